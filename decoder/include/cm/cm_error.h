@@ -1,0 +1,92 @@
+/*
+ * cm_error.h - error codes and the caller-owned status.
+ *
+ * One X-macro is the source of the enum, the symbolic names and the human
+ * texts, so they cannot drift apart.  Codes travel in the link protocol's
+ * NAK/ERROR frames: append new codes at the end, never renumber.
+ *
+ * Three families are kept apart on purpose:
+ *   bad input      (E_TRUNCATED, E_MAGIC, E_RANGE, E_KNOTS, E_NONFINITE, ...)
+ *   no room        (E_NOSPACE: a caller buffer is too small)
+ *   exceeds build  (E_LIMIT: valid input, but larger than this profile)
+ */
+#ifndef CM_ERROR_H
+#define CM_ERROR_H
+
+#include <stdint.h>
+
+#define CM_ERRORS(X)                                                              \
+    X(OK, "ok")                                                                   \
+    X(E_ARG, "invalid argument (a caller bug, not bad input)")                    \
+    X(E_LIMIT, "exceeds a compile-time limit of this build")                      \
+    X(E_NOSPACE, "output buffer too small")                                       \
+    X(E_TRUNCATED, "input ends before the size its header declares")             \
+    X(E_MAGIC, "not a curvemesh file")                                            \
+    X(E_VERSION, "unsupported format version")                                    \
+    X(E_CRC, "CRC mismatch: the data is corrupted")                               \
+    X(E_RANGE, "count or index out of range")                                     \
+    X(E_KNOTS, "knot vector decreasing, too short or multiplicity > order")       \
+    X(E_NONFINITE, "NaN or infinity in input")                                    \
+    X(E_FORMAT, "malformed data")                                                 \
+    X(E_SINGULAR, "linear system is singular or ill-conditioned")                 \
+    X(E_DEGENERATE, "degenerate geometry (zero-length vector or empty domain)")   \
+    X(E_CHECKSUM, "rebuilt surface differs from the encoder's (checksum)")        \
+    X(E_UNSUPPORTED, "feature not supported by this build")                       \
+    X(E_IGES, "malformed IGES file")                                              \
+    X(E_IO, "I/O error")                                                          \
+    X(E_TIMEOUT, "timed out")                                                     \
+    X(E_USB, "USB error")                                                         \
+    X(E_SERIAL, "serial line error")                                              \
+    X(E_GPIO, "GPIO error")                                                       \
+    X(E_PROTOCOL, "link protocol error")
+
+#define CM_ERR_ENUM_(id, text) CM_##id,
+typedef enum cm_err { CM_ERRORS(CM_ERR_ENUM_) CM_ERR_COUNT } cm_err;
+#undef CM_ERR_ENUM_
+
+#if defined(__GNUC__)
+#  define CM_NODISCARD __attribute__((warn_unused_result))
+#else
+#  define CM_NODISCARD
+#endif
+
+/** Symbolic name, e.g. "CM_E_LIMIT" (for logs); "CM_E_UNKNOWN" if out of range. */
+const char *cm_err_name(cm_err e);
+/** Human text (for the operator's screen); "unknown error" if out of range. */
+const char *cm_strerror(cm_err e);
+
+#define CM_NO_OFFSET UINT32_MAX /* status.offset when no byte position applies */
+#define CM_NO_LIMIT 0xFFFFu     /* status.limit when no limit is involved */
+
+/*
+ * Caller-owned detail of a failure.  The first (innermost) failure wins:
+ * the cm_fail* helpers never overwrite a status that already holds an
+ * error, so unwinding callers cannot replace the precise cause by a vague
+ * one.  Every field but `code` is optional context.
+ */
+typedef struct cm_status {
+    cm_err code;       /* CM_OK until the first failure */
+    uint32_t offset;   /* byte offset in the input, or CM_NO_OFFSET */
+    uint16_t limit;    /* cm_limit_id for CM_E_LIMIT, else CM_NO_LIMIT */
+    uint64_t need;     /* CM_E_LIMIT / CM_E_NOSPACE: what the input needs */
+    uint64_t have;     /* ... and what this build or buffer has */
+    int sys_errno;     /* errno of a failed system call, or 0 */
+    const char *where; /* static string: function or section that failed */
+} cm_status;
+
+/** Reset to CM_OK with no context. `st` may be NULL (then nothing happens). */
+void cm_status_init(cm_status *st);
+
+/** Record `code` at `where` (first failure wins); returns `code`. `st` may be NULL. */
+cm_err cm_fail(cm_status *st, cm_err code, const char *where);
+
+/** As cm_fail, with the byte offset of the failure in the input. */
+cm_err cm_fail_at(cm_status *st, cm_err code, uint32_t offset, const char *where);
+
+/** Record CM_E_LIMIT for limit `limit` (a cm_limit_id): input needs `need`, build has `have`. */
+cm_err cm_fail_limit(cm_status *st, unsigned limit, uint64_t need, uint64_t have, const char *where);
+
+/** Record CM_E_NOSPACE: a caller buffer of `have` elements, `need` required. */
+cm_err cm_fail_nospace(cm_status *st, uint64_t need, uint64_t have, const char *where);
+
+#endif /* CM_ERROR_H */

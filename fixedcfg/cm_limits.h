@@ -1,0 +1,168 @@
+/*
+ * cm_limits.h - THE list of compile-time limits of a curvemesh build.
+ *
+ * Every buffer of the decoder and of the shared kernels is sized from the
+ * macros below; nothing is allocated at run time.  A board profile
+ * (fixedcfg/profiles/<name>.h, selected by -DCM_PROFILE='"profiles/x.h"')
+ * may set any CM_MAX_* before the defaults here apply.  The defaults are the
+ * `terminal` profile's values, so a build without a profile is a terminal
+ * build.
+ *
+ * Each limit states its unit, its hard bound (a format or type ceiling that
+ * no profile may exceed, checked in cm_limits_check.h) and why it exists.
+ * The run-time table printed by `--limits` and `make print-limits` is
+ * generated from cm_limits_list.h, so the numbers live only here and in the
+ * profiles.
+ */
+#ifndef CM_LIMITS_H
+#define CM_LIMITS_H
+
+#ifdef CM_PROFILE
+#  include CM_PROFILE /* profile first: it may set any CM_MAX_* below */
+#endif
+
+#ifndef CM_PROFILE_NAME
+#  define CM_PROFILE_NAME "default"
+#endif
+
+/* ---- hard bounds: format field widths and type ceilings; never change ---- */
+#define CM_HARD_MAX_DEGREE 15u          /* 4-bit degree field of the format */
+#define CM_HARD_MAX_COUNT16 65535u      /* counts stored in 16-bit fields */
+#define CM_HARD_MAX_COUNT24 16777215u   /* model-wide indices (24-bit, fits int32 and size_t on 32-bit ARM) */
+#define CM_HARD_MAX_SIDES 8u            /* N-split record: at most 8 sub-patches (spec 6.4) */
+#define CM_HARD_MAX_GREG 16u            /* Gregory patches per face: SUBDIV needs 7, N-split 8 */
+#define CM_HARD_MAX_FIT_CTRL 35u        /* record field nu-4 is 5 bits (spec 15.2) */
+#define CM_HARD_MAX_LSQ_UNKNOWNS 1089u  /* (CM_HARD_MAX_FIT_CTRL-2)^2 */
+#define CM_HARD_MAX_LSQ_BAND 102u       /* 3*(CM_HARD_MAX_FIT_CTRL-2)+3 */
+#define CM_HARD_MAX_TRIS 1431655765u    /* 3*tris must fit uint32 glTF indices */
+#define CM_HARD_MAX_STACK 1048576u      /* 1 MiB: more than any board gives a thread */
+
+/* ---- curves and surfaces ---- */
+
+/* Polynomial degree of a curve, or of a surface in one direction.
+ * Unit: degree.  Hard bound 15.  Sizes every basis-function workspace
+ * (CM_MAX_ORDER doubles per row).  CAD exporters use 1..7 in practice. */
+#ifndef CM_MAX_DEGREE
+#  define CM_MAX_DEGREE 9
+#endif
+
+/* Control points of one edge curve (the transmitted boundary curves).
+ * Unit: control points.  Hard bound 65535.  Sizes per-edge scratch such as
+ * knot insertion and cubic conversion inputs; intersection curves from CAD
+ * exporters reach a few hundred. */
+#ifndef CM_MAX_EDGE_CTRL
+#  define CM_MAX_EDGE_CTRL 256
+#endif
+
+/* Control points of one surface in one direction (kept or fitted).
+ * Unit: control points.  Hard bound 65535.  Sizes knot vectors of a surface. */
+#ifndef CM_MAX_SURF_CTRL_DIR
+#  define CM_MAX_SURF_CTRL_DIR 128
+#endif
+
+/* Control points of one surface in total (nu*nv).  Unit: control points.
+ * Hard bound 2^24-1.  Sizes the control net buffer of a kept surface. */
+#ifndef CM_MAX_SURF_CTRL
+#  define CM_MAX_SURF_CTRL 8192
+#endif
+
+/* Control points per direction of a surface fitted by NFILL/G1FIT (spec 8.9
+ * tries c = 4..24).  Unit: control points.  Hard bound 35 (5-bit record
+ * field).  Sizes the side-curve least squares. */
+#ifndef CM_MAX_FIT_CTRL
+#  define CM_MAX_FIT_CTRL 24
+#endif
+
+/* ---- faces and loops ---- */
+
+/* Loops of one face: the outer loop plus holes.  Unit: loops.  Hard bound
+ * 65535.  Sizes the per-face topology record. */
+#ifndef CM_MAX_LOOPS
+#  define CM_MAX_LOOPS 64
+#endif
+
+/* Edge uses in one loop.  Unit: edges.  Hard bound 65535. */
+#ifndef CM_MAX_LOOP_EDGES
+#  define CM_MAX_LOOP_EDGES 128
+#endif
+
+/* Edge uses in one face, all loops together.  Unit: edges.  Hard bound
+ * 65535.  Sizes boundary sampling (CM_MAX_FACE_EDGES*CM_SEG_PER_EDGE points). */
+#ifndef CM_MAX_FACE_EDGES
+#  define CM_MAX_FACE_EDGES 512
+#endif
+
+/* Sides of a face rebuilt by Gregory N-split (spec 6.4).  Unit: sides.
+ * Hard bound 8. */
+#ifndef CM_MAX_SIDES
+#  define CM_MAX_SIDES 8
+#endif
+
+/* Bicubic Gregory patches of one rebuilt face.  Unit: patches.  Hard bound
+ * 16; SUBDIV needs 7 and N-split CM_MAX_SIDES. */
+#ifndef CM_MAX_GREG
+#  define CM_MAX_GREG 8
+#endif
+
+/* ---- least squares (spec 8.7, 16) ---- */
+
+/* Unknown control points of a fitted surface, K = (nu-2)(nv-2).  Unit:
+ * unknowns.  Hard bound 1089.  Banded storage is K*(band+1) doubles. */
+#ifndef CM_MAX_LSQ_UNKNOWNS
+#  define CM_MAX_LSQ_UNKNOWNS 484
+#endif
+
+/* Half bandwidth of the surface normal equations, w = 3(nv-2)+3.
+ * Unit: columns.  Hard bound 102. */
+#ifndef CM_MAX_LSQ_BAND
+#  define CM_MAX_LSQ_BAND 69
+#endif
+
+/* ---- whole model ---- */
+
+/* Faces of one model.  Unit: faces.  Hard bound 2^24-1. */
+#ifndef CM_MAX_FACES
+#  define CM_MAX_FACES 16384
+#endif
+
+/* Edges of one model's curve mesh (a shared edge counts once).
+ * Unit: edges.  Hard bound 2^24-1. */
+#ifndef CM_MAX_EDGES
+#  define CM_MAX_EDGES 32768
+#endif
+
+/* Vertices of one model's curve mesh.  Unit: vertices.  Hard bound 2^24-1. */
+#ifndef CM_MAX_VERTICES
+#  define CM_MAX_VERTICES 32768
+#endif
+
+/* Triangles of the decoded mesh.  Unit: triangles.  Hard bound
+ * 1431655765 (3 indices each must fit uint32 glTF indices). */
+#ifndef CM_MAX_TRIS
+#  define CM_MAX_TRIS 1048576
+#endif
+
+/* ---- stack (checked from -fstack-usage / -fcallgraph-info=su) ---- */
+
+/* Stack frame of one decoder or kernel function.  Unit: bytes.  Hard bound
+ * 1 MiB.  Enforced at compile time by -Wstack-usage. */
+#ifndef CM_STACK_FN_MAX
+#  define CM_STACK_FN_MAX 8192
+#endif
+
+/* Deepest call path through decoder and kernels, summed frames.
+ * Unit: bytes.  Hard bound 1 MiB.  Checked by `make check-stack`. */
+#ifndef CM_STACK_BUDGET
+#  define CM_STACK_BUDGET 65536
+#endif
+
+/* ---- derived sizes: never set directly ---- */
+#define CM_MAX_ORDER (CM_MAX_DEGREE + 1)                      /* order = degree + 1 */
+#define CM_MAX_DERS 2                                         /* derivatives evaluated: S, S', S'' */
+#define CM_MAX_EDGE_KNOTS (CM_MAX_EDGE_CTRL + CM_MAX_ORDER)   /* n + p + 1 */
+#define CM_MAX_SURF_KNOTS_DIR (CM_MAX_SURF_CTRL_DIR + CM_MAX_ORDER)
+#define CM_MAX_DENSE CM_MAX_FIT_CTRL                          /* dense Cholesky dimension */
+
+#include "cm_limits_check.h"
+
+#endif /* CM_LIMITS_H */

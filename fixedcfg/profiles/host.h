@@ -1,0 +1,28 @@
+/*
+ * Profile `host`: the workstation tools (import, compression, verification,
+ * host-side decode).  Large limits so any real model can be read; the
+ * encoder still checks every file it writes against the target profile
+ * (`cmz encode --profile terminal`).
+ */
+#ifndef CM_PROFILE_HOST_H
+#define CM_PROFILE_HOST_H
+#define CM_PROFILE_NAME "host"
+#define CM_MAX_DEGREE 15
+#define CM_MAX_EDGE_CTRL 8192
+#define CM_MAX_SURF_CTRL_DIR 4096
+#define CM_MAX_SURF_CTRL 1048576
+#define CM_MAX_FIT_CTRL 24
+#define CM_MAX_LOOPS 4096
+#define CM_MAX_LOOP_EDGES 4096
+#define CM_MAX_FACE_EDGES 16384
+#define CM_MAX_SIDES 8
+#define CM_MAX_GREG 8
+#define CM_MAX_LSQ_UNKNOWNS 484
+#define CM_MAX_LSQ_BAND 69
+#define CM_MAX_FACES 1048576
+#define CM_MAX_EDGES 2097152
+#define CM_MAX_VERTICES 2097152
+#define CM_MAX_TRIS 16777216
+#define CM_STACK_FN_MAX 8192
+#define CM_STACK_BUDGET 131072
+#endif

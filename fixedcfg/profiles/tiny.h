@@ -1,0 +1,26 @@
+/*
+ * Profile `tiny`: not a board.  Limits so small that tests reach every one
+ * of them with hand-sized inputs (each limit is tested at MAX, MAX+1 and 0).
+ */
+#ifndef CM_PROFILE_TINY_H
+#define CM_PROFILE_TINY_H
+#define CM_PROFILE_NAME "tiny"
+#define CM_MAX_DEGREE 3
+#define CM_MAX_EDGE_CTRL 8
+#define CM_MAX_SURF_CTRL_DIR 8
+#define CM_MAX_SURF_CTRL 32
+#define CM_MAX_FIT_CTRL 6
+#define CM_MAX_LOOPS 2
+#define CM_MAX_LOOP_EDGES 4
+#define CM_MAX_FACE_EDGES 8
+#define CM_MAX_SIDES 4
+#define CM_MAX_GREG 4
+#define CM_MAX_LSQ_UNKNOWNS 16
+#define CM_MAX_LSQ_BAND 15
+#define CM_MAX_FACES 8
+#define CM_MAX_EDGES 16
+#define CM_MAX_VERTICES 16
+#define CM_MAX_TRIS 512
+#define CM_STACK_FN_MAX 8192
+#define CM_STACK_BUDGET 65536
+#endif
