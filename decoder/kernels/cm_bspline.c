@@ -1,0 +1,455 @@
+/*
+ * cm_bspline.c - B-spline basis, NURBS curve/surface evaluation, knot
+ * insertion (spec K1-K3, K5; The NURBS Book A2.1-A2.3, A3.2, A3.6, A4.2,
+ * A4.4, A5.1).  See cm_bspline.h for conventions and the contract.
+ */
+#include "cm/cm_bspline.h"
+
+#include <stddef.h>
+
+#include "cm/cm_limits_info.h"
+
+/* homogeneous point (w*P, w) for rational evaluation and knot insertion */
+typedef struct hpt {
+    double x, y, z, w;
+} hpt;
+
+/* binomial coefficients up to CM_MAX_DERS (the rational quotient rule) */
+static const double binom[CM_MAX_DERS + 1][CM_MAX_DERS + 1] = {{1, 0, 0}, {1, 1, 0}, {1, 2, 1}};
+_Static_assert(CM_MAX_DERS == 2, "binom[] table is written for CM_MAX_DERS == 2");
+
+static cm_err check_degree(int p, cm_status *st, const char *where)
+{
+    if (p > CM_MAX_DEGREE)
+        return cm_fail_limit(st, CM_LIMIT_MAX_DEGREE, (uint64_t)p, CM_MAX_DEGREE, where);
+    if (p < 1)
+        return cm_fail(st, CM_E_RANGE, where);
+    return CM_OK;
+}
+
+cm_err cm_knots_check(int p, int n_ctrl, const double *knots, cm_status *st)
+{
+    cm_err e = check_degree(p, st, __func__);
+    if (e != CM_OK)
+        return e;
+    if (n_ctrl < p + 1)
+        return cm_fail(st, CM_E_RANGE, __func__);
+    int m = n_ctrl + p + 1; /* number of knots */
+    int mult = 1;
+    for (int i = 0; i < m; i++) {
+        if (!isfinite(knots[i]))
+            return cm_fail(st, CM_E_NONFINITE, __func__);
+        if (i > 0) {
+            if (knots[i] < knots[i - 1])
+                return cm_fail(st, CM_E_KNOTS, __func__);
+            mult = (knots[i] == knots[i - 1]) ? mult + 1 : 1;
+            if (mult > p + 1)
+                return cm_fail(st, CM_E_KNOTS, __func__);
+        }
+    }
+    if (!(knots[p] < knots[n_ctrl]))
+        return cm_fail(st, CM_E_KNOTS, __func__); /* empty parameter domain */
+    return CM_OK;
+}
+
+static cm_err check_points(const cm_vec3 *ctrl, const double *w, long n, cm_status *st, const char *where)
+{
+    for (long i = 0; i < n; i++) {
+        if (!cm_finite3(ctrl[i]))
+            return cm_fail(st, CM_E_NONFINITE, where);
+        if (w != NULL) {
+            if (!isfinite(w[i]))
+                return cm_fail(st, CM_E_NONFINITE, where);
+            if (!(w[i] > 0.0))
+                return cm_fail(st, CM_E_RANGE, where); /* weights must be positive */
+        }
+    }
+    return CM_OK;
+}
+
+cm_err cm_curve_check(const cm_curve *c, cm_status *st)
+{
+    cm_err e = check_degree(c->p, st, __func__);
+    if (e != CM_OK)
+        return e;
+    if (c->n_ctrl > CM_MAX_EDGE_CTRL)
+        return cm_fail_limit(st, CM_LIMIT_MAX_EDGE_CTRL, (uint64_t)c->n_ctrl, CM_MAX_EDGE_CTRL, __func__);
+    if ((e = cm_knots_check(c->p, c->n_ctrl, c->knots, st)) != CM_OK)
+        return e;
+    return check_points(c->ctrl, c->w, c->n_ctrl, st, __func__);
+}
+
+cm_err cm_surf_check(const cm_surf *s, cm_status *st)
+{
+    cm_err e;
+    if ((e = check_degree(s->p, st, __func__)) != CM_OK || (e = check_degree(s->q, st, __func__)) != CM_OK)
+        return e;
+    int nmax = s->nu > s->nv ? s->nu : s->nv;
+    if (nmax > CM_MAX_SURF_CTRL_DIR)
+        return cm_fail_limit(st, CM_LIMIT_MAX_SURF_CTRL_DIR, (uint64_t)nmax, CM_MAX_SURF_CTRL_DIR, __func__);
+    long total = (long)s->nu * (long)s->nv;
+    if (total > CM_MAX_SURF_CTRL)
+        return cm_fail_limit(st, CM_LIMIT_MAX_SURF_CTRL, (uint64_t)total, CM_MAX_SURF_CTRL, __func__);
+    if ((e = cm_knots_check(s->p, s->nu, s->U, st)) != CM_OK || (e = cm_knots_check(s->q, s->nv, s->V, st)) != CM_OK)
+        return e;
+    return check_points(s->ctrl, s->w, total, st, __func__);
+}
+
+int cm_bspl_find_span(int n_ctrl, int p, const double *knots, double u)
+{
+    double lo = knots[p], hi = knots[n_ctrl];
+    if (!(u > lo)) /* also catches NaN */
+        u = lo;
+    if (u >= hi) {
+        /* domain end: the last non-empty span */
+        int i = n_ctrl - 1;
+        while (i > p && !(knots[i] < knots[i + 1]))
+            i--;
+        return i;
+    }
+    /* invariant: knots[low] <= u < knots[high]; the interval halves each
+     * round, so 64 rounds bound any int range even for a corrupt vector */
+    int low = p, high = n_ctrl;
+    int mid = (low + high) / 2;
+    for (int guard = 0; guard < 64 && (u < knots[mid] || u >= knots[mid + 1]); guard++) {
+        if (u < knots[mid])
+            high = mid;
+        else
+            low = mid;
+        mid = (low + high) / 2;
+    }
+    return mid;
+}
+
+cm_err cm_bspl_basis(int span, double u, int p, const double *knots, double *N, cm_status *st)
+{
+    cm_err e = check_degree(p, st, __func__);
+    if (e != CM_OK)
+        return e;
+    double left[CM_MAX_ORDER], right[CM_MAX_ORDER];
+    N[0] = 1.0;
+    for (int j = 1; j <= p; j++) {
+        left[j] = u - knots[span + 1 - j];
+        right[j] = knots[span + j] - u;
+        double saved = 0.0;
+        for (int r = 0; r < j; r++) {
+            double temp = N[r] / (right[r + 1] + left[j - r]);
+            N[r] = saved + right[r + 1] * temp;
+            saved = left[j - r] * temp;
+        }
+        N[j] = saved;
+    }
+    return CM_OK;
+}
+
+cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots,
+                          double ders[CM_MAX_DERS + 1][CM_MAX_ORDER], cm_status *st)
+{
+    cm_err e = check_degree(p, st, __func__);
+    if (e != CM_OK)
+        return e;
+    if (nd < 0 || nd > CM_MAX_DERS)
+        return cm_fail(st, CM_E_ARG, __func__);
+    double ndu[CM_MAX_ORDER][CM_MAX_ORDER];
+    double a[2][CM_MAX_ORDER];
+    double left[CM_MAX_ORDER], right[CM_MAX_ORDER];
+
+    ndu[0][0] = 1.0;
+    for (int j = 1; j <= p; j++) {
+        left[j] = u - knots[span + 1 - j];
+        right[j] = knots[span + j] - u;
+        double saved = 0.0;
+        for (int r = 0; r < j; r++) {
+            ndu[j][r] = right[r + 1] + left[j - r]; /* lower triangle: knot differences */
+            double temp = ndu[r][j - 1] / ndu[j][r];
+            ndu[r][j] = saved + right[r + 1] * temp; /* upper triangle: basis functions */
+            saved = left[j - r] * temp;
+        }
+        ndu[j][j] = saved;
+    }
+    for (int j = 0; j <= p; j++)
+        ders[0][j] = ndu[j][p];
+
+    int n = nd < p ? nd : p; /* derivatives above the degree vanish */
+    for (int r = 0; r <= p; r++) {
+        int s1 = 0, s2 = 1;
+        a[0][0] = 1.0;
+        for (int k = 1; k <= n; k++) {
+            double d = 0.0;
+            int rk = r - k, pk = p - k;
+            if (r >= k) {
+                a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+                d = a[s2][0] * ndu[rk][pk];
+            }
+            int j1 = rk >= -1 ? 1 : -rk;
+            int j2 = (r - 1 <= pk) ? k - 1 : p - r;
+            for (int j = j1; j <= j2; j++) {
+                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
+                d += a[s2][j] * ndu[rk + j][pk];
+            }
+            if (r <= pk) {
+                a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+                d += a[s2][k] * ndu[r][pk];
+            }
+            ders[k][r] = d;
+            int t = s1;
+            s1 = s2;
+            s2 = t;
+        }
+    }
+    double fac = (double)p;
+    for (int k = 1; k <= n; k++) {
+        for (int j = 0; j <= p; j++)
+            ders[k][j] *= fac;
+        fac *= (double)(p - k);
+    }
+    for (int k = n + 1; k <= nd; k++)
+        for (int j = 0; j <= p; j++)
+            ders[k][j] = 0.0;
+    return CM_OK;
+}
+
+void cm_curve_domain(const cm_curve *c, double *u0, double *u1)
+{
+    *u0 = c->knots[c->p];
+    *u1 = c->knots[c->n_ctrl];
+}
+
+cm_err cm_curve_eval(const cm_curve *c, double u, int nd, cm_vec3 *d, cm_status *st)
+{
+    double ders[CM_MAX_DERS + 1][CM_MAX_ORDER];
+    int p = c->p;
+    cm_err e;
+    if ((e = check_degree(p, st, __func__)) != CM_OK)
+        return e;
+    if (nd < 0 || nd > CM_MAX_DERS)
+        return cm_fail(st, CM_E_ARG, __func__);
+    double lo = c->knots[p], hi = c->knots[c->n_ctrl];
+    if (!(u > lo))
+        u = lo;
+    if (u > hi)
+        u = hi;
+    int span = cm_bspl_find_span(c->n_ctrl, p, c->knots, u);
+    if ((e = cm_bspl_ders_basis(span, u, p, nd, c->knots, ders, st)) != CM_OK)
+        return e;
+
+    cm_vec3 A[CM_MAX_DERS + 1];
+    double W[CM_MAX_DERS + 1];
+    for (int k = 0; k <= nd; k++) {
+        cm_vec3 acc = cm_v3(0, 0, 0);
+        double wacc = 0.0;
+        for (int j = 0; j <= p; j++) {
+            int i = span - p + j;
+            double wi = c->w ? c->w[i] : 1.0;
+            double b = ders[k][j];
+            acc = cm_axpy(acc, b * wi, c->ctrl[i]);
+            wacc += b * wi;
+        }
+        A[k] = acc;
+        W[k] = wacc;
+    }
+    if (c->w == NULL) {
+        for (int k = 0; k <= nd; k++)
+            d[k] = A[k];
+        return CM_OK;
+    }
+    /* A4.2: C^(k) = (A^(k) - sum_{i=1..k} binom(k,i) w^(i) C^(k-i)) / w */
+    for (int k = 0; k <= nd; k++) {
+        cm_vec3 v = A[k];
+        for (int i = 1; i <= k; i++)
+            v = cm_sub(v, cm_scale(d[k - i], binom[k][i] * W[i]));
+        d[k] = cm_scale(v, 1.0 / W[0]);
+    }
+    return CM_OK;
+}
+
+cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1],
+                    cm_status *st)
+{
+    double Nu[CM_MAX_DERS + 1][CM_MAX_ORDER], Nv[CM_MAX_DERS + 1][CM_MAX_ORDER];
+    hpt temp[CM_MAX_ORDER];
+    hpt Aw[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+    int p = s->p, q = s->q;
+    cm_err e;
+    if ((e = check_degree(p, st, __func__)) != CM_OK || (e = check_degree(q, st, __func__)) != CM_OK)
+        return e;
+    if (nd < 0 || nd > CM_MAX_DERS)
+        return cm_fail(st, CM_E_ARG, __func__);
+    double u0 = s->U[p], u1 = s->U[s->nu], v0 = s->V[q], v1 = s->V[s->nv];
+    if (!(u > u0))
+        u = u0;
+    if (u > u1)
+        u = u1;
+    if (!(v > v0))
+        v = v0;
+    if (v > v1)
+        v = v1;
+    int us = cm_bspl_find_span(s->nu, p, s->U, u);
+    int vs = cm_bspl_find_span(s->nv, q, s->V, v);
+    if ((e = cm_bspl_ders_basis(us, u, p, nd, s->U, Nu, st)) != CM_OK ||
+        (e = cm_bspl_ders_basis(vs, v, q, nd, s->V, Nv, st)) != CM_OK)
+        return e;
+
+    for (int k = 0; k <= CM_MAX_DERS; k++)
+        for (int l = 0; l <= CM_MAX_DERS; l++) {
+            S[k][l] = cm_v3(0, 0, 0);
+            Aw[k][l].x = Aw[k][l].y = Aw[k][l].z = Aw[k][l].w = 0.0;
+        }
+    /* A3.6: contract u first into temp[s], then v; fixed summation order */
+    for (int k = 0; k <= nd; k++) {
+        for (int sidx = 0; sidx <= q; sidx++) {
+            hpt t = {0, 0, 0, 0};
+            for (int r = 0; r <= p; r++) {
+                long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
+                double wi = s->w ? s->w[idx] : 1.0;
+                double b = Nu[k][r] * wi;
+                t.x += b * s->ctrl[idx].x;
+                t.y += b * s->ctrl[idx].y;
+                t.z += b * s->ctrl[idx].z;
+                t.w += b;
+            }
+            temp[sidx] = t;
+        }
+        for (int l = 0; l <= nd - k; l++) {
+            hpt a = {0, 0, 0, 0};
+            for (int sidx = 0; sidx <= q; sidx++) {
+                double b = Nv[l][sidx];
+                a.x += b * temp[sidx].x;
+                a.y += b * temp[sidx].y;
+                a.z += b * temp[sidx].z;
+                a.w += b * temp[sidx].w;
+            }
+            Aw[k][l] = a;
+        }
+    }
+    if (s->w == NULL) {
+        for (int k = 0; k <= nd; k++)
+            for (int l = 0; l <= nd - k; l++)
+                S[k][l] = cm_v3(Aw[k][l].x, Aw[k][l].y, Aw[k][l].z);
+        return CM_OK;
+    }
+    /* A4.4: quotient rule for rational surfaces */
+    for (int k = 0; k <= nd; k++) {
+        for (int l = 0; l <= nd - k; l++) {
+            cm_vec3 v2 = cm_v3(Aw[k][l].x, Aw[k][l].y, Aw[k][l].z);
+            for (int j = 1; j <= l; j++)
+                v2 = cm_sub(v2, cm_scale(S[k][l - j], binom[l][j] * Aw[0][j].w));
+            for (int i = 1; i <= k; i++) {
+                v2 = cm_sub(v2, cm_scale(S[k - i][l], binom[k][i] * Aw[i][0].w));
+                cm_vec3 v3 = cm_v3(0, 0, 0);
+                for (int j = 1; j <= l; j++)
+                    v3 = cm_add(v3, cm_scale(S[k - i][l - j], binom[l][j] * Aw[i][j].w));
+                v2 = cm_sub(v2, cm_scale(v3, binom[k][i]));
+            }
+            S[k][l] = cm_scale(v2, 1.0 / Aw[0][0].w);
+        }
+    }
+    return CM_OK;
+}
+
+cm_err cm_curve_insert_knot(const cm_curve *c, double u, int r, double *knots_out, cm_vec3 *ctrl_out,
+                            double *w_out, int cap, cm_status *st)
+{
+    int p = c->p, n = c->n_ctrl;
+    const double *U = c->knots;
+    cm_err e;
+    if ((e = check_degree(p, st, __func__)) != CM_OK)
+        return e;
+    if (r < 1 || !(u > U[p]) || !(u < U[n]))
+        return cm_fail(st, CM_E_ARG, __func__);
+    int s = 0; /* multiplicity of u already in the vector */
+    for (int i = 0; i < n + p + 1; i++)
+        if (U[i] == u)
+            s++;
+    if (r + s > p)
+        return cm_fail(st, CM_E_ARG, __func__);
+    if (n + r > CM_MAX_EDGE_CTRL)
+        return cm_fail_limit(st, CM_LIMIT_MAX_EDGE_CTRL, (uint64_t)(n + r), CM_MAX_EDGE_CTRL, __func__);
+    if (n + r > cap)
+        return cm_fail_nospace(st, (uint64_t)(n + r), (uint64_t)cap, __func__);
+
+    int k = cm_bspl_find_span(n, p, U, u);
+    int mp = n + p; /* index of the last knot */
+    for (int i = 0; i <= k; i++)
+        knots_out[i] = U[i];
+    for (int i = 1; i <= r; i++)
+        knots_out[k + i] = u;
+    for (int i = k + 1; i <= mp; i++)
+        knots_out[i + r] = U[i];
+
+    hpt Rw[CM_MAX_ORDER];
+#define HW(i) (c->w ? c->w[(i)] : 1.0)
+#define TO_H(P, wt) ((hpt){(P).x * (wt), (P).y * (wt), (P).z * (wt), (wt)})
+    /* unchanged control points at both ends; written homogeneous->Euclidean below */
+    for (int i = 0; i <= k - p; i++) {
+        ctrl_out[i] = c->ctrl[i];
+        if (c->w)
+            w_out[i] = c->w[i];
+    }
+    for (int i = k - s; i < n; i++) {
+        ctrl_out[i + r] = c->ctrl[i];
+        if (c->w)
+            w_out[i + r] = c->w[i];
+    }
+    for (int i = 0; i <= p - s; i++)
+        Rw[i] = TO_H(c->ctrl[k - p + i], HW(k - p + i));
+    int L = 0;
+    for (int j = 1; j <= r; j++) {
+        L = k - p + j;
+        for (int i = 0; i <= p - j - s; i++) {
+            double alpha = (u - U[L + i]) / (U[i + k + 1] - U[L + i]);
+            double beta = 1.0 - alpha;
+            Rw[i].x = alpha * Rw[i + 1].x + beta * Rw[i].x;
+            Rw[i].y = alpha * Rw[i + 1].y + beta * Rw[i].y;
+            Rw[i].z = alpha * Rw[i + 1].z + beta * Rw[i].z;
+            Rw[i].w = alpha * Rw[i + 1].w + beta * Rw[i].w;
+        }
+        hpt a = Rw[0], b = Rw[p - j - s];
+        ctrl_out[L] = cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
+        ctrl_out[k + r - j - s] = cm_v3(b.x / b.w, b.y / b.w, b.z / b.w);
+        if (c->w) {
+            w_out[L] = a.w;
+            w_out[k + r - j - s] = b.w;
+        }
+    }
+    for (int i = L + 1; i < k - s; i++) {
+        hpt a = Rw[i - L];
+        ctrl_out[i] = cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
+        if (c->w)
+            w_out[i] = a.w;
+    }
+#undef HW
+#undef TO_H
+    return CM_OK;
+}
+
+cm_err cm_knots_uniform(int n_ctrl, int p, double *knots, cm_status *st)
+{
+    cm_err e;
+    if ((e = check_degree(p, st, __func__)) != CM_OK)
+        return e;
+    if (n_ctrl < p + 1)
+        return cm_fail(st, CM_E_RANGE, __func__);
+    int spans = n_ctrl - p;
+    for (int i = 0; i <= p; i++) {
+        knots[i] = 0.0;
+        knots[n_ctrl + i] = 1.0;
+    }
+    for (int j = 1; j < spans; j++)
+        knots[p + j] = (double)j / (double)spans;
+    return CM_OK;
+}
+
+cm_err cm_greville(int n_ctrl, int p, const double *knots, double *xi, cm_status *st)
+{
+    cm_err e;
+    if ((e = check_degree(p, st, __func__)) != CM_OK)
+        return e;
+    for (int i = 0; i < n_ctrl; i++) {
+        double s = 0.0;
+        for (int j = 1; j <= p; j++)
+            s += knots[i + j];
+        xi[i] = s / (double)p;
+    }
+    return CM_OK;
+}

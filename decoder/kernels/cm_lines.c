@@ -1,0 +1,25 @@
+/* cm_lines.c - closest points of two lines, ray/plane intersection (spec K10). */
+#include "cm/cm_geom.h"
+
+int cm_lines_closest(cm_vec3 p, cm_vec3 d, cm_vec3 q, cm_vec3 e, double *lam, double *mu)
+{
+    double dd = cm_dot(d, d), ee = cm_dot(e, e), de = cm_dot(d, e);
+    if (cm_norm2(cm_cross(d, e)) < 1e-12 * dd * ee)
+        return 0;
+    /* (p + lam d - q - mu e).d = 0 and .e = 0 */
+    cm_vec3 w = cm_sub(p, q);
+    double wd = cm_dot(w, d), we = cm_dot(w, e);
+    double det = dd * ee - de * de;
+    *lam = (de * we - ee * wd) / det;
+    *mu = (dd * we - de * wd) / det;
+    return 1;
+}
+
+int cm_ray_plane(cm_vec3 p, cm_vec3 d, cm_vec3 m, double c, double *lam)
+{
+    double dm = cm_dot(d, m);
+    if (!(fabs(dm) >= CM_SIN_RAY_PLANE * cm_norm(d)))
+        return 0;
+    *lam = (c - cm_dot(p, m)) / dm;
+    return 1;
+}
