@@ -1,0 +1,76 @@
+/* cm_report.c - human-readable limits tables and error lines. */
+#include "cm_report.h"
+
+#include <errno.h>
+#include <string.h>
+
+#include "cm/cm_limits_info.h"
+
+void cm_report_limits(FILE *f)
+{
+    fprintf(f, "curvemesh limits, profile %s\n", cm_profile_name);
+    fprintf(f, "%-18s %12s %12s  %-10s %s\n", "limit", "value", "hard max", "unit", "meaning");
+    for (unsigned i = 0; i < CM_LIMIT_COUNT; i++) {
+        const cm_limit_info *l = &cm_limit_table[i];
+        fprintf(f, "%-18s %12lu %12lu  %-10s %s\n", l->name, (unsigned long)l->value, (unsigned long)l->hard_max,
+                l->unit, l->doc);
+    }
+}
+
+void cm_report_limits_markdown(FILE *f)
+{
+    fprintf(f, "| limit | %s | hard max | unit | meaning |\n|---|---:|---:|---|---|\n", cm_profile_name);
+    for (unsigned i = 0; i < CM_LIMIT_COUNT; i++) {
+        const cm_limit_info *l = &cm_limit_table[i];
+        fprintf(f, "| `%s` | %lu | %lu | %s | %s |\n", l->macro, (unsigned long)l->value, (unsigned long)l->hard_max,
+                l->unit, l->doc);
+    }
+}
+
+void cm_report_errors_markdown(FILE *f)
+{
+    fprintf(f, "| code | name | meaning |\n|---:|---|---|\n");
+    for (int e = 0; e < (int)CM_ERR_COUNT; e++)
+        fprintf(f, "| %d | `%s` | %s |\n", e, cm_err_name((cm_err)e), cm_strerror((cm_err)e));
+}
+
+char *cm_format_status(char *buf, size_t cap, const cm_status *st)
+{
+    size_t n = 0;
+    int w;
+#define APPEND(...)                                                              \
+    do {                                                                         \
+        w = snprintf(buf + n, n < cap ? cap - n : 0, __VA_ARGS__);               \
+        if (w > 0)                                                               \
+            n += (size_t)w;                                                      \
+    } while (0)
+    if (cap == 0)
+        return buf;
+    buf[0] = 0;
+    if (st->offset != CM_NO_OFFSET)
+        APPEND("byte %lu: ", (unsigned long)st->offset);
+    APPEND("%s (%s)", cm_strerror(st->code), cm_err_name(st->code));
+    if (st->code == CM_E_LIMIT) {
+        const cm_limit_info *l = cm_limit_get(st->limit);
+        if (l)
+            APPEND(": needs %s=%llu, this build (profile %s) has %llu", l->name, (unsigned long long)st->need,
+                   cm_profile_name, (unsigned long long)st->have);
+    } else if (st->code == CM_E_NOSPACE) {
+        APPEND(": needs %llu, buffer has %llu", (unsigned long long)st->need, (unsigned long long)st->have);
+    }
+    if (st->sys_errno)
+        APPEND(": %s", strerror(st->sys_errno));
+    if (st->where)
+        APPEND(" [in %s]", st->where);
+#undef APPEND
+    if (n >= cap)
+        buf[cap - 1] = 0;
+    return buf;
+}
+
+void cm_report_status(FILE *f, const char *prog, const char *subject, const cm_status *st)
+{
+    char buf[512];
+    cm_format_status(buf, sizeof buf, st);
+    fprintf(f, "%s%s%s%s%s\n", prog ? prog : "", prog ? ": " : "", subject ? subject : "", subject ? ": " : "", buf);
+}

@@ -1,0 +1,35 @@
+/*
+ * cm_report.h - the one place that turns limits and statuses into text for
+ * people: `--limits` tables, error lines on stderr, README tables.
+ * (The decoder never prints; binaries call these.)
+ */
+#ifndef CM_REPORT_H
+#define CM_REPORT_H
+
+#include <stdio.h>
+
+#include "cm/cm_error.h"
+
+/** The limits table of this build (profile name, then one row per limit). */
+void cm_report_limits(FILE *f);
+
+/** The limits table as a Markdown table (for README). */
+void cm_report_limits_markdown(FILE *f);
+
+/** The error codes as a Markdown table: code, name, meaning (for README). */
+void cm_report_errors_markdown(FILE *f);
+
+/**
+ * One line describing a failure, e.g.
+ * "cmz: part.cmz: byte 42: exceeds a compile-time limit of this build
+ *  (CM_E_LIMIT): the model needs MAX_FACES=20000, this build (profile
+ *  terminal) has 16384".
+ * @param prog     program name (may be NULL)
+ * @param subject  file or device concerned (may be NULL)
+ */
+void cm_report_status(FILE *f, const char *prog, const char *subject, const cm_status *st);
+
+/** Format the same text into buf (always NUL-terminated); returns buf. */
+char *cm_format_status(char *buf, size_t cap, const cm_status *st);
+
+#endif /* CM_REPORT_H */

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# gate_selftest.sh CC NM STACK_CHECK TMPDIR - prove the gates can fail.
+#
+# A gate that never fails asserts nothing: compile fixtures with recursion,
+# an oversized frame, malloc and printf, and require check_stack and
+# check_noheap.sh to reject them, naming the culprit.
+set -u
+cc=$1 nm=$2 stack=$3 tmp=$4
+here=$(cd "$(dirname "$0")" && pwd)
+mkdir -p "$tmp"
+fail=0
+(cd "$tmp" && $cc -std=c11 -O0 -fcallgraph-info=su -c "$here/fixtures/bad_recursion.c" -o bad_recursion.o) || exit 1
+out=$("$stack" --fn-max 8192 --budget 65536 "$tmp/bad_recursion.ci")
+if [ $? -eq 0 ]; then echo "stack gate accepted recursion"; fail=1; fi
+grep -q 'recursion: fixture_depth' <<<"$out" || { echo "stack gate did not name the recursion: $out"; fail=1; }
+grep -Eq 'fixture_big uses (19|20)[0-9]{3} bytes' <<<"$out" || { echo "stack gate did not name the big frame: $out"; fail=1; }
+$cc -std=c11 -O2 -c "$here/fixtures/bad_heap.c" -o "$tmp/bad_heap.o" || exit 1
+rm -f "$tmp/bad_heap.a" && ar rcs "$tmp/bad_heap.a" "$tmp/bad_heap.o"
+out=$("$here/check_noheap.sh" "$nm" "$tmp/bad_heap.a" "$here/noheap_allow.txt")
+if [ $? -eq 0 ]; then echo "no-heap gate accepted malloc"; fail=1; fi
+grep -qx '  malloc' <<<"$out" || { echo "no-heap gate did not name malloc: $out"; fail=1; }
+grep -Eqx '  (printf|puts)' <<<"$out" || { echo "no-heap gate did not name stdio: $out"; fail=1; }
+[ $fail -eq 0 ] && echo "gate self-test: recursion, 20 kB frame, malloc and stdio are all rejected"
+exit $fail
