@@ -1,0 +1,244 @@
+# curvemesh - one non-recursive Makefile.
+#
+#   make [all]            library, tools and terminal binaries for PROFILE
+#   make check            installs missing Debian packages (deps), then every test and gate
+#   make demo             encode + decode a bundled model (not yet: see README)
+#   make print-limits     the compile-time limits of PROFILE
+#   make CROSS_COMPILE=aarch64-linux-gnu-    cross build (arm-linux-gnueabihf- too)
+#   make install PREFIX=/usr DESTDIR=/tmp/stage
+#   V=1 shows the commands.
+#
+# Comments stay on their own lines: in GNU make `VAR ?= x  # note` keeps the
+# spaces before '#' in the value.
+
+.DEFAULT_GOAL := all
+.DELETE_ON_ERROR:
+.SUFFIXES:
+SHELL := /bin/bash
+
+# ---- toolchain (cross-friendly: CC from the environment wins, CROSS_COMPILE prefixes the defaults) ----
+CROSS_COMPILE ?=
+ifeq ($(origin CC),default)
+CC := $(CROSS_COMPILE)gcc
+endif
+ifeq ($(origin AR),default)
+AR := $(CROSS_COMPILE)ar
+endif
+NM ?= $(CROSS_COMPILE)nm
+PKG_CONFIG ?= $(CROSS_COMPILE)pkg-config
+# tools that run on the build machine during the build (stack checker)
+HOSTCC ?= cc
+
+# board profile: fixedcfg/profiles/$(PROFILE).h
+PROFILE ?= terminal
+PROFILES := terminal host tiny
+ifeq ($(filter $(PROFILE),$(PROFILES)),)
+$(error PROFILE=$(PROFILE) is not one of: $(PROFILES))
+endif
+
+TRIPLET := $(shell $(CC) -dumpmachine 2>/dev/null)
+ifeq ($(TRIPLET),)
+$(error cannot run '$(CC) -dumpmachine': is the compiler installed? (make deps))
+endif
+CC_IS_CLANG := $(shell $(CC) --version 2>/dev/null | grep -qi clang && echo 1)
+BUILD_ROOT ?= build
+# objects of one (architecture, profile) pair
+bdir = $(BUILD_ROOT)/$(TRIPLET)-$(1)
+B := $(call bdir,$(PROFILE))
+
+# ---- install (GNU conventions; DESTDIR is never set here) ----
+PREFIX ?= /usr/local
+BINDIR ?= $(PREFIX)/bin
+
+V ?= 0
+ifeq ($(V),1)
+Q :=
+else
+Q := @
+endif
+# "  CC      file" progress lines, silenced by make -s
+ifneq ($(findstring s,$(firstword -$(MAKEFLAGS))),)
+say :=
+else
+say = @echo "  $(1)$(2)"
+endif
+
+# ---- flags: the project's own, kept apart from the user's CFLAGS/CPPFLAGS/LDFLAGS ----
+CFLAGS ?= -O2 -g
+# binary64 everywhere, no FMA contraction: x86-64 and ARM rebuild bit-identical surfaces
+CM_STD := -std=c11 -ffp-contract=off -fno-fast-math
+ifneq ($(filter i386-% i486-% i586-% i686-%,$(TRIPLET)),)
+CM_STD += -msse2 -mfpmath=sse
+endif
+CM_WARN := -Wall -Wextra -Wundef -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wcast-align \
+           -Wformat=2 -Wvla -Walloca -Wdouble-promotion -Werror
+# the heap-free decoder and kernels also refuse silent narrowing
+CM_WARN_DECODER := $(CM_WARN) -Wconversion
+# stack: per-function budget at compile time (the profile's CM_STACK_FN_MAX),
+# call graph for check-stack (gcc only; clang gets the frame-size warning)
+limit_of = $(shell echo $(2) | $(CC) -E -P -Ifixedcfg -DCM_PROFILE='"profiles/$(1).h"' -include cm_limits.h - \
+	2>/dev/null | tail -n 1)
+ifeq ($(CC_IS_CLANG),1)
+stack_flags = -Wframe-larger-than=$(call limit_of,$(1),CM_STACK_FN_MAX)
+else
+stack_flags = -fstack-usage -fcallgraph-info=su -Wstack-usage=$(call limit_of,$(1),CM_STACK_FN_MAX)
+endif
+ifeq ($(CM_NO_STACK_FLAGS),1)
+stack_flags =
+endif
+# the decoder sees only fixedcfg and its own headers; everything else may also use platform/
+CM_INC := -Ifixedcfg -Idecoder/include
+CM_INC_ALL := $(CM_INC) -Iplatform -Ihost_tools
+DEPFLAGS = -MMD -MP
+CMOCKA_CFLAGS = $(shell $(PKG_CONFIG) --cflags cmocka 2>/dev/null)
+CMOCKA_LIBS = $(shell $(PKG_CONFIG) --libs cmocka 2>/dev/null || echo -lcmocka)
+# the test binaries abort on any heap call made by project code (check-noheap, layer b)
+NOHEAP_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free,--wrap=aligned_alloc,--wrap=posix_memalign
+
+# ---- sources ----
+KERNEL_SRC := $(sort $(wildcard decoder/kernels/*.c))
+DECODER_SRC := $(sort $(wildcard decoder/src/*.c))
+LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC)
+UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
+UNIT_NAMES := $(patsubst tests/unit/%.c,%,$(UNIT_SRC))
+
+# ---- per-profile rules: objects, library, unit tests ----
+# $(1) = profile.  Objects of decoder/ get the strict warnings and the stack flags.
+define PROFILE_RULES
+STACK_FLAGS_$(1) := $(call stack_flags,$(1))
+$(call bdir,$(1))/decoder/%.o: decoder/%.c
+	@mkdir -p $$(@D)
+	$$(call say,CC      ,$$@)
+	$$(Q)$$(CC) $$(CM_INC) -DCM_PROFILE='"profiles/$(1).h"' $$(CPPFLAGS) $$(CM_STD) $$(CM_WARN_DECODER) \
+		$$(STACK_FLAGS_$(1)) $$(CFLAGS) $$(DEPFLAGS) -c $$< -o $$@
+
+$(call bdir,$(1))/%.o: %.c
+	@mkdir -p $$(@D)
+	$$(call say,CC      ,$$@)
+	$$(Q)$$(CC) $$(CM_INC_ALL) -DCM_PROFILE='"profiles/$(1).h"' -DCM_EXPECT_PROFILE='"$(1)"' $$(CPPFLAGS) \
+		$$(CM_STD) $$(CM_WARN) $$(CMOCKA_CFLAGS) $$(CFLAGS) $$(DEPFLAGS) -c $$< -o $$@
+
+$(call bdir,$(1))/libcmdecoder.a: $(patsubst %.c,$(call bdir,$(1))/%.o,$(LIB_SRC))
+	$$(call say,AR      ,$$@)
+	$$(Q)rm -f $$@ && $$(AR) rcs $$@ $$^
+
+$(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES)): $(call bdir,$(1))/tests/unit/%: $(call bdir,$(1))/tests/unit/%.o $(call bdir,$(1))/tests/unit/noheap_wrap.o \
+		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(CMOCKA_LIBS) -lm
+
+$(call bdir,$(1))/tests/unit/kernel_vectors: $(call bdir,$(1))/tests/unit/kernel_vectors.o $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
+
+$(call bdir,$(1))/cm-limits: $(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/platform/cm_limits_main.o \
+		$(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
+
+unit-tests-$(1): $(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES) kernel_vectors)
+endef
+$(foreach p,$(PROFILES),$(eval $(call PROFILE_RULES,$(p))))
+LIMIT_TOOLS := $(foreach p,$(PROFILES),$(call bdir,$(p))/cm-limits)
+
+.PRECIOUS: $(BUILD_ROOT)/%.o
+.PHONY: all lib unit-tests $(addprefix unit-tests-,$(PROFILES))
+
+all: lib $(B)/cm-limits
+lib: $(B)/libcmdecoder.a
+unit-tests: unit-tests-$(PROFILE)
+
+-include $(shell find $(BUILD_ROOT) -name '*.d' 2>/dev/null)
+
+# ---- limits ----
+.PHONY: print-limits
+print-limits: $(B)/cm-limits
+	$(Q)$(B)/cm-limits
+
+# ---- checks ----
+# Each suite prints TAP-like "ok"/"not ok" lines; tests/tools/run_suites.sh
+# runs them all and ends with "N passed, N failed".
+STACK_CHECK := $(BUILD_ROOT)/tools/check_stack
+$(STACK_CHECK): tests/tools/check_stack.c
+	@mkdir -p $(@D)
+	$(call say,HOSTCC  ,$@)
+	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
+
+.PHONY: check check-run check-noheap check-stack check-cross check-clang deps
+# `make check` on a fresh machine: install what is missing, then test.
+check:
+	$(Q)$(MAKE) --no-print-directory deps
+	$(Q)$(MAKE) --no-print-directory check-run
+
+CROSS_TARGETS := aarch64-linux-gnu- arm-linux-gnueabihf-
+
+check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) $(call bdir,terminal)/libcmdecoder.a \
+		$(LIMIT_TOOLS) $(STACK_CHECK)
+	$(Q)tests/tools/run_suites.sh \
+		"unit-host:$(call bdir,host)/tests/unit" \
+		"unit-terminal:$(call bdir,terminal)/tests/unit" \
+		"unit-tiny:$(call bdir,tiny)/tests/unit" \
+		"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
+		"gate:gates-reject-bad-code:tests/tools/gate_selftest.sh $(HOSTCC) nm $(STACK_CHECK) $(BUILD_ROOT)/gate-selftest" \
+		"gate:readme-tables:$(MAKE) --no-print-directory -s check-readme" \
+		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
+		"gate:stack-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack" \
+		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
+		"gate:cross:$(MAKE) --no-print-directory -s check-cross"
+
+# layer (a) of the no-heap gate: the decoder/kernel archive may only call allowlisted libc/libm symbols
+check-noheap: $(B)/libcmdecoder.a
+	$(Q)tests/tools/check_noheap.sh $(NM) $< tests/tools/noheap_allow.txt
+
+check-stack: $(B)/libcmdecoder.a $(STACK_CHECK)
+	$(Q)$(STACK_CHECK) --fn-max $(call limit_of,$(PROFILE),CM_STACK_FN_MAX) \
+		--budget $(call limit_of,$(PROFILE),CM_STACK_BUDGET) $$(find $(B)/decoder -name '*.ci' | sort)
+
+# gcc built the suites above; clang builds and runs them again with ASan+UBSan
+CLANG_SAN := -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+check-clang:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" unit-tests-host unit-tests-tiny
+	$(Q)tests/tools/run_suites.sh --quiet \
+		"clang-host:$$(ls -d $(BUILD_ROOT)/clang-san/*-host)/tests/unit" \
+		"clang-tiny:$$(ls -d $(BUILD_ROOT)/clang-san/*-tiny)/tests/unit"
+
+# unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine
+check-cross: $(call bdir,host)/tests/unit/kernel_vectors
+	$(Q)for x in $(CROSS_TARGETS); do \
+		$(MAKE) --no-print-directory -s CROSS_COMPILE=$$x CC=$${x}gcc AR=$${x}ar PKG_CONFIG=$${x}pkg-config \
+			unit-tests-host unit-tests-terminal || exit 1; \
+	done
+	$(Q)tests/tools/check_cross.sh $(BUILD_ROOT) $(call bdir,host)/tests/unit/kernel_vectors $(CROSS_TARGETS)
+
+# ---- Debian packages ----
+# Host tools, tests, cross toolchains and the foreign-architecture libraries the cross tests link.
+DEPS_ARCHS := arm64 armhf
+DEPS_PKGS := gcc make pkgconf libcmocka-dev clang libclang-rt-14-dev \
+	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf qemu-user \
+	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf
+deps:
+	$(Q)DEPS_ARCHS="$(DEPS_ARCHS)" tests/tools/deps.sh $(DEPS_PKGS)
+
+# ---- README's generated tables (limits of every profile, error codes) ----
+.PHONY: readme check-readme
+readme: $(LIMIT_TOOLS)
+	$(Q)tests/tools/readme_tables.sh $(BUILD_ROOT) $(TRIPLET)
+check-readme: $(LIMIT_TOOLS)
+	$(Q)tests/tools/readme_tables.sh --check $(BUILD_ROOT) $(TRIPLET)
+
+# ---- demo (needs the encoder and decoder of later work) ----
+.PHONY: demo bench
+demo:
+	@echo "make demo: not yet - the encoder and decoder are not built yet (see README, Status)."
+
+bench:
+	@echo "make bench: not yet - nothing to benchmark before the encoder exists (see README, Status)."
+
+# ---- install / clean ----
+.PHONY: install clean
+install: $(B)/cm-limits
+	install -D -m 0755 $(B)/cm-limits $(DESTDIR)$(BINDIR)/cm-limits
+
+clean:
+	rm -rf $(BUILD_ROOT)
