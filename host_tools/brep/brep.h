@@ -1,0 +1,94 @@
+/*
+ * brep.h - the workstation's boundary representation: faces, each an exact
+ * NURBS surface with an outer loop and holes made of 3D boundary curves.
+ *
+ * Every input form lands here the same way: IGES 144 trimmed surfaces,
+ * 143 bounded surfaces, 186/514/510 B-rep solids and untrimmed surfaces
+ * (a face bounded by its parameter rectangle).  Topology (shared edges) is
+ * not part of this layer: IGES 144 files share nothing, so the curve mesh
+ * (mesh/cmesh.h) derives it for all inputs alike.
+ *
+ * A loop is a sequence of segments, each an owned curve traversed over its
+ * whole domain in loop direction (importers cut and reverse as needed).
+ * Orientation (spec §1): walking along a loop with the face normal towards
+ * the viewer, the material is on the left; the outer loop runs
+ * counter-clockwise, holes clockwise.  The face normal is Su x Sv, negated
+ * when `flip` is set.  brep_orient_loops (face_domain.c) enforces this.
+ */
+#ifndef BREP_H
+#define BREP_H
+
+#include <stdint.h>
+
+#include "geom/hnurbs.h"
+#include "iges/iges_geom.h"
+
+typedef struct brep_loop {
+    int first, n; /* segments [first, first + n) */
+} brep_loop;
+
+typedef struct brep_face {
+    int surf;             /* index into surfs */
+    int first_loop, nloops; /* loops[first_loop] is the outer loop */
+    int natural;          /* the outer loop is the surface's parameter rectangle */
+    int flip;             /* face normal = -(Su x Sv) */
+    int has_color;
+    uint32_t rgb;         /* 0xRRGGBB when has_color */
+    int src_de, src_type; /* the IGES entity that made the face (144, 143, 510, or a surface) */
+    int surf_type;        /* IGES type of its base surface (128, 120, 190, ...) */
+    int shell;            /* index of its shell (186/514), -1 if none */
+    int instance;         /* outermost subfigure instance (408) placing it, 0 for none */
+} brep_face;
+
+typedef struct brep_model {
+    hsurf *surfs;
+    int nsurfs, capsurfs;
+    brep_face *faces;
+    int nfaces, capfaces;
+    brep_loop *loops;
+    int nloops, caploops;
+    hcurve *segs;
+    int nsegs, capsegs;
+    int nshells;
+    hbox box;             /* of all boundary curves (millimetres) */
+    double resolution_mm; /* the file's minimum resolution, converted; 0 if none */
+    int faces_failed;     /* faces skipped because they could not be built (warned) */
+} brep_model;
+
+void brep_free(brep_model *m);
+
+/** Diagonal of the model box (0 for an empty model). */
+double brep_diag(const brep_model *m);
+
+/**
+ * The model's geometric tolerance (vertex merging, projection acceptance):
+ * 1e-6 of the diagonal (spec 5.1), or the file's declared resolution when
+ * that is coarser, capped at 1e-4 of the diagonal.  Never absolute.
+ */
+double brep_tolerance(const brep_model *m);
+
+/* building blocks for importers (all return CM_OK or an allocation error) */
+CM_NODISCARD cm_err brep_add_surf(brep_model *m, hsurf *s, int *index, cm_status *st); /* moves s */
+CM_NODISCARD cm_err brep_add_seg(brep_model *m, hcurve *c, cm_status *st);             /* moves c */
+CM_NODISCARD cm_err brep_add_loop(brep_model *m, int first_seg, int nseg, cm_status *st);
+CM_NODISCARD cm_err brep_add_face(brep_model *m, const brep_face *f, cm_status *st);
+
+/** Roll the model back to the given counts (drops a half-built face). */
+void brep_truncate(brep_model *m, int nsurfs, int nfaces, int nloops, int nsegs);
+
+/** Counts per kind of IGES input, for `cmz info`. */
+typedef struct brep_import_stats {
+    int faces_144, faces_143, faces_510, faces_untrimmed;
+    int instances;        /* expanded 408 subfigure instances */
+    int face_entities;    /* distinct 144/143/510 entities imported (instances place some several times) */
+} brep_import_stats;
+
+/**
+ * Import every face of an IGES file into m (model space, millimetres).
+ * A face that cannot be built is skipped with a warning in f->warn naming
+ * its entity and line; the import fails only on errors that leave no
+ * usable model (none of the file's faces could be read).
+ */
+CM_NODISCARD cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_status *st);
+
+#endif /* BREP_H */

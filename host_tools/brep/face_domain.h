@@ -1,0 +1,70 @@
+/*
+ * face_domain.h - a face's trimmed region in its surface's parameter
+ * space: the loops as (u,v) polygons, oriented per spec §1, with an
+ * inside test and a sampler.
+ *
+ * The polygons come from projecting samples of the 3D boundary curves onto
+ * the surface (spec §12 allows this when no pcurves are used), following
+ * each loop by continuation so that a loop crossing the seam of a closed
+ * surface stays continuous ("unwrapped": u may leave [u0,u1] by a period).
+ * The face's surface is evaluated at wrapped parameters.
+ *
+ * A face whose loops wind around a closed surface (a band of a full
+ * cylinder bounded by two circles, no seam edge) has no closed polygon in
+ * (u,v); its two winding loops are joined along the seam into one polygon.
+ */
+#ifndef FACE_DOMAIN_H
+#define FACE_DOMAIN_H
+
+#include "brep/brep.h"
+#include "geom/hproject.h"
+
+typedef struct fd_loop {
+    int first, n;   /* polygon vertices [first, first+n); closed implicitly */
+    double area;    /* signed (u,v) area after orientation */
+    int winds;      /* net turns around a closed direction (0 for an ordinary loop) */
+} fd_loop;
+
+typedef struct face_domain {
+    int face;
+    hsurf_param sp;
+    cm_vec2 *uv;      /* polygon vertices of all loops (unwrapped) */
+    cm_vec3 *xyz;     /* the boundary point each vertex came from */
+    int npts, cap;
+    fd_loop *loops;   /* loops[0] the outer region polygon, then holes */
+    int nloops;
+    double umin, umax, vmin, vmax; /* box of the outer polygon */
+    double max_gap;   /* largest distance from a boundary sample to the surface */
+    int reversed;     /* loops were reversed to match the face normal */
+    int reordered;    /* the outer loop was not the file's first loop */
+    int joined_seam;  /* winding loops were joined along the seam */
+} face_domain;
+
+/**
+ * Build the parameter domain of face `face`, and fix the model's loops in
+ * place (spec §1): reverse loops that run the wrong way for the face
+ * normal, move the outer loop first.  `tol` is the model's geometric
+ * tolerance (closedness of surfaces, projection acceptance).
+ */
+CM_NODISCARD cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, cm_status *st);
+
+void face_domain_free(face_domain *fd);
+
+/** 1 if (u,v) is inside the outer polygon and outside every hole. */
+int face_domain_inside(const face_domain *fd, cm_vec2 uv);
+
+/** Distance in (u,v) from a point to the nearest polygon edge. */
+double face_domain_edge_dist(const face_domain *fd, cm_vec2 uv);
+
+/** Surface point and unit normal (face orientation: flipped with the face) at (u,v). */
+CM_NODISCARD cm_err face_domain_eval(const brep_model *m, const face_domain *fd, double u, double v, cm_vec3 *P,
+                                     cm_vec3 *N, cm_status *st);
+
+/**
+ * Up to `n` points well inside the face (away from its boundary),
+ * deterministic for a given `seed`.  Returns the number written (>= 1 for
+ * any face with a non-empty region).
+ */
+int face_domain_sample(const face_domain *fd, int n, uint32_t seed, cm_vec2 *out);
+
+#endif /* FACE_DOMAIN_H */

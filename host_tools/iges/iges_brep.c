@@ -1,0 +1,798 @@
+/*
+ * iges_brep.c - IGES faces into the workstation B-rep (see brep/brep.h).
+ *
+ * Which entities are faces: every 144 trimmed surface, 143 bounded
+ * surface, 510 face (through 186 solids and 514 shells), and every
+ * surface entity that nothing references (an untrimmed patch).  Entities
+ * inside a 308 subfigure definition are faces only through the 408
+ * instances that place them.  "Referenced" means structurally (a 144's
+ * base surface, a shell's faces, a definition's members...), not through
+ * 402 groups or 406 properties, which annotate but do not own.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "brep/brep.h"
+#include "cm/cm_project.h"
+#include "iges/iges_file.h"
+#include "iges/iges_geom.h"
+
+#define MAX_INSTANCE_DEPTH 16
+
+typedef struct importer {
+    iges_file *f;
+    brep_model *m;
+    brep_import_stats *stats;
+    cm_status *st;
+    unsigned char *ref;   /* per entity index: structurally referenced */
+    int instance;         /* current 408 instance counter (0 = top level) */
+} importer;
+
+static int ent_index(const iges_file *f, const iges_entity *e)
+{
+    return (int)(e - f->ents);
+}
+
+static void mark_ref(importer *im, const iges_entity *e, int i)
+{
+    if (i < 0 || i >= e->nparams || e->params[i].kind != IGES_P_NUM)
+        return;
+    double v = e->params[i].num;
+    if (!(fabs(v) < 1e9))
+        return;
+    const iges_entity *t = iges_by_de(im->f, (int)fabs(v));
+    if (t)
+        im->ref[ent_index(im->f, t)] = 1;
+}
+
+/* Mark every entity that another entity owns through its parameters. */
+static void mark_references(importer *im)
+{
+    const iges_file *f = im->f;
+    for (int k = 0; k < f->nents; k++) {
+        const iges_entity *e = &f->ents[k];
+        if (e->bad)
+            continue;
+        int n = e->nparams;
+        switch (e->type) {
+        case 102: /* N, DE... */
+            for (int i = 1; i < n && i <= iges_int_or(e, 0, 0); i++)
+                mark_ref(im, e, i);
+            break;
+        case 118:
+            mark_ref(im, e, 0);
+            mark_ref(im, e, 1);
+            break;
+        case 120:
+            mark_ref(im, e, 0);
+            mark_ref(im, e, 1);
+            break;
+        case 122:
+            mark_ref(im, e, 0);
+            break;
+        case 141: { /* TYPE PREF SPTR N (CRV SENSE K PS...)... */
+            mark_ref(im, e, 2);
+            int pos = 4;
+            for (int c = 0; c < iges_int_or(e, 3, 0) && pos + 2 < n; c++) {
+                mark_ref(im, e, pos);
+                int kk = iges_int_or(e, pos + 2, 0);
+                for (int j = 0; j < kk; j++)
+                    mark_ref(im, e, pos + 3 + j);
+                pos += 3 + (kk > 0 ? kk : 0);
+            }
+            break;
+        }
+        case 142:
+            mark_ref(im, e, 1);
+            mark_ref(im, e, 2);
+            mark_ref(im, e, 3);
+            break;
+        case 143:
+            mark_ref(im, e, 1);
+            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+                mark_ref(im, e, 3 + i);
+            break;
+        case 144:
+            mark_ref(im, e, 0);
+            mark_ref(im, e, 3);
+            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+                mark_ref(im, e, 4 + i);
+            break;
+        case 186:
+            mark_ref(im, e, 0);
+            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+                mark_ref(im, e, 3 + 2 * i);
+            break;
+        case 190: case 192: case 194: case 196: case 198:
+            for (int i = 0; i < n && i < 5; i++)
+                if (e->params[i].kind == IGES_P_NUM && e->params[i].num == floor(e->params[i].num) &&
+                    e->params[i].num > 0) {
+                    const iges_entity *t = iges_by_de(f, (int)e->params[i].num);
+                    if (t && (t->type == 116 || t->type == 123))
+                        im->ref[ent_index(f, t)] = 1;
+                }
+            break;
+        case 308:
+            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+                mark_ref(im, e, 3 + i);
+            break;
+        case 408:
+            mark_ref(im, e, 0);
+            break;
+        case 504:
+            for (int i = 0; i < iges_int_or(e, 0, 0); i++) {
+                mark_ref(im, e, 1 + 5 * i);
+                mark_ref(im, e, 2 + 5 * i);
+                mark_ref(im, e, 4 + 5 * i);
+            }
+            break;
+        case 508: {
+            int pos = 1;
+            for (int c = 0; c < iges_int_or(e, 0, 0) && pos + 4 < n; c++) {
+                mark_ref(im, e, pos + 1);
+                int kk = iges_int_or(e, pos + 4, 0);
+                for (int j = 0; j < kk; j++)
+                    mark_ref(im, e, pos + 6 + 2 * j);
+                pos += 5 + 2 * (kk > 0 ? kk : 0);
+            }
+            break;
+        }
+        case 510:
+            mark_ref(im, e, 0);
+            for (int i = 0; i < iges_int_or(e, 1, 0); i++)
+                mark_ref(im, e, 3 + i);
+            break;
+        case 514:
+            for (int i = 0; i < iges_int_or(e, 0, 0); i++)
+                mark_ref(im, e, 1 + 2 * i);
+            break;
+        default:
+            break;
+        }
+    }
+}
+
+/* ---- colours ---- */
+
+static int face_color(importer *im, const iges_entity *e, uint32_t *rgb)
+{
+    static const uint32_t palette[9] = {0, 0x000000, 0xff0000, 0x00ff00, 0x0000ff,
+                                        0xffff00, 0xff00ff, 0x00ffff, 0xffffff};
+    if (e->color > 0 && e->color <= 8) {
+        *rgb = palette[e->color];
+        return 1;
+    }
+    if (e->color < 0) {
+        const iges_entity *c = iges_by_de(im->f, -e->color);
+        if (c && c->type == 314 && !c->bad) {
+            uint32_t v = 0;
+            for (int i = 0; i < 3; i++) {
+                double pc = iges_num_or(c, i, 0.0);
+                pc = pc < 0 ? 0 : pc > 100 ? 100 : pc;
+                v = (v << 8) | (uint32_t)lround(pc * 2.55);
+            }
+            im->f->ents[ent_index(im->f, c)].used = 1;
+            *rgb = v;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* ---- faces ---- */
+
+/* skip a face: warn with the reason already in f->err and forget the error */
+static void face_failed(importer *im, const iges_entity *e, int nsurfs, int nfaces, int nloops, int nsegs)
+{
+    brep_truncate(im->m, nsurfs, nfaces, nloops, nsegs);
+    iges_warn(im->f, e->pd_line, "face %d (%s, DE %d) skipped: %s", im->m->nfaces + im->m->faces_failed + 1,
+              iges_type_name(e->type), e->de, im->f->err[0] ? im->f->err : "unknown reason");
+    im->f->err[0] = 0;
+    im->f->err_line = 0;
+    im->m->faces_failed++;
+    if (im->st)
+        cm_status_init(im->st);
+}
+
+/* length of a curve by 64 chords */
+static double curve_length(const hcurve *c)
+{
+    cm_curve v = hcurve_view(c);
+    double t0, t1, len = 0;
+    hcurve_domain(c, &t0, &t1);
+    cm_vec3 prev = cm_v3(0, 0, 0);
+    for (int k = 0; k <= 64; k++) {
+        cm_vec3 d[1];
+        if (cm_curve_eval(&v, t0 + (t1 - t0) * k / 64.0, 0, d, NULL) != CM_OK)
+            return 0;
+        if (k)
+            len += cm_dist(d[0], prev);
+        prev = d[0];
+    }
+    return len;
+}
+
+/*
+ * Add a face from its loops (lists of model-space curves in loop order;
+ * loops[0] outer unless `natural`), building the surface over their extent.
+ * Moves the curves out of the lists.
+ */
+static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const haffine *surf_parent,
+                       hcurve_list *loops, int nloops, int natural, int flip, int shell)
+{
+    brep_model *m = im->m;
+    hbox box = hbox_empty();
+    for (int l = 0; l < nloops; l++)
+        for (int i = 0; i < loops[l].n; i++)
+            hbox_add_curve(&box, &loops[l].c[i]);
+    hsurf s = {0};
+    cm_err e = iges_surface(im->f, surf_de, surf_parent, &box, &s, im->st);
+    if (e != CM_OK)
+        return e;
+    brep_face face;
+    memset(&face, 0, sizeof face);
+    face.src_de = fe->de;
+    face.src_type = fe->type;
+    face.surf_type = iges_by_de(im->f, surf_de) ? iges_by_de(im->f, surf_de)->type : 0;
+    face.flip = flip;
+    face.shell = shell;
+    face.instance = im->instance;
+    face.natural = natural;
+    face.first_loop = m->nloops;
+    uint32_t rgb;
+    if (face_color(im, fe, &rgb) || face_color(im, iges_by_de(im->f, surf_de), &rgb)) {
+        face.has_color = 1;
+        face.rgb = rgb;
+    }
+    if ((e = brep_add_surf(m, &s, &face.surf, im->st)) != CM_OK)
+        return e;
+    const hsurf *sf = &m->surfs[face.surf];
+    if (natural) {
+        /* the parameter rectangle, counter-clockwise in (u,v): v=v0, u=u1, v=v1 back, u=u0 back */
+        double u0, u1, v0, v1;
+        hsurf_domain(sf, &u0, &u1, &v0, &v1);
+        hcurve side[4] = {{0}, {0}, {0}, {0}};
+        if ((e = hsurf_iso_v(sf, v0, &side[0], im->st)) != CM_OK || (e = hsurf_iso_u(sf, u1, &side[1], im->st)) != CM_OK ||
+            (e = hsurf_iso_v(sf, v1, &side[2], im->st)) != CM_OK || (e = hsurf_iso_u(sf, u0, &side[3], im->st)) != CM_OK) {
+            for (int i = 0; i < 4; i++)
+                hcurve_free(&side[i]);
+            return e;
+        }
+        hcurve_reverse(&side[2]);
+        hcurve_reverse(&side[3]);
+        for (int i = 0; i < 4; i++)
+            hbox_add_curve(&box, &side[i]);
+        double diag = box.empty ? 0 : cm_dist(box.lo, box.hi);
+        int first = m->nsegs;
+        for (int i = 0; i < 4 && e == CM_OK; i++) {
+            if (curve_length(&side[i]) <= 1e-9 * diag) { /* a collapsed side (a pole) */
+                hcurve_free(&side[i]);
+                continue;
+            }
+            e = brep_add_seg(m, &side[i], im->st);
+        }
+        for (int i = 0; i < 4; i++)
+            hcurve_free(&side[i]);
+        if (e == CM_OK)
+            e = brep_add_loop(m, first, m->nsegs - first, im->st);
+        if (e != CM_OK)
+            return e;
+        face.nloops = 1;
+    }
+    double diag = box.empty ? 0 : cm_dist(box.lo, box.hi);
+    for (int l = 0; l < nloops; l++) {
+        int first = m->nsegs;
+        for (int i = 0; i < loops[l].n; i++) {
+            if (curve_length(&loops[l].c[i]) <= 1e-9 * diag)
+                continue; /* degenerate boundary piece (exporters write them at poles) */
+            if ((e = brep_add_seg(m, &loops[l].c[i], im->st)) != CM_OK)
+                return e;
+        }
+        if (m->nsegs == first) {
+            iges_warn(im->f, fe->pd_line, "DE %d: loop %d has no non-degenerate curve; dropped", fe->de, l + 1);
+            continue;
+        }
+        if ((e = brep_add_loop(m, first, m->nsegs - first, im->st)) != CM_OK)
+            return e;
+        face.nloops++;
+    }
+    if (face.nloops == 0)
+        return iges_entity_error(im->f, fe, "no usable boundary"), cm_fail(im->st, CM_E_IGES, "face");
+    if (!box.empty) {
+        hbox_add(&m->box, box.lo);
+        hbox_add(&m->box, box.hi);
+    }
+    return brep_add_face(m, &face, im->st);
+}
+
+/* model-space curves of one boundary entity into a list; reversed when `reverse` */
+static cm_err boundary_curves(importer *im, int de, const haffine *map, int reverse, hcurve_list *out)
+{
+    hcurve_list tmp = {0};
+    cm_err e = iges_curve(im->f, de, map, &tmp, im->st);
+    if (e == CM_OK && reverse) {
+        for (int i = 0; i < tmp.n / 2; i++) {
+            hcurve t = tmp.c[i];
+            tmp.c[i] = tmp.c[tmp.n - 1 - i];
+            tmp.c[tmp.n - 1 - i] = t;
+        }
+        for (int i = 0; i < tmp.n; i++)
+            hcurve_reverse(&tmp.c[i]);
+    }
+    for (int i = 0; i < tmp.n && e == CM_OK; i++)
+        e = hcurve_list_push(out, &tmp.c[i], im->st);
+    hcurve_list_free(&tmp);
+    return e;
+}
+
+static cm_err face_144(importer *im, const iges_entity *e, const haffine *parent)
+{
+    iges_file *f = im->f;
+    haffine map;
+    int pts, n1, n2, pto;
+    if (iges_entity_xform(f, e, &map) || iges_ptr(f, e, 0, 0, &pts) || iges_int(f, e, 1, &n1) ||
+        iges_int(f, e, 2, &n2))
+        return cm_fail(im->st, CM_E_IGES, "144");
+    map = haffine_compose(parent, &map);
+    if (n2 < 0 || n2 > 100000 || 4 + n2 > e->nparams)
+        return iges_entity_error(f, e, "%d inner boundaries do not fit its %d parameters", n2, e->nparams),
+               cm_fail(im->st, CM_E_IGES, "144");
+    int nl = 1 + n2;
+    hcurve_list *loops = calloc((size_t)nl, sizeof *loops);
+    if (!loops)
+        return cm_fail(im->st, CM_E_IO, "out of memory");
+    cm_err err = CM_OK;
+    if (n1 != 0) {
+        if (iges_ptr(f, e, 3, 0, &pto))
+            err = cm_fail(im->st, CM_E_IGES, "144");
+        else
+            err = boundary_curves(im, pto, &map, 0, &loops[0]);
+    }
+    for (int i = 0; i < n2 && err == CM_OK; i++) {
+        int pti;
+        if (iges_ptr(f, e, 4 + i, 0, &pti))
+            err = cm_fail(im->st, CM_E_IGES, "144");
+        else
+            err = boundary_curves(im, pti, &map, 0, &loops[1 + i]);
+    }
+    if (err == CM_OK)
+        err = add_face(im, e, pts, &map, n1 != 0 ? loops : loops + 1, n1 != 0 ? nl : n2, n1 == 0, 0, -1);
+    for (int i = 0; i < nl; i++)
+        hcurve_list_free(&loops[i]);
+    free(loops);
+    if (err == CM_OK)
+        im->stats->faces_144++;
+    return err;
+}
+
+static cm_err face_143(importer *im, const iges_entity *e, const haffine *parent)
+{
+    iges_file *f = im->f;
+    haffine map;
+    int sptr, n;
+    if (iges_entity_xform(f, e, &map) || iges_ptr(f, e, 1, 0, &sptr) || iges_int(f, e, 2, &n))
+        return cm_fail(im->st, CM_E_IGES, "143");
+    map = haffine_compose(parent, &map);
+    if (n < 1 || n > 100000 || 3 + n > e->nparams)
+        return iges_entity_error(f, e, "%d boundaries do not fit its %d parameters", n, e->nparams),
+               cm_fail(im->st, CM_E_IGES, "143");
+    hcurve_list *loops = calloc((size_t)n, sizeof *loops);
+    if (!loops)
+        return cm_fail(im->st, CM_E_IO, "out of memory");
+    cm_err err = CM_OK;
+    for (int b = 0; b < n && err == CM_OK; b++) {
+        int bde;
+        if (iges_ptr(f, e, 3 + b, 0, &bde)) {
+            err = cm_fail(im->st, CM_E_IGES, "143");
+            break;
+        }
+        const iges_entity *bd = iges_by_de(f, bde);
+        haffine bmap;
+        int nc;
+        if (bd->type != 141 || bd->bad || iges_entity_xform(f, bd, &bmap) || iges_int(f, bd, 3, &nc)) {
+            err = iges_entity_error(f, e, "boundary %d (DE %d) is not a readable 141 boundary", b + 1, bde);
+            break;
+        }
+        bmap = haffine_compose(&map, &bmap);
+        int pos = 4;
+        for (int c = 0; c < nc && err == CM_OK; c++) {
+            int crv, sense, kk;
+            if (iges_ptr(f, bd, pos, 0, &crv) || iges_int(f, bd, pos + 1, &sense) || iges_int(f, bd, pos + 2, &kk) ||
+                kk < 0) {
+                err = cm_fail(im->st, CM_E_IGES, "141");
+                break;
+            }
+            err = boundary_curves(im, crv, &bmap, sense == 2, &loops[b]);
+            pos += 3 + kk;
+        }
+        if (err == CM_OK)
+            f->ents[ent_index(f, bd)].used = 1;
+    }
+    if (err == CM_OK)
+        err = add_face(im, e, sptr, &map, loops, n, 0, 0, -1);
+    for (int i = 0; i < n; i++)
+        hcurve_list_free(&loops[i]);
+    free(loops);
+    if (err == CM_OK)
+        im->stats->faces_143++;
+    return err;
+}
+
+/* vertex `idx` (1-based) of a 502 vertex list, in model space */
+static int vertex_502(importer *im, const iges_entity *host, int de, int idx, const haffine *map, cm_vec3 *out)
+{
+    const iges_entity *v = iges_by_de(im->f, de);
+    haffine vm;
+    if (!v || v->type != 502 || v->bad || iges_entity_xform(im->f, v, &vm)) {
+        iges_entity_error(im->f, host, "vertex list DE %d is not a readable 502", de);
+        return -1;
+    }
+    int n = iges_int_or(v, 0, 0);
+    if (idx < 1 || idx > n || 1 + 3 * n > v->nparams) {
+        iges_entity_error(im->f, host, "vertex %d of list DE %d does not exist", idx, de);
+        return -1;
+    }
+    vm = haffine_compose(map, &vm);
+    cm_vec3 p = cm_v3(iges_num_or(v, 1 + 3 * (idx - 1), (double)NAN), iges_num_or(v, 2 + 3 * (idx - 1), (double)NAN),
+                      iges_num_or(v, 3 + 3 * (idx - 1), (double)NAN));
+    if (!cm_finite3(p)) {
+        iges_entity_error(im->f, v, "vertex %d is not numeric", idx);
+        return -1;
+    }
+    im->f->ents[ent_index(im->f, v)].used = 1;
+    *out = haffine_apply(&vm, p);
+    return 0;
+}
+
+/*
+ * Edge `ndx` of a 504 edge list: its curve cut between its two vertices
+ * (the curve may extend beyond them), oriented start -> terminate vertex.
+ */
+static cm_err edge_504(importer *im, const iges_entity *loop, int list_de, int ndx, const haffine *map, hcurve *out)
+{
+    iges_file *f = im->f;
+    const iges_entity *el = iges_by_de(f, list_de);
+    haffine em;
+    if (!el || el->type != 504 || el->bad || iges_entity_xform(f, el, &em))
+        return iges_entity_error(f, loop, "edge list DE %d is not a readable 504", list_de),
+               cm_fail(im->st, CM_E_IGES, "504");
+    em = haffine_compose(map, &em);
+    int n = iges_int_or(el, 0, 0);
+    if (ndx < 1 || ndx > n || 1 + 5 * n > el->nparams)
+        return iges_entity_error(f, loop, "edge %d of list DE %d does not exist", ndx, list_de),
+               cm_fail(im->st, CM_E_IGES, "504");
+    int o = 1 + 5 * (ndx - 1), crv, svp, sv, tvp, tv;
+    if (iges_ptr(f, el, o, 0, &crv) || iges_ptr(f, el, o + 1, 0, &svp) || iges_int(f, el, o + 2, &sv) ||
+        iges_ptr(f, el, o + 3, 0, &tvp) || iges_int(f, el, o + 4, &tv))
+        return cm_fail(im->st, CM_E_IGES, "504");
+    cm_vec3 A, B;
+    if (vertex_502(im, el, svp, sv, &em, &A) || vertex_502(im, el, tvp, tv, &em, &B))
+        return cm_fail(im->st, CM_E_IGES, "504");
+    hcurve_list pieces = {0};
+    hcurve whole = {0};
+    cm_err e = iges_curve(f, crv, &em, &pieces, im->st);
+    if (e == CM_OK && pieces.n == 1) {
+        whole = pieces.c[0];
+        memset(&pieces.c[0], 0, sizeof whole);
+    } else if (e == CM_OK) {
+        /* several pieces: keep them as one curve by cutting each end piece; rare in practice */
+        e = hcurve_copy(&pieces.c[0], &whole, im->st);
+        if (e == CM_OK && pieces.n > 1)
+            iges_warn(f, loop->pd_line, "edge %d of list DE %d is a %d-piece composite: only its first piece is used",
+                      ndx, list_de, pieces.n);
+    }
+    hcurve_list_free(&pieces);
+    if (e != CM_OK) {
+        hcurve_free(&whole);
+        return e;
+    }
+    f->ents[ent_index(f, el)].used = 1;
+    cm_curve v = hcurve_view(&whole);
+    double t0, t1, ta, tb, da, db;
+    hcurve_domain(&whole, &t0, &t1);
+    if (cm_curve_project(&v, t0, t1, A, &ta, &da, im->st) != CM_OK ||
+        cm_curve_project(&v, t0, t1, B, &tb, &db, im->st) != CM_OK) {
+        hcurve_free(&whole);
+        return iges_entity_error(f, loop, "cannot place the vertices of edge %d on its curve", ndx),
+               cm_fail(im->st, CM_E_IGES, "504");
+    }
+    double span = t1 - t0, eps = 1e-9 * span;
+    int closed_edge = cm_dist(A, B) <= 1e-9 * (1.0 + cm_norm(A));
+    if (closed_edge || (fabs(ta - t0) <= eps && fabs(tb - t1) <= eps)) {
+        *out = whole; /* the whole curve (a closed edge runs all the way round) */
+        return CM_OK;
+    }
+    if (fabs(ta - t1) <= eps && fabs(tb - t0) <= eps) {
+        hcurve_reverse(&whole);
+        *out = whole;
+        return CM_OK;
+    }
+    int rev = ta > tb;
+    double lo = rev ? tb : ta, hi = rev ? ta : tb;
+    if (!(hi - lo > eps)) {
+        hcurve_free(&whole);
+        return iges_entity_error(f, loop, "edge %d: both vertices project to the same point of its curve", ndx),
+               cm_fail(im->st, CM_E_IGES, "504");
+    }
+    if (lo - t0 <= eps && t1 - hi <= eps) {
+        *out = whole;
+    } else {
+        e = hcurve_subrange(&whole, lo, hi, out, im->st);
+        hcurve_free(&whole);
+        if (e != CM_OK)
+            return e;
+    }
+    if (rev)
+        hcurve_reverse(out);
+    return CM_OK;
+}
+
+static cm_err face_510(importer *im, const iges_entity *e, const haffine *parent, int shell, int flip)
+{
+    iges_file *f = im->f;
+    haffine map;
+    int surf, n, of;
+    if (iges_entity_xform(f, e, &map) || iges_ptr(f, e, 0, 0, &surf) || iges_int(f, e, 1, &n))
+        return cm_fail(im->st, CM_E_IGES, "510");
+    of = iges_int_or(e, 2, 1);
+    map = haffine_compose(parent, &map);
+    if (n < 1 || n > 100000 || 3 + n > e->nparams)
+        return iges_entity_error(f, e, "%d loops do not fit its %d parameters", n, e->nparams),
+               cm_fail(im->st, CM_E_IGES, "510");
+    if (of != 1)
+        iges_warn(f, e->pd_line, "face DE %d does not mark its first loop as outer; the outer loop is decided "
+                                 "from the geometry", e->de);
+    hcurve_list *loops = calloc((size_t)n, sizeof *loops);
+    if (!loops)
+        return cm_fail(im->st, CM_E_IO, "out of memory");
+    cm_err err = CM_OK;
+    for (int l = 0; l < n && err == CM_OK; l++) {
+        int lde;
+        if (iges_ptr(f, e, 3 + l, 0, &lde)) {
+            err = cm_fail(im->st, CM_E_IGES, "510");
+            break;
+        }
+        const iges_entity *lp = iges_by_de(f, lde);
+        haffine lmap;
+        int ne;
+        if (lp->type != 508 || lp->bad || iges_entity_xform(f, lp, &lmap) || iges_int(f, lp, 0, &ne) || ne < 1) {
+            err = iges_entity_error(f, e, "loop %d (DE %d) is not a readable 508 loop", l + 1, lde);
+            break;
+        }
+        lmap = haffine_compose(&map, &lmap);
+        int pos = 1;
+        for (int k = 0; k < ne && err == CM_OK; k++) {
+            int type, list, ndx, ok_flag, kk;
+            if (iges_int(f, lp, pos, &type) || iges_int(f, lp, pos + 2, &ndx) || iges_int(f, lp, pos + 3, &ok_flag) ||
+                iges_int(f, lp, pos + 4, &kk) || kk < 0) {
+                err = cm_fail(im->st, CM_E_IGES, "508");
+                break;
+            }
+            list = iges_int_or(lp, pos + 1, 0);
+            pos += 5 + 2 * kk;
+            if (type == 1)
+                continue; /* a vertex in a loop: no curve */
+            hcurve c = {0};
+            err = edge_504(im, lp, list, ndx, &lmap, &c);
+            if (err == CM_OK) {
+                if (ok_flag == 0)
+                    hcurve_reverse(&c);
+                err = hcurve_list_push(&loops[l], &c, im->st);
+            }
+            hcurve_free(&c);
+        }
+        if (err == CM_OK)
+            f->ents[ent_index(f, lp)].used = 1;
+    }
+    if (err == CM_OK)
+        err = add_face(im, e, surf, &map, loops, n, 0, flip, shell);
+    for (int i = 0; i < n; i++)
+        hcurve_list_free(&loops[i]);
+    free(loops);
+    if (err == CM_OK)
+        im->stats->faces_510++;
+    return err;
+}
+
+static cm_err import_face(importer *im, const iges_entity *e, const haffine *parent, int shell, int flip)
+{
+    brep_model *m = im->m;
+    int ns = m->nsurfs, nf = m->nfaces, nl = m->nloops, nsg = m->nsegs;
+    cm_err err;
+    switch (e->type) {
+    case 144: err = face_144(im, e, parent); break;
+    case 143: err = face_143(im, e, parent); break;
+    case 510: err = face_510(im, e, parent, shell, flip); break;
+    default: {
+        /* an untrimmed surface: a face bounded by its parameter rectangle */
+        err = add_face(im, e, e->de, parent, NULL, 0, 1, 0, -1);
+        if (err == CM_OK)
+            im->stats->faces_untrimmed++;
+    }
+    }
+    if (err != CM_OK) {
+        if (err == CM_E_IO)
+            return err; /* out of memory: nothing sensible to continue with */
+        face_failed(im, e, ns, nf, nl, nsg);
+        return CM_OK;
+    }
+    im->f->ents[ent_index(im->f, e)].used = 1;
+    return CM_OK;
+}
+
+static cm_err shell_514(importer *im, const iges_entity *e, const haffine *parent, int reversed)
+{
+    iges_file *f = im->f;
+    haffine map;
+    int n;
+    if (iges_entity_xform(f, e, &map) || iges_int(f, e, 0, &n) || n < 0 || 1 + 2 * n > e->nparams)
+        return iges_entity_error(f, e, "malformed shell"), cm_fail(im->st, CM_E_IGES, "514");
+    map = haffine_compose(parent, &map);
+    int shell = im->m->nshells++;
+    for (int i = 0; i < n; i++) {
+        int fde, of;
+        if (iges_ptr(f, e, 1 + 2 * i, 0, &fde))
+            return cm_fail(im->st, CM_E_IGES, "514");
+        of = iges_int_or(e, 2 + 2 * i, 1);
+        const iges_entity *fe = iges_by_de(f, fde);
+        if (fe->type != 510 || fe->bad) {
+            iges_warn(f, e->pd_line, "shell DE %d: member %d (DE %d) is not a readable face (510); skipped", e->de,
+                      i + 1, fde);
+            im->m->faces_failed++;
+            continue;
+        }
+        /* face normal = surface normal when OF = 1; a reversed shell flips every face */
+        cm_err err = import_face(im, fe, &map, shell, (of == 0) != (reversed != 0));
+        if (err != CM_OK)
+            return err;
+    }
+    f->ents[ent_index(f, e)].used = 1;
+    return CM_OK;
+}
+
+static cm_err solid_186(importer *im, const iges_entity *e, const haffine *parent)
+{
+    iges_file *f = im->f;
+    haffine map;
+    int shell, nv;
+    if (iges_entity_xform(f, e, &map) || iges_ptr(f, e, 0, 0, &shell) || iges_int(f, e, 2, &nv) || nv < 0)
+        return iges_entity_error(f, e, "malformed solid"), cm_fail(im->st, CM_E_IGES, "186");
+    map = haffine_compose(parent, &map);
+    int sof = iges_int_or(e, 1, 1);
+    const iges_entity *s = iges_by_de(f, shell);
+    if (s->type != 514 || s->bad)
+        return iges_entity_error(f, e, "its shell DE %d is not a readable 514", shell), cm_fail(im->st, CM_E_IGES, "186");
+    cm_err err = shell_514(im, s, &map, sof == 0);
+    for (int i = 0; i < nv && err == CM_OK; i++) {
+        int vde;
+        if (iges_ptr(f, e, 3 + 2 * i, 0, &vde))
+            return cm_fail(im->st, CM_E_IGES, "186");
+        const iges_entity *vs = iges_by_de(f, vde);
+        if (vs->type == 514 && !vs->bad)
+            err = shell_514(im, vs, &map, iges_int_or(e, 4 + 2 * i, 1) == 0);
+    }
+    if (err == CM_OK)
+        f->ents[ent_index(f, e)].used = 1;
+    return err;
+}
+
+static cm_err import_entity(importer *im, const iges_entity *e, const haffine *parent, int depth);
+
+static cm_err instance_408(importer *im, const iges_entity *e, const haffine *parent, int depth)
+{
+    iges_file *f = im->f;
+    int def;
+    haffine own;
+    if (depth >= MAX_INSTANCE_DEPTH)
+        return iges_entity_error(f, e, "subfigures nested deeper than %d (a cycle?)", MAX_INSTANCE_DEPTH),
+               cm_fail(im->st, CM_E_IGES, "408");
+    if (iges_entity_xform(f, e, &own) || iges_ptr(f, e, 0, 0, &def))
+        return cm_fail(im->st, CM_E_IGES, "408");
+    const iges_entity *d = iges_by_de(f, def);
+    if (d->type != 308 || d->bad)
+        return iges_entity_error(f, e, "DE %d is not a subfigure definition (308)", def), cm_fail(im->st, CM_E_IGES, "408");
+    double s = iges_num_or(e, 4, 1.0);
+    if (!(s > 0))
+        s = 1.0;
+    /* x -> own(s * def(x) + t) */
+    haffine place = haffine_identity();
+    for (int i = 0; i < 3; i++)
+        place.R[i][i] = s;
+    place.t = cm_v3(iges_num_or(e, 1, 0.0), iges_num_or(e, 2, 0.0), iges_num_or(e, 3, 0.0));
+    haffine defmap;
+    if (iges_entity_xform(f, d, &defmap))
+        return cm_fail(im->st, CM_E_IGES, "308");
+    haffine m = haffine_compose(&own, &place);
+    m = haffine_compose(&m, &defmap);
+    m = haffine_compose(parent, &m);
+    int n = iges_int_or(d, 2, 0);
+    if (n < 0 || 3 + n > d->nparams)
+        return iges_entity_error(f, d, "%d members do not fit its %d parameters", n, d->nparams),
+               cm_fail(im->st, CM_E_IGES, "308");
+    /* faces remember the outermost placement: a part may be assembled from nested
+     * subfigures (and even one shell per face), which together form one body */
+    int saved = im->instance;
+    im->stats->instances++;
+    if (depth == 0)
+        im->instance = im->stats->instances;
+    cm_err err = CM_OK;
+    for (int i = 0; i < n && err == CM_OK; i++) {
+        int mde;
+        if (iges_ptr(f, d, 3 + i, 0, &mde)) {
+            err = cm_fail(im->st, CM_E_IGES, "308");
+            break;
+        }
+        err = import_entity(im, iges_by_de(f, mde), &m, depth + 1);
+    }
+    im->instance = saved;
+    if (err == CM_OK) {
+        f->ents[ent_index(f, e)].used = 1;
+        f->ents[ent_index(f, d)].used = 1;
+    }
+    return err;
+}
+
+/* faces of one entity, if it makes any; everything else is left for `cmz info` to count */
+static cm_err import_entity(importer *im, const iges_entity *e, const haffine *parent, int depth)
+{
+    if (e->bad)
+        return CM_OK;
+    switch (e->type) {
+    case 144: case 143: case 510:
+        return import_face(im, e, parent, -1, 0);
+    case 186:
+        return solid_186(im, e, parent);
+    case 514:
+        return shell_514(im, e, parent, 0);
+    case 408:
+        return instance_408(im, e, parent, depth);
+    default:
+        if (iges_is_surface(e->type) && e->type != 108 && e->type != 190 && e->type != 192 && e->type != 194)
+            return import_face(im, e, parent, -1, 0); /* bounded surface kinds only: planes etc. need a trim */
+        return CM_OK;
+    }
+}
+
+cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_status *st)
+{
+    importer im;
+    memset(&im, 0, sizeof im);
+    memset(m, 0, sizeof *m);
+    memset(stats, 0, sizeof *stats);
+    m->box = hbox_empty();
+    m->resolution_mm = f->g.resolution * f->to_mm;
+    im.f = f;
+    im.m = m;
+    im.stats = stats;
+    im.st = st;
+    im.ref = calloc((size_t)(f->nents ? f->nents : 1), 1);
+    if (!im.ref)
+        return cm_fail(st, CM_E_IO, "out of memory");
+    mark_references(&im);
+    haffine to_mm = haffine_identity();
+    for (int i = 0; i < 3; i++)
+        to_mm.R[i][i] = f->to_mm;
+    cm_err err = CM_OK;
+    for (int k = 0; k < f->nents && err == CM_OK; k++) {
+        const iges_entity *e = &f->ents[k];
+        if (im.ref[k])
+            continue; /* owned by another entity: imported through it */
+        err = import_entity(&im, e, &to_mm, 0);
+    }
+    free(im.ref);
+    if (err != CM_OK)
+        return err;
+    for (int k = 0; k < f->nents; k++) {
+        int t = f->ents[k].type;
+        stats->face_entities += (t == 144 || t == 143 || t == 510) && f->ents[k].used;
+    }
+    if (m->nfaces == 0) {
+        if (m->faces_failed)
+            iges_error(f, 0, "none of the file's %d faces could be read (see the warnings)", m->faces_failed);
+        else
+            iges_error(f, 0, "the file holds no faces (no trimmed, bounded or B-rep surfaces)");
+        return cm_fail(st, CM_E_IGES, "iges_to_brep");
+    }
+    return CM_OK;
+}
