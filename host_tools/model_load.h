@@ -1,0 +1,44 @@
+/*
+ * model_load.h - the workstation's import pipeline in one call:
+ * IGES file -> B-rep -> face parameter domains (loops oriented) -> curve
+ * mesh.  Shared by `cmz info`, `cmz sample` and the encoder.
+ */
+#ifndef MODEL_LOAD_H
+#define MODEL_LOAD_H
+
+#include "brep/brep.h"
+#include "brep/face_domain.h"
+#include "iges/iges_file.h"
+#include "mesh/cmesh.h"
+
+typedef struct loaded_model {
+    iges_file iges;
+    brep_model brep;
+    brep_import_stats stats;
+    face_domain *fds;    /* one per face; a face whose domain failed has fds[f].uv == NULL */
+    int domains_failed;
+    int loops_reversed;  /* faces whose loops were re-oriented (spec §1) */
+    int outer_reordered; /* faces whose outer loop was not listed first */
+    int seam_joined;     /* faces bounded by loops winding around a closed surface */
+    double max_gap;      /* largest boundary-to-surface distance seen */
+    cmesh mesh;
+    double seconds_read, seconds_brep, seconds_domains, seconds_mesh;
+} loaded_model;
+
+/** Progress callback: stage name, done, total (may be NULL). */
+typedef void (*model_progress)(const char *stage, int done, int total, void *ctx);
+
+/**
+ * Load a model.  On failure returns the error; lm->iges.err holds a
+ * "line N: ..." message for IGES errors.  lm is always freeable.
+ */
+CM_NODISCARD cm_err model_load(const char *path, loaded_model *lm, model_progress progress, void *ctx,
+                               cm_status *st);
+
+/** The same from an IGES file already in memory (`name` is used in messages; the fuzzer uses this). */
+CM_NODISCARD cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm,
+                                    model_progress progress, void *ctx, cm_status *st);
+
+void model_free(loaded_model *lm);
+
+#endif /* MODEL_LOAD_H */
