@@ -101,6 +101,12 @@ DECODER_SRC := $(sort $(wildcard decoder/src/*.c))
 LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_NAMES := $(patsubst tests/unit/%.c,%,$(UNIT_SRC))
+# workstation code: everything under host_tools/ except the program mains (*_main.c)
+HOST_SRC := $(sort $(filter-out %_main.c,$(wildcard host_tools/*.c host_tools/*/*.c)))
+HOST_TEST_SRC := $(sort $(wildcard tests/host/test_*.c))
+HOST_TEST_NAMES := $(patsubst tests/host/%.c,%,$(HOST_TEST_SRC))
+# helpers linked into every host test (synthetic IGES writer, ...)
+HOST_TEST_HELPERS := $(sort $(filter-out tests/host/test_%.c,$(wildcard tests/host/*.c)))
 
 # ---- per-profile rules: objects, library, unit tests ----
 # $(1) = profile.  Objects of decoder/ get the strict warnings and the stack flags.
@@ -137,14 +143,41 @@ $(call bdir,$(1))/cm-limits: $(call bdir,$(1))/platform/cm_report.o $(call bdir,
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
 
 unit-tests-$(1): $(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES) kernel_vectors)
+
+$(call bdir,$(1))/libcmhost.a: $(patsubst %.c,$(call bdir,$(1))/%.o,$(HOST_SRC) platform/cm_report.c)
+	$$(call say,AR      ,$$@)
+	$$(Q)rm -f $$@ && $$(AR) rcs $$@ $$^
+
+$(addprefix $(call bdir,$(1))/tests/host/,$(HOST_TEST_NAMES)): $(call bdir,$(1))/tests/host/%: \
+		$(call bdir,$(1))/tests/host/%.o $(patsubst %.c,$(call bdir,$(1))/%.o,$(HOST_TEST_HELPERS)) \
+		$(call bdir,$(1))/libcmhost.a $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ $$(CMOCKA_LIBS) -lm
+
+host-tests-$(1): $(addprefix $(call bdir,$(1))/tests/host/,$(HOST_TEST_NAMES))
+
+# fuzz targets replayed without libFuzzer (tests/fuzz/replay_main.c)
+$(call bdir,$(1))/tests/fuzz/replay_%: $(call bdir,$(1))/tests/fuzz/fuzz_%.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
+		$(call bdir,$(1))/libcmhost.a $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
 endef
 $(foreach p,$(PROFILES),$(eval $(call PROFILE_RULES,$(p))))
 LIMIT_TOOLS := $(foreach p,$(PROFILES),$(call bdir,$(p))/cm-limits)
 
-.PRECIOUS: $(BUILD_ROOT)/%.o
-.PHONY: all lib unit-tests $(addprefix unit-tests-,$(PROFILES))
+# the workstation tool, always built with the host profile
+CMZ := $(call bdir,host)/cmz
+$(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(call bdir,host)/libcmhost.a $(call bdir,host)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
 
-all: lib $(B)/cm-limits
+.PRECIOUS: $(BUILD_ROOT)/%.o
+
+# the Open CASCADE oracle (tests only): make oracle
+-include tests/oracle/oracle.mk
+.PHONY: all lib unit-tests $(addprefix unit-tests-,$(PROFILES)) $(addprefix host-tests-,$(PROFILES))
+
+all: lib $(B)/cm-limits $(CMZ)
 lib: $(B)/libcmdecoder.a
 unit-tests: unit-tests-$(PROFILE)
 
@@ -164,7 +197,7 @@ $(STACK_CHECK): tests/tools/check_stack.c
 	$(call say,HOSTCC  ,$@)
 	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
-.PHONY: check check-run check-noheap check-stack check-cross check-clang deps
+.PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-corpus-occt deps
 # `make check` on a fresh machine: install what is missing, then test.
 check:
 	$(Q)$(MAKE) --no-print-directory deps
@@ -172,18 +205,21 @@ check:
 
 CROSS_TARGETS := aarch64-linux-gnu- arm-linux-gnueabihf-
 
-check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) $(call bdir,terminal)/libcmdecoder.a \
+check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,terminal)/libcmdecoder.a \
 		$(LIMIT_TOOLS) $(STACK_CHECK)
 	$(Q)tests/tools/run_suites.sh \
 		"unit-host:$(call bdir,host)/tests/unit" \
 		"unit-terminal:$(call bdir,terminal)/tests/unit" \
 		"unit-tiny:$(call bdir,tiny)/tests/unit" \
+		"host:$(call bdir,host)/tests/host" \
 		"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
 		"gate:gates-reject-bad-code:tests/tools/gate_selftest.sh $(HOSTCC) nm $(STACK_CHECK) $(BUILD_ROOT)/gate-selftest" \
 		"gate:readme-tables:$(MAKE) --no-print-directory -s check-readme" \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
 		"gate:stack-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack" \
 		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
+		"gate:iges-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
+		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross"
 
 # layer (a) of the no-heap gate: the decoder/kernel archive may only call allowlisted libc/libm symbols
@@ -198,10 +234,40 @@ check-stack: $(B)/libcmdecoder.a $(STACK_CHECK)
 CLANG_SAN := -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 check-clang:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
-		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" unit-tests-host unit-tests-tiny
-	$(Q)tests/tools/run_suites.sh --quiet \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" unit-tests-host unit-tests-tiny host-tests-host
+	$(Q)CM_SHARED_MODELS=/nonexistent tests/tools/run_suites.sh --quiet \
 		"clang-host:$$(ls -d $(BUILD_ROOT)/clang-san/*-host)/tests/unit" \
-		"clang-tiny:$$(ls -d $(BUILD_ROOT)/clang-san/*-tiny)/tests/unit"
+		"clang-tiny:$$(ls -d $(BUILD_ROOT)/clang-san/*-tiny)/tests/unit" \
+		"clang-host-tools:$$(ls -d $(BUILD_ROOT)/clang-san/*-host)/tests/host"
+
+# the IGES import fuzz target replayed under ASan/UBSan: seeds, regressions and the shared corpus
+SHARED_MODELS ?= ../shared/models
+check-fuzz-replay:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
+		$(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges
+	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges \
+		tests/fuzz/corpus_iges $(wildcard tests/fuzz/regressions_iges) $(wildcard $(SHARED_MODELS)/iges)
+
+# libFuzzer on the IGES import (not part of check): make fuzz-iges FUZZ_SECONDS=600
+FUZZ_SECONDS ?= 60
+FUZZ_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
+.PHONY: fuzz-iges
+fuzz-iges:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined" \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_iges.o \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_iges \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_iges.o \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a -lm
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz/corpus_iges && cp tests/fuzz/corpus_iges/* $(BUILD_ROOT)/fuzz/corpus_iges/
+	$(BUILD_ROOT)/fuzz/fuzz_iges -max_total_time=$(FUZZ_SECONDS) -max_len=262144 -timeout=30 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_iges $(wildcard $(SHARED_MODELS)/iges)
+
+# the import against Open CASCADE on the shared corpus (skips without it)
+check-corpus-occt: $(CMZ) oracle
+	$(Q)tests/tools/check_corpus_occt.sh $(CMZ) $(ORACLE_BIN) $(SHARED_MODELS)
 
 # unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine
 check-cross: $(call bdir,host)/tests/unit/kernel_vectors
@@ -214,7 +280,8 @@ check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 # ---- Debian packages ----
 # Host tools, tests, cross toolchains and the foreign-architecture libraries the cross tests link.
 DEPS_ARCHS := arm64 armhf
-DEPS_PKGS := gcc make pkgconf libcmocka-dev clang libclang-rt-14-dev \
+DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzzer-14-dev \
+	libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev \
 	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf qemu-user \
 	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf
 deps:

@@ -14,6 +14,7 @@ quiet=0
 if [ "${1:-}" = --quiet ]; then quiet=1; shift; fi
 pass=0
 fail=0
+skipped=0
 failed_names=()
 say() { [ $quiet -eq 1 ] || echo "$@"; }
 
@@ -22,7 +23,10 @@ run_binary() { # label path
     out=$(CMOCKA_MESSAGE_OUTPUT=TAP ${RUNNER:-} "$bin" 2>&1)
     rc=$?
     np=$(grep -c '^ok ' <<<"$out")
-    nf=$(grep -c '^not ok ' <<<"$out")
+    # cmocka reports skip() as "not ok N # SKIP name": neither a pass nor a failure
+    ns=$(grep -c '^not ok [0-9]* # SKIP' <<<"$out")
+    nf=$(( $(grep -c '^not ok ' <<<"$out") - ns ))
+    skipped=$((skipped + ns))
     if [ "$rc" -ne 0 ] && [ "$nf" -eq 0 ]; then
         nf=1
         failed_names+=("$label/$(basename "$bin") (exit $rc)")
@@ -30,12 +34,12 @@ run_binary() { # label path
     fi
     if [ "$nf" -gt 0 ]; then
         while read -r l; do failed_names+=("$label/$(basename "$bin"): ${l#not ok }"); done \
-            < <(grep '^not ok ' <<<"$out")
+            < <(grep '^not ok ' <<<"$out" | grep -v '^not ok [0-9]* # SKIP')
         grep -B2 -A8 '^not ok ' <<<"$out" | head -n 60
     fi
     pass=$((pass + np))
     fail=$((fail + nf))
-    say "  $label/$(basename "$bin"): $np passed, $nf failed"
+    say "  $label/$(basename "$bin"): $np passed, $nf failed$([ "$ns" -gt 0 ] && echo ", $ns skipped")"
 }
 
 for s in "$@"; do
@@ -89,5 +93,6 @@ if [ ${#failed_names[@]} -gt 0 ]; then
     echo "failures:"
     printf '  %s\n' "${failed_names[@]}"
 fi
+[ "$skipped" -gt 0 ] && echo "$skipped skipped (see SKIP lines above)"
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -1,0 +1,401 @@
+/* igs_writer.c - a minimal IGES writer and the synthetic test shapes (see igs_writer.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "igs_writer.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+void igw_init(igw *w)
+{
+    memset(w, 0, sizeof *w);
+    w->units = 2;
+    w->scale = 1.0;
+    snprintf(w->exporter, sizeof w->exporter, "curvemesh test writer");
+}
+
+void igw_free(igw *w)
+{
+    for (int i = 0; i < w->n; i++)
+        free(w->e[i].params);
+    free(w->e);
+    memset(w, 0, sizeof *w);
+}
+
+int igw_add(igw *w, int type, int form, const char *fmt, ...)
+{
+    if (w->n == w->cap) {
+        w->cap = w->cap ? 2 * w->cap : 64;
+        w->e = realloc(w->e, (size_t)w->cap * sizeof *w->e);
+    }
+    char buf[65536];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    struct igw_ent *e = &w->e[w->n];
+    memset(e, 0, sizeof *e);
+    e->type = type;
+    e->form = form;
+    e->params = strdup(buf);
+    return 2 * w->n++ + 1;
+}
+
+void igw_set(igw *w, int de, int subord, int xform, int color)
+{
+    struct igw_ent *e = &w->e[(de - 1) / 2];
+    e->subord = subord;
+    e->xform = xform;
+    e->color = color;
+}
+
+/* append one 80-column line: 72 (or 64 + 8) columns of text, section letter, sequence */
+static void put_line(char **out, size_t *len, size_t *cap, const char *text, int width, const char *mid, char sec,
+                     int seq)
+{
+    if (*len + 82 > *cap) {
+        *cap = *cap ? 2 * *cap : 65536;
+        *out = realloc(*out, *cap);
+    }
+    char line[81];
+    memset(line, ' ', 80);
+    line[80] = 0;
+    size_t tl = strlen(text);
+    memcpy(line, text, tl < (size_t)width ? tl : (size_t)width);
+    if (mid)
+        memcpy(line + 64, mid, 8);
+    char tail[24];
+    snprintf(tail, sizeof tail, "%c%7d", sec, seq % 10000000);
+    memcpy(line + 72, tail, 8);
+    memcpy(*out + *len, line, 80);
+    (*out)[*len + 80] = '\n';
+    *len += 81;
+    (*out)[*len] = 0;
+}
+
+char *igw_text(const igw *w, size_t *len_out)
+{
+    char *out = NULL;
+    size_t len = 0, cap = 0;
+    put_line(&out, &len, &cap, "curvemesh synthetic IGES for tests", 72, NULL, 'S', 1);
+    /* Global section, wrapped at 72 columns between parameters */
+    char g[1024];
+    snprintf(g, sizeof g,
+             "1H,,1H;,4Htest,8Htest.igs,%zuH%s,3H0.1,32,38,6,308,15,4Htest,%.1f,%d,2H%s,1,0.01,15H20261122.120000,"
+             "1e-06,1000.,6Htester,4Hcmz.,11,0,15H20261122.120000;",
+             strlen(w->exporter), w->exporter, w->scale, w->units, w->units == 1 ? "IN" : "MM");
+    int gseq = 0;
+    for (size_t pos = 0; pos < strlen(g);) {
+        size_t take = strlen(g) - pos > 72 ? 72 : strlen(g) - pos;
+        char chunk[73];
+        memcpy(chunk, g + pos, take);
+        chunk[take] = 0;
+        put_line(&out, &len, &cap, chunk, 72, NULL, 'G', ++gseq);
+        pos += take;
+    }
+    /* Parameter lines per entity, first to know the pointers */
+    int *pstart = malloc((size_t)(w->n + 1) * sizeof *pstart), *pcount = malloc((size_t)(w->n + 1) * sizeof *pcount);
+    char *pbuf = NULL;
+    size_t plen = 0, pcap = 0;
+    int pseq = 0;
+    for (int i = 0; i < w->n; i++) {
+        const struct igw_ent *e = &w->e[i];
+        size_t n = strlen(e->params) + 32;
+        char *full = malloc(n);
+        snprintf(full, n, "%d%s%s;", e->type, e->params[0] ? "," : "", e->params);
+        pstart[i] = pseq + 1;
+        char mid[24];
+        snprintf(mid, sizeof mid, "%8d", (2 * i + 1) % 10000000);
+        mid[0] = ' ';
+        /* split between parameters, at most 64 columns per line */
+        size_t pos = 0, fl = strlen(full);
+        while (pos < fl) {
+            size_t take = fl - pos;
+            if (take > 64) {
+                take = 64;
+                while (take > 1 && full[pos + take - 1] != ',' && full[pos + take - 1] != ';')
+                    take--;
+            }
+            char chunk[65];
+            memcpy(chunk, full + pos, take);
+            chunk[take] = 0;
+            put_line(&pbuf, &plen, &pcap, chunk, 64, mid, 'P', ++pseq);
+            pos += take;
+        }
+        pcount[i] = pseq + 1 - pstart[i];
+        free(full);
+    }
+    for (int i = 0; i < w->n; i++) {
+        const struct igw_ent *e = &w->e[i];
+        char l1[160], l2[160];
+        snprintf(l1, sizeof l1, "%8d%8d%8d%8d%8d%8d%8d%8d    %02d00", e->type, pstart[i], 0, 1, 0, 0, e->xform, 0,
+                 e->subord);
+        snprintf(l2, sizeof l2, "%8d%8d%8d%8d%8d%8s%8s%8s%8d", e->type, 0, e->color, pcount[i], e->form, "", "", "", 0);
+        put_line(&out, &len, &cap, l1, 72, NULL, 'D', 2 * i + 1);
+        put_line(&out, &len, &cap, l2, 72, NULL, 'D', 2 * i + 2);
+    }
+    if (len + plen + 100 > cap) {
+        cap = len + plen + 100;
+        out = realloc(out, cap);
+    }
+    memcpy(out + len, pbuf, plen);
+    len += plen;
+    char t[96];
+    snprintf(t, sizeof t, "S%7dG%7dD%7dP%7d", 1, gseq, 2 * w->n, pseq);
+    put_line(&out, &len, &cap, t, 72, NULL, 'T', 1);
+    free(pbuf);
+    free(pstart);
+    free(pcount);
+    *len_out = len;
+    return out;
+}
+
+int igw_save(const igw *w, const char *path)
+{
+    size_t len;
+    char *t = igw_text(w, &len);
+    FILE *f = fopen(path, "wb");
+    int rc = -1;
+    if (f) {
+        rc = fwrite(t, 1, len, f) == len ? 0 : -1;
+        if (fclose(f) != 0)
+            rc = -1;
+    }
+    free(t);
+    return rc;
+}
+
+/* ---- geometry helpers ---- */
+
+typedef struct v3 {
+    double x, y, z;
+} v3;
+
+static int line(igw *w, v3 a, v3 b)
+{
+    int de = igw_add(w, 110, 0, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", a.x, a.y, a.z, b.x, b.y, b.z);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+/* full counter-clockwise circle in the plane z, starting and ending at angle 0 */
+static int circle_100(igw *w, double cx, double cy, double z, double r)
+{
+    int de = igw_add(w, 100, 0, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", z, cx, cy, cx + r, cy, cx + r, cy);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+/* full clockwise circle (seen from +z) as a rational 126 of four quarter arcs, starting at angle 0 */
+static int circle_cw_126(igw *w, double cx, double cy, double z, double r)
+{
+    const double s = sqrt(0.5);
+    /* angles 0, -45(handle), -90, ... : clockwise */
+    const double px[9] = {1, 1, 0, -1, -1, -1, 0, 1, 1}, py[9] = {0, -1, -1, -1, 0, 1, 1, 1, 0};
+    char buf[4096];
+    int k = snprintf(buf, sizeof buf, "8,2,1,1,0,0,0,0,0,0.25,0.25,0.5,0.5,0.75,0.75,1,1,1");
+    for (int i = 0; i < 9; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g", i % 2 ? s : 1.0);
+    for (int i = 0; i < 9; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", cx + r * px[i], cy + r * py[i], z);
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,0,1");
+    int de = igw_add(w, 126, 0, "%s", buf);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+static int bilinear_128(igw *w, v3 p00, v3 p10, v3 p01, v3 p11)
+{
+    int de = igw_add(w, 128, 0,
+                     "1,1,1,1,1,0,1,0,0,0,0,1,1,0,0,1,1,1,1,1,1,"
+                     "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0,1,0,1",
+                     p00.x, p00.y, p00.z, p10.x, p10.y, p10.z, p01.x, p01.y, p01.z, p11.x, p11.y, p11.z);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+/* a 142 on `surf` whose model-space curve is `crv`, and return its DE */
+static int on_surface(igw *w, int surf, int crv)
+{
+    int de = igw_add(w, 142, 0, "0,%d,0,%d,2", surf, crv);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+static int composite(igw *w, const int *members, int n)
+{
+    char buf[1024];
+    int k = snprintf(buf, sizeof buf, "%d", n);
+    for (int i = 0; i < n; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%d", members[i]);
+    int de = igw_add(w, 102, 0, "%s", buf);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+/* rectangle loop a->b->c->d as a composite of 4 lines */
+static int rect_loop(igw *w, v3 a, v3 b, v3 c, v3 d)
+{
+    int m[4] = {line(w, a, b), line(w, b, c), line(w, c, d), line(w, d, a)};
+    return composite(w, m, 4);
+}
+
+static void plane_face_144(igw *w, v3 p00, v3 p10, v3 p11, v3 p01, int hole_curve)
+{
+    int s = bilinear_128(w, p00, p10, p01, p11);
+    int outer = on_surface(w, s, rect_loop(w, p00, p10, p11, p01));
+    if (hole_curve)
+        igw_add(w, 144, 0, "%d,1,1,%d,%d", s, outer, on_surface(w, s, hole_curve));
+    else
+        igw_add(w, 144, 0, "%d,1,0,%d", s, outer);
+}
+
+void igw_box_with_hole_144(igw *w, double a, double b, double c, double r)
+{
+    double cx = a / 2, cy = b / 2;
+    v3 p[8];
+    for (int i = 0; i < 8; i++)
+        p[i] = (v3){i & 1 ? a : 0, i & 2 ? b : 0, i & 4 ? c : 0};
+    plane_face_144(w, p[0], p[1], p[3], p[2], circle_100(w, cx, cy, 0, r)); /* bottom */
+    plane_face_144(w, p[4], p[5], p[7], p[6], circle_100(w, cx, cy, c, r)); /* top */
+    plane_face_144(w, p[0], p[1], p[5], p[4], 0);                            /* y = 0 */
+    plane_face_144(w, p[1], p[3], p[7], p[5], 0);                            /* x = a */
+    plane_face_144(w, p[3], p[2], p[6], p[7], 0);                            /* y = b */
+    plane_face_144(w, p[2], p[0], p[4], p[6], 0);                            /* x = 0 */
+    /* the hole: a 120 (line revolved 360 deg), loop = bottom circle, seam up, top circle backwards, seam down */
+    int axis = line(w, (v3){cx, cy, 0}, (v3){cx, cy, 1});
+    int gen = line(w, (v3){cx + r, cy, 0}, (v3){cx + r, cy, c});
+    int surf = igw_add(w, 120, 0, "%d,%d,0,%.17g", axis, gen, 2 * M_PI);
+    igw_set(w, surf, 1, 0, 0);
+    int m[4] = {circle_100(w, cx, cy, 0, r), line(w, (v3){cx + r, cy, 0}, (v3){cx + r, cy, c}),
+                circle_cw_126(w, cx, cy, c, r), line(w, (v3){cx + r, cy, c}, (v3){cx + r, cy, 0})};
+    igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, 4)));
+}
+
+static int point_116(igw *w, v3 p)
+{
+    int de = igw_add(w, 116, 0, "%.17g,%.17g,%.17g,0", p.x, p.y, p.z);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+static int dir_123(igw *w, v3 d)
+{
+    int de = igw_add(w, 123, 0, "%.17g,%.17g,%.17g", d.x, d.y, d.z);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+void igw_box_with_hole_186(igw *w, double a, double b, double c, double r)
+{
+    double cx = a / 2, cy = b / 2;
+    /* vertices 1..8 box corners (i & 1 -> x, i & 2 -> y, i & 4 -> z), 9, 10 seam points */
+    char vb[2048];
+    int k = snprintf(vb, sizeof vb, "10");
+    for (int i = 0; i < 8; i++)
+        k += snprintf(vb + k, sizeof vb - (size_t)k, ",%.17g,%.17g,%.17g", i & 1 ? a : 0.0, i & 2 ? b : 0.0,
+                      i & 4 ? c : 0.0);
+    k += snprintf(vb + k, sizeof vb - (size_t)k, ",%.17g,%.17g,0,%.17g,%.17g,%.17g", cx + r, cy, cx + r, cy, c);
+    int vl = igw_add(w, 502, 1, "%s", vb);
+    igw_set(w, vl, 1, 0, 0);
+    v3 P[11];
+    for (int i = 0; i < 8; i++)
+        P[i + 1] = (v3){i & 1 ? a : 0, i & 2 ? b : 0, i & 4 ? c : 0};
+    P[9] = (v3){cx + r, cy, 0};
+    P[10] = (v3){cx + r, cy, c};
+    /* edges: 12 box edges (vertex pairs), 2 circles, 1 seam */
+    static const int ev[15][2] = {{1, 2}, {2, 4}, {4, 3}, {3, 1}, {5, 6}, {6, 8}, {8, 7}, {7, 5},
+                                  {1, 5}, {2, 6}, {4, 8}, {3, 7}, {9, 9}, {10, 10}, {9, 10}};
+    int crv[15];
+    for (int i = 0; i < 12; i++)
+        crv[i] = line(w, P[ev[i][0]], P[ev[i][1]]);
+    crv[12] = circle_100(w, cx, cy, 0, r);
+    crv[13] = circle_100(w, cx, cy, c, r);
+    crv[14] = line(w, P[9], P[10]);
+    char eb[4096];
+    k = snprintf(eb, sizeof eb, "15");
+    for (int i = 0; i < 15; i++)
+        k += snprintf(eb + k, sizeof eb - (size_t)k, ",%d,%d,%d,%d,%d", crv[i], vl, ev[i][0], vl, ev[i][1]);
+    int el = igw_add(w, 504, 1, "%s", eb);
+    igw_set(w, el, 1, 0, 0);
+    /* loops: lists of (edge index, orientation 1 = along the edge) */
+    struct lp {
+        int n;
+        int e[4], of[4];
+    };
+    const struct lp loops[9] = {
+        {4, {4, 3, 2, 1}, {0, 0, 0, 0}},  /* bottom outer (clockwise from above: outward normal -z) */
+        {1, {13}, {1}},                   /* bottom hole */
+        {4, {5, 6, 7, 8}, {1, 1, 1, 1}},  /* top outer */
+        {1, {14}, {0}},                   /* top hole */
+        {4, {1, 10, 5, 9}, {1, 1, 0, 0}}, /* y = 0 */
+        {4, {2, 11, 6, 10}, {1, 1, 0, 0}}, /* x = a */
+        {4, {3, 12, 7, 11}, {1, 1, 0, 0}}, /* y = b */
+        {4, {4, 9, 8, 12}, {1, 1, 0, 0}},  /* x = 0 */
+        {4, {13, 15, 14, 15}, {1, 1, 0, 0}}, /* hole cylinder with its seam */
+    };
+    int lde[9];
+    for (int l = 0; l < 9; l++) {
+        char lb[512];
+        int q = snprintf(lb, sizeof lb, "%d", loops[l].n);
+        for (int i = 0; i < loops[l].n; i++)
+            q += snprintf(lb + q, sizeof lb - (size_t)q, ",0,%d,%d,%d,0", el, loops[l].e[i], loops[l].of[i]);
+        lde[l] = igw_add(w, 508, 1, "%s", lb);
+        igw_set(w, lde[l], 1, 0, 0);
+    }
+    /* surfaces: planes with outward normals, the cylinder (its normal points away from the axis) */
+    const v3 origin[6] = {{0, 0, 0}, {0, 0, c}, {0, 0, 0}, {a, 0, 0}, {0, b, 0}, {0, 0, 0}};
+    const v3 normal[6] = {{0, 0, -1}, {0, 0, 1}, {0, -1, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}};
+    int surf[7];
+    for (int i = 0; i < 6; i++) {
+        surf[i] = igw_add(w, 190, 0, "%d,%d", point_116(w, origin[i]), dir_123(w, normal[i]));
+        igw_set(w, surf[i], 1, 0, 0);
+    }
+    surf[6] = igw_add(w, 192, 1, "%d,%d,%.17g,%d", point_116(w, (v3){cx, cy, 0}), dir_123(w, (v3){0, 0, 1}), r,
+                      dir_123(w, (v3){1, 0, 0}));
+    igw_set(w, surf[6], 1, 0, 0);
+    int face[7];
+    face[0] = igw_add(w, 510, 1, "%d,2,1,%d,%d", surf[0], lde[0], lde[1]);
+    face[1] = igw_add(w, 510, 1, "%d,2,1,%d,%d", surf[1], lde[2], lde[3]);
+    for (int i = 2; i < 6; i++)
+        face[i] = igw_add(w, 510, 1, "%d,1,1,%d", surf[i], lde[i + 2]);
+    face[6] = igw_add(w, 510, 1, "%d,1,1,%d", surf[6], lde[8]);
+    char sb[256];
+    k = snprintf(sb, sizeof sb, "7");
+    for (int i = 0; i < 7; i++) {
+        igw_set(w, face[i], 1, 0, 0);
+        /* the hole's outward normal points at the axis: opposite to the cylinder's */
+        k += snprintf(sb + k, sizeof sb - (size_t)k, ",%d,%d", face[i], i == 6 ? 0 : 1);
+    }
+    int shell = igw_add(w, 514, 1, "%s", sb);
+    igw_set(w, shell, 1, 0, 0);
+    igw_add(w, 186, 0, "%d,1,0", shell);
+}
+
+void igw_half_cylinder_120(igw *w, double r, double h)
+{
+    int axis = line(w, (v3){0, 0, 0}, (v3){0, 0, 1});
+    int gen = line(w, (v3){r, 0, 0}, (v3){r, 0, h});
+    igw_add(w, 120, 0, "%d,%d,0,%.17g", axis, gen, M_PI);
+}
+
+const double igw_bicubic_z[4][4] = {{0, 0.5, 0.2, 0}, {0.3, 1.0, 0.8, 0.1}, {0.1, 0.9, 1.2, 0.4}, {0, 0.2, 0.5, 0.3}};
+
+void igw_bicubic_128(igw *w)
+{
+    char buf[4096];
+    int k = snprintf(buf, sizeof buf, "3,3,3,3,0,0,1,0,0,0,0,0,0,1,1,1,1,0,0,0,0,1,1,1,1");
+    for (int i = 0; i < 16; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
+    for (int j = 0; j < 4; j++)     /* v index outer */
+        for (int i = 0; i < 4; i++) /* u index runs fastest in the file */
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%d,%d,%.17g", i, j, igw_bicubic_z[i][j]);
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+    igw_add(w, 128, 0, "%s", buf);
+}

@@ -1,0 +1,54 @@
+/*
+ * igs_writer.h - a minimal IGES 5.3 writer for tests: entities with
+ * free-format parameters, laid out in fixed 80-column S/G/D/P/T sections.
+ * Tests build synthetic models with exactly known geometry and topology
+ * (tests stand alone without ../shared/models).
+ */
+#ifndef IGS_WRITER_H
+#define IGS_WRITER_H
+
+#include <stddef.h>
+
+typedef struct igw {
+    struct igw_ent {
+        int type, form, xform, subord, color;
+        char *params; /* "1.,2.,3" without the type number and terminator */
+    } *e;
+    int n, cap;
+    int units;     /* Global units flag (2 = mm) */
+    double scale;  /* model space scale */
+    char exporter[64];
+} igw;
+
+void igw_init(igw *w);
+void igw_free(igw *w);
+
+/** Add an entity; params is printf-style text of its parameters (comma separated). Returns its DE. */
+int igw_add(igw *w, int type, int form, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+
+/** Mark entity `de` subordinate (physically dependent) and/or give it a transformation or colour. */
+void igw_set(igw *w, int de, int subord, int xform, int color);
+
+/** The whole file (malloc'd, NUL-terminated); *len its length. */
+char *igw_text(const igw *w, size_t *len);
+
+/** Write the file to `path`; 0 on success. */
+int igw_save(const igw *w, const char *path);
+
+/* ---- shapes used by the tests ---- */
+
+/** Box [0,a]x[0,b]x[0,c] with a through hole of radius r along z at (a/2, b/2), as 7 trimmed (144) faces. */
+void igw_box_with_hole_144(igw *w, double a, double b, double c, double r);
+
+/** The same solid as a 186 manifold solid B-rep (502/504/508/510/514, planes 190, cylinder 192). */
+void igw_box_with_hole_186(igw *w, double a, double b, double c, double r);
+
+/** Half cylinder radius r, height h, as an untrimmed 120 surface of revolution (line revolved by pi). */
+void igw_half_cylinder_120(igw *w, double r, double h);
+
+/** An untrimmed bicubic 128 patch: P_ij = (i, j, z_ij) with z from a fixed table. */
+void igw_bicubic_128(igw *w);
+/** The z values of igw_bicubic_128 (row-major [i][j]). */
+extern const double igw_bicubic_z[4][4];
+
+#endif /* IGS_WRITER_H */
