@@ -78,194 +78,45 @@ static void reverse_model_loop(brep_model *m, const brep_loop *l)
 }
 
 /*
- * Project the samples of one model loop, by continuation from the
- * previous sample, into fd (the loop's polygon) and measure its winding
- * around closed directions.
- *
- * Poles: where the surface collapses (S_v = 0 on a sphere's pole, say),
- * the free parameter of a boundary point there is undefined and
- * continuation leaves it anywhere.  A run of pole samples is redrawn along
- * the pole line, from the free parameter of the sample before the run to
- * that of the sample after it (the shorter way round in a closed
- * direction), which is the polygon the face really has in (u,v).
+ * The (u,v) polygon of one model loop: samples of its curves followed
+ * through the surface by the shared kernel (cm_loop_uv: continuation,
+ * seams, poles), written into fd with the 3D point each came from.
  */
+static cm_param_ws param_ws; /* large: static, one face at a time */
+
 static cm_err project_loop(const brep_model *m, const brep_loop *l, face_domain *fd, double accept, int *wu, int *wv,
                            cm_status *st)
 {
-    const hsurf_param *sp = &fd->sp;
-    double pu = sp->u1 - sp->u0, pv = sp->v1 - sp->v0;
     int n = 0;
     for (int s = 0; s < l->n; s++)
         n += seg_samples(&m->segs[l->first + s]);
-    /* raw samples, plus the loop's start once more (index n) to measure the winding */
-    cm_vec2 *uv = malloc((size_t)(n + 1) * sizeof *uv);
-    cm_vec3 *xyz = malloc((size_t)(n + 1) * sizeof *xyz);
-    int *pole = malloc((size_t)(n + 1) * sizeof *pole); /* 0, 1: u free (S_u = 0), 2: v free (S_v = 0) */
-    if (!uv || !xyz || !pole) {
-        free(uv);
-        free(xyz);
-        free(pole);
-        return cm_fail(st, CM_E_IO, "out of memory");
-    }
-    double u = 0, v = 0;
+    cm_vec3 *pts = malloc((size_t)n * sizeof *pts);
+    cm_vec2 *uv = malloc((size_t)(2 * n) * sizeof *uv);
+    int *src = malloc((size_t)(2 * n) * sizeof *src);
+    cm_err e = (!pts || !uv || !src) ? cm_fail(st, CM_E_IO, "out of memory") : CM_OK;
     int k = 0;
-    cm_err e = CM_OK;
-    for (int s = 0; s <= l->n && e == CM_OK; s++) {
-        const hcurve *c = &m->segs[l->first + (s == l->n ? 0 : s)];
+    for (int s = 0; s < l->n && e == CM_OK; s++) {
+        const hcurve *c = &m->segs[l->first + s];
         cm_curve cv = hcurve_view(c);
         double t0, t1;
         hcurve_domain(c, &t0, &t1);
-        int ns = s == l->n ? 1 : seg_samples(c);
+        int ns = seg_samples(c);
         for (int j = 0; j < ns && e == CM_OK; j++) {
-            cm_vec3 d[3];
-            if ((e = cm_curve_eval(&cv, t0 + (t1 - t0) * j / ns, 0, d, st)) != CM_OK)
-                break;
-            double uu = u, vv = v, dist;
-            if (k == 0) {
-                /* the loop's first point: a coarse grid, a fine one only if that lands badly */
-                e = hsurf_project_grid(sp, d[0], 17, &uu, &vv, &dist, st);
-                if (e == CM_OK && dist > accept)
-                    e = hsurf_project_grid(sp, d[0], 41, &uu, &vv, &dist, st);
-            } else {
-                e = hsurf_project_from(sp, d[0], &uu, &vv, &dist, st);
-                if (e == CM_OK && dist > accept) {
-                    /* lost the way (a jump in the file): search globally, keep the periodic copy nearest to us */
-                    double gu, gv, gd;
-                    e = hsurf_project_grid(sp, d[0], 41, &gu, &gv, &gd, st);
-                    if (e == CM_OK && gd < dist) {
-                        if (sp->closed_u)
-                            gu += pu * round((u - gu) / pu);
-                        if (sp->closed_v)
-                            gv += pv * round((v - gv) / pv);
-                        uu = gu;
-                        vv = gv;
-                        dist = gd;
-                    }
-                }
-            }
-            if (e != CM_OK)
-                break;
-            cm_vec3 dd[3];
-            if ((e = hsurf_param_eval(sp, uu, vv, dd, st)) != CM_OK)
-                break;
-            /* a pole: the iso-line through the point in one direction is shorter than the acceptance
-             * distance (exporters leave a generatrix end a little off the axis) */
-            double lu = cm_norm(dd[1]) * pu, lv = cm_norm(dd[2]) * pv;
-            pole[k] = lu <= accept && lu < lv ? 1 : (lv <= accept && lv < lu ? 2 : 0);
-            if (s < l->n && dist > fd->max_gap)
-                fd->max_gap = dist;
-            u = uu;
-            v = vv;
-            uv[k] = cm_v2(u, v);
-            xyz[k] = d[0];
-            k++;
+            cm_vec3 d[1];
+            e = cm_curve_eval(&cv, t0 + (t1 - t0) * j / ns, 0, d, st);
+            pts[k++] = d[0];
         }
     }
-    /* redraw pole runs along the pole line; shift what follows to stay continuous */
-    double shift_u = 0, shift_v = 0;
-    int last = -1; /* last non-pole sample, in shifted coordinates uv[last] */
-    for (int i = 0; i <= n && e == CM_OK; i++) {
-        uv[i].x += shift_u;
-        uv[i].y += shift_v;
-        if (pole[i]) {
-            if (last >= 0) { /* the free parameter continues from the sample before */
-                if (pole[i] == 1)
-                    uv[i].x = uv[last].x;
-                else
-                    uv[i].y = uv[last].y;
-            }
-            continue;
-        }
-        if (last >= 0 && i > last + 1) {
-            /* leaving a pole run: turn the shorter way to this sample's free parameter */
-            int free_u = pole[i - 1] == 1;
-            double delta = free_u ? uv[i].x - uv[last].x : uv[i].y - uv[last].y, period = free_u ? pu : pv;
-            int closed = free_u ? sp->closed_u : sp->closed_v;
-            double adj = closed ? -period * round(delta / period) : 0.0;
-            if (free_u) {
-                shift_u += adj;
-                uv[i].x += adj;
-            } else {
-                shift_v += adj;
-                uv[i].y += adj;
-            }
-        }
-        last = i;
-    }
-    if (e == CM_OK) {
-        /* emit: a pole run becomes two points on the pole line (arrival and departure) */
-        for (int i = 0; i < n && e == CM_OK; i++) {
-            if (pole[i] && (i + 1 >= n || !pole[i + 1])) {
-                int j = i + 1; /* next sample (the closing one for the last) */
-                cm_vec2 dep = uv[i];
-                if (pole[i] == 1)
-                    dep.x = uv[j].x;
-                else
-                    dep.y = uv[j].y;
-                if (push_pt(fd, uv[i], xyz[i]) || push_pt(fd, dep, xyz[i]))
-                    e = cm_fail(st, CM_E_IO, "out of memory");
-                continue;
-            }
-            if (push_pt(fd, uv[i], xyz[i]))
-                e = cm_fail(st, CM_E_IO, "out of memory");
-        }
-        *wu = sp->closed_u ? (int)lround((uv[n].x - uv[0].x) / pu) : 0;
-        *wv = sp->closed_v ? (int)lround((uv[n].y - uv[0].y) / pv) : 0;
-    }
+    int nout = 0;
+    if (e == CM_OK)
+        e = cm_loop_uv(&fd->ps, pts, n, accept, uv, src, 2 * n, &nout, wu, wv, &fd->max_gap, &param_ws, st);
+    for (int i = 0; i < nout && e == CM_OK; i++)
+        if (push_pt(fd, uv[i], pts[src[i]]))
+            e = cm_fail(st, CM_E_IO, "out of memory");
+    free(pts);
     free(uv);
-    free(xyz);
-    free(pole);
+    free(src);
     return e;
-}
-
-/*
- * One polygon for a band between winding loops (or a winding loop and the
- * domain edge): lower loop running +u, then the seam, the upper loop
- * running -u, the seam back.  Works on the u-winding case; a v-winding
- * face is handled by swapping coordinates around the call.
- */
-static int join_band(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, double period, double vcap, int cap_top,
-                     cm_vec2 **out, int *nout)
-{
-    int n = nlo + 1 + (hi ? nhi + 1 : 2);
-    cm_vec2 *p = malloc((size_t)n * sizeof *p);
-    if (!p)
-        return -1;
-    int k = 0;
-    for (int i = 0; i < nlo; i++)
-        p[k++] = lo[i];
-    p[k++] = cm_v2(lo[0].x + period, lo[0].y);
-    if (hi) {
-        /* start the upper loop where it is nearest (mod period) to lo[0].u + period */
-        int best = 0;
-        double bd = HUGE_VAL;
-        for (int i = 0; i < nhi; i++) {
-            double du = hi[i].x - (lo[0].x + period);
-            du -= period * round(du / period);
-            if (fabs(du) < bd) {
-                bd = fabs(du);
-                best = i;
-            }
-        }
-        double shift = (lo[0].x + period) - hi[best].x;
-        shift = period * round(shift / period);
-        /* follow the upper loop; unwrap as we go so it descends continuously by one period */
-        double prev = hi[best].x + shift;
-        for (int i = 0; i <= nhi; i++) {
-            cm_vec2 q = hi[(best + i) % nhi];
-            double x = q.x + shift;
-            x += period * round((prev - x) / period);
-            p[k++] = cm_v2(x, q.y);
-            prev = x;
-        }
-    } else {
-        p[k++] = cm_v2(lo[0].x + period, vcap);
-        p[k++] = cm_v2(lo[0].x, vcap);
-        (void)cap_top;
-    }
-    *out = p;
-    *nout = k;
-    return 0;
 }
 
 cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, cm_status *st)
@@ -273,7 +124,9 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
     memset(fd, 0, sizeof *fd);
     brep_face *f = &m->faces[face];
     fd->face = face;
-    fd->sp = hsurf_param_of(&m->surfs[f->surf], tol);
+    cm_surf view = hsurf_view(&m->surfs[f->surf]);
+    if (cm_psurf_init(&fd->ps, &view, tol, st) != CM_OK)
+        return cm_fail(st, CM_E_DEGENERATE, "face_domain: surface");
     fd->loops = calloc((size_t)f->nloops + 1, sizeof *fd->loops);
     int *wu = calloc((size_t)f->nloops, sizeof(int)), *wv = calloc((size_t)f->nloops, sizeof(int));
     if (!fd->loops || !wu || !wv) {
@@ -321,7 +174,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                     b = l;
             }
         int along_u = wu[a] != 0;
-        double period = along_u ? fd->sp.u1 - fd->sp.u0 : fd->sp.v1 - fd->sp.v0;
+        double period = along_u ? fd->ps.u1 - fd->ps.u0 : fd->ps.v1 - fd->ps.v0;
         if (nwind > 2 || (b >= 0 && (along_u ? wu[b] == 0 : wv[b] == 0))) {
             e = cm_fail(st, CM_E_UNSUPPORTED, "face_domain: more than two loops wind around the surface");
         } else {
@@ -401,10 +254,12 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                 cm_vec2 *poly = NULL;
                 int np = 0;
                 if (!bad) {
-                    double vcap = (along_u ? fd->sp.v1 : fd->sp.u1);
+                    double vcap = (along_u ? fd->ps.v1 : fd->ps.u1);
                     if (b < 0 && lo_dir < 0)
-                        vcap = along_u ? fd->sp.v0 : fd->sp.u0;
-                    bad = join_band(rl ? rl : lo, nlo, b >= 0 ? rh : NULL, nhi, period, vcap, lo_dir > 0, &poly, &np);
+                        vcap = along_u ? fd->ps.v0 : fd->ps.u0;
+                    poly = malloc((size_t)(nlo + nhi + 3) * sizeof *poly);
+                    bad = !poly || cm_join_winding(rl ? rl : lo, nlo, b >= 0 ? rh : NULL, nhi, period, vcap, poly,
+                                                   nlo + nhi + 3, &np, NULL) != CM_OK;
                 }
                 free(rl);
                 free(rh);
@@ -519,7 +374,7 @@ cm_err face_domain_eval(const brep_model *m, const face_domain *fd, double u, do
                         cm_status *st)
 {
     cm_vec3 d[3];
-    cm_err e = hsurf_param_eval(&fd->sp, u, v, d, st);
+    cm_err e = cm_psurf_eval(&fd->ps, u, v, d, st);
     if (e != CM_OK)
         return e;
     *P = d[0];

@@ -17,7 +17,7 @@
 #define FACE_DOMAIN_H
 
 #include "brep/brep.h"
-#include "geom/hproject.h"
+#include "cm/cm_param.h"
 
 typedef struct fd_loop {
     int first, n;   /* polygon vertices [first, first+n); closed implicitly */
@@ -27,7 +27,7 @@ typedef struct fd_loop {
 
 typedef struct face_domain {
     int face;
-    hsurf_param sp;
+    cm_psurf ps;      /* the face's surface, with its domain and closedness */
     cm_vec2 *uv;      /* polygon vertices of all loops (unwrapped) */
     cm_vec3 *xyz;     /* the boundary point each vertex came from */
     int npts, cap;

@@ -181,6 +181,14 @@ CM_NODISCARD cm_err hsurf_torus(cm_vec3 o, cm_vec3 X, cm_vec3 Y, cm_vec3 Z, doub
 /** Apply x -> R x + t to the control net. */
 void hsurf_transform(hsurf *s, const haffine *m);
 
+/**
+ * The part [u0,u1] x [v0,v1] of s as its own surface, clamped on that
+ * rectangle (knot insertion column by column, then row by row; exact).
+ * With the whole domain it clamps an unclamped surface.
+ */
+CM_NODISCARD cm_err hsurf_subrange(const hsurf *s, double u0, double u1, double v0, double v1, hsurf *out,
+                                   cm_status *st);
+
 /** The iso-curve at u = u0 (a curve in v) or v = v0 (a curve in u), exact. */
 CM_NODISCARD cm_err hsurf_iso_u(const hsurf *s, double u, hcurve *out, cm_status *st);
 CM_NODISCARD cm_err hsurf_iso_v(const hsurf *s, double v, hcurve *out, cm_status *st);

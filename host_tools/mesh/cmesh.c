@@ -616,8 +616,8 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
                     }
                     double u = D->uv[best].x, v = D->uv[best].y, dist;
                     cm_vec3 d3[3];
-                    if (hsurf_project_from(&D->sp, P, &u, &v, &dist, NULL) != CM_OK ||
-                        hsurf_param_eval(&D->sp, u, v, d3, NULL) != CM_OK) {
+                    if (cm_psurf_project_from(&D->ps, P, &u, &v, &dist, NULL) != CM_OK ||
+                        cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK) {
                         ok = 0;
                         break;
                     }
@@ -625,8 +625,8 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
                     if (!(cm_norm(nn) > 1e-12 * cm_norm(d3[1]) * cm_norm(d3[2]))) {
                         /* degenerate point (a pole): step 1e-3 along the edge (spec §13) */
                         cm_vec3 P2 = curve_point(&E->c, k < 10 ? s + 1e-3 : s - 1e-3);
-                        if (hsurf_project_from(&D->sp, P2, &u, &v, &dist, NULL) != CM_OK ||
-                            hsurf_param_eval(&D->sp, u, v, d3, NULL) != CM_OK) {
+                        if (cm_psurf_project_from(&D->ps, P2, &u, &v, &dist, NULL) != CM_OK ||
+                            cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK) {
                             ok = 0;
                             break;
                         }

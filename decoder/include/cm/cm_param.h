@@ -1,0 +1,83 @@
+/*
+ * cm_param.h - following a face's boundary through its surface's
+ * parameter space: the (u,v) polygon of each loop, shared by the
+ * workstation's import (trimmed faces) and the terminal's tessellation of
+ * kept surfaces, so both see the same domain.
+ *
+ * A loop is a closed sequence of 3D points on (or within a gap of) the
+ * surface.  Each point is projected by continuation from the previous one
+ * (Levenberg-Marquardt from the last (u,v)), so a loop crossing the seam of
+ * a closed surface stays continuous: the parameter may leave [u0,u1] by a
+ * period ("unwrapped"), the surface is evaluated at the wrapped value.
+ * Poles (a collapsed side: a sphere's pole, a cone's apex) leave a point's
+ * free parameter undefined; a run of pole points is redrawn along the pole
+ * line from the free parameter before it to the one after it (the shorter
+ * way round), which is the polygon the face really has in (u,v), and the
+ * pole point appears twice (arrival and departure).  A loop that winds
+ * around a closed direction (a band of a full cylinder) is reported with
+ * its winding so the caller can close it with cm_join_winding().
+ *
+ * Contract: no allocation, recursion or I/O; bounded iterations; only
+ * + - * / sqrt (bit-identical everywhere); workspace from the caller.
+ */
+#ifndef CM_PARAM_H
+#define CM_PARAM_H
+
+#include "cm/cm_bspline.h"
+#include "cm/cm_error.h"
+#include "cm/cm_vec.h"
+#include "cm_limits.h"
+
+typedef struct cm_psurf {
+    cm_surf s;
+    double u0, u1, v0, v1;   /* domain */
+    int closed_u, closed_v;  /* the surface meets itself across u0/u1 (v0/v1) */
+} cm_psurf;
+
+/** Domain and closedness of s: closed when S(u0,v) == S(u1,v) within tol at 9 values of v. */
+CM_NODISCARD cm_err cm_psurf_init(cm_psurf *ps, const cm_surf *s, double tol, cm_status *st);
+
+/** S, S_u, S_v at (u,v): periodic parameters wrapped, others clamped. */
+CM_NODISCARD cm_err cm_psurf_eval(const cm_psurf *ps, double u, double v, cm_vec3 d[3], cm_status *st);
+
+/** Closest point by Levenberg-Marquardt from (u,v) (<= 60 steps); periodic parameters stay unwrapped. */
+CM_NODISCARD cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double *u, double *v, double *dist,
+                                          cm_status *st);
+
+/** Best of an n x n grid (2 <= n <= 64), then cm_psurf_project_from. */
+CM_NODISCARD cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, double *v, double *dist,
+                                          cm_status *st);
+
+/** Workspace of cm_loop_uv. */
+typedef struct cm_param_ws {
+    cm_vec2 uv[CM_MAX_TESS_POINTS + 1];
+    unsigned char pole[CM_MAX_TESS_POINTS + 1];
+} cm_param_ws;
+
+/**
+ * The (u,v) polygon of one loop of n points.
+ * @param accept   a continuation step landing farther than this from its point is retried by a global search
+ * @param[out] uv  the polygon (pole points doubled: at most 2n points); cap its capacity
+ * @param[out] src for each polygon point, the index of the loop point it came from
+ * @param[out] wind_u, wind_v  net turns around closed directions (0 for an ordinary loop)
+ * @param[in,out] max_gap      raised to the largest point-to-surface distance seen
+ * @return CM_E_LIMIT if n > CM_MAX_TESS_POINTS, CM_E_NOSPACE if cap is too small
+ */
+CM_NODISCARD cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, cm_vec2 *uv, int *src,
+                               int cap, int *nout, int *wind_u, int *wind_v, double *max_gap, cm_param_ws *ws,
+                               cm_status *st);
+
+/**
+ * One polygon for a face bounded by loops winding around a closed surface
+ * direction: `lo` winds the lower band edge, `hi` (may be NULL) the upper;
+ * with only `lo`, the band is closed by the domain edge at `cap_coord`.
+ * Works in coordinates where x is the winding direction (swap u,v before
+ * and after for a v-winding face).  The lower loop must run +x, the upper
+ * -x.  Output: lo, the seam up, hi (unwrapped to descend by one period),
+ * the seam down: a simple polygon (counter-clockwise).
+ * @return CM_E_NOSPACE if cap < nlo + nhi + 3
+ */
+CM_NODISCARD cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, double period,
+                                    double cap_coord, cm_vec2 *out, int cap, int *nout, cm_status *st);
+
+#endif /* CM_PARAM_H */

@@ -1,0 +1,289 @@
+/* cm_param.c - loops through a surface's parameter space (see cm_param.h). */
+#include "cm/cm_param.h"
+
+#include <stddef.h>
+
+#include "cm/cm_limits_info.h"
+#include "cm/cm_lsq.h"
+
+static double wrap(double x, double a, double b, int periodic)
+{
+    if (periodic) {
+        double p = b - a;
+        x -= p * floor((x - a) / p);
+        return x > b ? b : x; /* rounding at the seam */
+    }
+    return x < a ? a : (x > b ? b : x);
+}
+
+cm_err cm_psurf_eval(const cm_psurf *ps, double u, double v, cm_vec3 d[3], cm_status *st)
+{
+    cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+    cm_err e = cm_surf_eval(&ps->s, wrap(u, ps->u0, ps->u1, ps->closed_u), wrap(v, ps->v0, ps->v1, ps->closed_v), 1,
+                            S, st);
+    if (e != CM_OK)
+        return e;
+    d[0] = S[0][0];
+    d[1] = S[1][0];
+    d[2] = S[0][1];
+    return CM_OK;
+}
+
+cm_err cm_psurf_init(cm_psurf *ps, const cm_surf *s, double tol, cm_status *st)
+{
+    ps->s = *s;
+    ps->u0 = s->U[s->p];
+    ps->u1 = s->U[s->nu];
+    ps->v0 = s->V[s->q];
+    ps->v1 = s->V[s->nv];
+    ps->closed_u = ps->closed_v = 0;
+    int cu = 1, cv = 1;
+    for (int k = 0; k <= 8; k++) {
+        cm_vec3 a[3], b[3];
+        double t = (double)k / 8.0;
+        cm_err e;
+        if ((e = cm_psurf_eval(ps, ps->u0, ps->v0 + (ps->v1 - ps->v0) * t, a, st)) != CM_OK ||
+            (e = cm_psurf_eval(ps, ps->u1, ps->v0 + (ps->v1 - ps->v0) * t, b, st)) != CM_OK)
+            return e;
+        if (cm_dist(a[0], b[0]) > tol)
+            cu = 0;
+        if ((e = cm_psurf_eval(ps, ps->u0 + (ps->u1 - ps->u0) * t, ps->v0, a, st)) != CM_OK ||
+            (e = cm_psurf_eval(ps, ps->u0 + (ps->u1 - ps->u0) * t, ps->v1, b, st)) != CM_OK)
+            return e;
+        if (cm_dist(a[0], b[0]) > tol)
+            cv = 0;
+    }
+    ps->closed_u = cu;
+    ps->closed_v = cv;
+    return CM_OK;
+}
+
+cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double *u, double *v, double *dist, cm_status *st)
+{
+    double uu = *u, vv = *v;
+    if (!ps->closed_u)
+        uu = wrap(uu, ps->u0, ps->u1, 0);
+    if (!ps->closed_v)
+        vv = wrap(vv, ps->v0, ps->v1, 0);
+    cm_vec3 d[3];
+    cm_err e = cm_psurf_eval(ps, uu, vv, d, st);
+    if (e != CM_OK)
+        return e;
+    double f = cm_norm2(cm_sub(d[0], P)), mu = 1e-3;
+    double du = ps->u1 - ps->u0, dv = ps->v1 - ps->v0;
+    for (int it = 0; it < 60; it++) {
+        cm_vec3 r = cm_sub(d[0], P);
+        double J[4] = {cm_dot(d[1], d[1]), cm_dot(d[1], d[2]), cm_dot(d[1], d[2]), cm_dot(d[2], d[2])};
+        double g[2] = {-cm_dot(d[1], r), -cm_dot(d[2], r)};
+        double tr = J[0] + J[3];
+        if (!(tr > 0))
+            break;
+        double A[4] = {J[0] + mu * tr, J[1], J[2], J[3] + mu * tr}, x[2];
+        if (cm_solve2(A, g, 0.0, x, NULL) != CM_OK)
+            break;
+        double un = uu + x[0], vn = vv + x[1];
+        if (!ps->closed_u)
+            un = wrap(un, ps->u0, ps->u1, 0);
+        if (!ps->closed_v)
+            vn = wrap(vn, ps->v0, ps->v1, 0);
+        double step = fabs(un - uu) / du + fabs(vn - vv) / dv;
+        cm_vec3 dn[3];
+        if ((e = cm_psurf_eval(ps, un, vn, dn, st)) != CM_OK)
+            return e;
+        double fn = cm_norm2(cm_sub(dn[0], P));
+        if (fn <= f) {
+            uu = un;
+            vv = vn;
+            f = fn;
+            d[0] = dn[0];
+            d[1] = dn[1];
+            d[2] = dn[2];
+            mu = mu / 10.0 > 1e-12 ? mu / 10.0 : 1e-12;
+        } else {
+            mu *= 10.0;
+            if (mu > 1e8)
+                break;
+        }
+        if (step < 1e-14)
+            break;
+    }
+    *u = uu;
+    *v = vv;
+    if (dist)
+        *dist = sqrt(f);
+    return CM_OK;
+}
+
+cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, double *v, double *dist, cm_status *st)
+{
+    if (n < 2 || n > 64)
+        return cm_fail(st, CM_E_ARG, __func__);
+    double bu = ps->u0, bv = ps->v0, bf = -1.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double ui = ps->u0 + (ps->u1 - ps->u0) * (double)i / (double)(n - 1);
+            double vj = ps->v0 + (ps->v1 - ps->v0) * (double)j / (double)(n - 1);
+            cm_vec3 d[3];
+            cm_err e = cm_psurf_eval(ps, ui, vj, d, st);
+            if (e != CM_OK)
+                return e;
+            double fi = cm_norm2(cm_sub(d[0], P));
+            if (bf < 0 || fi < bf) {
+                bf = fi;
+                bu = ui;
+                bv = vj;
+            }
+        }
+    *u = bu;
+    *v = bv;
+    return cm_psurf_project_from(ps, P, u, v, dist, st);
+}
+
+cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, cm_vec2 *uv_out, int *src, int cap,
+                  int *nout, int *wind_u, int *wind_v, double *max_gap, cm_param_ws *ws, cm_status *st)
+{
+    if (n > CM_MAX_TESS_POINTS)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)n, CM_MAX_TESS_POINTS, __func__);
+    if (n < 1)
+        return cm_fail(st, CM_E_ARG, __func__);
+    double pu = ps->u1 - ps->u0, pv = ps->v1 - ps->v0;
+    cm_vec2 *uv = ws->uv;
+    unsigned char *pole = ws->pole;
+    double u = 0, v = 0;
+    cm_err e;
+    /* 1. project by continuation; index n is the loop's start once more (for the winding) */
+    for (int k = 0; k <= n; k++) {
+        cm_vec3 P = pts[k < n ? k : 0];
+        double uu = u, vv = v, dist;
+        if (k == 0) {
+            /* the first point: a coarse grid, a fine one only if that lands badly */
+            if ((e = cm_psurf_project_grid(ps, P, 17, &uu, &vv, &dist, st)) != CM_OK)
+                return e;
+            if (dist > accept && (e = cm_psurf_project_grid(ps, P, 41, &uu, &vv, &dist, st)) != CM_OK)
+                return e;
+        } else {
+            if ((e = cm_psurf_project_from(ps, P, &uu, &vv, &dist, st)) != CM_OK)
+                return e;
+            if (dist > accept) {
+                /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
+                double gu, gv, gd;
+                if ((e = cm_psurf_project_grid(ps, P, 41, &gu, &gv, &gd, st)) != CM_OK)
+                    return e;
+                if (gd < dist) {
+                    if (ps->closed_u)
+                        gu += pu * floor((u - gu) / pu + 0.5);
+                    if (ps->closed_v)
+                        gv += pv * floor((v - gv) / pv + 0.5);
+                    uu = gu;
+                    vv = gv;
+                    dist = gd;
+                }
+            }
+        }
+        cm_vec3 dd[3];
+        if ((e = cm_psurf_eval(ps, uu, vv, dd, st)) != CM_OK)
+            return e;
+        /* a pole: the iso-line through the point in one direction is shorter than `accept`
+         * (exporters leave a generatrix end a little off the axis) */
+        double lu = cm_norm(dd[1]) * pu, lv = cm_norm(dd[2]) * pv;
+        pole[k] = (unsigned char)(lu <= accept && lu < lv ? 1 : (lv <= accept && lv < lu ? 2 : 0));
+        if (k < n && max_gap && dist > *max_gap)
+            *max_gap = dist;
+        u = uu;
+        v = vv;
+        uv[k] = cm_v2(u, v);
+    }
+    /* 2. redraw pole runs along the pole line; shift what follows to stay continuous */
+    double shift_u = 0, shift_v = 0;
+    int last = -1; /* last non-pole point */
+    for (int i = 0; i <= n; i++) {
+        uv[i].x += shift_u;
+        uv[i].y += shift_v;
+        if (pole[i]) {
+            if (last >= 0) {
+                if (pole[i] == 1)
+                    uv[i].x = uv[last].x;
+                else
+                    uv[i].y = uv[last].y;
+            }
+            continue;
+        }
+        if (last >= 0 && i > last + 1) {
+            /* leaving a pole run: turn the shorter way to this point's free parameter */
+            int free_u = pole[i - 1] == 1;
+            double delta = free_u ? uv[i].x - uv[last].x : uv[i].y - uv[last].y, period = free_u ? pu : pv;
+            int closed = free_u ? ps->closed_u : ps->closed_v;
+            double adj = closed ? -period * floor(delta / period + 0.5) : 0.0;
+            if (free_u) {
+                shift_u += adj;
+                uv[i].x += adj;
+            } else {
+                shift_v += adj;
+                uv[i].y += adj;
+            }
+        }
+        last = i;
+    }
+    /* 3. emit: the last point of a pole run appears twice, with the arrival and the departure parameter */
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        int run_end = pole[i] && (i + 1 == n || !pole[i + 1]);
+        if (k + 1 + run_end > cap)
+            return cm_fail_nospace(st, (uint64_t)(k + 1 + run_end), (uint64_t)cap, __func__);
+        uv_out[k] = uv[i];
+        src[k++] = i;
+        if (run_end) {
+            cm_vec2 dep = uv[i];
+            if (pole[i] == 1)
+                dep.x = uv[i + 1].x;
+            else
+                dep.y = uv[i + 1].y;
+            uv_out[k] = dep;
+            src[k++] = i;
+        }
+    }
+    *nout = k;
+    *wind_u = ps->closed_u ? (int)floor((uv[n].x - uv[0].x) / pu + 0.5) : 0;
+    *wind_v = ps->closed_v ? (int)floor((uv[n].y - uv[0].y) / pv + 0.5) : 0;
+    return CM_OK;
+}
+
+cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, double period, double cap_coord,
+                       cm_vec2 *out, int cap, int *nout, cm_status *st)
+{
+    int need = nlo + 1 + (hi ? nhi + 1 : 2);
+    if (need > cap)
+        return cm_fail_nospace(st, (uint64_t)need, (uint64_t)cap, __func__);
+    int k = 0;
+    for (int i = 0; i < nlo; i++)
+        out[k++] = lo[i];
+    out[k++] = cm_v2(lo[0].x + period, lo[0].y);
+    if (hi) {
+        /* start the upper loop where it is nearest (mod period) to lo[0] + period */
+        int best = 0;
+        double bd = -1;
+        for (int i = 0; i < nhi; i++) {
+            double du = hi[i].x - (lo[0].x + period);
+            du -= period * floor(du / period + 0.5);
+            if (bd < 0 || fabs(du) < bd) {
+                bd = fabs(du);
+                best = i;
+            }
+        }
+        double shift = (lo[0].x + period) - hi[best].x;
+        shift = period * floor(shift / period + 0.5);
+        double prev = hi[best].x + shift;
+        for (int i = 0; i <= nhi; i++) {
+            cm_vec2 q = hi[(best + i) % nhi];
+            double x = q.x + shift;
+            x += period * floor((prev - x) / period + 0.5);
+            out[k++] = cm_v2(x, q.y);
+            prev = x;
+        }
+    } else {
+        out[k++] = cm_v2(lo[0].x + period, cap_coord);
+        out[k++] = cm_v2(lo[0].x, cap_coord);
+    }
+    *nout = k;
+    return CM_OK;
+}
