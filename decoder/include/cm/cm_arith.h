@@ -1,0 +1,82 @@
+/*
+ * cm_arith.h - the entropy coder of the .cmz format: an adaptive binary
+ * range coder (LZMA-style: 32-bit range, 11-bit probabilities adapting by
+ * 1/32) and the integer models built on it.  The encoder half runs on the
+ * workstation, the decoder half on the terminal; both are here so they
+ * cannot drift apart.
+ *
+ * Integers are binarised as: the bit length k = 0..33 of the magnitude,
+ * coded as a unary run of adaptive bits (one context per position), then
+ * the bits below the leading one: the first CM_AC_MANT_CTX of them with
+ * adaptive contexts per (k, position), the rest at probability 1/2.  A
+ * signed value adds an adaptive sign bit.  Each field of the format owns a
+ * cm_ac_int model, so the statistics of vertex deltas, knot gaps and
+ * indices stay apart.
+ *
+ * Decoding never reads outside its buffer: past the end it reads zeros and
+ * sets `overrun`, which the caller turns into CM_E_TRUNCATED.
+ */
+#ifndef CM_ARITH_H
+#define CM_ARITH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cm/cm_error.h"
+
+#define CM_AC_PROB_BITS 11
+#define CM_AC_PROB_INIT (1u << (CM_AC_PROB_BITS - 1))
+#define CM_AC_MANT_CTX 3   /* adaptive bits below the leading one */
+#define CM_AC_MAX_LEN 34   /* bit lengths 0..33 (values up to 2^33 - 1) */
+
+typedef uint16_t cm_ac_prob;
+
+/** Model of one integer field. */
+typedef struct cm_ac_int {
+    cm_ac_prob len[CM_AC_MAX_LEN];                 /* unary bit-length run */
+    cm_ac_prob mant[CM_AC_MAX_LEN][CM_AC_MANT_CTX]; /* top bits of the magnitude */
+    cm_ac_prob sign;
+} cm_ac_int;
+
+void cm_ac_int_init(cm_ac_int *m);
+void cm_ac_prob_init(cm_ac_prob *p);
+
+/* ---- encoder (workstation): writes into a caller buffer, reports overflow ---- */
+typedef struct cm_ac_enc {
+    uint8_t *buf;
+    size_t cap, pos;
+    uint64_t low;
+    uint32_t range;
+    uint8_t cache;
+    uint64_t cache_size;
+    int overflow; /* the buffer was too small: the output is incomplete */
+} cm_ac_enc;
+
+void cm_ac_enc_init(cm_ac_enc *e, uint8_t *buf, size_t cap);
+void cm_ac_enc_bit(cm_ac_enc *e, cm_ac_prob *p, unsigned bit);
+void cm_ac_enc_direct(cm_ac_enc *e, uint32_t value, unsigned nbits);
+void cm_ac_enc_uint(cm_ac_enc *e, cm_ac_int *m, uint64_t v);
+void cm_ac_enc_sint(cm_ac_enc *e, cm_ac_int *m, int64_t v);
+/** Flush; returns the number of bytes written (0 and overflow set if cap was too small). */
+size_t cm_ac_enc_finish(cm_ac_enc *e);
+
+/* ---- decoder (terminal) ---- */
+typedef struct cm_ac_dec {
+    const uint8_t *buf;
+    size_t len, pos;
+    uint32_t range, code;
+    int overrun; /* tried to read past the end */
+} cm_ac_dec;
+
+void cm_ac_dec_init(cm_ac_dec *d, const uint8_t *buf, size_t len);
+unsigned cm_ac_dec_bit(cm_ac_dec *d, cm_ac_prob *p);
+uint32_t cm_ac_dec_direct(cm_ac_dec *d, unsigned nbits);
+uint64_t cm_ac_dec_uint(cm_ac_dec *d, cm_ac_int *m);
+int64_t cm_ac_dec_sint(cm_ac_dec *d, cm_ac_int *m);
+
+/* ---- CRC-32 (IEEE 802.3, reflected, as zlib) ---- */
+uint32_t cm_crc32_update(uint32_t crc, const uint8_t *p, size_t n);
+/** CRC-32 of a whole buffer (cm_crc32_update(0, p, n)). */
+uint32_t cm_crc32(const uint8_t *p, size_t n);
+
+#endif /* CM_ARITH_H */
