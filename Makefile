@@ -98,11 +98,12 @@ NOHEAP_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free,--wrap
 # ---- sources ----
 KERNEL_SRC := $(sort $(wildcard decoder/kernels/*.c))
 DECODER_SRC := $(sort $(wildcard decoder/src/*.c))
-LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC)
+OUT_SRC := $(sort $(wildcard decoder/out/*.c))
+LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC) $(OUT_SRC)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_NAMES := $(patsubst tests/unit/%.c,%,$(UNIT_SRC))
 # workstation code: everything under host_tools/ except the program mains (*_main.c)
-HOST_SRC := $(sort $(filter-out %_main.c,$(wildcard host_tools/*.c host_tools/*/*.c)))
+HOST_SRC := $(sort $(filter-out %_main.c %profile_table.c,$(wildcard host_tools/*.c host_tools/*/*.c)))
 HOST_TEST_SRC := $(sort $(wildcard tests/host/test_*.c))
 HOST_TEST_NAMES := $(patsubst tests/host/%.c,%,$(HOST_TEST_SRC))
 # helpers linked into every host test (synthetic IGES writer, ...)
@@ -144,6 +145,12 @@ $(call bdir,$(1))/cm-limits: $(call bdir,$(1))/platform/cm_report.o $(call bdir,
 
 unit-tests-$(1): $(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES) kernel_vectors)
 
+# the terminal's decoder, built with this profile; no heap on its path (linked with the abort wrappers)
+$(call bdir,$(1))/cmz-decode: $(call bdir,$(1))/platform/cmz_decode_main.o $(call bdir,$(1))/platform/cm_decode_file.o \
+		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/tests/unit/noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ -lm
+
 $(call bdir,$(1))/libcmhost.a: $(patsubst %.c,$(call bdir,$(1))/%.o,$(HOST_SRC) platform/cm_report.c)
 	$$(call say,AR      ,$$@)
 	$$(Q)rm -f $$@ && $$(AR) rcs $$@ $$^
@@ -156,7 +163,11 @@ $(addprefix $(call bdir,$(1))/tests/host/,$(HOST_TEST_NAMES)): $(call bdir,$(1))
 
 host-tests-$(1): $(addprefix $(call bdir,$(1))/tests/host/,$(HOST_TEST_NAMES))
 
-# fuzz targets replayed without libFuzzer (tests/fuzz/replay_main.c)
+# fuzz targets replayed without libFuzzer (tests/fuzz/replay_main.c); the decoder's needs no host code
+$(call bdir,$(1))/tests/fuzz/replay_decode: $(call bdir,$(1))/tests/fuzz/fuzz_decode.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
+		$(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
 $(call bdir,$(1))/tests/fuzz/replay_%: $(call bdir,$(1))/tests/fuzz/fuzz_%.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
 		$(call bdir,$(1))/libcmhost.a $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
@@ -165,9 +176,25 @@ endef
 $(foreach p,$(PROFILES),$(eval $(call PROFILE_RULES,$(p))))
 LIMIT_TOOLS := $(foreach p,$(PROFILES),$(call bdir,$(p))/cm-limits)
 
+# every profile's limits table, for `cmz encode --profile NAME`
+PROFILE_TABLES := $(foreach p,$(PROFILES),$(call bdir,host)/host_tools/profile_table_$(p).o)
+$(call bdir,host)/host_tools/profile_table_%.o: host_tools/profile_table.c
+	@mkdir -p $(@D)
+	$(call say,CC      ,$@)
+	$(Q)$(CC) $(CM_INC_ALL) -DCM_PROFILE='"profiles/$*.h"' -DPROFILE_TABLE=cm_profile_table_$* $(CPPFLAGS) \
+		$(CM_STD) $(CM_WARN) $(CFLAGS) -c $< -o $@
+
+# test tool: the decoded mesh's topology (host profile)
+MESH_CHECK := $(call bdir,host)/tests/tools/mesh_check
+$(MESH_CHECK): $(call bdir,host)/tests/tools/mesh_check.o $(call bdir,host)/tests/host/mesh_topo.o \
+		$(call bdir,host)/platform/cm_decode_file.o $(call bdir,host)/platform/cm_report.o $(call bdir,host)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
+
 # the workstation tool, always built with the host profile
 CMZ := $(call bdir,host)/cmz
-$(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(call bdir,host)/libcmhost.a $(call bdir,host)/libcmdecoder.a
+$(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(PROFILE_TABLES) $(call bdir,host)/libcmhost.a \
+		$(call bdir,host)/platform/cm_decode_file.o $(call bdir,host)/libcmdecoder.a
 	$(call say,LD      ,$@)
 	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
 
@@ -175,9 +202,11 @@ $(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(call bdir,host)/libcmhost.a $(
 
 # the Open CASCADE oracle (tests only): make oracle
 -include tests/oracle/oracle.mk
+# the glTF reader check (tests only): make gltf-check
+-include tests/tools/gltf_check.mk
 .PHONY: all lib unit-tests $(addprefix unit-tests-,$(PROFILES)) $(addprefix host-tests-,$(PROFILES))
 
-all: lib $(B)/cm-limits $(CMZ)
+all: lib $(B)/cm-limits $(B)/cmz-decode $(CMZ)
 lib: $(B)/libcmdecoder.a
 unit-tests: unit-tests-$(PROFILE)
 
@@ -197,7 +226,8 @@ $(STACK_CHECK): tests/tools/check_stack.c
 	$(call say,HOSTCC  ,$@)
 	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
-.PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-corpus-occt deps
+.PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-fuzz-decode-replay \
+	check-corpus-roundtrip check-corpus-occt deps
 # `make check` on a fresh machine: install what is missing, then test.
 check:
 	$(Q)$(MAKE) --no-print-directory deps
@@ -219,6 +249,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:stack-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack" \
 		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
 		"gate:iges-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
+		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross"
 
@@ -249,6 +280,32 @@ check-fuzz-replay:
 	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges \
 		tests/fuzz/corpus_iges $(wildcard tests/fuzz/regressions_iges) $(wildcard $(SHARED_MODELS)/iges)
 
+# the decode fuzz target (terminal profile, the board's limits) replayed under ASan/UBSan:
+# seeds (valid files of every method), named malformed inputs and regressions
+CLANG_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
+# (built as the fuzzer is, without CRC checks, so regressions found by fuzz-decode replay here)
+check-fuzz-decode-replay:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san-fuzz CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="$(CLANG_SAN) -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION" LDFLAGS="-fsanitize=address,undefined" \
+		$(BUILD_ROOT)/clang-san-fuzz/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_decode
+	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san-fuzz/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_decode \
+		tests/fuzz/corpus_decode $(wildcard tests/fuzz/regressions_decode)
+
+# libFuzzer on the decoder (not part of check): make fuzz-decode FUZZ_SECONDS=600
+# (built without CRC checks, in build/fuzz only, so that mutations reach the section decoders)
+.PHONY: fuzz-decode
+fuzz-decode:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION" \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode.o \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_decode \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode.o \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz/corpus_decode && cp tests/fuzz/corpus_decode/* $(BUILD_ROOT)/fuzz/corpus_decode/
+	$(BUILD_ROOT)/fuzz/fuzz_decode -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=30 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_decode
+
 # libFuzzer on the IGES import (not part of check): make fuzz-iges FUZZ_SECONDS=600
 FUZZ_SECONDS ?= 60
 FUZZ_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
@@ -269,6 +326,10 @@ fuzz-iges:
 check-corpus-occt: $(CMZ) oracle
 	$(Q)tests/tools/check_corpus_occt.sh $(CMZ) $(ORACLE_BIN) $(SHARED_MODELS)
 
+# encode -> decode -> mesh on the shared corpus, judged by mesh_check, OCCT and tinygltf (skips without it)
+check-corpus-roundtrip: $(CMZ) $(MESH_CHECK) oracle gltf-check-tool
+	$(Q)tests/tools/check_corpus_roundtrip.sh $(CMZ) $(MESH_CHECK) $(ORACLE_BIN) $(GLTF_CHECK_BIN) $(SHARED_MODELS)
+
 # unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine
 check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 	$(Q)for x in $(CROSS_TARGETS); do \
@@ -281,6 +342,7 @@ check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 # Host tools, tests, cross toolchains and the foreign-architecture libraries the cross tests link.
 DEPS_ARCHS := arm64 armhf
 DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzzer-14-dev \
+	libtinygltf-dev nlohmann-json3-dev \
 	libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev \
 	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf qemu-user \
 	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf

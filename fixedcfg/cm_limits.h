@@ -139,7 +139,49 @@
 /* Triangles of the decoded mesh.  Unit: triangles.  Hard bound
  * 1431655765 (3 indices each must fit uint32 glTF indices). */
 #ifndef CM_MAX_TRIS
-#  define CM_MAX_TRIS 1048576
+#  define CM_MAX_TRIS 524288
+#endif
+
+/* Points triangulated for one face (boundary samples of all its loops plus
+ * interior points).  Unit: points.  Hard bound 2^24-1.  Sizes the
+ * tessellation workspace (about 2 triangles per point). */
+#ifndef CM_MAX_TESS_POINTS
+#  define CM_MAX_TESS_POINTS 8192
+#endif
+
+/* Size of one .cmz file.  Unit: bytes.  Hard bound 2^31-1.  The decoder
+ * holds the whole compressed file while decoding it. */
+#ifndef CM_MAX_FILE_BYTES
+#  define CM_MAX_FILE_BYTES 8388608
+#endif
+
+/* Control points of all curves and kept surfaces of one model (one pool).
+ * Unit: control points.  Hard bound 2^24-1.  32 bytes each (point and weight). */
+#ifndef CM_MAX_MODEL_CTRL
+#  define CM_MAX_MODEL_CTRL 262144
+#endif
+
+/* Knots of all curves and kept surfaces of one model (one pool).
+ * Unit: knots.  Hard bound 2^24-1. */
+#ifndef CM_MAX_MODEL_KNOTS
+#  define CM_MAX_MODEL_KNOTS 262144
+#endif
+
+/* Loops of all faces of one model.  Unit: loops.  Hard bound 2^24-1. */
+#ifndef CM_MAX_MODEL_LOOPS
+#  define CM_MAX_MODEL_LOOPS 32768
+#endif
+
+/* Edge uses of all loops of one model (about twice the edges).
+ * Unit: uses.  Hard bound 2^24-1. */
+#ifndef CM_MAX_MODEL_USES
+#  define CM_MAX_MODEL_USES 131072
+#endif
+
+/* Points sampled on one edge for tessellation.  Unit: points.  Hard bound
+ * 65535.  The chordal tolerance decides; this caps a wild curve. */
+#ifndef CM_MAX_EDGE_SAMPLES
+#  define CM_MAX_EDGE_SAMPLES 1024
 #endif
 
 /* ---- stack (checked from -fstack-usage / -fcallgraph-info=su) ---- */
@@ -162,6 +204,7 @@
 #define CM_MAX_EDGE_KNOTS (CM_MAX_EDGE_CTRL + CM_MAX_ORDER)   /* n + p + 1 */
 #define CM_MAX_SURF_KNOTS_DIR (CM_MAX_SURF_CTRL_DIR + CM_MAX_ORDER)
 #define CM_MAX_DENSE CM_MAX_FIT_CTRL                          /* dense Cholesky dimension */
+#define CM_MAX_TESS_TRIS (2 * CM_MAX_TESS_POINTS)             /* a triangulation of n points has < 2n triangles */
 
 #include "cm_limits_check.h"
 

@@ -61,6 +61,20 @@ _Static_assert(CM_MAX_VERTICES >= 1 && CM_MAX_VERTICES <= CM_HARD_MAX_COUNT24,
                "CM_MAX_VERTICES must be in [1,16777215]");
 _Static_assert(CM_MAX_TRIS >= 1 && CM_MAX_TRIS <= CM_HARD_MAX_TRIS,
                "CM_MAX_TRIS must be in [1,1431655765] (3*tris indices must fit uint32)");
+_Static_assert(CM_MAX_TESS_POINTS >= 16 && CM_MAX_TESS_POINTS <= CM_HARD_MAX_COUNT24,
+               "CM_MAX_TESS_POINTS must be in [16,16777215]");
+_Static_assert(CM_MAX_FILE_BYTES >= 256 && CM_MAX_FILE_BYTES <= 2147483647,
+               "CM_MAX_FILE_BYTES must be in [256, 2^31-1]");
+_Static_assert(CM_MAX_MODEL_CTRL >= CM_MAX_EDGE_CTRL && CM_MAX_MODEL_CTRL <= CM_HARD_MAX_COUNT24,
+               "CM_MAX_MODEL_CTRL must be in [CM_MAX_EDGE_CTRL, 16777215]");
+_Static_assert(CM_MAX_MODEL_KNOTS >= CM_MAX_EDGE_KNOTS && CM_MAX_MODEL_KNOTS <= CM_HARD_MAX_COUNT24,
+               "CM_MAX_MODEL_KNOTS must be in [CM_MAX_EDGE_KNOTS, 16777215]");
+_Static_assert(CM_MAX_MODEL_LOOPS >= CM_MAX_LOOPS && CM_MAX_MODEL_LOOPS <= CM_HARD_MAX_COUNT24,
+               "CM_MAX_MODEL_LOOPS must be in [CM_MAX_LOOPS, 16777215]");
+_Static_assert(CM_MAX_MODEL_USES >= CM_MAX_FACE_EDGES && CM_MAX_MODEL_USES <= CM_HARD_MAX_COUNT24,
+               "CM_MAX_MODEL_USES must be in [CM_MAX_FACE_EDGES, 16777215]");
+_Static_assert(CM_MAX_EDGE_SAMPLES >= 2 && CM_MAX_EDGE_SAMPLES <= CM_HARD_MAX_COUNT16,
+               "CM_MAX_EDGE_SAMPLES must be in [2, 65535]");
 _Static_assert(CM_STACK_FN_MAX >= 1024 && CM_STACK_FN_MAX <= CM_STACK_BUDGET,
                "CM_STACK_FN_MAX must be in [1024, CM_STACK_BUDGET]");
 _Static_assert(CM_STACK_BUDGET <= CM_HARD_MAX_STACK,

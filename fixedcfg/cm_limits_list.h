@@ -47,6 +47,18 @@
     X(STACK_FN_MAX, CM_STACK_FN_MAX, CM_HARD_MAX_STACK, "bytes",                               \
       "stack frame of one decoder or kernel function")                                        \
     X(STACK_BUDGET, CM_STACK_BUDGET, CM_HARD_MAX_STACK, "bytes",                               \
-      "deepest decoder/kernel call path, summed frames")
+      "deepest decoder/kernel call path, summed frames")                                      \
+    X(MAX_TESS_POINTS, CM_MAX_TESS_POINTS, CM_HARD_MAX_COUNT24, "points",                      \
+      "points triangulated for one face (boundary and interior)")                             \
+    X(MAX_FILE_BYTES, CM_MAX_FILE_BYTES, 2147483647u, "bytes", "size of one .cmz file")       \
+    X(MAX_MODEL_CTRL, CM_MAX_MODEL_CTRL, CM_HARD_MAX_COUNT24, "points",                        \
+      "control points of all curves and kept surfaces of a model")                            \
+    X(MAX_MODEL_KNOTS, CM_MAX_MODEL_KNOTS, CM_HARD_MAX_COUNT24, "knots",                       \
+      "knots of all curves and kept surfaces of a model")                                     \
+    X(MAX_MODEL_LOOPS, CM_MAX_MODEL_LOOPS, CM_HARD_MAX_COUNT24, "loops", "loops of all faces of a model") \
+    X(MAX_MODEL_USES, CM_MAX_MODEL_USES, CM_HARD_MAX_COUNT24, "uses",                          \
+      "edge uses of all loops of a model")                                                    \
+    X(MAX_EDGE_SAMPLES, CM_MAX_EDGE_SAMPLES, CM_HARD_MAX_COUNT16, "points",                    \
+      "points sampled on one edge for tessellation")
 
 #endif /* CM_LIMITS_LIST_H */

@@ -16,9 +16,13 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "cm/cm_format.h"
 #include "cm/cm_limits_info.h"
+#include "cm_decode_file.h"
 #include "cm_report.h"
+#include "encode/encode.h"
 #include "model_load.h"
+#include "profiles.h"
 
 #define CMZ_VERSION "0.1.0"
 
@@ -39,6 +43,19 @@ static void usage(FILE *f)
             "      (read / used / skipped), faces by surface kind, loops and holes, vertices,\n"
             "      edges (shared / free / seam / non-manifold), G1 edges, solids, bounding box,\n"
             "      tolerances and warnings.  --json prints the same as one JSON object.\n"
+            "  encode MODEL.igs -o MODEL.cmz [--tol REL] [--quant REL] [--tess REL]\n"
+            "         [--profile NAME] [--report FACES.tsv]\n"
+            "      Compress the model: every face becomes a PLANE rebuilt from its boundary\n"
+            "      when that is within --tol (default 0.01: 1 %% of the face's bounding box),\n"
+            "      else its surface is kept.  --quant: coordinate grid as a fraction of the\n"
+            "      model diagonal (default 1e-6); --tess: recommended chordal tolerance for\n"
+            "      viewers (default 5e-4).  --profile refuses, with the reason, a file the\n"
+            "      named board profile (terminal, host, tiny) cannot load.  Prints one\n"
+            "      summary line; --report writes a row per face.\n"
+            "  decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n"
+            "      Rebuild every face and tessellate it (chordal tolerance --tess in mm,\n"
+            "      default the file's recommendation) into binary glTF (metres, +Y up),\n"
+            "      binary STL or OBJ (millimetres), chosen by the extension.\n"
             "  sample MODEL.igs -o POINTS.xyz [--per-face N]\n"
             "      Write N points (default 20) lying on every trimmed face, inside its outer\n"
             "      loop and outside its holes, one 'x y z face_id' line each (millimetres,\n"
@@ -454,6 +471,235 @@ static int cmd_sample(int argc, char **argv)
     return rc;
 }
 
+/* write a buffer to `path` through a temporary file and a rename: never half a file */
+static int write_atomic(const char *path, const uint8_t *data, size_t len)
+{
+    size_t tl = strlen(path) + 32;
+    char *tmp = malloc(tl);
+    if (!tmp) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        return EXIT_NOMEM;
+    }
+    snprintf(tmp, tl, "%s.tmp%ld", path, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    int ok = f && fwrite(data, 1, len, f) == len;
+    if (f && fclose(f) != 0)
+        ok = 0;
+    if (!ok || rename(tmp, path) != 0) {
+        fprintf(stderr, "%s: writing %s failed: %s\n", prog, path, strerror(errno));
+        remove(tmp);
+        free(tmp);
+        return EXIT_IO;
+    }
+    free(tmp);
+    return EXIT_OK;
+}
+
+static int parse_real(const char *opt, const char *text, double lo, double hi, double *out)
+{
+    char *end;
+    double v = strtod(text, &end);
+    if (*end || !(v >= lo && v <= hi)) {
+        fprintf(stderr, "%s: %s wants a number in [%g, %g], not '%s'\n", prog, opt, lo, hi, text);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+static const char *method_name(int m)
+{
+    return m == CM_METHOD_PLANE ? "plane" : m == CM_METHOD_KEEP ? "keep" : "?";
+}
+
+static int cmd_encode(int argc, char **argv)
+{
+    const char *path = NULL, *out = NULL, *report = NULL, *profile = NULL;
+    encode_opts o;
+    encode_opts_default(&o);
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(a, "-o") == 0 && v) {
+            out = v;
+            i++;
+        } else if (strcmp(a, "--report") == 0 && v) {
+            report = v;
+            i++;
+        } else if (strcmp(a, "--profile") == 0 && v) {
+            profile = v;
+            i++;
+        } else if (strcmp(a, "--tol") == 0 && v) {
+            if (parse_real(a, v, 1e-9, 0.5, &o.rel_tol))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "--quant") == 0 && v) {
+            if (parse_real(a, v, 1e-12, 1e-2, &o.quant_rel))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "--tess") == 0 && v) {
+            if (parse_real(a, v, 1e-7, 0.1, &o.tess_rel))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "-q") == 0) {
+            quiet = 1;
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "%s encode: unknown option %s (see cmz --help)\n", prog, a);
+            return EXIT_USAGE;
+        } else if (!path) {
+            path = a;
+        } else {
+            fprintf(stderr, "%s encode: one model at a time (got %s and %s)\n", prog, path, a);
+            return EXIT_USAGE;
+        }
+    }
+    if (!path || !out) {
+        fprintf(stderr, "%s encode: usage: cmz encode MODEL.igs -o MODEL.cmz [options] (see cmz --help)\n", prog);
+        return EXIT_USAGE;
+    }
+    if (profile) {
+        o.target = cm_profile_limits(profile);
+        o.target_name = profile;
+        if (!o.target) {
+            fprintf(stderr, "%s encode: unknown profile '%s' (terminal, host or tiny)\n", prog, profile);
+            return EXIT_USAGE;
+        }
+    }
+    loaded_model lm;
+    cm_status st;
+    cm_status_init(&st);
+    if (model_load(path, &lm, progress, NULL, &st) != CM_OK) {
+        int rc = load_failed(path, &lm, &st);
+        model_free(&lm);
+        return rc;
+    }
+    encode_result r;
+    cm_status_init(&st);
+    cm_err e = encode_model(&lm, &o, &r, &st);
+    int rc = EXIT_OK;
+    if (e == CM_E_LIMIT && r.refusal[0]) {
+        fprintf(stderr, "%s: %s: refused: %s (nothing written)\n", prog, path, r.refusal);
+        rc = EXIT_INPUT;
+    } else if (e != CM_OK) {
+        cm_report_status(stderr, prog, path, &st);
+        rc = st.code == CM_E_IO ? EXIT_NOMEM : EXIT_INPUT;
+    }
+    if (rc == EXIT_OK)
+        rc = write_atomic(out, r.bytes, r.len);
+    if (rc == EXIT_OK && report) {
+        FILE *f = fopen(report, "w");
+        if (!f) {
+            fprintf(stderr, "%s: %s: %s\n", prog, report, strerror(errno));
+            rc = EXIT_IO;
+        } else {
+            fprintf(f, "face\tde\tentity\tsurface\tmethod\tbbox_mm\tplane_dev_mm\tmax_err_mm\tratio\tsurf_ctrl\n");
+            for (int i = 0; i < lm.brep.nfaces; i++) {
+                const face_report *fr = &r.faces[i];
+                fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\n", i, lm.brep.faces[i].src_de,
+                        lm.brep.faces[i].src_type, lm.brep.faces[i].surf_type, method_name(fr->method), fr->bbox,
+                        fr->plane_dev, fr->rebuild_max, fr->ratio, fr->surf_ctrl);
+            }
+            if (fclose(f) != 0)
+                rc = EXIT_IO;
+        }
+    }
+    if (rc == EXIT_OK) {
+        FILE *in = fopen(path, "rb");
+        long isize = 0;
+        if (in) {
+            fseek(in, 0, SEEK_END);
+            isize = ftell(in);
+            fclose(in);
+        }
+        printf("%s -> %s: %d faces (%d plane, %d kept), %d edges (%d lines), %zu bytes, %.1fx smaller than the "
+               "IGES (%ld bytes)%s\n",
+               path, out, lm.brep.nfaces, r.faces_plane, r.faces_keep, r.edges_line + r.edges_curve, r.edges_line,
+               r.len, r.len ? (double)isize / (double)r.len : 0.0, isize,
+               r.faces_flipped ? "" : "");
+    }
+    encode_result_free(&r);
+    model_free(&lm);
+    return rc;
+}
+
+static cm_decoder decoder;   /* large: static storage, as on the terminal */
+static cm_tess_ws tess_ws;
+
+static int cmd_decode(int argc, char **argv)
+{
+    const char *path = NULL, *out = NULL;
+    double tol = 0;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(a, "-o") == 0 && v) {
+            out = v;
+            i++;
+        } else if (strcmp(a, "--tess") == 0 && v) {
+            if (parse_real(a, v, 1e-9, 1e9, &tol))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "-q") == 0) {
+            quiet = 1;
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "%s decode: unknown option %s (see cmz --help)\n", prog, a);
+            return EXIT_USAGE;
+        } else if (!path) {
+            path = a;
+        } else {
+            fprintf(stderr, "%s decode: one file at a time (got %s and %s)\n", prog, path, a);
+            return EXIT_USAGE;
+        }
+    }
+    int fmt = out ? cm_out_format_of(out) : -1;
+    if (!path || !out || fmt < 0) {
+        fprintf(stderr, "%s decode: usage: cmz decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n", prog);
+        return EXIT_USAGE;
+    }
+    cm_status st;
+    cm_status_init(&st);
+    if (cm_decode_read(path, &decoder, &st) != CM_OK) {
+        cm_report_status(stderr, prog, path, &st);
+        return st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+    }
+    /* the mesh sized by what the file says it needs (the workstation may use the heap) */
+    uint64_t tris = decoder.need[CM_LIMIT_MAX_TRIS];
+    if (tol > 0 && tol < decoder.model.tess_tol)
+        tris = tris * (uint64_t)(decoder.model.tess_tol / tol + 1.0) * 2; /* finer than the file planned */
+    if (tris < 1024)
+        tris = 1024;
+    if (tris > CM_MAX_TRIS)
+        tris = CM_MAX_TRIS;
+    cm_mesh mesh;
+    memset(&mesh, 0, sizeof mesh);
+    mesh.cap_verts = (uint32_t)(3 * tris);
+    mesh.cap_index = (uint32_t)(3 * tris);
+    mesh.cap_faces = decoder.model.nfaces ? decoder.model.nfaces : 1;
+    mesh.pos = malloc((size_t)mesh.cap_verts * sizeof *mesh.pos);
+    mesh.nrm = malloc((size_t)mesh.cap_verts * sizeof *mesh.nrm);
+    mesh.idx = malloc((size_t)mesh.cap_index * sizeof *mesh.idx);
+    mesh.faces = malloc((size_t)mesh.cap_faces * sizeof *mesh.faces);
+    int rc = EXIT_OK;
+    cm_decode_summary sum;
+    uint64_t bytes = 0;
+    if (!mesh.pos || !mesh.nrm || !mesh.idx || !mesh.faces) {
+        fprintf(stderr, "%s: out of memory for %llu triangles\n", prog, (unsigned long long)tris);
+        rc = EXIT_NOMEM;
+    } else if (cm_decode_mesh(&decoder, tol, &mesh, &tess_ws, &sum, &st) != CM_OK ||
+               cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
+        cm_report_status(stderr, prog, path, &st);
+        rc = st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+    } else if (!quiet) {
+        printf("%s -> %s: %u faces (%u plane, %u kept), %u triangles, %u vertices, chordal tolerance %.3g mm, "
+               "%llu bytes\n",
+               path, out, sum.faces, sum.faces_plane, sum.faces_keep, sum.triangles, sum.vertices, sum.tess_tol,
+               (unsigned long long)bytes);
+    }
+    free(mesh.pos);
+    free(mesh.nrm);
+    free(mesh.idx);
+    free(mesh.faces);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -477,6 +723,10 @@ int main(int argc, char **argv)
         return cmd_info(argc - 2, argv + 2);
     if (strcmp(cmd, "sample") == 0)
         return cmd_sample(argc - 2, argv + 2);
+    if (strcmp(cmd, "encode") == 0)
+        return cmd_encode(argc - 2, argv + 2);
+    if (strcmp(cmd, "decode") == 0)
+        return cmd_decode(argc - 2, argv + 2);
     fprintf(stderr, "%s: unknown command '%s' (cmz --help lists them)\n", prog, cmd);
     return EXIT_USAGE;
 }

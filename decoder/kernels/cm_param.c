@@ -180,6 +180,14 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
                 }
             }
         }
+        if (k > 0) {
+            /* consecutive samples are far closer than half a period: take the periodic copy nearest
+               to the previous point (a Newton walk may have gone round the long way) */
+            if (ps->closed_u)
+                uu += pu * floor((u - uu) / pu + 0.5);
+            if (ps->closed_v)
+                vv += pv * floor((v - vv) / pv + 0.5);
+        }
         cm_vec3 dd[3];
         if ((e = cm_psurf_eval(ps, uu, vv, dd, st)) != CM_OK)
             return e;
@@ -249,7 +257,7 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
 }
 
 cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, double period, double cap_coord,
-                       cm_vec2 *out, int cap, int *nout, cm_status *st)
+                       cm_vec2 *out, int cap, int *nout, int *hi_start, cm_status *st)
 {
     int need = nlo + 1 + (hi ? nhi + 1 : 2);
     if (need > cap)
@@ -270,6 +278,8 @@ cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, d
                 best = i;
             }
         }
+        if (hi_start)
+            *hi_start = best;
         double shift = (lo[0].x + period) - hi[best].x;
         shift = period * floor(shift / period + 0.5);
         double prev = hi[best].x + shift;

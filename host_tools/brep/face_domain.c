@@ -259,7 +259,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                         vcap = along_u ? fd->ps.v0 : fd->ps.u0;
                     poly = malloc((size_t)(nlo + nhi + 3) * sizeof *poly);
                     bad = !poly || cm_join_winding(rl ? rl : lo, nlo, b >= 0 ? rh : NULL, nhi, period, vcap, poly,
-                                                   nlo + nhi + 3, &np, NULL) != CM_OK;
+                                                   nlo + nhi + 3, &np, NULL, NULL) != CM_OK;
                 }
                 free(rl);
                 free(rh);

@@ -681,65 +681,6 @@ int iges_is_surface(int type)
     }
 }
 
-/* the part [u0,u1] x [v0,v1] of a surface, exactly, column by column then row by row */
-static cm_err surf_subrange(const hsurf *s, double u0, double u1, double v0, double v1, hsurf *out, cm_status *st)
-{
-    hsurf a = {0};
-    cm_err e = CM_OK;
-    /* u direction: each column j is a curve in u */
-    for (int pass = 0; pass < 2 && e == CM_OK; pass++) {
-        const hsurf *src = pass == 0 ? s : &a;
-        int along_u = pass == 0;
-        int ncurves = along_u ? src->nv : src->nu, nctrl = along_u ? src->nu : src->nv;
-        double lo = along_u ? u0 : v0, hi = along_u ? u1 : v1;
-        hsurf res = {0};
-        for (int c = 0; c < ncurves && e == CM_OK; c++) {
-            hcurve col = {0}, sub = {0};
-            e = hcurve_alloc(&col, along_u ? src->p : src->q, nctrl, src->w != NULL, st);
-            if (e != CM_OK)
-                break;
-            memcpy(col.knots, along_u ? src->U : src->V, (size_t)(nctrl + col.p + 1) * sizeof(double));
-            for (int i = 0; i < nctrl; i++) {
-                long idx = along_u ? (long)i * src->nv + c : (long)c * src->nv + i;
-                col.ctrl[i] = src->ctrl[idx];
-                if (src->w)
-                    col.w[i] = src->w[idx];
-            }
-            e = hcurve_subrange(&col, lo, hi, &sub, st);
-            if (e == CM_OK && c == 0)
-                e = along_u ? hsurf_alloc(&res, src->p, src->q, sub.n, src->nv, src->w != NULL, st)
-                            : hsurf_alloc(&res, src->p, src->q, src->nu, sub.n, src->w != NULL, st);
-            if (e == CM_OK) {
-                if (c == 0) {
-                    memcpy(along_u ? res.U : res.V, sub.knots, (size_t)(sub.n + sub.p + 1) * sizeof(double));
-                    memcpy(along_u ? res.V : res.U, along_u ? src->V : src->U,
-                           (size_t)(along_u ? src->nv + src->q + 1 : src->nu + src->p + 1) * sizeof(double));
-                }
-                for (int i = 0; i < sub.n; i++) {
-                    long idx = along_u ? (long)i * res.nv + c : (long)c * res.nv + i;
-                    res.ctrl[idx] = sub.ctrl[i];
-                    if (res.w)
-                        res.w[idx] = sub.w ? sub.w[i] : 1.0;
-                }
-            }
-            hcurve_free(&col);
-            hcurve_free(&sub);
-        }
-        if (pass == 0) {
-            a = res;
-        } else {
-            hsurf_free(&a);
-            if (e == CM_OK)
-                *out = res;
-            else
-                hsurf_free(&res);
-        }
-    }
-    if (e != CM_OK)
-        hsurf_free(&a);
-    return e;
-}
-
 static cm_err bspline_128(iges_file *f, const iges_entity *e, const haffine *m, hsurf *out, cm_status *st)
 {
     int K1, K2, M1, M2;
@@ -794,7 +735,7 @@ static cm_err bspline_128(iges_file *f, const iges_entity *e, const haffine *m, 
     double tu = 1e-9 * (u1 - u0), tv = 1e-9 * (v1 - v0);
     if (du0 < du1 && dv0 < dv1 && (du0 > u0 + tu || du1 < u1 - tu || dv0 > v0 + tv || dv1 < v1 - tv)) {
         hsurf sub = {0};
-        err = surf_subrange(&s, fmax(du0, u0), fmin(du1, u1), fmax(dv0, v0), fmin(dv1, v1), &sub, st);
+        err = hsurf_subrange(&s, fmax(du0, u0), fmin(du1, u1), fmax(dv0, v0), fmin(dv1, v1), &sub, st);
         hsurf_free(&s);
         if (err != CM_OK)
             return iges_entity_error(f, e, "cannot restrict to its declared parameter range"), err;

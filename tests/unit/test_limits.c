@@ -29,7 +29,7 @@ static void test_profile_values(void **state)
         /* the terminal uses cm_limits.h's documented defaults */
         assert_int_equal(CM_MAX_DEGREE, 9);
         assert_int_equal(CM_MAX_FACES, 16384);
-        assert_int_equal(CM_MAX_TRIS, 1048576);
+        assert_int_equal(CM_MAX_TRIS, 524288);
     } else {
         fail_msg("unknown profile %s", cm_profile_name);
     }

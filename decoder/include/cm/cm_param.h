@@ -75,9 +75,12 @@ CM_NODISCARD cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, do
  * and after for a v-winding face).  The lower loop must run +x, the upper
  * -x.  Output: lo, the seam up, hi (unwrapped to descend by one period),
  * the seam down: a simple polygon (counter-clockwise).
+ * Layout of the output: lo[0..nlo), lo[0] + one period, then either hi[(hi_start + i) % nhi]
+ * for i = 0..nhi (unwrapped) or two cap points.
+ * @param[out] hi_start  where the upper loop was entered (may be NULL)
  * @return CM_E_NOSPACE if cap < nlo + nhi + 3
  */
 CM_NODISCARD cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, double period,
-                                    double cap_coord, cm_vec2 *out, int cap, int *nout, cm_status *st);
+                                    double cap_coord, cm_vec2 *out, int cap, int *nout, int *hi_start, cm_status *st);
 
 #endif /* CM_PARAM_H */

@@ -28,6 +28,9 @@ static inline cm_vec3 cm_v3(double x, double y, double z)
     return r;
 }
 
+/* a mesh position (float[3], as cm_mesh stores it) widened to double */
+static inline cm_vec3 cm_v3f(const float p[3]) { return cm_v3((double)p[0], (double)p[1], (double)p[2]); }
+
 static inline cm_vec2 cm_v2(double x, double y)
 {
     cm_vec2 r;

@@ -1,0 +1,83 @@
+/*
+ * cm_decode.h - the terminal's .cmz reader: fed in chunks of any size,
+ * validates everything, fills a cm_model.
+ *
+ *   static cm_decoder dec;        // a few MiB: give it static storage
+ *   cm_dec_init(&dec);
+ *   while (bytes arrive) cm_dec_feed(&dec, p, n, &st);   // header checked as soon as it is in
+ *   cm_dec_finish(&dec, &st);     // all bytes in: CRCs checked, sections decoded into dec.model
+ *
+ * Contract (the security model of README): the decoder never reads past
+ * the bytes fed, never writes past any fixedcfg-sized array, never
+ * allocates, never recurses, and finishes in time bounded by the input
+ * size and the limits.  A model whose header declares a need above a limit
+ * of this build is refused by cm_dec_feed as soon as the header is
+ * complete, before any byte of the body is looked at: CM_E_LIMIT, with the
+ * limit, the need and this build's value in the status.  After CM_OK every
+ * count is within its limit, every index is valid, every number is finite
+ * and every loop is closed.  Errors carry the byte offset where they were
+ * detected.
+ */
+#ifndef CM_DECODE_H
+#define CM_DECODE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cm/cm_error.h"
+#include "cm/cm_format.h"
+#include "cm/cm_limits_info.h"
+
+typedef struct cm_dec_section {
+    uint8_t tag;
+    uint32_t off, len, crc;
+} cm_dec_section;
+
+typedef enum cm_dec_state {
+    CM_DEC_HEADER = 0, /* waiting for the header */
+    CM_DEC_BODY = 1,   /* header accepted, body arriving */
+    CM_DEC_DONE = 2,   /* model decoded */
+    CM_DEC_FAILED = 3  /* an error was reported; feed/finish refuse further work */
+} cm_dec_state;
+
+typedef struct cm_decoder {
+    cm_dec_state state;
+    uint32_t len;                      /* bytes received */
+    uint32_t header_len, file_len;
+    uint8_t version_major, version_minor;
+    uint16_t flags;
+    uint32_t nlimits;
+    uint32_t need[CM_LIMIT_COUNT];     /* the model's needs, by limit id */
+    uint32_t nsec;
+    cm_dec_section sec[CM_SEC_COUNT];
+    int64_t vq[CM_MAX_VERTICES][3];    /* vertices on the integer grid (predictors) */
+    int64_t sq[CM_MAX_SURF_CTRL][3];   /* one kept surface's net on the grid (predictor) */
+    int64_t sw[CM_MAX_SURF_CTRL];      /* ... and its quantised weights */
+    uint8_t buf[CM_MAX_FILE_BYTES];    /* the compressed file */
+    cm_model model;
+} cm_decoder;
+
+void cm_dec_init(cm_decoder *d);
+
+/**
+ * Append n bytes (n may be 0).  As soon as the header is complete it is
+ * checked: magic, version, lengths, section table, header CRC and every
+ * need against this build's limits.
+ * @return CM_OK, or CM_E_MAGIC / CM_E_VERSION / CM_E_FORMAT / CM_E_CRC /
+ *         CM_E_LIMIT (header refused) / CM_E_RANGE (more bytes than the file)
+ */
+CM_NODISCARD cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st);
+
+/** 1 once the header has been accepted (needs are then in d->need). */
+int cm_dec_header_ok(const cm_decoder *d);
+
+/**
+ * All bytes fed: check the whole-file CRC and each section's, decode the
+ * sections into d->model and validate the topology.
+ * @return CM_OK, CM_E_TRUNCATED (fewer bytes than the header declares),
+ *         CM_E_CRC, CM_E_RANGE, CM_E_KNOTS, CM_E_NONFINITE, CM_E_FORMAT,
+ *         CM_E_LIMIT, CM_E_UNSUPPORTED (a method this version does not know)
+ */
+CM_NODISCARD cm_err cm_dec_finish(cm_decoder *d, cm_status *st);
+
+#endif /* CM_DECODE_H */

@@ -1,0 +1,132 @@
+/*
+ * cm_format.h - constants and the decoded model of the .cmz format v1
+ * (docs/FORMAT.md is the specification; this header is its C view).
+ *
+ * The model is what the terminal rebuilds surfaces from: vertices, edges
+ * (the transmitted curves, clamped on [0,1], ends exactly at their
+ * vertices), faces with loops of edge uses and a reconstruction method,
+ * kept surfaces, colours.  All storage is static and sized by fixedcfg
+ * limits; nothing here allocates.
+ */
+#ifndef CM_FORMAT_H
+#define CM_FORMAT_H
+
+#include <stdint.h>
+
+#include "cm/cm_error.h"
+#include "cm/cm_vec.h"
+#include "cm_limits.h"
+
+#define CM_FMT_MAGIC0 0x89u
+#define CM_FMT_MAGIC1 'C'
+#define CM_FMT_MAGIC2 'M'
+#define CM_FMT_MAGIC3 'Z'
+#define CM_FMT_VERSION_MAJOR 1
+#define CM_FMT_VERSION_MINOR 0
+
+#define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
+#define CM_FMT_SECTION_ENTRY 16u  /* tag, 3 reserved, offset, length, crc */
+#define CM_FMT_MAX_HEADER 4096u   /* a header larger than this is malformed */
+#define CM_FMT_KNOT_BITS 30       /* knots quantised to 2^-30 of [0,1] */
+#define CM_FMT_WEIGHT_BITS 24     /* weights quantised to 2^-24 of the first weight */
+#define CM_FMT_MAX_PALETTE 255    /* colours (index 0 = none) */
+#define CM_FMT_SEG_PER_EDGE 10    /* boundary samples per edge use (spec 8.1 / 5A) */
+
+enum cm_fmt_section {
+    CM_SEC_VERT = 1,
+    CM_SEC_EDGE = 2,
+    CM_SEC_SURF = 3,
+    CM_SEC_FACE = 4,
+    CM_SEC_COLR = 5,
+    CM_SEC_COUNT = 5
+};
+
+enum cm_fmt_method {
+    CM_METHOD_KEEP = 0,   /* the original surface travels in the SURF section */
+    CM_METHOD_PLANE = 1,  /* spec 5A: rebuilt from the boundary */
+    CM_METHOD_COUNT = 2   /* methods this version knows */
+};
+
+enum cm_fmt_edge_kind {
+    CM_EDGE_LINE = 0,     /* degree 1 between its vertices: no curve data */
+    CM_EDGE_CURVE = 1     /* a clamped NURBS on [0,1] */
+};
+
+typedef struct cm_edge {
+    int32_t v0, v1;       /* vertices at t = 0 and t = 1 */
+    uint32_t ctrl0;       /* first control point in the pool (ctrl[ctrl0] is v0) */
+    uint32_t knot0;       /* first knot in the pool (n + p + 1 knots) */
+    uint16_t nctrl;
+    uint8_t p, rational, g1, kind;
+} cm_edge;
+
+typedef struct cm_ksurf {
+    uint32_t ctrl0, uknot0, vknot0; /* pools; net row-major in u */
+    uint16_t nu, nv;
+    uint8_t p, q, rational;
+} cm_ksurf;
+
+typedef struct cm_use {
+    uint32_t edge;
+    uint8_t rev;          /* 1: the loop runs v1 -> v0 */
+} cm_use;
+
+typedef struct cm_loop {
+    uint32_t use0;
+    uint16_t nuse;
+} cm_loop;
+
+typedef struct cm_face {
+    uint32_t loop0;       /* loop0 is the outer loop */
+    uint16_t nloops;
+    uint8_t method, flip, color; /* color: palette index, 0 = none */
+    uint32_t surf;        /* KEEP: index of its kept surface */
+} cm_face;
+
+/** The decoded model: everything the reconstruction reads (spec §2 rule 5). */
+typedef struct cm_model {
+    double origin[3], q;  /* quantisation grid: p = origin + q * integer */
+    double tess_tol;      /* chordal tolerance recommended by the encoder (mm) */
+    double rel_tol;       /* the encoder's rebuild tolerance (fraction of a face's size) */
+    uint32_t nverts, nedges, nfaces, nloops, nuses, nsurfs, nctrl, nknots, npalette;
+    cm_vec3 verts[CM_MAX_VERTICES];
+    cm_edge edges[CM_MAX_EDGES];
+    cm_ksurf surfs[CM_MAX_FACES];
+    cm_face faces[CM_MAX_FACES];
+    cm_loop loops[CM_MAX_MODEL_LOOPS];
+    cm_use uses[CM_MAX_MODEL_USES];
+    cm_vec3 ctrl[CM_MAX_MODEL_CTRL];
+    double w[CM_MAX_MODEL_CTRL];
+    double knots[CM_MAX_MODEL_KNOTS];
+    uint32_t palette[CM_FMT_MAX_PALETTE + 1];
+} cm_model;
+
+/** Little-endian loads and stores (no host-endianness assumption). */
+static inline uint32_t cm_get_u32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+static inline uint16_t cm_get_u16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }
+static inline void cm_put_u32(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+    p[2] = (uint8_t)(v >> 16);
+    p[3] = (uint8_t)(v >> 24);
+}
+static inline void cm_put_u16(uint8_t *p, uint16_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
+/** IEEE-754 binary64 through its bit pattern (little-endian on the wire). */
+double cm_get_f64(const uint8_t *p);
+void cm_put_f64(uint8_t *p, double v);
+
+/** Views of a model edge / kept surface for the kernels (pointing into the model's pools). */
+struct cm_curve;
+struct cm_surf;
+void cm_model_edge_curve(const cm_model *m, uint32_t e, struct cm_curve *out);
+void cm_model_surface(const cm_model *m, uint32_t s, struct cm_surf *out);
+
+#endif /* CM_FORMAT_H */

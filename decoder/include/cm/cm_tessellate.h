@@ -1,0 +1,69 @@
+/*
+ * cm_tessellate.h - a decoded model's faces as triangles (spec of issue 4):
+ * every edge sampled once (the same points for both faces that share it),
+ * the samples mapped into each face's parameter domain, the trimmed region
+ * triangulated with its holes (cm_tess.h), interior points added where the
+ * surface curves, so that no triangle is farther than the chordal
+ * tolerance from the surface.  Watertight along shared edges by
+ * construction: a boundary vertex is the edge's own point, bit for bit.
+ *
+ * Heap-free: the caller owns the workspace (static on the terminal) and
+ * the mesh arrays; faces are appended to the mesh one by one.
+ */
+#ifndef CM_TESSELLATE_H
+#define CM_TESSELLATE_H
+
+#include "cm/cm_format.h"
+#include "cm/cm_mesh.h"
+#include "cm/cm_param.h"
+#include "cm/cm_rebuild.h"
+#include "cm/cm_tess.h"
+
+typedef struct cm_tess_ws {
+    cm_rebuild_ws rb;
+    cm_param_ws pw;
+    cm_tri_ws tri;
+    cm_vec3 bpts[CM_MAX_TESS_POINTS];      /* boundary points in 3D, all loops */
+    cm_vec2 uv[CM_MAX_TESS_POINTS];        /* points to triangulate: boundary, then interior */
+    int src[CM_MAX_TESS_POINTS];           /* boundary uv point -> bpts index */
+    int loop_start[CM_MAX_LOOPS + 2];
+    int loop_bstart[CM_MAX_LOOPS + 2];     /* loops' first bpts index */
+    int wind_u[CM_MAX_LOOPS], wind_v[CM_MAX_LOOPS];
+    cm_vec2 tmp[CM_MAX_TESS_POINTS];       /* polygon joins; scaled (u,v) for the triangulator */
+    int src2[CM_MAX_TESS_POINTS];          /* polygon joins: sources of the joined points */
+    int ssrc[CM_MAX_TESS_POINTS];          /* polygon joins: sources of the winding loops' copies */
+    cm_vec3 xyz[CM_MAX_TESS_POINTS];       /* refinement: 3D position of each triangulation point */
+    int tris[CM_MAX_TESS_TRIS][3];
+    uint32_t vmap[CM_MAX_TESS_POINTS];     /* triangulation point -> mesh vertex (or UINT32_MAX) */
+    double ts[CM_MAX_EDGE_SAMPLES];
+} cm_tess_ws;
+
+/** Statistics of one face's tessellation (for the encoder's needs and for tests). */
+typedef struct cm_tess_info {
+    int points;       /* points handed to the triangulator */
+    int triangles;
+    int max_edge_samples;
+    double max_gap;   /* largest distance of a boundary point to a kept surface */
+} cm_tess_info;
+
+/**
+ * Parameters t in [0,1] sampling edge e so that every chord is within
+ * `tol` of the curve (uniform in t, doubled until it holds).
+ * @param[out] ts  n + 1 values, ts[0] = 0, ts[n] = 1 (cap entries available)
+ * @return CM_E_LIMIT when more than CM_MAX_EDGE_SAMPLES would be needed
+ *         (then the densest allowed sampling is returned, with the error)
+ */
+CM_NODISCARD cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int cap, int *n,
+                                   cm_status *st);
+
+/**
+ * Rebuild face f and append its triangles to `mesh` (one cm_mesh_face).
+ * @param tol  chordal tolerance in mm (the file's tess_tol, or the viewer's)
+ * @return CM_E_LIMIT when the face needs more than CM_MAX_TESS_POINTS or
+ *         the mesh more than its capacity (CM_MAX_TRIS); errors of the
+ *         rebuild, the projection or the triangulation otherwise
+ */
+CM_NODISCARD cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
+                                       cm_tess_info *info, cm_status *st);
+
+#endif /* CM_TESSELLATE_H */

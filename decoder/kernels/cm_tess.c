@@ -1,0 +1,1442 @@
+/*
+ * cm_tess.c - heap-free constrained Delaunay triangulation of a polygon with
+ * holes and interior points (the core of tessellation, see cm_tess.h).
+ *
+ * Steps:
+ *  1. Check the arguments.  Scale every point by the power of two that
+ *     brings the boundary's larger extent into (1/2, 1]: exact, so every
+ *     predicate decides as it would on the caller's coordinates, and every
+ *     tolerance below is relative to the face's size.
+ *  2. Touching loops: boundary points of different loops (or of one loop,
+ *     not neighbours on it) within EPS_TOUCH get one position, so that a
+ *     vertex shared by two loops but mapped into the parameter domain twice
+ *     with different rounding is seen exactly shared.
+ *  3. Link each loop into a ring of nodes (node k = point k), drop a point
+ *     that repeats its predecessor (a zero-length segment is nobody's side),
+ *     refuse loops with fewer than 3 points or no area, reverse a loop given
+ *     in the wrong orientation.
+ *  4. Bridge the holes into the outer ring (Eberly's hole elimination, with
+ *     the tie rules of mapbox/earcut): holes in order of increasing min x;
+ *     from the hole's leftmost vertex M a ray to -x finds the nearest ring
+ *     edge; its end with the smaller x, or the ring vertex inside the
+ *     triangle (M, hit, end) with the least angle to the ray, becomes the
+ *     bridge end P, and the ring becomes ... P M ...hole... M' P' ... with
+ *     copies M', P'.  (The brief proposed the mirror image, rightmost vertex
+ *     and a ray to +x: the same method; earcut's side conventions were kept
+ *     so that its tested tie rules apply unchanged.)  A hole whose M is at a
+ *     ring vertex (touching loops) is spliced in there without a bridge.
+ *  5. Ear clipping.  An ear b (neighbours a, c) is strictly convex and no
+ *     other node lies in the closed triangle abc (or within EPS_TOUCH outside
+ *     it).  Only nodes that are not strictly convex, or that share their
+ *     position with another node (bridge copies, touching loops), can lie in
+ *     an ear: they are the candidates, and an ear test visits the nodes
+ *     between its box's corners in z-order (earcut's hashing).  A candidate
+ *     at b's position blocks when one of its ring edges enters the ear's
+ *     angle.  Zero-length ring edges and spikes (two ring edges folding back
+ *     onto each other, left where a cut runs along a boundary segment at a
+ *     touching point) are removed as soon as they appear, pairing what lies
+ *     across them.  Ears are searched around the ring as in earcut (after a
+ *     cut, go on after the next node); a node that failed is not tested
+ *     again until its neighbours change or a whole turn finds no ear.  When
+ *     a whole turn finds no ear (near-collinear nodes, loops overlapping by
+ *     rounding), a relaxed test (only points strictly inside block) is
+ *     tried, then the least-bad node: the largest sine of its turn among the
+ *     unblocked ones; one that turns clearly the wrong way (sine < -SIN_TOL)
+ *     means the loops cross: CM_E_DEGENERATE.  Adjacency is built while
+ *     clipping: every ring edge remembers the triangle side across it.
+ *     Every strict ear is counter-clockwise, and each cut changes the ring's
+ *     winding number exactly where its triangle lies, so the triangles tile
+ *     the region exactly.
+ *  6. Lawson flips over all non-fixed sides: a side is flipped when the
+ *     opposite vertex is inside the circumcircle (certainly: the determinant
+ *     beyond its rounding bound, evaluated from both triangles as a sliver's
+ *     own circle is ill-conditioned) or one of its triangles is flat, and
+ *     only if the quadrilateral is strictly convex.  Boundary sides are
+ *     fixed.  The result is the constrained Delaunay triangulation of the
+ *     boundary points.
+ *  7. Interior points, in input order: locate (a grid of cells over the box
+ *     remembers a triangle meeting each cell, -1 where none does: those
+ *     points are outside at once; else walk from the cell's triangle, then
+ *     from the last one, then scan all), skip points outside, within
+ *     max(min_dist, EPS_SNAP) of a used point or of a boundary segment (a
+ *     breadth-first search over the triangles that meet that disc finds
+ *     every such point and segment), split the triangle (or the two
+ *     triangles of the side it lies on) and restore the Delaunay property
+ *     with flips around it.
+ *  8. A final Lawson pass; copy out.
+ *
+ * Only + - * / and comparisons on doubles (fabs, sqrt, floor),
+ * -ffp-contract=off: bit-identical on every architecture.  No recursion;
+ * every loop has a bound; all storage is the caller's cm_tri_ws.
+ */
+#include "cm/cm_tess.h"
+
+#include <float.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "cm/cm_limits_info.h"
+
+/* Tolerances, in the scaled coordinates (the boundary's larger extent is in (1/2, 1]). */
+#define EPS_DUP 1e-14   /* closer points are at one position (rounding noise of ~50 ulp) */
+#define EPS_REL 1e-14   /* orientation |det| <= EPS_REL (|l| + |r|) counts as collinear (error bound 3.3e-16) */
+#define EPS_IC 1e-14    /* incircle det must exceed EPS_IC * permanent to flip (error bound 1.1e-15) */
+#define EPS_TOUCH 1e-10 /* boundary points of different loops this close touch (the loops meet there) */
+#define EPS_SNAP 1e-10  /* interior points nearer than this to a vertex or the boundary are skipped */
+#define EPS_ON 1e-13    /* an interior point this close to a side is inserted on that side */
+#define EPS_AREA 1e-12  /* a loop with |2 area| <= EPS_AREA * extent^2 has no area */
+#define SIN_TOL 1e-8    /* a fallback ear may turn the wrong way by at most this sine */
+
+/* triangle flags */
+#define FIX(s) (1u << (s))    /* side s is fixed */
+#define QUEUED(s) (8u << (s)) /* side s is in the flip queue */
+#define FIX_ALL 7u
+/* node flags */
+#define NF_DUP 1u   /* another node has the same position */
+#define NF_CAND 2u  /* a candidate: not strictly convex, or NF_DUP (cand_update) */
+#define NF_DEAD 4u  /* removed from the ring */
+#define NF_NOEAR 8u /* failed the ear test, and nothing near it changed since */
+
+typedef struct tess_ctx {
+    cm_tri_ws *ws;
+    int nn;          /* nodes allocated */
+    int ntri;        /* triangles */
+    int sp;          /* flip queue size */
+    int overflow;    /* a triangle was needed beyond CM_MAX_TESS_TRIS (cannot happen for valid counts) */
+    double box[4];   /* the boundary's box: xmin, ymin, xmax, ymax */
+    double zinv;     /* z-order: cells per unit (32767 over the box's extent) */
+    int grid;        /* cells per side of the location grid over the box, 0 if none */
+    double ghx, ghy; /* its cell size */
+    double fold;     /* a fallback ear turning the wrong way is still cut when no higher than this */
+} tess_ctx;
+
+static int n3(int i) { return i == 2 ? 0 : i + 1; }
+static int p3(int i) { return i == 0 ? 2 : i - 1; }
+
+/* ---------------------------------------------------------------- predicates */
+
+static double dist2(cm_vec2 a, cm_vec2 b)
+{
+    double dx = a.x - b.x, dy = a.y - b.y;
+    return dx * dx + dy * dy;
+}
+
+static int same_pos(cm_vec2 a, cm_vec2 b) { return fabs(a.x - b.x) <= EPS_DUP && fabs(a.y - b.y) <= EPS_DUP; }
+
+/*
+ * Twice the signed area of abc (> 0: counter-clockwise); *err: its rounding
+ * tolerance.  The determinant is taken at the corner opposite the longest
+ * side (orientation is invariant under rotation of the corners): the two
+ * shortest sides give the smallest products, hence the smallest error, which
+ * keeps the sign certain for slivers next to very short boundary segments.
+ */
+static double orient(cm_vec2 a, cm_vec2 b, cm_vec2 c, double *err)
+{
+    double lab = dist2(a, b), lbc = dist2(b, c), lca = dist2(c, a);
+    cm_vec2 o = a, u = b, v = c; /* longest side bc: pivot a */
+    if (lab >= lbc && lab >= lca) { /* longest ab: pivot c */
+        o = c;
+        u = a;
+        v = b;
+    } else if (lca >= lbc) { /* longest ca: pivot b */
+        o = b;
+        u = c;
+        v = a;
+    }
+    double l = (u.x - o.x) * (v.y - o.y), r = (u.y - o.y) * (v.x - o.x);
+    *err = EPS_REL * (fabs(l) + fabs(r));
+    return l - r;
+}
+
+/* orientation beyond its tolerance: +1 counter-clockwise, -1 clockwise, 0 collinear */
+static int orient_sign(cm_vec2 a, cm_vec2 b, cm_vec2 c)
+{
+    double e, o = orient(a, b, c, &e);
+    return o > e ? 1 : (o < -e ? -1 : 0);
+}
+
+/* > 0 if d is inside the circle through the counter-clockwise a, b, c (Shewchuk's incircle) */
+static double incircle(cm_vec2 a, cm_vec2 b, cm_vec2 c, cm_vec2 d, double *err)
+{
+    double adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
+    double bc1 = bdx * cdy, bc2 = cdx * bdy, ca1 = cdx * ady, ca2 = adx * cdy, ab1 = adx * bdy, ab2 = bdx * ady;
+    double al = adx * adx + ady * ady, bl = bdx * bdx + bdy * bdy, cl = cdx * cdx + cdy * cdy;
+    double det = al * (bc1 - bc2) + bl * (ca1 - ca2) + cl * (ab1 - ab2);
+    *err = EPS_IC * ((fabs(bc1) + fabs(bc2)) * al + (fabs(ca1) + fabs(ca2)) * bl + (fabs(ab1) + fabs(ab2)) * cl);
+    return det;
+}
+
+/* squared distance from q to the segment ab */
+static double seg_dist2(cm_vec2 q, cm_vec2 a, cm_vec2 b)
+{
+    double ex = b.x - a.x, ey = b.y - a.y, l2 = ex * ex + ey * ey;
+    if (!(l2 > 0.0))
+        return dist2(q, a);
+    double t = ((q.x - a.x) * ex + (q.y - a.y) * ey) / l2;
+    if (t <= 0.0)
+        return dist2(q, a);
+    if (t >= 1.0)
+        return dist2(q, b);
+    return dist2(q, cm_v2(a.x + t * ex, a.y + t * ey));
+}
+
+/* earcut's exact point-in-triangle (closed), used with its bridge rules */
+static int ec_in_triangle(double ax, double ay, double bx, double by, double cx, double cy, double px, double py)
+{
+    return (cx - px) * (ay - py) >= (ax - px) * (cy - py) && (ax - px) * (by - py) >= (bx - px) * (ay - py) &&
+           (bx - px) * (cy - py) >= (cx - px) * (by - py);
+}
+
+static double cross3(cm_vec2 a, cm_vec2 b, cm_vec2 c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); }
+
+/* --------------------------------------------------------------- node rings */
+
+static cm_vec2 npos(const cm_tri_ws *ws, int k) { return ws->p[ws->node_pt[k]]; }
+
+/* node k strictly convex (turns left beyond the tolerance) */
+static int node_convex(const cm_tri_ws *ws, int k)
+{
+    return orient_sign(npos(ws, ws->prev[k]), npos(ws, k), npos(ws, ws->next[k])) > 0;
+}
+
+/*
+ * Candidates: the nodes an ear test must look at, those not strictly convex
+ * or sharing their position with another node (NF_CAND).  All live nodes
+ * are also linked in z-order (Morton order of their cell in a 32768 x 32768
+ * grid over the box, as in earcut), so an ear test visits only the nodes
+ * whose z lies between those of its triangle's box corners: a superset of
+ * the nodes in the box, found from the ear's own node in both directions.
+ */
+static void cand_update(tess_ctx *c, int k)
+{
+    cm_tri_ws *ws = c->ws;
+    ws->nflag[k] = (unsigned char)(ws->nflag[k] & ~NF_NOEAR); /* its neighbours changed: test again */
+    if ((ws->nflag[k] & NF_DUP) || !node_convex(ws, k))
+        ws->nflag[k] = (unsigned char)(ws->nflag[k] | NF_CAND);
+    else
+        ws->nflag[k] = (unsigned char)(ws->nflag[k] & ~NF_CAND);
+}
+
+/* node k leaves the ring: out of the z-order list too */
+static void node_remove(tess_ctx *c, int k)
+{
+    cm_tri_ws *ws = c->ws;
+    if (ws->zprev[k] >= 0)
+        ws->znext[ws->zprev[k]] = ws->znext[k];
+    if (ws->znext[k] >= 0)
+        ws->zprev[ws->znext[k]] = ws->zprev[k];
+    ws->nflag[k] = (unsigned char)((ws->nflag[k] & ~NF_CAND) | NF_DEAD);
+}
+
+/* Morton code of the cell holding (x, y): 15 bits per axis, interleaved */
+static uint32_t zcode(const tess_ctx *c, double x, double y)
+{
+    double fx = (x - c->box[0]) * c->zinv, fy = (y - c->box[1]) * c->zinv;
+    uint32_t ix = fx <= 0.0 ? 0u : (fx >= 32767.0 ? 32767u : (uint32_t)fx);
+    uint32_t iy = fy <= 0.0 ? 0u : (fy >= 32767.0 ? 32767u : (uint32_t)fy);
+    uint32_t z = 0;
+    for (int b = 0; b < 15; b++)
+        z |= ((ix >> b) & 1u) << (2 * b) | ((iy >> b) & 1u) << (2 * b + 1);
+    return z;
+}
+
+/* move ring-edge state s to node k (fixing the back reference of a pending bridge twin) */
+static void set_side(cm_tri_ws *ws, int k, int s)
+{
+    ws->side[k] = s;
+    if (s <= -2)
+        ws->side[-s - 2] = -2 - k;
+}
+
+/* ----------------------------------------------------------------- triangles */
+
+static int new_tri(tess_ctx *c, int a, int b, int d)
+{
+    if (c->ntri >= CM_MAX_TESS_TRIS) {
+        c->overflow = 1;
+        return -1;
+    }
+    cm_tri_ws *ws = c->ws;
+    int t = c->ntri++;
+    ws->tri[t][0] = a;
+    ws->tri[t][1] = b;
+    ws->tri[t][2] = d;
+    ws->adj[t][0] = ws->adj[t][1] = ws->adj[t][2] = -1;
+    ws->flag[t] = 0;
+    ws->mark[t] = 0;
+    return t;
+}
+
+static void set_fixed(cm_tri_ws *ws, int t, int s, int on)
+{
+    if (on)
+        ws->flag[t] = (unsigned char)(ws->flag[t] | FIX(s));
+    else
+        ws->flag[t] = (unsigned char)(ws->flag[t] & ~FIX(s));
+}
+
+/* side s of triangle t lies on ring edge k -> next[k]: link it to what is across */
+static void attach(cm_tri_ws *ws, int t, int s, int k)
+{
+    int S = ws->side[k];
+    ws->adj[t][s] = -1;
+    if (S == -1) {
+        set_fixed(ws, t, s, 1);
+    } else if (S >= 0) {
+        ws->adj[t][s] = S;
+        ws->adj[S / 3][S % 3] = 3 * t + s;
+    } else {
+        ws->side[-S - 2] = 3 * t + s; /* the twin edge will link when it is cut */
+    }
+}
+
+/* a ring edge that vanishes without a triangle on it: whatever waited for it becomes boundary */
+static void drop_state(cm_tri_ws *ws, int S)
+{
+    if (S >= 0)
+        set_fixed(ws, S / 3, S % 3, 1);
+    else if (S <= -2)
+        ws->side[-S - 2] = -1;
+}
+
+/* two ring edges that are the same segment traversed both ways: pair what is across them */
+static void pair_states(cm_tri_ws *ws, int S1, int S2)
+{
+    if (S1 >= 0 && S2 >= 0) {
+        int t1 = S1 / 3, s1 = S1 % 3, t2 = S2 / 3, s2 = S2 % 3;
+        ws->adj[t1][s1] = S2;
+        ws->adj[t2][s2] = S1;
+        /* sides made of different (coincident) points: never flipped, count as boundary */
+        if (ws->tri[t1][s1] != ws->tri[t2][n3(s2)] || ws->tri[t1][n3(s1)] != ws->tri[t2][s2]) {
+            set_fixed(ws, t1, s1, 1);
+            set_fixed(ws, t2, s2, 1);
+        }
+        return;
+    }
+    drop_state(ws, S1);
+    drop_state(ws, S2);
+}
+
+/* ------------------------------------------------------------- sorting nodes */
+
+/* order of nodes: by_z 0: position (x, then y), 1: z-order; then id */
+static int node_less(const cm_tri_ws *ws, int by_z, int i, int j)
+{
+    if (by_z) {
+        if (ws->zkey[i] != ws->zkey[j])
+            return ws->zkey[i] < ws->zkey[j];
+        return i < j;
+    }
+    cm_vec2 a = npos(ws, i), b = npos(ws, j);
+    if (a.x != b.x)
+        return a.x < b.x;
+    if (a.y != b.y)
+        return a.y < b.y;
+    return i < j;
+}
+
+static void sift_down(const cm_tri_ws *ws, int by_z, int *v, int root, int n)
+{
+    for (int child = 2 * root + 1; child < n; child = 2 * root + 1) {
+        if (child + 1 < n && node_less(ws, by_z, v[child], v[child + 1]))
+            child++;
+        if (!node_less(ws, by_z, v[root], v[child]))
+            return;
+        int t = v[root];
+        v[root] = v[child];
+        v[child] = t;
+        root = child;
+    }
+}
+
+/* heapsort of node ids (node_less): O(n log n), no recursion */
+static void sort_nodes(const cm_tri_ws *ws, int by_z, int *v, int n)
+{
+    for (int s = n / 2 - 1; s >= 0; s--)
+        sift_down(ws, by_z, v, s, n);
+    for (int e = n - 1; e > 0; e--) {
+        int t = v[0];
+        v[0] = v[e];
+        v[e] = t;
+        sift_down(ws, by_z, v, 0, e);
+    }
+}
+
+/* ------------------------------------------------------------------- loops */
+
+/*
+ * Link loop [s, e) into a ring of nodes s.. (node = point), dropping points
+ * that repeat their predecessor.  Reverses the ring if its orientation is not
+ * the wanted one (want > 0: counter-clockwise).  Returns the first node, or
+ * -1 if the loop has fewer than 3 points or no area.
+ */
+static int make_ring(cm_tri_ws *ws, int s, int e, int want)
+{
+    int first = -1, last = -1, cnt = 0;
+    for (int k = s; k < e; k++) {
+        ws->node_pt[k] = k;
+        ws->nflag[k] = 0;
+        ws->side[k] = -1;
+        if (last >= 0 && same_pos(ws->p[k], ws->p[last]))
+            continue;
+        if (last >= 0) {
+            ws->next[last] = k;
+            ws->prev[k] = last;
+        } else {
+            first = k;
+        }
+        last = k;
+        cnt++;
+    }
+    for (int g = e - s; g > 0 && cnt > 1 && same_pos(ws->p[last], ws->p[first]); g--) {
+        last = ws->prev[last];
+        cnt--;
+    }
+    if (cnt < 3)
+        return -1;
+    ws->next[last] = first;
+    ws->prev[first] = last;
+    double a2 = 0.0, xmin = ws->p[first].x, xmax = xmin, ymin = ws->p[first].y, ymax = ymin;
+    int k = first;
+    for (int g = 0; g < cnt; g++, k = ws->next[k]) {
+        cm_vec2 q = ws->p[k];
+        a2 += cross3(ws->p[first], q, ws->p[ws->next[k]]);
+        xmin = q.x < xmin ? q.x : xmin;
+        xmax = q.x > xmax ? q.x : xmax;
+        ymin = q.y < ymin ? q.y : ymin;
+        ymax = q.y > ymax ? q.y : ymax;
+    }
+    double ext = xmax - xmin > ymax - ymin ? xmax - xmin : ymax - ymin;
+    if (!(fabs(a2) > EPS_AREA * ext * ext))
+        return -1;
+    if ((a2 > 0.0) != (want > 0)) {
+        k = first;
+        for (int g = 0; g < cnt; g++) {
+            int nx = ws->next[k];
+            ws->next[k] = ws->prev[k];
+            ws->prev[k] = nx;
+            k = nx;
+        }
+    }
+    return first;
+}
+
+/* earcut: the sector of node a contains the direction to b */
+static int locally_inside(const cm_tri_ws *ws, int a, cm_vec2 b)
+{
+    cm_vec2 A = npos(ws, a), P = npos(ws, ws->prev[a]), N = npos(ws, ws->next[a]);
+    if (cross3(P, A, N) > 0.0)
+        return cross3(A, b, N) <= 0.0 && cross3(A, P, b) <= 0.0;
+    return cross3(A, b, P) > 0.0 || cross3(A, N, b) > 0.0;
+}
+
+/* earcut: the sector of m contains the sector of p (same position) */
+static int sector_contains(const cm_tri_ws *ws, int m, int p)
+{
+    cm_vec2 M = npos(ws, m);
+    return cross3(npos(ws, ws->prev[m]), M, npos(ws, ws->prev[p])) > 0.0 &&
+           cross3(npos(ws, ws->next[p]), M, npos(ws, ws->next[m])) > 0.0;
+}
+
+/*
+ * earcut's findHoleBridge: the ring node (of the ring through `outer`, `len`
+ * nodes) that hole node `h` connects to, or -1 if the ray meets no edge.
+ */
+static int find_bridge(const cm_tri_ws *ws, int h, int outer, int len)
+{
+    cm_vec2 H = npos(ws, h);
+    double hx = H.x, hy = H.y, qx = 0.0;
+    int m = -1, same = -1, touch = 0, p = outer;
+    for (int g = 0; g < len; g++) {
+        int n = ws->next[p];
+        cm_vec2 P = npos(ws, p), N = npos(ws, n);
+        /* a ring vertex at H (touching loops): that one, preferring a copy whose sector holds H */
+        if (same_pos(P, H) && (same < 0 || (!locally_inside(ws, same, H) && locally_inside(ws, p, H))))
+            same = p;
+        if (hy <= P.y && hy >= N.y && N.y != P.y) {
+            double x = P.x + (hy - P.y) * (N.x - P.x) / (N.y - P.y);
+            if (x <= hx && (m < 0 || x > qx)) {
+                qx = x;
+                m = P.x < N.x ? p : n;
+                touch = x == hx; /* the hole touches this edge: its end with the smaller x */
+            }
+        }
+        p = n;
+        if (p == outer)
+            break;
+    }
+    if (same >= 0)
+        return same;
+    if (m < 0 || touch)
+        return m;
+    /* a ring vertex inside the triangle (hole point, hit, m) is a better end: least angle to the ray */
+    cm_vec2 Mv = npos(ws, m);
+    double mx = Mv.x, my = Mv.y, tan_min = 0.0;
+    int have = 0, stop = m;
+    p = m;
+    for (int g = 0; g < len; g++) {
+        cm_vec2 P = npos(ws, p);
+        if (hx >= P.x && P.x >= mx && hx != P.x &&
+            ec_in_triangle(hy < my ? hx : qx, hy, mx, my, hy < my ? qx : hx, hy, P.x, P.y)) {
+            double tn = fabs(hy - P.y) / (hx - P.x);
+            cm_vec2 Mc = npos(ws, m);
+            if (locally_inside(ws, p, H) &&
+                (!have || tn < tan_min ||
+                 (tn == tan_min && (P.x > Mc.x || (P.x == Mc.x && sector_contains(ws, m, p)))))) {
+                m = p;
+                tan_min = tn;
+                have = 1;
+            }
+        }
+        p = ws->next[p];
+        if (p == stop)
+            break;
+    }
+    return m;
+}
+
+/*
+ * Splice the hole ring through node h into the ring at node m: bridge
+ * m -> h ... h' -> m' (copies m', h').  merge: h and m are at one position
+ * (loops that touch), the hole goes in without a bridge, its node h dropped
+ * and m standing for it.
+ */
+static int splice_hole(tess_ctx *c, int m, int h, int merge)
+{
+    cm_tri_ws *ws = c->ws;
+    int mn = ws->next[m], hp = ws->prev[h];
+    if (c->nn + 2 > CM_TESS_MAX_NODES)
+        return -1;
+    int m2 = c->nn++;
+    ws->node_pt[m2] = ws->node_pt[m];
+    ws->nflag[m2] = NF_DUP;
+    ws->nflag[m] = (unsigned char)(ws->nflag[m] | NF_DUP);
+    set_side(ws, m2, ws->side[m]);
+    if (merge) {
+        int hn = ws->next[h];
+        ws->next[m] = hn;
+        ws->prev[hn] = m;
+        set_side(ws, m, ws->side[h]);
+        ws->next[hp] = m2;
+        ws->prev[m2] = hp;
+    } else {
+        int h2 = c->nn++;
+        ws->node_pt[h2] = ws->node_pt[h];
+        ws->nflag[h2] = NF_DUP;
+        ws->nflag[h] = (unsigned char)(ws->nflag[h] | NF_DUP);
+        ws->next[m] = h;
+        ws->prev[h] = m;
+        ws->next[hp] = h2;
+        ws->prev[h2] = hp;
+        ws->next[h2] = m2;
+        ws->prev[m2] = h2;
+        ws->side[m] = -2 - h2; /* m -> h and h' -> m' are the two sides of the bridge */
+        ws->side[h2] = -2 - m;
+    }
+    ws->next[m2] = mn;
+    ws->prev[mn] = m2;
+    return 0;
+}
+
+/* ------------------------------------------------------------ ear clipping */
+
+/* a node k at the ear tip's position b blocks if one of its ring edges enters the ear's angle */
+static int wedge_blocks(const cm_tri_ws *ws, int k, cm_vec2 A, cm_vec2 B, cm_vec2 C)
+{
+    cm_vec2 X[2] = {npos(ws, ws->prev[k]), npos(ws, ws->next[k])};
+    for (int i = 0; i < 2; i++)
+        if (!same_pos(X[i], B) && orient_sign(B, C, X[i]) > 0 && orient_sign(B, X[i], A) > 0)
+            return 1;
+    return 0;
+}
+
+/* p is left of the line uv, on it, or less than EPS_TOUCH right of it */
+static int near_side(cm_vec2 u, cm_vec2 v, cm_vec2 p)
+{
+    double e, o = orient(u, v, p, &e);
+    return o >= -e || o * o <= EPS_TOUCH * EPS_TOUCH * dist2(u, v);
+}
+
+/*
+ * Is node b an ear?  strict: b strictly convex and no candidate node in the
+ * closed triangle or less than EPS_TOUCH outside it (where loops touch or
+ * overlap by rounding, a cut must not pass on the wrong side of a vertex
+ * that pokes through a side); relaxed: b convex by the sign alone and no
+ * candidate strictly inside; convex_test 0: b's turn is not looked at
+ * (least-bad fallback).
+ */
+static int is_ear(const tess_ctx *c, int b, int relaxed, int convex_test)
+{
+    const cm_tri_ws *ws = c->ws;
+    int a = ws->prev[b], d = ws->next[b];
+    cm_vec2 A = npos(ws, a), B = npos(ws, b), C = npos(ws, d);
+    if (convex_test) {
+        double e, o = orient(A, B, C, &e);
+        if (!(o > (relaxed ? 0.0 : e)))
+            return 0;
+    }
+    double pad = EPS_TOUCH;
+    double x0 = A.x < B.x ? A.x : B.x, x1 = A.x > B.x ? A.x : B.x;
+    double y0 = A.y < B.y ? A.y : B.y, y1 = A.y > B.y ? A.y : B.y;
+    x0 = (C.x < x0 ? C.x : x0) - pad;
+    x1 = (C.x > x1 ? C.x : x1) + pad;
+    y0 = (C.y < y0 ? C.y : y0) - pad;
+    y1 = (C.y > y1 ? C.y : y1) + pad;
+    uint32_t zlo = zcode(c, x0, y0), zhi = zcode(c, x1, y1);
+    int k = ws->znext[b], back = 0;
+    for (int g = 0; g < c->nn; g++) {
+        if (!back && (k < 0 || ws->zkey[k] > zhi)) { /* forward done: now backward from b */
+            back = 1;
+            k = ws->zprev[b];
+        }
+        if (back && (k < 0 || ws->zkey[k] < zlo))
+            break;
+        int cur = k;
+        k = back ? ws->zprev[k] : ws->znext[k];
+        if (!(ws->nflag[cur] & NF_CAND) || cur == a || cur == d)
+            continue;
+        cm_vec2 P = npos(ws, cur);
+        if (P.x < x0 || P.x > x1 || P.y < y0 || P.y > y1)
+            continue;
+        if (same_pos(P, A) || same_pos(P, C))
+            continue;
+        if (same_pos(P, B)) {
+            if (wedge_blocks(ws, cur, A, B, C))
+                return 0;
+            continue;
+        }
+        if (relaxed ? (orient_sign(A, B, P) > 0 && orient_sign(B, C, P) > 0 && orient_sign(C, A, P) > 0)
+                    : (near_side(A, B, P) && near_side(B, C, P) && near_side(C, A, P)))
+            return 0;
+    }
+    return 1;
+}
+
+/* cut ear b: triangle (prev b, b, next b) */
+static int clip(tess_ctx *c, int b)
+{
+    cm_tri_ws *ws = c->ws;
+    int a = ws->prev[b], d = ws->next[b];
+    int t = new_tri(c, ws->node_pt[a], ws->node_pt[b], ws->node_pt[d]);
+    if (t < 0)
+        return -1;
+    attach(ws, t, 0, a);
+    attach(ws, t, 1, b);
+    ws->side[a] = 3 * t + 2; /* the new ring edge a -> d is side 2, until cut */
+    ws->next[a] = d;
+    ws->prev[d] = a;
+    node_remove(c, b);
+    cand_update(c, a);
+    cand_update(c, d);
+    return 0;
+}
+
+/* remove node b, which repeats the position of a = prev[b]: the edge a -> b has no length */
+static void drop_zero_edge(tess_ctx *c, int b)
+{
+    cm_tri_ws *ws = c->ws;
+    int a = ws->prev[b], d = ws->next[b];
+    drop_state(ws, ws->side[a]);
+    set_side(ws, a, ws->side[b]);
+    ws->next[a] = d;
+    ws->prev[d] = a;
+    node_remove(c, b);
+    cand_update(c, a);
+    cand_update(c, d);
+}
+
+/* a spike a -> b -> d with a, d at one position: pair its two edges, keep a, drop b and d */
+static void drop_spike(tess_ctx *c, int b)
+{
+    cm_tri_ws *ws = c->ws;
+    int a = ws->prev[b], d = ws->next[b], e = ws->next[d];
+    pair_states(ws, ws->side[a], ws->side[b]);
+    node_remove(c, b);
+    node_remove(c, d);
+    if (e == a) { /* nothing but the spike was left; the edge d -> a has no length */
+        drop_state(ws, ws->side[d]);
+        ws->side[a] = -1;
+        return;
+    }
+    set_side(ws, a, ws->side[d]);
+    ws->next[a] = e;
+    ws->prev[e] = a;
+    cand_update(c, a);
+    cand_update(c, e);
+}
+
+/* remove a zero-length edge into k or a spike at k; the node to look at next, or -1 if none */
+static int fix_at(tess_ctx *c, int k, int *rem)
+{
+    cm_tri_ws *ws = c->ws;
+    int a = ws->prev[k];
+    if (same_pos(npos(ws, a), npos(ws, k))) {
+        drop_zero_edge(c, k);
+        *rem -= 1;
+        return a;
+    }
+    if (same_pos(npos(ws, a), npos(ws, ws->next[k]))) {
+        drop_spike(c, k);
+        *rem -= 2;
+        return a;
+    }
+    return -1;
+}
+
+/*
+ * Clean the ring around node k: zero-length edges and spikes (two edges
+ * folding back onto each other, left when a cut runs along a boundary
+ * segment that touches another loop) are removed as soon as they appear, so
+ * no ear is ever cut across them.  Returns a live node near k.
+ */
+static int settle(tess_ctx *c, int k, int *rem, int len)
+{
+    cm_tri_ws *ws = c->ws;
+    for (int g = 0; g < len && *rem >= 3; g++) {
+        int r = fix_at(c, k, rem);
+        if (r < 0 && *rem >= 3) {
+            r = fix_at(c, ws->next[k], rem);
+            if (r >= 0 && (ws->nflag[k] & NF_DEAD))
+                k = r;
+        } else if (r >= 0) {
+            k = r;
+        }
+        if (r < 0)
+            break;
+    }
+    return k;
+}
+
+/* the least-bad tip when no ear exists: largest sine of the turn among unblocked nodes */
+static int least_bad(const tess_ctx *c, int start, int len, double *score)
+{
+    const cm_tri_ws *ws = c->ws;
+    int best = -1, k = start;
+    double bs = 0.0;
+    for (int g = 0; g < len; g++, k = ws->next[k]) {
+        if (!is_ear(c, k, 1, 0))
+            continue;
+        cm_vec2 A = npos(ws, ws->prev[k]), B = npos(ws, k), C = npos(ws, ws->next[k]);
+        double l = sqrt(dist2(A, B) * dist2(B, C));
+        double s = l > 0.0 ? cross3(A, B, C) / l : 0.0;
+        if (best < 0 || s > bs) {
+            best = k;
+            bs = s;
+        }
+    }
+    *score = bs;
+    return best;
+}
+
+/*
+ * A fallback ear that turns the wrong way (sine `sc` below -SIN_TOL) means loops that cross.  When
+ * the caller allows folds, such a triangle is still cut if its height over its longest side is at
+ * most c->fold: two boundary runs closer than the tessellation tolerance that cross by rounding
+ * (a sliver of the region) come out as a triangle folded over by less than that.
+ */
+static int fold_ok(const tess_ctx *c, cm_vec2 A, cm_vec2 B, cm_vec2 C, double sc)
+{
+    if (sc >= -SIN_TOL)
+        return 1;
+    if (!(c->fold > 0.0))
+        return 0;
+    double l = dist2(A, B), m = dist2(B, C), n = dist2(C, A);
+    double longest = sqrt(l > m ? (l > n ? l : n) : (m > n ? m : n));
+    return longest > 0.0 && fabs(cross3(A, B, C)) <= c->fold * longest;
+}
+
+/* cut ear b and clean the ring around it; the node to go on from */
+static int cut(tess_ctx *c, int b, int *rem, int len)
+{
+    cm_tri_ws *ws = c->ws;
+    int a = ws->prev[b], d = ws->next[b];
+    if (clip(c, b) < 0)
+        return -1;
+    *rem -= 1;
+    int k = settle(c, a, rem, len);
+    if (!(ws->nflag[d] & NF_DEAD))
+        k = settle(c, d, rem, len);
+    return k;
+}
+
+/* triangulate the ring through `start` (`len` nodes) */
+static cm_err ear_clip(tess_ctx *c, int start, int len, cm_status *st)
+{
+    cm_tri_ws *ws = c->ws;
+    double ext = c->box[2] - c->box[0] > c->box[3] - c->box[1] ? c->box[2] - c->box[0] : c->box[3] - c->box[1];
+    c->zinv = 32767.0 / ext;
+    int k = start, rem = len, *v = ws->stack;
+    for (int g = 0; g < len; g++, k = ws->next[k]) {
+        cand_update(c, k);
+        cm_vec2 P = npos(ws, k);
+        ws->zkey[k] = zcode(c, P.x, P.y);
+        v[g] = k;
+    }
+    sort_nodes(ws, 1, v, len);
+    for (int g = 0; g < len; g++) {
+        ws->zprev[v[g]] = g > 0 ? v[g - 1] : -1;
+        ws->znext[v[g]] = g + 1 < len ? v[g + 1] : -1;
+    }
+    for (int g = 0; g < len && rem >= 3; g++)
+        k = ws->next[settle(c, k, &rem, len)];
+    int ear = k, stop = k, skipped = 0;
+    /* each turn of at most rem tests either cuts a node, or clears the cache (then the next
+       turn tests everything), or falls back (which cuts or fails) */
+    uint64_t cap = 2 * (uint64_t)len * (uint64_t)(len + 2) + 16;
+    for (uint64_t it = 0; it < cap && rem > 2; it++) {
+        int a = ws->prev[ear], d = ws->next[ear];
+        if (rem == 3) {
+            cm_vec2 A = npos(ws, a), B = npos(ws, ear), C = npos(ws, d);
+            double l = sqrt(dist2(A, B) * dist2(B, C)), sc = l > 0.0 ? cross3(A, B, C) / l : -1.0;
+            if (!fold_ok(c, A, B, C, sc))
+                return cm_fail(st, CM_E_DEGENERATE, __func__);
+            int t = new_tri(c, ws->node_pt[a], ws->node_pt[ear], ws->node_pt[d]);
+            if (t < 0)
+                break;
+            attach(ws, t, 0, a);
+            attach(ws, t, 1, ear);
+            attach(ws, t, 2, d);
+            rem = 0;
+            break;
+        }
+        /* a node that failed keeps failing until its neighbours change (cand_update clears the
+           flag) or a node blocking it goes: the cache is cleared after a turn without an ear */
+        if (ws->nflag[ear] & NF_NOEAR) {
+            skipped++;
+        } else if (is_ear(c, ear, 0, 1)) {
+            k = cut(c, ear, &rem, len);
+            if (k < 0)
+                break;
+            /* go on after the next node: fewer slivers (earcut) */
+            ear = stop = (ws->nflag[d] & NF_DEAD) ? ws->next[k] : ws->next[d];
+            skipped = 0;
+            continue;
+        } else {
+            ws->nflag[ear] = (unsigned char)(ws->nflag[ear] | NF_NOEAR);
+        }
+        ear = d;
+        if (ear != stop)
+            continue;
+        if (skipped) { /* a whole turn without an ear, some nodes not tested: test them all */
+            k = ear;
+            for (int g = 0; g < rem; g++, k = ws->next[k])
+                ws->nflag[k] = (unsigned char)(ws->nflag[k] & ~NF_NOEAR);
+            skipped = 0;
+            continue;
+        }
+        /* a whole turn without an ear */
+        int b = -1;
+        k = ear;
+        for (int g = 0; g < rem && b < 0; g++, k = ws->next[k])
+            if (is_ear(c, k, 1, 1))
+                b = k;
+        if (b < 0) {
+            double sc;
+            b = least_bad(c, ear, rem, &sc);
+            if (b < 0 || !fold_ok(c, npos(ws, ws->prev[b]), npos(ws, b), npos(ws, ws->next[b]), sc))
+                return cm_fail(st, CM_E_DEGENERATE, __func__);
+        }
+        k = cut(c, b, &rem, len);
+        if (k < 0)
+            break;
+        ear = stop = k;
+        skipped = 0;
+    }
+    if (c->overflow)
+        return cm_fail(st, CM_E_RANGE, __func__);
+    if (rem == 2) /* two nodes left: their edges are one segment both ways */
+        pair_states(ws, ws->side[ear], ws->side[ws->next[ear]]);
+    else if (rem > 2)
+        return cm_fail(st, CM_E_DEGENERATE, __func__);
+    /* a side whose partner never came (only after a fallback) counts as boundary */
+    for (int t = 0; t < c->ntri; t++)
+        for (int s = 0; s < 3; s++)
+            if (ws->adj[t][s] < 0)
+                set_fixed(ws, t, s, 1);
+    return CM_OK;
+}
+
+/* -------------------------------------------------------- Lawson flipping */
+
+static void push_side(tess_ctx *c, int t, int s)
+{
+    cm_tri_ws *ws = c->ws;
+    if ((ws->flag[t] & QUEUED(s)) || c->sp >= 3 * CM_MAX_TESS_TRIS)
+        return;
+    ws->flag[t] = (unsigned char)(ws->flag[t] | QUEUED(s));
+    ws->stack[c->sp++] = 3 * t + s;
+}
+
+static void link_side(cm_tri_ws *ws, int t, int s, int S, unsigned fixed)
+{
+    ws->adj[t][s] = S;
+    if (S >= 0)
+        ws->adj[S / 3][S % 3] = 3 * t + s;
+    set_fixed(ws, t, s, (int)fixed);
+}
+
+/* flip side s of t if the pair is not locally Delaunay; 1 if flipped */
+static int try_flip(tess_ctx *c, int t, int s)
+{
+    cm_tri_ws *ws = c->ws;
+    int S = ws->adj[t][s];
+    if (S < 0 || (ws->flag[t] & FIX(s)))
+        return 0;
+    int u = S / 3, j = S % 3, s1 = n3(s), s2 = p3(s), j1 = n3(j), j2 = p3(j);
+    int a = ws->tri[t][s], b = ws->tri[t][s1], cc = ws->tri[t][s2], d = ws->tri[u][j2];
+    if (u == t || cc == d || ws->tri[u][j] != b || ws->tri[u][j1] != a)
+        return 0;
+    cm_vec2 A = ws->p[a], B = ws->p[b], C = ws->p[cc], D = ws->p[d];
+    if (orient_sign(A, D, C) <= 0 || orient_sign(D, B, C) <= 0)
+        return 0; /* the quadrilateral is not strictly convex */
+    if (orient_sign(A, B, C) > 0 && orient_sign(B, A, D) > 0) {
+        /* d in the circle of abc, or equivalently c in the circle of bad: the two evaluations
+           round differently (a sliver's own circle is ill-conditioned); either one certain is enough */
+        double e1, e2, ic1 = incircle(A, B, C, D, &e1), ic2 = incircle(B, A, D, C, &e2);
+        if (!(ic1 > e1) && !(ic2 > e2))
+            return 0;
+    }
+    int Xbc = ws->adj[t][s1], Xca = ws->adj[t][s2], Xad = ws->adj[u][j1], Xdb = ws->adj[u][j2];
+    unsigned fbc = ws->flag[t] & FIX(s1), fca = ws->flag[t] & FIX(s2);
+    unsigned fad = ws->flag[u] & FIX(j1), fdb = ws->flag[u] & FIX(j2);
+    /* t = (c, a, d), u = (d, b, c) */
+    ws->tri[t][0] = cc;
+    ws->tri[t][1] = a;
+    ws->tri[t][2] = d;
+    ws->tri[u][0] = d;
+    ws->tri[u][1] = b;
+    ws->tri[u][2] = cc;
+    link_side(ws, t, 0, Xca, fca != 0);
+    link_side(ws, t, 1, Xad, fad != 0);
+    link_side(ws, u, 0, Xdb, fdb != 0);
+    link_side(ws, u, 1, Xbc, fbc != 0);
+    ws->adj[t][2] = 3 * u + 2;
+    ws->adj[u][2] = 3 * t + 2;
+    set_fixed(ws, t, 2, 0);
+    set_fixed(ws, u, 2, 0);
+    push_side(c, t, 0);
+    push_side(c, t, 1);
+    push_side(c, u, 0);
+    push_side(c, u, 1);
+    return 1;
+}
+
+/* flip until the queue is empty (Lawson); the pop budget only guards against a numerical cycle */
+static void run_flips(tess_ctx *c)
+{
+    cm_tri_ws *ws = c->ws;
+    uint64_t cap = 64 + 16 * (uint64_t)c->ntri * (uint64_t)c->ntri;
+    for (uint64_t it = 0; it < cap && c->sp > 0; it++) {
+        int e = ws->stack[--c->sp], t = e / 3, s = e % 3;
+        ws->flag[t] = (unsigned char)(ws->flag[t] & ~QUEUED(s));
+        (void)try_flip(c, t, s);
+    }
+    for (; c->sp > 0;) { /* budget exhausted: leave the queue clean */
+        int e = ws->stack[--c->sp];
+        ws->flag[e / 3] = (unsigned char)(ws->flag[e / 3] & ~QUEUED(e % 3));
+    }
+}
+
+static void flip_all(tess_ctx *c)
+{
+    cm_tri_ws *ws = c->ws;
+    for (int t = 0; t < c->ntri; t++)
+        for (int s = 0; s < 3; s++)
+            if (ws->adj[t][s] > 3 * t + s && !(ws->flag[t] & FIX(s)))
+                push_side(c, t, s);
+    run_flips(c);
+}
+
+/* ------------------------------------------------------ interior points */
+
+/* visibility walk from t towards q; -1 if it meets the boundary or does not settle */
+static int walk(const tess_ctx *c, int t, cm_vec2 q)
+{
+    const cm_tri_ws *ws = c->ws;
+    for (int step = 0; step < c->ntri + 3; step++) {
+        int moved = 0;
+        for (int r = 0; r < 3 && !moved; r++) {
+            int i = (r + step) % 3; /* rotate the first side tried: no cycling on ties */
+            double e, o = orient(ws->p[ws->tri[t][i]], ws->p[ws->tri[t][n3(i)]], q, &e);
+            if (o < -e) {
+                int S = ws->adj[t][i];
+                if (S < 0)
+                    return -1;
+                t = S / 3;
+                moved = 1;
+            }
+        }
+        if (!moved)
+            return t;
+    }
+    return -1;
+}
+
+static int scan(const tess_ctx *c, cm_vec2 q)
+{
+    const cm_tri_ws *ws = c->ws;
+    for (int t = 0; t < c->ntri; t++) {
+        cm_vec2 A = ws->p[ws->tri[t][0]], B = ws->p[ws->tri[t][1]], C = ws->p[ws->tri[t][2]];
+        if ((q.x < A.x && q.x < B.x && q.x < C.x) || (q.x > A.x && q.x > B.x && q.x > C.x) ||
+            (q.y < A.y && q.y < B.y && q.y < C.y) || (q.y > A.y && q.y > B.y && q.y > C.y))
+            continue; /* outside its box (a point on the box still gets the exact test) */
+        int in = 1;
+        for (int i = 0; i < 3 && in; i++)
+            in = orient_sign(ws->p[ws->tri[t][i]], ws->p[ws->tri[t][n3(i)]], q) >= 0;
+        if (in)
+            return t;
+    }
+    return -1;
+}
+
+/*
+ * Is a vertex or a fixed side within sqrt(r2) of q (in triangle t0)?
+ * Breadth-first over the triangles that meet the disc, entered through
+ * non-fixed sides that meet it: every vertex and boundary segment in the
+ * disc is on a triangle of that set, or behind a boundary segment that is.
+ */
+static int near_used(tess_ctx *c, int t0, cm_vec2 q, double r2, int stamp)
+{
+    cm_tri_ws *ws = c->ws;
+    int tail = 0;
+    ws->stack[tail++] = t0;
+    ws->mark[t0] = stamp;
+    for (int head = 0; head < tail; head++) {
+        int t = ws->stack[head];
+        for (int i = 0; i < 3; i++)
+            if (dist2(q, ws->p[ws->tri[t][i]]) < r2)
+                return 1;
+        for (int i = 0; i < 3; i++) {
+            double d2 = seg_dist2(q, ws->p[ws->tri[t][i]], ws->p[ws->tri[t][n3(i)]]);
+            if (!(d2 < r2))
+                continue;
+            if (ws->flag[t] & FIX(i))
+                return 1;
+            int S = ws->adj[t][i];
+            if (S >= 0 && ws->mark[S / 3] != stamp && tail < 3 * CM_MAX_TESS_TRIS) {
+                ws->mark[S / 3] = stamp;
+                ws->stack[tail++] = S / 3;
+            }
+        }
+    }
+    return 0;
+}
+
+/* split t = (a, b, c) at point q inside it */
+static int split_tri(tess_ctx *c, int t, int q)
+{
+    cm_tri_ws *ws = c->ws;
+    int a = ws->tri[t][0], b = ws->tri[t][1], d = ws->tri[t][2];
+    int X1 = ws->adj[t][1], X2 = ws->adj[t][2];
+    unsigned f = ws->flag[t] & FIX_ALL;
+    int t1 = new_tri(c, b, d, q), t2 = new_tri(c, d, a, q);
+    if (t1 < 0 || t2 < 0)
+        return -1;
+    ws->tri[t][2] = q;
+    link_side(ws, t, 0, ws->adj[t][0], f & 1u);
+    link_side(ws, t, 1, 3 * t1 + 2, 0);
+    link_side(ws, t, 2, 3 * t2 + 1, 0);
+    link_side(ws, t1, 0, X1, (f >> 1) & 1u);
+    link_side(ws, t1, 1, 3 * t2 + 2, 0);
+    link_side(ws, t2, 0, X2, (f >> 2) & 1u);
+    push_side(c, t, 0);
+    push_side(c, t1, 0);
+    push_side(c, t2, 0);
+    return t;
+}
+
+/* split side i of t (and the triangle across it) at point q on it */
+static int split_side(tess_ctx *c, int t, int i, int q)
+{
+    cm_tri_ws *ws = c->ws;
+    int S = ws->adj[t][i];
+    if (S < 0 || (ws->flag[t] & FIX(i)))
+        return -2;
+    int u = S / 3, j = S % 3, i1 = n3(i), i2 = p3(i), j1 = n3(j), j2 = p3(j);
+    int a = ws->tri[t][i], b = ws->tri[t][i1], cc = ws->tri[t][i2], d = ws->tri[u][j2];
+    if (u == t || cc == d || ws->tri[u][j] != b || ws->tri[u][j1] != a)
+        return -2;
+    int Xbc = ws->adj[t][i1], Xca = ws->adj[t][i2], Xad = ws->adj[u][j1], Xdb = ws->adj[u][j2];
+    unsigned fbc = ws->flag[t] & FIX(i1), fca = ws->flag[t] & FIX(i2);
+    unsigned fad = ws->flag[u] & FIX(j1), fdb = ws->flag[u] & FIX(j2);
+    int t1 = new_tri(c, cc, q, b), u1 = new_tri(c, d, q, a);
+    if (t1 < 0 || u1 < 0)
+        return -1;
+    /* t = (c, a, q), t1 = (c, q, b), u = (d, b, q), u1 = (d, q, a) */
+    ws->tri[t][0] = cc;
+    ws->tri[t][1] = a;
+    ws->tri[t][2] = q;
+    ws->tri[u][0] = d;
+    ws->tri[u][1] = b;
+    ws->tri[u][2] = q;
+    link_side(ws, t, 0, Xca, fca != 0);
+    link_side(ws, t1, 2, Xbc, fbc != 0);
+    link_side(ws, u, 0, Xdb, fdb != 0);
+    link_side(ws, u1, 2, Xad, fad != 0);
+    link_side(ws, t, 1, 3 * u1 + 1, 0);
+    link_side(ws, t, 2, 3 * t1 + 0, 0);
+    link_side(ws, t1, 1, 3 * u + 1, 0);
+    link_side(ws, u, 2, 3 * u1 + 0, 0);
+    set_fixed(ws, u, 1, 0);
+    push_side(c, t, 0);
+    push_side(c, t1, 2);
+    push_side(c, u, 0);
+    push_side(c, u1, 2);
+    return t;
+}
+
+/* cell of the location grid holding q (clamped to the grid) */
+static int cell_of(const tess_ctx *c, cm_vec2 q)
+{
+    double fx = floor((q.x - c->box[0]) / c->ghx), fy = floor((q.y - c->box[1]) / c->ghy);
+    int ix = fx < 0.0 ? 0 : (fx > (double)(c->grid - 1) ? c->grid - 1 : (int)fx);
+    int iy = fy < 0.0 ? 0 : (fy > (double)(c->grid - 1) ? c->grid - 1 : (int)fy);
+    return iy * c->grid + ix;
+}
+
+/*
+ * Location grid: G x G cells over the boundary's box (G^2 about half the
+ * triangle count, at most CM_MAX_TESS_POINTS), each remembering a triangle
+ * that meets it, or -1 if none does: a point in such a cell is outside the
+ * region and is skipped without a search (the caller's interior grid covers
+ * the box of the face, and every point outside would otherwise cost a scan
+ * of all triangles).  Each triangle is rasterised row by row (its x range
+ * in each row's strip, widened by GRID_PAD so that rounding never leaves a
+ * cell it touches empty), so a sliver costs the cells it crosses, not its
+ * box.  Walks start from the cell's triangle, which stays near because the
+ * cell takes every triangle a point is inserted into.
+ */
+#define GRID_PAD 1e-9
+static void build_grid(tess_ctx *c)
+{
+    cm_tri_ws *ws = c->ws;
+    int g = (int)sqrt(0.5 * (double)c->ntri); /* ntri < 2 CM_MAX_TESS_POINTS: g^2 fits the cells */
+    g = g < 1 ? 1 : g;
+    c->grid = g;
+    c->ghx = (c->box[2] - c->box[0]) / g;
+    c->ghy = (c->box[3] - c->box[1]) / g;
+    if (!(c->ghx > 0.0 && c->ghy > 0.0)) {
+        c->grid = 0;
+        return;
+    }
+    for (int i = 0; i < g * g; i++)
+        ws->cell[i] = -1;
+    for (int t = 0; t < c->ntri; t++) {
+        cm_vec2 V[3] = {ws->p[ws->tri[t][0]], ws->p[ws->tri[t][1]], ws->p[ws->tri[t][2]]};
+        double ylo = V[0].y, yhi = V[0].y;
+        for (int i = 1; i < 3; i++) {
+            ylo = V[i].y < ylo ? V[i].y : ylo;
+            yhi = V[i].y > yhi ? V[i].y : yhi;
+        }
+        int r0 = cell_of(c, cm_v2(c->box[0], ylo - GRID_PAD)) / g, r1 = cell_of(c, cm_v2(c->box[0], yhi + GRID_PAD)) / g;
+        for (int r = r0; r <= r1; r++) {
+            double y0 = c->box[1] + r * c->ghy - GRID_PAD, y1 = c->box[1] + (r + 1) * c->ghy + GRID_PAD;
+            double xlo = 0.0, xhi = 0.0;
+            int have = 0;
+            for (int i = 0; i < 3; i++) {
+                cm_vec2 P = V[i], Q = V[n3(i)];
+                double xs[3];
+                int n = 0;
+                if (P.y >= y0 && P.y <= y1)
+                    xs[n++] = P.x;
+                for (int k = 0; k < 2; k++) {
+                    double yc = k ? y1 : y0;
+                    if ((P.y < yc && Q.y > yc) || (P.y > yc && Q.y < yc))
+                        xs[n++] = P.x + (yc - P.y) * (Q.x - P.x) / (Q.y - P.y);
+                }
+                for (int k = 0; k < n; k++) {
+                    xlo = !have || xs[k] < xlo ? xs[k] : xlo;
+                    xhi = !have || xs[k] > xhi ? xs[k] : xhi;
+                    have = 1;
+                }
+            }
+            if (!have)
+                continue;
+            int c0 = cell_of(c, cm_v2(xlo - GRID_PAD, c->box[1])), c1 = cell_of(c, cm_v2(xhi + GRID_PAD, c->box[1]));
+            for (int k = c0; k <= c1; k++)
+                ws->cell[r * g + k] = t;
+        }
+    }
+}
+
+/* insert interior point q; returns the triangle to walk from next, -2 if q was skipped, -1 on overflow */
+static int insert_point(tess_ctx *c, int q, int last, double r2, int stamp)
+{
+    cm_tri_ws *ws = c->ws;
+    cm_vec2 Q = ws->p[q];
+    const double *box = c->box;
+    if (!(Q.x >= box[0] - EPS_SNAP && Q.x <= box[2] + EPS_SNAP && Q.y >= box[1] - EPS_SNAP &&
+          Q.y <= box[3] + EPS_SNAP))
+        return -2; /* outside the boundary's box */
+    int cell = c->grid > 0 ? cell_of(c, Q) : -1, t = -1;
+    if (cell >= 0) {
+        if (ws->cell[cell] < 0)
+            return -2; /* no triangle meets the cell: outside the region */
+        t = walk(c, ws->cell[cell], Q);
+    }
+    if (t < 0)
+        t = walk(c, last, Q);
+    if (t < 0)
+        t = scan(c, Q);
+    if (t < 0 || near_used(c, t, Q, r2, stamp))
+        return -2;
+    int on = -1;
+    double dmin = EPS_ON * EPS_ON;
+    for (int i = 0; i < 3; i++) {
+        cm_vec2 A = ws->p[ws->tri[t][i]], B = ws->p[ws->tri[t][n3(i)]];
+        double e, o = orient(A, B, Q, &e), l2 = dist2(A, B);
+        double d2 = l2 > 0.0 ? o * o / l2 : 0.0;
+        if (d2 <= dmin) {
+            dmin = d2;
+            on = i;
+        } else if (o < 0.0) {
+            return -2; /* not in t after all */
+        }
+    }
+    int r = on >= 0 ? split_side(c, t, on, q) : split_tri(c, t, q);
+    if (r < 0)
+        return r;
+    run_flips(c);
+    if (cell >= 0)
+        ws->cell[cell] = r;
+    return r;
+}
+
+/* ------------------------------------------------------------------ driver */
+
+static cm_err check_args(const cm_vec2 *pts, int npts, const int *loop_start, int nloops, double min_dist,
+                         int (*tris)[3], int cap, const int *ntris, const cm_tri_ws *ws, cm_status *st)
+{
+    if (!pts || !loop_start || !ntris || !ws || nloops < 1 || npts < 0 || cap < 0 || (cap > 0 && !tris) ||
+        !(min_dist >= 0.0))
+        return cm_fail(st, CM_E_ARG, __func__);
+    if (npts > CM_MAX_TESS_POINTS)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)npts, CM_MAX_TESS_POINTS, __func__);
+    if (loop_start[0] != 0 || loop_start[nloops] > npts)
+        return cm_fail(st, CM_E_ARG, __func__);
+    for (int l = 0; l < nloops; l++)
+        if (loop_start[l + 1] <= loop_start[l])
+            return cm_fail(st, CM_E_ARG, __func__);
+    for (int i = 0; i < npts; i++)
+        if (!(fabs(pts[i].x) <= DBL_MAX && fabs(pts[i].y) <= DBL_MAX))
+            return cm_fail(st, CM_E_NONFINITE, __func__);
+    return CM_OK;
+}
+
+/*
+ * Scale every point by the power of two k that brings the boundary's
+ * larger extent into (1/2, 1]; the box of the boundary goes to c->box.
+ * Scaling by a power of two is exact, so every predicate decides as it
+ * would on the caller's coordinates (no translation: it would round, and
+ * change the answer for nearly degenerate configurations); the tolerances
+ * are relative to the extent.  Only if that would overflow (coordinates
+ * 1e300 times the extent) the box corner is subtracted first.  Returns k,
+ * or 0 if the boundary points all coincide.
+ */
+static double normalise(const cm_vec2 *pts, int npts, int nb, cm_tri_ws *ws, double box[4])
+{
+    double xmin = pts[0].x, xmax = xmin, ymin = pts[0].y, ymax = ymin;
+    for (int i = 1; i < nb; i++) {
+        xmin = pts[i].x < xmin ? pts[i].x : xmin;
+        xmax = pts[i].x > xmax ? pts[i].x : xmax;
+        ymin = pts[i].y < ymin ? pts[i].y : ymin;
+        ymax = pts[i].y > ymax ? pts[i].y : ymax;
+    }
+    double s = xmax - xmin > ymax - ymin ? xmax - xmin : ymax - ymin;
+    if (!(s > 0.0 && s <= DBL_MAX))
+        return 0.0;
+    double k = 1.0;
+    for (int g = 0; g < 2200 && s * k > 1.0; g++)
+        k *= 0.5;
+    for (int g = 0; g < 2200 && s * k <= 0.5; g++)
+        k *= 2.0;
+    double big = fabs(xmin) > fabs(xmax) ? fabs(xmin) : fabs(xmax);
+    big = fabs(ymin) > big ? fabs(ymin) : big;
+    big = fabs(ymax) > big ? fabs(ymax) : big;
+    double ox = 0.0, oy = 0.0;
+    if (!(big * k <= 1e300)) {
+        ox = xmin;
+        oy = ymin;
+    }
+    for (int i = 0; i < npts; i++)
+        ws->p[i] = cm_v2((pts[i].x - ox) * k, (pts[i].y - oy) * k);
+    box[0] = (xmin - ox) * k;
+    box[1] = (ymin - oy) * k;
+    box[2] = (xmax - ox) * k;
+    box[3] = (ymax - oy) * k;
+    return k;
+}
+
+/* the boundary points i and j are neighbours on one loop (then never snapped together) */
+static int loop_neighbours(const int *loop_of, const int *loop_start, int i, int j)
+{
+    if (loop_of[i] != loop_of[j])
+        return 0;
+    int s = loop_start[loop_of[i]], e = loop_start[loop_of[i] + 1] - 1;
+    return i - j == 1 || j - i == 1 || (i == s && j == e) || (i == e && j == s);
+}
+
+/*
+ * Loops that touch: boundary points within EPS_TOUCH of each other (and not
+ * neighbours on one loop) are given one position, the first's in (x, y)
+ * order, so that the rest of the algorithm sees touching loops exactly
+ * touching even when the caller mapped the shared vertex into the
+ * parameter domain twice with different rounding.  Only the internal copy
+ * moves; the output refers to the caller's points.  The forward scan in
+ * sorted order is capped at SNAP_WINDOW points, which only matters for
+ * pathological inputs with many points within EPS_TOUCH in x.
+ */
+#define SNAP_WINDOW 64
+static void snap_touching(cm_tri_ws *ws, const int *loop_start, int nloops, int nb)
+{
+    int *loop_of = ws->mark, *v = ws->stack;
+    unsigned char *snapped = ws->nflag;
+    for (int l = 0; l < nloops; l++)
+        for (int i = loop_start[l]; i < loop_start[l + 1]; i++)
+            loop_of[i] = l;
+    for (int i = 0; i < nb; i++) {
+        ws->node_pt[i] = i;
+        snapped[i] = 0;
+        v[i] = i;
+    }
+    sort_nodes(ws, 0, v, nb);
+    for (int a = 0; a < nb; a++) {
+        int i = v[a];
+        for (int b = a + 1; b < nb && b <= a + SNAP_WINDOW; b++) {
+            int j = v[b];
+            if (ws->p[j].x - ws->p[i].x > EPS_TOUCH)
+                break;
+            if (snapped[j] || fabs(ws->p[j].y - ws->p[i].y) > EPS_TOUCH ||
+                loop_neighbours(loop_of, loop_start, i, j))
+                continue;
+            ws->p[j] = ws->p[i];
+            snapped[j] = 1;
+        }
+    }
+}
+
+/* build the single ring: outer loop with every hole bridged in; its start node and length */
+static cm_err build_ring(tess_ctx *c, const int *loop_start, int nloops, int *start, int *len, cm_status *st)
+{
+    cm_tri_ws *ws = c->ws;
+    snap_touching(ws, loop_start, nloops, loop_start[nloops]);
+    int outer = make_ring(ws, 0, loop_start[1], 1);
+    if (outer < 0)
+        return cm_fail(st, CM_E_DEGENERATE, __func__);
+    int nh = nloops - 1, *hole = ws->stack;
+    for (int l = 1; l < nloops; l++) {
+        int h = make_ring(ws, loop_start[l], loop_start[l + 1], -1);
+        if (h < 0)
+            return cm_fail(st, CM_E_DEGENERATE, __func__);
+        int k = h, left = h, cnt = loop_start[l + 1] - loop_start[l];
+        for (int g = 0; g < cnt; g++, k = ws->next[k]) {
+            cm_vec2 P = npos(ws, k), L = npos(ws, left);
+            if (P.x < L.x || (P.x == L.x && P.y < L.y))
+                left = k;
+            if (ws->next[k] == h)
+                break;
+        }
+        hole[l - 1] = left;
+    }
+    sort_nodes(ws, 0, hole, nh);
+    int ring_len = 0, k = outer;
+    for (int g = 0; g < loop_start[1]; g++, k = ws->next[k]) {
+        ring_len++;
+        if (ws->next[k] == outer)
+            break;
+    }
+    for (int i = 0; i < nh; i++) {
+        int h = hole[i], hl = 0;
+        k = h;
+        for (int g = 0; g < c->nn; g++, k = ws->next[k]) {
+            hl++;
+            if (ws->next[k] == h)
+                break;
+        }
+        int m = find_bridge(ws, h, outer, ring_len);
+        if (m < 0)
+            return cm_fail(st, CM_E_DEGENERATE, __func__); /* the hole is not inside the outer loop */
+        int merged = same_pos(npos(ws, m), npos(ws, h));
+        if (splice_hole(c, m, h, merged) < 0)
+            return cm_fail(st, CM_E_RANGE, __func__);
+        ring_len += merged ? hl : hl + 2;
+    }
+    *start = outer;
+    *len = ring_len;
+    /* mark nodes that share a position with another node (sorted neighbours) */
+    int *v = ws->stack;
+    k = outer;
+    for (int g = 0; g < ring_len; g++, k = ws->next[k])
+        v[g] = k;
+    sort_nodes(ws, 0, v, ring_len);
+    for (int g = 0; g + 1 < ring_len; g++)
+        if (same_pos(npos(ws, v[g]), npos(ws, v[g + 1]))) {
+            ws->nflag[v[g]] = (unsigned char)(ws->nflag[v[g]] | NF_DUP);
+            ws->nflag[v[g + 1]] = (unsigned char)(ws->nflag[v[g + 1]] | NF_DUP);
+        }
+    return CM_OK;
+}
+
+cm_err cm_triangulate(const cm_vec2 *pts, int npts, const int *loop_start, int nloops, double min_dist,
+                      int (*tris)[3], int cap, int *ntris, int *nused, cm_tri_ws *ws, cm_status *st)
+{
+    return cm_triangulate_folds(pts, npts, loop_start, nloops, min_dist, 0.0, tris, cap, ntris, nused, ws, st);
+}
+
+cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start, int nloops, double min_dist,
+                            double fold_tol, int (*tris)[3], int cap, int *ntris, int *nused, cm_tri_ws *ws,
+                            cm_status *st)
+{
+    if (ntris)
+        *ntris = 0;
+    if (nused)
+        *nused = 0;
+    cm_err err = check_args(pts, npts, loop_start, nloops, min_dist, tris, cap, ntris, ws, st);
+    if (err != CM_OK)
+        return err;
+    int nb = loop_start[nloops];
+    tess_ctx c;
+    memset(&c, 0, sizeof c);
+    double scale = normalise(pts, npts, nb, ws, c.box);
+    if (!(scale > 0.0))
+        return cm_fail(st, CM_E_DEGENERATE, __func__);
+    c.ws = ws;
+    c.nn = nb;
+    c.fold = fold_tol > 0.0 ? fold_tol * scale : 0.0;
+    int start = 0, len = 0;
+    err = build_ring(&c, loop_start, nloops, &start, &len, st);
+    if (err != CM_OK)
+        return err;
+    err = ear_clip(&c, start, len, st);
+    if (err != CM_OK)
+        return err;
+    if (c.ntri == 0)
+        return cm_fail(st, CM_E_DEGENERATE, __func__);
+    flip_all(&c);
+
+    if (npts > nb)
+        build_grid(&c);
+    double md = min_dist * scale, r = md > EPS_SNAP ? md : EPS_SNAP, r2 = r * r;
+    int last = 0, used = 0;
+    for (int q = nb; q < npts; q++) {
+        int t = insert_point(&c, q, last, r2, q - nb + 1);
+        if (t == -1 || c.overflow)
+            return cm_fail(st, CM_E_RANGE, __func__);
+        if (t >= 0) {
+            last = t;
+            used++;
+        }
+    }
+    flip_all(&c);
+
+    if (c.ntri > cap)
+        return cm_fail_nospace(st, (uint64_t)c.ntri, (uint64_t)cap, __func__);
+    for (int t = 0; t < c.ntri; t++)
+        for (int i = 0; i < 3; i++)
+            tris[t][i] = ws->tri[t][i];
+    *ntris = c.ntri;
+    if (nused)
+        *nused = used;
+    return CM_OK;
+}

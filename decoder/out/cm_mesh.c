@@ -1,0 +1,41 @@
+/* cm_mesh.c - the decoded triangle mesh: clearing and bounds. */
+#include "cm/cm_mesh.h"
+
+#include <stddef.h>
+
+void cm_mesh_clear(cm_mesh *m)
+{
+    if (m == NULL)
+        return;
+    m->nverts = 0;
+    m->nindex = 0;
+    m->nfaces = 0;
+}
+
+/*
+ * Bounds of positions [0, nverts).  NaN coordinates never win a comparison,
+ * so they are ignored unless the first vertex holds one (the writers reject
+ * non-finite meshes before they need bounds).
+ */
+int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
+{
+    if (m == NULL || m->nverts == 0 || m->pos == NULL || lo == NULL || hi == NULL)
+        return 0;
+    float l[3], h[3];
+    for (int k = 0; k < 3; k++)
+        l[k] = h[k] = m->pos[0][k];
+    for (uint32_t i = 1; i < m->nverts; i++) {
+        for (int k = 0; k < 3; k++) {
+            float v = m->pos[i][k];
+            if (v < l[k])
+                l[k] = v;
+            if (v > h[k])
+                h[k] = v;
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        lo[k] = l[k];
+        hi[k] = h[k];
+    }
+    return 1;
+}

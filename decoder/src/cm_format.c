@@ -1,0 +1,49 @@
+/* cm_format.c - byte order helpers and kernel views of the decoded model. */
+#include "cm/cm_format.h"
+
+#include <string.h>
+
+#include "cm/cm_bspline.h"
+
+double cm_get_f64(const uint8_t *p)
+{
+    uint64_t u = 0;
+    for (int i = 7; i >= 0; i--)
+        u = (u << 8) | p[i];
+    double v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
+void cm_put_f64(uint8_t *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, sizeof u);
+    for (int i = 0; i < 8; i++) {
+        p[i] = (uint8_t)u;
+        u >>= 8;
+    }
+}
+
+void cm_model_edge_curve(const cm_model *m, uint32_t e, cm_curve *out)
+{
+    const cm_edge *E = &m->edges[e];
+    out->p = E->p;
+    out->n_ctrl = E->nctrl;
+    out->knots = m->knots + E->knot0;
+    out->ctrl = m->ctrl + E->ctrl0;
+    out->w = E->rational ? m->w + E->ctrl0 : NULL;
+}
+
+void cm_model_surface(const cm_model *m, uint32_t s, cm_surf *out)
+{
+    const cm_ksurf *S = &m->surfs[s];
+    out->p = S->p;
+    out->q = S->q;
+    out->nu = S->nu;
+    out->nv = S->nv;
+    out->U = m->knots + S->uknot0;
+    out->V = m->knots + S->vknot0;
+    out->ctrl = m->ctrl + S->ctrl0;
+    out->w = S->rational ? m->w + S->ctrl0 : NULL;
+}

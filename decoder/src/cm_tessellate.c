@@ -1,0 +1,578 @@
+/* cm_tessellate.c - faces of a decoded model as triangles (see cm_tessellate.h). */
+#include "cm/cm_tessellate.h"
+
+#include <stddef.h>
+
+#include "cm/cm_limits_info.h"
+
+#define MAX_DOUBLINGS 12
+
+cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int cap, int *n_out, cm_status *st)
+{
+    const cm_edge *E = &m->edges[e];
+    int maxn = cap - 1 < CM_MAX_EDGE_SAMPLES - 1 ? cap - 1 : CM_MAX_EDGE_SAMPLES - 1;
+    if (maxn < 1)
+        return cm_fail_nospace(st, 2, (uint64_t)cap, __func__);
+    if (E->kind == CM_EDGE_LINE) {
+        ts[0] = 0.0;
+        ts[1] = 1.0;
+        *n_out = 1;
+        return CM_OK;
+    }
+    cm_curve c;
+    cm_model_edge_curve(m, e, &c);
+    /* start from one segment per knot span (at least 2), double until every chord fits */
+    int spans = 1;
+    for (int i = c.p + 1; i < c.n_ctrl; i++)
+        if (c.knots[i] > c.knots[i - 1] && c.knots[i] < 1.0)
+            spans++;
+    int n = spans < 2 ? 2 : spans;
+    if (n > maxn)
+        n = maxn;
+    for (int round = 0; round < MAX_DOUBLINGS; round++) {
+        double worst = 0.0;
+        cm_vec3 prev = cm_v3(0, 0, 0);
+        for (int i = 0; i <= n; i++) {
+            cm_vec3 d[1];
+            cm_err err = cm_curve_eval(&c, (double)i / (double)n, 0, d, st);
+            if (err != CM_OK)
+                return err;
+            if (i > 0) {
+                cm_vec3 mid[1];
+                if ((err = cm_curve_eval(&c, ((double)i - 0.5) / (double)n, 0, mid, st)) != CM_OK)
+                    return err;
+                double dev = cm_dist(mid[0], cm_scale(cm_add(prev, d[0]), 0.5));
+                if (dev > worst)
+                    worst = dev;
+            }
+            prev = d[0];
+        }
+        if (worst <= tol || n >= maxn)
+            break;
+        n = 2 * n > maxn ? maxn : 2 * n;
+    }
+    for (int i = 0; i <= n; i++)
+        ts[i] = (double)i / (double)n;
+    ts[n] = 1.0;
+    *n_out = n;
+    return CM_OK;
+}
+
+static double poly_area(const cm_vec2 *p, int n)
+{
+    double a = 0;
+    for (int i = 0, j = n - 1; i < n; j = i++)
+        a += cm_cross2(p[j], p[i]);
+    return 0.5 * a;
+}
+
+static void reverse_pts(cm_vec2 *p, int *src, int n)
+{
+    for (int i = 0; i < n / 2; i++) {
+        cm_vec2 t = p[i];
+        p[i] = p[n - 1 - i];
+        p[n - 1 - i] = t;
+        int s = src[i];
+        src[i] = src[n - 1 - i];
+        src[n - 1 - i] = s;
+    }
+}
+
+/* the boundary points of every loop of face f, in use direction, into ws->bpts.
+ * Not inlined: gcc 12 then reports a (false) maybe-uninitialized in the caller. */
+__attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const cm_face *F, double tol, cm_tess_ws *ws, int *nb,
+                              cm_tess_info *info, cm_status *st)
+{
+    int k = 0;
+    for (uint32_t l = 0; l < F->nloops; l++) {
+        const cm_loop *L = &m->loops[F->loop0 + l];
+        ws->loop_bstart[l] = k;
+        for (uint32_t u = 0; u < L->nuse; u++) {
+            const cm_use *U = &m->uses[L->use0 + u];
+            int n;
+            cm_err e = cm_edge_params(m, U->edge, tol, ws->ts, CM_MAX_EDGE_SAMPLES, &n, st);
+            if (e != CM_OK)
+                return e;
+            if (n + 1 > info->max_edge_samples)
+                info->max_edge_samples = n + 1;
+            if (k + n > CM_MAX_TESS_POINTS)
+                return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)(k + n), CM_MAX_TESS_POINTS, __func__);
+            cm_curve c;
+            cm_model_edge_curve(m, U->edge, &c);
+            /* the use's start up to (not including) its end: the next use supplies that point */
+            for (int i = 0; i < n; i++) {
+                cm_vec3 d[1];
+                if ((e = cm_curve_eval(&c, U->rev ? ws->ts[n - i] : ws->ts[i], 0, d, st)) != CM_OK)
+                    return e;
+                ws->bpts[k++] = d[0];
+            }
+        }
+    }
+    ws->loop_bstart[F->nloops] = k;
+    *nb = k;
+    return CM_OK;
+}
+
+/* a kept face's loops in (u,v), winding loops joined along the seam; fills uv/src/loop_start */
+static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, cm_tess_ws *ws, int *npts,
+                          int *nloops_out, cm_tess_info *info, cm_status *st)
+{
+    int k = 0, nwind = 0, a = -1, b = -1;
+    *npts = 0;
+    *nloops_out = 0;
+    for (uint32_t l = 0; l < F->nloops; l++) {
+        int first = ws->loop_bstart[l], count = ws->loop_bstart[l + 1] - first, nout;
+        ws->loop_start[l] = k;
+        cm_err e = cm_loop_uv(ps, ws->bpts + first, count, accept, ws->uv + k, ws->src + k, CM_MAX_TESS_POINTS - k,
+                              &nout, &ws->wind_u[l], &ws->wind_v[l], &info->max_gap, &ws->pw, st);
+        if (e != CM_OK)
+            return e;
+        for (int i = 0; i < nout; i++)
+            ws->src[k + i] += first;
+        k += nout;
+        if (ws->wind_u[l] || ws->wind_v[l]) {
+            nwind++;
+            if (a < 0)
+                a = (int)l;
+            else
+                b = (int)l;
+        }
+    }
+    ws->loop_start[F->nloops] = k;
+    *npts = k;
+    *nloops_out = (int)F->nloops;
+    if (nwind == 0)
+        return CM_OK;
+    int along_u = ws->wind_u[a] != 0;
+    if (nwind > 2 || (b >= 0 && (along_u ? ws->wind_u[b] == 0 : ws->wind_v[b] == 0)))
+        return cm_fail(st, CM_E_UNSUPPORTED, "loops winding around the surface in two directions");
+    /* x = the winding direction (coordinates swapped for a v-winding face); the lower loop must
+     * run +x and the upper -x, so the band between them comes out counter-clockwise */
+    double period = along_u ? ps->u1 - ps->u0 : ps->v1 - ps->v0;
+    double mean[2] = {0, 0};
+    for (int w = 0; w < 2; w++) {
+        int l = w ? b : a;
+        if (l < 0)
+            continue;
+        for (int i = ws->loop_start[l]; i < ws->loop_start[l + 1]; i++)
+            mean[w] += along_u ? ws->uv[i].y : ws->uv[i].x;
+        mean[w] /= (double)(ws->loop_start[l + 1] - ws->loop_start[l]);
+    }
+    int lo = a, hi = b;
+    if (b >= 0 && mean[1] < mean[0]) {
+        lo = b;
+        hi = a;
+    }
+    int nlo = ws->loop_start[lo + 1] - ws->loop_start[lo];
+    int nhi = hi >= 0 ? ws->loop_start[hi + 1] - ws->loop_start[hi] : 0;
+    /* copies of the two loops, swapped to (x, y), in the triangulator's free point array */
+    cm_vec2 *plo = ws->tri.p, *phi = ws->tri.p + nlo;
+    int *slo = ws->ssrc, *shi = ws->ssrc + nlo;
+    for (int i = 0; i < nlo + nhi; i++) {
+        int from = i < nlo ? ws->loop_start[lo] + i : ws->loop_start[hi] + (i - nlo);
+        cm_vec2 q = ws->uv[from];
+        plo[i] = along_u ? q : cm_v2(q.y, q.x);
+        slo[i] = ws->src[from];
+    }
+    int w_lo = along_u ? ws->wind_u[lo] : ws->wind_v[lo];
+    double cap_coord = along_u ? ps->v1 : ps->u1;
+    if (w_lo < 0)
+        reverse_pts(plo, slo, nlo);
+    if (hi >= 0 && (along_u ? ws->wind_u[hi] : ws->wind_v[hi]) > 0)
+        reverse_pts(phi, shi, nhi);
+    if (hi < 0 && w_lo < 0) /* a lone loop running -x bounds the band below it */
+        cap_coord = along_u ? ps->v0 : ps->u0;
+    int nj, hi_start = 0;
+    cm_err e = cm_join_winding(plo, nlo, hi >= 0 ? phi : NULL, nhi, period, cap_coord, ws->tmp, CM_MAX_TESS_POINTS,
+                               &nj, &hi_start, st);
+    if (e != CM_OK)
+        return e;
+    /* sources of the joined polygon: lo, lo[0] again, hi from hi_start (unwrapped), or the cap (none) */
+    for (int i = 0; i < nj; i++) {
+        int s = -1;
+        if (i < nlo)
+            s = slo[i];
+        else if (i == nlo)
+            s = slo[0];
+        else if (hi >= 0)
+            s = shi[(hi_start + (i - nlo - 1)) % nhi];
+        ws->src2[i] = s;
+        if (!along_u)
+            ws->tmp[i] = cm_v2(ws->tmp[i].y, ws->tmp[i].x);
+    }
+    /* the other loops (holes) follow the joined polygon */
+    int out = nj, nl = 1;
+    for (uint32_t l = 0; l < F->nloops; l++) {
+        if ((int)l == a || (int)l == b)
+            continue;
+        int len = ws->loop_start[l + 1] - ws->loop_start[l];
+        if (out + len > CM_MAX_TESS_POINTS)
+            return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)(out + len), CM_MAX_TESS_POINTS, __func__);
+        for (int i = 0; i < len; i++) {
+            ws->tmp[out + i] = ws->uv[ws->loop_start[l] + i];
+            ws->src2[out + i] = ws->src[ws->loop_start[l] + i];
+        }
+        ws->loop_start[nl++] = out;
+        out += len;
+    }
+    ws->loop_start[0] = 0;
+    ws->loop_start[nl] = out;
+    for (int i = 0; i < out; i++) {
+        ws->uv[i] = ws->tmp[i];
+        ws->src[i] = ws->src2[i];
+    }
+    *npts = out;
+    *nloops_out = nl;
+    return CM_OK;
+}
+
+/*
+ * The region in ws->tmp (scaled (u,v), about millimetres), triangulated.  A face whose boundary
+ * runs back close along itself - a sliver of the region far narrower than the tolerance, as where
+ * a spring's coil is ground flat - can cross itself by rounding in (u,v).  Then, in turn: triangles
+ * folded over by at most a quarter of the tolerance are allowed (cm_triangulate_folds); the
+ * boundary points are snapped to a grid of a quarter of the tolerance, then of the tolerance,
+ * which makes such runs coincide (a slit, which the triangulator removes).  The 3D points stay
+ * the edges' own, so the mesh stays closed; the fold is below the tolerance.
+ */
+static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist, double tol, int *ntris,
+                          cm_status *st)
+{
+    cm_status first;
+    cm_status_init(&first);
+    cm_err e = cm_triangulate(ws->tmp, npts, ws->loop_start, nloops, min_dist, ws->tris, CM_MAX_TESS_TRIS, ntris,
+                              NULL, &ws->tri, &first);
+    for (int k = 0; e == CM_E_DEGENERATE && k < 3 && tol > 0; k++) {
+        if (k > 0) {
+            double grid = k == 1 ? 0.25 * tol : tol;
+            for (int i = 0; i < ws->loop_start[nloops]; i++)
+                ws->tmp[i] = cm_v2(grid * floor(ws->tmp[i].x / grid + 0.5), grid * floor(ws->tmp[i].y / grid + 0.5));
+        }
+        cm_status again;
+        cm_status_init(&again);
+        e = cm_triangulate_folds(ws->tmp, npts, ws->loop_start, nloops, min_dist, 0.25 * tol, ws->tris,
+                                 CM_MAX_TESS_TRIS, ntris, NULL, &ws->tri, &again);
+    }
+    if (e != CM_OK && st && st->code == CM_OK)
+        *st = first; /* report the first attempt's failure: it names the original geometry */
+    return e;
+}
+
+/* rounds of refinement of a kept face's triangulation (each at most doubles the points locally) */
+#define TESS_REFINE_ROUNDS 4
+
+/* 3D position of triangulation point i: a boundary point is its edge's own point */
+static cm_err point_xyz(const cm_psurf *ps, cm_tess_ws *ws, int i, cm_status *st)
+{
+    if (ws->src[i] >= 0) {
+        ws->xyz[i] = ws->bpts[ws->src[i]];
+        return CM_OK;
+    }
+    cm_vec3 d[3];
+    cm_err e = cm_psurf_eval(ps, ws->uv[i].x, ws->uv[i].y, d, st);
+    ws->xyz[i] = d[0];
+    return e;
+}
+
+/* the flat mesh has `flat` where the surface has S(uv): farther apart than tol, add uv as a point */
+static cm_err refine_at(const cm_psurf *ps, cm_tess_ws *ws, cm_vec2 uv, cm_vec3 flat, double tol, double su,
+                        double sv, int *npts, cm_status *st)
+{
+    cm_vec3 d[3];
+    cm_err e = cm_psurf_eval(ps, uv.x, uv.y, d, st);
+    if (e != CM_OK)
+        return e;
+    /* distance along the surface normal: the parametrisation's own distortion (a rational arc's
+       parameter midpoint is not its angular midpoint) moves S(uv) along the surface, which is no error */
+    cm_vec3 n = cm_cross(d[1], d[2]), off = cm_sub(d[0], flat);
+    double ln = cm_norm(n);
+    double dev = ln > 1e-12 * cm_norm(d[1]) * cm_norm(d[2]) && ln > 0 ? fabs(cm_dot(off, n)) / ln : cm_norm(off);
+    if (!(dev > tol) || *npts >= CM_MAX_TESS_POINTS)
+        return CM_OK;
+    int k = (*npts)++;
+    ws->uv[k] = uv;
+    ws->tmp[k] = cm_v2(uv.x * su, uv.y * sv);
+    ws->src[k] = -1;
+    ws->xyz[k] = d[0];
+    return CM_OK;
+}
+
+/* i -> j (i < j) is a segment of a boundary loop (consecutive points of one loop) */
+static int boundary_side(const int *loop_start, int nloops, int nbnd, int i, int j)
+{
+    if (i >= nbnd || j >= nbnd)
+        return 0;
+    for (int l = 0; l < nloops; l++) {
+        int a = loop_start[l], b = loop_start[l + 1];
+        if (i >= a && i < b)
+            return j < b && (j == i + 1 || (i == a && j == b - 1));
+    }
+    return 0;
+}
+
+/* unit normal of a kept surface at (u,v), turned to the face; a degenerate point (a pole) borrows the
+ * normal a little towards `toward` */
+static cm_vec3 keep_normal(const cm_psurf *ps, double u, double v, cm_vec2 toward, double sign)
+{
+    for (int k = 0; k < 4; k++) {
+        double s = k == 0 ? 0.0 : (k == 1 ? 1e-6 : (k == 2 ? 1e-4 : 1e-2));
+        cm_vec3 d[3];
+        if (cm_psurf_eval(ps, u + s * (toward.x - u), v + s * (toward.y - v), d, NULL) != CM_OK)
+            break;
+        cm_vec3 n = cm_cross(d[1], d[2]);
+        double l = cm_norm(n);
+        if (l > 1e-12 * cm_norm(d[1]) * cm_norm(d[2]) && l > 0)
+            return cm_scale(n, sign / l);
+    }
+    return cm_v3(0, 0, sign);
+}
+
+cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
+                          cm_tess_info *info, cm_status *st)
+{
+    const cm_face *F = &m->faces[f];
+    cm_tess_info local;
+    if (!info)
+        info = &local;
+    info->points = info->triangles = info->max_edge_samples = 0;
+    info->max_gap = 0;
+    if (F->nloops > CM_MAX_LOOPS)
+        return cm_fail_limit(st, CM_LIMIT_MAX_LOOPS, F->nloops, CM_MAX_LOOPS, __func__);
+    cm_rebuilt rb;
+    cm_err e = cm_rebuild_face(m, f, &rb, &ws->rb, st);
+    if (e != CM_OK)
+        return e;
+    int nb;
+    if ((e = sample_boundary(m, F, tol, ws, &nb, info, st)) != CM_OK)
+        return e;
+    int npts = 0, nloops = (int)F->nloops;
+    cm_psurf ps;
+    double sign = F->flip ? -1.0 : 1.0;
+    int keep = F->method == CM_METHOD_KEEP;
+    if (keep) {
+        if ((e = cm_psurf_init(&ps, &rb.surf, 1e-9 * rb.bbox, st)) != CM_OK)
+            return e;
+        int kn = 0, kl = 0;
+        if ((e = keep_domain(&ps, F, 1e-3 * rb.bbox, ws, &kn, &kl, info, st)) != CM_OK)
+            return e;
+        npts = kn;
+        nloops = kl;
+    } else {
+        /* PLANE: the frame's (x, y); ez is the face normal (spec 5A) */
+        for (int l = 0; l <= nloops; l++)
+            ws->loop_start[l] = ws->loop_bstart[l];
+        for (int i = 0; i < nb; i++) {
+            cm_vec3 q = cm_frame_local(&rb.frame, ws->bpts[i]);
+            ws->uv[i] = cm_v2(q.x, q.y);
+            ws->src[i] = i;
+        }
+        npts = nb;
+        sign = 1.0;
+    }
+    /* the triangulator wants the outer loop counter-clockwise and holes clockwise in its plane */
+    for (int l = 0; l < nloops; l++) {
+        int first = ws->loop_start[l], n = ws->loop_start[l + 1] - first;
+        double area = poly_area(ws->uv + first, n);
+        if ((l == 0) != (area > 0))
+            reverse_pts(ws->uv + first, ws->src + first, n);
+    }
+    int interior = 0, grid_nu = 1, grid_nv = 1;
+    /* the plane of triangulation: (u,v) scaled by the surface's mean speeds, so triangles are well
+     * shaped in 3D even where u is an angle and v a length */
+    double umin = ws->uv[0].x, umax = umin, vmin = ws->uv[0].y, vmax = vmin;
+    for (int i = 0; i < ws->loop_start[1]; i++) {
+        umin = ws->uv[i].x < umin ? ws->uv[i].x : umin;
+        umax = ws->uv[i].x > umax ? ws->uv[i].x : umax;
+        vmin = ws->uv[i].y < vmin ? ws->uv[i].y : vmin;
+        vmax = ws->uv[i].y > vmax ? ws->uv[i].y : vmax;
+    }
+    double su = 1.0, sv = 1.0;
+    if (keep && umax > umin && vmax > vmin) {
+        /* speeds and curvatures on a 5 x 5 grid over the domain */
+        double kuu = 0, kvv = 0, msu = 0, msv = 0;
+        for (int i = 0; i < 5; i++)
+            for (int j = 0; j < 5; j++) {
+                double u = umin + (umax - umin) * (i + 0.5) / 5.0, v = vmin + (vmax - vmin) * (j + 0.5) / 5.0;
+                cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+                double uw = u, vw = v;
+                if (ps.closed_u)
+                    uw -= (ps.u1 - ps.u0) * floor((u - ps.u0) / (ps.u1 - ps.u0));
+                if (ps.closed_v)
+                    vw -= (ps.v1 - ps.v0) * floor((v - ps.v0) / (ps.v1 - ps.v0));
+                if ((e = cm_surf_eval(&ps.s, uw, vw, 2, S, st)) != CM_OK)
+                    return e;
+                msu += cm_norm(S[1][0]) / 25.0;
+                msv += cm_norm(S[0][1]) / 25.0;
+                double a = cm_norm(S[2][0]), c = cm_norm(S[0][2]);
+                kuu = a > kuu ? a : kuu;
+                kvv = c > kvv ? c : kvv;
+            }
+        if (msu > 0 && msv > 0) {
+            su = msu;
+            sv = msv;
+        }
+        /* interior grid: chordal error of a span h with second derivative k is k h^2 / 8 */
+        double du = kuu > 0 ? sqrt(8.0 * tol / kuu) : umax - umin;
+        double dv = kvv > 0 ? sqrt(8.0 * tol / kvv) : vmax - vmin;
+        double nu_f = (umax - umin) / du, nv_f = (vmax - vmin) / dv;
+        if (nu_f < 1)
+            nu_f = 1;
+        if (nv_f < 1)
+            nv_f = 1;
+        double room = (double)(CM_MAX_TESS_POINTS - npts) * 0.5;
+        if (nu_f * nv_f > room && room >= 1) {
+            double shrink = sqrt(room / (nu_f * nv_f));
+            nu_f *= shrink;
+            nv_f *= shrink;
+        }
+        int nu_i = (int)ceil(nu_f), nv_i = (int)ceil(nv_f);
+        grid_nu = nu_i;
+        grid_nv = nv_i;
+        if (nu_i > 1 || nv_i > 1)
+            for (int i = 0; i < nu_i && npts < CM_MAX_TESS_POINTS; i++)
+                for (int j = 0; j < nv_i && npts < CM_MAX_TESS_POINTS; j++) {
+                    ws->uv[npts] = cm_v2(umin + (umax - umin) * (i + 0.5) / nu_i, vmin + (vmax - vmin) * (j + 0.5) / nv_i);
+                    ws->src[npts++] = -1;
+                    interior++;
+                }
+    }
+    for (int i = 0; i < npts; i++)
+        ws->tmp[i] = cm_v2(ws->uv[i].x * su, ws->uv[i].y * sv);
+    /* interior points too close to the boundary or each other: a quarter of a grid cell's shorter
+       side (cells are long and thin on a cylinder: their area would drop every other point) */
+    double min_dist = 0.0;
+    if (interior > 0) {
+        double cu = (umax - umin) * su / grid_nu, cv = (vmax - vmin) * sv / grid_nv;
+        min_dist = 0.25 * (cu < cv ? cu : cv);
+    }
+    int ntris = 0;
+    if ((e = triangulate(ws, npts, nloops, min_dist, tol, &ntris, st)) != CM_OK)
+        return e;
+    /*
+     * Refinement of kept surfaces: the grid above follows curvature sampled at 25 points, which misses
+     * peaks (a rational arc's parameter speed varies along it), and triangles reaching from the
+     * boundary to the grid can be wider than a cell.  A triangle whose centre, or an inner side's
+     * midpoint, lies farther than tol from the surface gets that point, and the region is
+     * triangulated again; a few rounds bring every such point within tol.
+     */
+    int nxyz = 0, nbnd = ws->loop_start[nloops];
+    for (int round = 0; keep && round < TESS_REFINE_ROUNDS; round++) {
+        for (; nxyz < npts; nxyz++)
+            if ((e = point_xyz(&ps, ws, nxyz, st)) != CM_OK)
+                return e;
+        int before = npts;
+        for (int t = 0; t < ntris && npts < CM_MAX_TESS_POINTS; t++) {
+            const int *c = ws->tris[t];
+            cm_vec2 g = cm_v2((ws->uv[c[0]].x + ws->uv[c[1]].x + ws->uv[c[2]].x) / 3.0,
+                              (ws->uv[c[0]].y + ws->uv[c[1]].y + ws->uv[c[2]].y) / 3.0);
+            cm_vec3 G = cm_scale(cm_add(cm_add(ws->xyz[c[0]], ws->xyz[c[1]]), ws->xyz[c[2]]), 1.0 / 3.0);
+            if ((e = refine_at(&ps, ws, g, G, tol, su, sv, &npts, st)) != CM_OK)
+                return e;
+            for (int k = 0; k < 3 && npts < CM_MAX_TESS_POINTS; k++) {
+                int i = c[k], j = c[(k + 1) % 3];
+                if (j < i) /* each inner side once, from the triangle that has it as i -> j, i < j */
+                    continue;
+                if (boundary_side(ws->loop_start, nloops, nbnd, i, j))
+                    continue;
+                cm_vec2 mid = cm_v2(0.5 * (ws->uv[i].x + ws->uv[j].x), 0.5 * (ws->uv[i].y + ws->uv[j].y));
+                cm_vec3 M = cm_scale(cm_add(ws->xyz[i], ws->xyz[j]), 0.5);
+                if ((e = refine_at(&ps, ws, mid, M, tol, su, sv, &npts, st)) != CM_OK)
+                    return e;
+            }
+        }
+        if (npts == before)
+            break;
+        min_dist *= 0.5;
+        if ((e = triangulate(ws, npts, nloops, min_dist, tol, &ntris, st)) != CM_OK)
+            return e;
+    }
+    info->points = npts;
+    info->triangles = ntris;
+    /* emit: positions of the used points; boundary vertices are the edges' own points */
+    for (int i = 0; i < npts; i++)
+        ws->vmap[i] = UINT32_MAX;
+    for (int t = 0; t < ntris; t++)
+        for (int c = 0; c < 3; c++)
+            ws->vmap[ws->tris[t][c]] = 0;
+    for (int i = 0; i < npts; i++) {
+        if (ws->vmap[i] == UINT32_MAX)
+            continue;
+        if (keep) {
+            if ((e = point_xyz(&ps, ws, i, st)) != CM_OK)
+                return e;
+        } else {
+            ws->xyz[i] = ws->src[i] >= 0 ? ws->bpts[ws->src[i]]
+                                         : cm_frame_world(&rb.frame, cm_v3(ws->uv[i].x, ws->uv[i].y, 0));
+        }
+    }
+    /*
+     * A triangle with two corners at one point of the output (a pole, where a whole boundary edge
+     * is one point; corners closer than float resolution) has no area: it is dropped.  Its two
+     * other sides are then the same segment both ways, so its neighbours meet directly and the
+     * mesh stays closed.
+     */
+    int kept_tris = 0;
+    for (int t = 0; t < ntris; t++) {
+        const int *c = ws->tris[t];
+        int flat = 0;
+        for (int k = 0; k < 3; k++) {
+            cm_vec3 a = ws->xyz[c[k]], b = ws->xyz[c[(k + 1) % 3]];
+            flat |= (float)a.x == (float)b.x && (float)a.y == (float)b.y && (float)a.z == (float)b.z;
+        }
+        if (flat)
+            continue;
+        for (int k = 0; k < 3; k++)
+            ws->tris[kept_tris][k] = c[k];
+        kept_tris++;
+    }
+    ntris = kept_tris;
+    info->triangles = ntris;
+    for (int i = 0; i < npts; i++)
+        ws->vmap[i] = UINT32_MAX;
+    uint32_t nv = 0;
+    for (int t = 0; t < ntris; t++)
+        for (int c = 0; c < 3; c++)
+            if (ws->vmap[ws->tris[t][c]] == UINT32_MAX)
+                ws->vmap[ws->tris[t][c]] = nv++;
+    if (mesh->nfaces >= mesh->cap_faces)
+        return cm_fail_limit(st, CM_LIMIT_MAX_FACES, (uint64_t)mesh->nfaces + 1, mesh->cap_faces, __func__);
+    if (nv > mesh->cap_verts - mesh->nverts)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, (uint64_t)mesh->nverts + nv, mesh->cap_verts, __func__);
+    if ((uint64_t)ntris * 3 > (uint64_t)(mesh->cap_index - mesh->nindex))
+        return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, ((uint64_t)mesh->nindex + 3u * (uint64_t)ntris) / 3,
+                             mesh->cap_index / 3, __func__);
+    uint32_t base = mesh->nverts;
+    cm_vec2 centre = cm_v2(0.5 * (umin + umax), 0.5 * (vmin + vmax));
+    for (int i = 0; i < npts; i++) {
+        if (ws->vmap[i] == UINT32_MAX)
+            continue;
+        cm_vec3 P = ws->xyz[i];
+        cm_vec3 N = keep ? keep_normal(&ps, ws->uv[i].x, ws->uv[i].y, centre, sign) : rb.frame.ez;
+        uint32_t k = base + ws->vmap[i];
+        mesh->pos[k][0] = (float)P.x;
+        mesh->pos[k][1] = (float)P.y;
+        mesh->pos[k][2] = (float)P.z;
+        mesh->nrm[k][0] = (float)N.x;
+        mesh->nrm[k][1] = (float)N.y;
+        mesh->nrm[k][2] = (float)N.z;
+    }
+    /* triangles are counter-clockwise in (u,v): around Su x Sv; a flipped kept face turns them */
+    int turn = keep && F->flip;
+    for (int t = 0; t < ntris; t++) {
+        uint32_t *ix = mesh->idx + mesh->nindex + 3 * (uint32_t)t;
+        ix[0] = base + ws->vmap[ws->tris[t][0]];
+        ix[1] = base + ws->vmap[ws->tris[t][turn ? 2 : 1]];
+        ix[2] = base + ws->vmap[ws->tris[t][turn ? 1 : 2]];
+    }
+    cm_mesh_face *mf = &mesh->faces[mesh->nfaces++];
+    mf->first_vert = base;
+    mf->nverts = nv;
+    mf->first_index = mesh->nindex;
+    mf->nindex = 3u * (uint32_t)ntris;
+    mf->has_color = F->color != 0;
+    mf->rgb = F->color ? m->palette[F->color] : 0;
+    mf->source_face = f;
+    mesh->nverts += nv;
+    mesh->nindex += 3u * (uint32_t)ntris;
+    return CM_OK;
+}

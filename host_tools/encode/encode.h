@@ -1,0 +1,67 @@
+/*
+ * encode.h - the workstation encoder: a loaded model (IGES -> curve mesh)
+ * to .cmz v1 bytes (docs/FORMAT.md).
+ *
+ * Order of work (spec §14, the parts this version implements):
+ *   1. orient every part consistently (shared edges run both ways);
+ *   2. quantise the transmitted edges first (spec §2 rule 5): clamped on
+ *      [0,1], ends exactly on the quantised vertices;
+ *   3. per face try PLANE (spec 5A, checked against the original surface,
+ *      spec §12 grid) and otherwise KEEP the quantised original surface;
+ *   4. write the sections, then decode the result with the decoder's own
+ *      code and check it is bit-identical to what was meant to be sent;
+ *   5. record the model's needs in the header and compare them with the
+ *      target profile's limits.
+ */
+#ifndef ENCODE_H
+#define ENCODE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cm/cm_limits_info.h"
+#include "model_load.h"
+
+typedef struct encode_opts {
+    double rel_tol;    /* rebuild tolerance, fraction of a face's bounding box (spec §1: 0.01) */
+    double quant_rel;  /* coordinate grid step, fraction of the model diagonal (rounded down to 2^k mm) */
+    double tess_rel;   /* recommended chordal tolerance, fraction of the model diagonal */
+    const cm_limit_info *target; /* limits of the profile the file must load on (NULL: none) */
+    const char *target_name;
+} encode_opts;
+
+void encode_opts_default(encode_opts *o);
+
+typedef struct face_report {
+    int method;        /* CM_METHOD_* */
+    double bbox;       /* face bounding-box diagonal (mm) */
+    double plane_dev;  /* largest boundary distance from the face's plane (mm) */
+    double rebuild_max;/* largest distance of the original surface to the sent one (§12 grid, mm) */
+    double ratio;      /* rebuild_max / bbox */
+    int surf_ctrl;     /* control points sent for a kept surface */
+} face_report;
+
+typedef struct encode_result {
+    uint8_t *bytes;    /* malloc'd file */
+    size_t len;
+    uint32_t need[CM_LIMIT_COUNT];
+    int faces_plane, faces_keep;
+    int edges_line, edges_curve;
+    int faces_flipped; /* faces turned to make every part consistently oriented */
+    double q;          /* grid step (mm) */
+    size_t section_bytes[6];
+    face_report *faces; /* one per face (malloc'd) */
+    char refusal[512]; /* non-empty: the target profile cannot load the file (why) */
+} encode_result;
+
+void encode_result_free(encode_result *r);
+
+/**
+ * Encode lm.  The model's faces may be re-oriented in place.  On success
+ * r->bytes holds the file; if opts->target is set and a need exceeds it,
+ * returns CM_E_LIMIT with r->refusal explaining (the bytes are still
+ * produced, so a caller may report sizes).
+ */
+CM_NODISCARD cm_err encode_model(loaded_model *lm, const encode_opts *opts, encode_result *r, cm_status *st);
+
+#endif /* ENCODE_H */

@@ -1,0 +1,144 @@
+/* cm_decode_file.c - .cmz -> mesh -> file with POSIX I/O and no heap (see cm_decode_file.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "cm_decode_file.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    if (a < b)
+        return 0;
+    for (size_t i = 0; i < b; i++) {
+        char c = s[a - b + i];
+        if (c >= 'A' && c <= 'Z')
+            c = (char)(c - 'A' + 'a');
+        if (c != suffix[i])
+            return 0;
+    }
+    return 1;
+}
+
+int cm_out_format_of(const char *path)
+{
+    if (ends_with(path, ".glb"))
+        return CM_OUT_GLB;
+    if (ends_with(path, ".stl"))
+        return CM_OUT_STL;
+    if (ends_with(path, ".obj"))
+        return CM_OUT_OBJ;
+    return -1;
+}
+
+static cm_err io_fail(cm_status *st, const char *where)
+{
+    int err = errno;
+    cm_err e = cm_fail(st, CM_E_IO, where);
+    if (st && st->code == CM_E_IO && st->sys_errno == 0)
+        st->sys_errno = err;
+    return e;
+}
+
+cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
+{
+    cm_dec_init(dec);
+    int fd = open(in_path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return io_fail(st, "open");
+    uint8_t chunk[16384];
+    cm_err e = CM_OK;
+    for (;;) {
+        ssize_t n = read(fd, chunk, sizeof chunk);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            e = io_fail(st, "read");
+            break;
+        }
+        if (n == 0)
+            break;
+        if ((e = cm_dec_feed(dec, chunk, (size_t)n, st)) != CM_OK)
+            break;
+    }
+    close(fd);
+    if (e == CM_OK)
+        e = cm_dec_finish(dec, st);
+    return e;
+}
+
+cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_ws *ws, cm_decode_summary *sum,
+                      cm_status *st)
+{
+    const cm_model *m = &dec->model;
+    cm_mesh_clear(mesh);
+    memset(sum, 0, sizeof *sum);
+    sum->tess_tol = tol > 0 ? tol : m->tess_tol;
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        cm_tess_info info;
+        cm_err e = cm_tessellate_face(m, f, sum->tess_tol, mesh, ws, &info, st);
+        if (e != CM_OK) {
+            if (st && st->where == NULL)
+                st->where = "tessellation";
+            return e;
+        }
+        if (info.max_gap > sum->max_gap)
+            sum->max_gap = info.max_gap;
+        sum->faces_plane += m->faces[f].method == CM_METHOD_PLANE;
+        sum->faces_keep += m->faces[f].method == CM_METHOD_KEEP;
+    }
+    sum->faces = m->nfaces;
+    sum->triangles = mesh->nindex / 3;
+    sum->vertices = mesh->nverts;
+    return CM_OK;
+}
+
+cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_path, uint64_t *bytes, cm_status *st)
+{
+    char tmp[4096];
+    if (strlen(out_path) + 16 > sizeof tmp)
+        return cm_fail(st, CM_E_ARG, "output path too long");
+    snprintf(tmp, sizeof tmp, "%s.part%ld", out_path, (long)getpid());
+    static cm_out w; /* serialiser state: static, like everything on the decode path */
+    cm_err e = cm_out_begin(&w, fmt, mesh, st);
+    if (e != CM_OK)
+        return e;
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0)
+        return io_fail(st, "create");
+    uint8_t chunk[65536];
+    uint64_t total = 0;
+    for (;;) {
+        size_t n = 0;
+        int done = 0;
+        if ((e = cm_out_next(&w, chunk, sizeof chunk, &n, &done, st)) != CM_OK)
+            break;
+        for (size_t off = 0; off < n;) {
+            ssize_t k = write(fd, chunk + off, n - off);
+            if (k < 0 && errno == EINTR)
+                continue;
+            if (k <= 0) {
+                e = io_fail(st, "write");
+                break;
+            }
+            off += (size_t)k;
+        }
+        total += n;
+        if (e != CM_OK || done)
+            break;
+    }
+    if (e == CM_OK && fsync(fd) != 0)
+        e = io_fail(st, "fsync");
+    if (close(fd) != 0 && e == CM_OK)
+        e = io_fail(st, "close");
+    if (e == CM_OK && rename(tmp, out_path) != 0)
+        e = io_fail(st, "rename");
+    if (e != CM_OK)
+        unlink(tmp);
+    else if (bytes)
+        *bytes = total;
+    return e;
+}

@@ -1,0 +1,97 @@
+/*
+ * cmz-decode - the terminal's decoder: .cmz in, .glb/.stl/.obj out.
+ *
+ *   cmz-decode MODEL.cmz -o MODEL.glb [--tess MM]
+ *   cmz-decode --limits | --version | --help
+ *
+ * Built with the board's profile (PROFILE=terminal by default): every
+ * buffer is static and sized by fixedcfg; the decode path never touches
+ * the heap.  A model larger than this build's limits is refused before
+ * its body is read, naming the limit.  The output appears atomically.
+ *
+ * Exit status: 0 success, 1 the file is malformed or exceeds a limit,
+ * 2 usage, 3 I/O error.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cm/cm_limits_info.h"
+#include "cm_decode_file.h"
+#include "cm_report.h"
+
+#define VERT_CAP (CM_MAX_TRIS + 2 * CM_MAX_FACES) /* a face of T triangles has at most T + 2 vertices */
+
+static cm_decoder decoder;
+static cm_tess_ws tess;
+static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
+static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
+static cm_mesh_face faces[CM_MAX_FACES];
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: cmz-decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n"
+            "       cmz-decode --limits | --version | --help\n"
+            "\n"
+            "Rebuild a curvemesh model and write it as binary glTF (metres, +Y up), binary STL\n"
+            "or OBJ (millimetres), chosen by the extension.  --tess: chordal tolerance in mm\n"
+            "(default: the file's recommendation).  Built with profile %s (--limits shows them).\n"
+            "\n"
+            "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error.\n",
+            cm_profile_name);
+}
+
+int main(int argc, char **argv)
+{
+    const char *in = NULL, *out = NULL;
+    double tol = 0;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            usage(stdout);
+            return 0;
+        } else if (strcmp(argv[i], "--limits") == 0) {
+            cm_report_limits(stdout);
+            return 0;
+        } else if (strcmp(argv[i], "--version") == 0) {
+            printf("cmz-decode 0.1.0 (format 1, profile %s)\n", cm_profile_name);
+            return 0;
+        } else if (strcmp(argv[i], "-o") == 0 && i + 1 < argc) {
+            out = argv[++i];
+        } else if (strcmp(argv[i], "--tess") == 0 && i + 1 < argc) {
+            char *end;
+            tol = strtod(argv[++i], &end);
+            if (*end || !(tol > 0)) {
+                fprintf(stderr, "cmz-decode: --tess wants a positive number of millimetres, not '%s'\n", argv[i]);
+                return 2;
+            }
+        } else if (argv[i][0] == '-') {
+            fprintf(stderr, "cmz-decode: unknown option %s\n", argv[i]);
+            usage(stderr);
+            return 2;
+        } else if (!in) {
+            in = argv[i];
+        } else {
+            fprintf(stderr, "cmz-decode: one model at a time\n");
+            return 2;
+        }
+    }
+    int fmt = out ? cm_out_format_of(out) : -1;
+    if (!in || fmt < 0) {
+        usage(stderr);
+        return 2;
+    }
+    cm_mesh mesh = {pos, nrm, idx, faces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
+    cm_status st;
+    cm_status_init(&st);
+    cm_decode_summary sum;
+    uint64_t bytes = 0;
+    if (cm_decode_read(in, &decoder, &st) != CM_OK || cm_decode_mesh(&decoder, tol, &mesh, &tess, &sum, &st) != CM_OK ||
+        cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
+        cm_report_status(stderr, "cmz-decode", in, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
+    printf("%s -> %s: %u faces, %u triangles, %llu bytes\n", in, out, sum.faces, sum.triangles,
+           (unsigned long long)bytes);
+    return 0;
+}

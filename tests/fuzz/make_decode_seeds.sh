@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# make_decode_seeds.sh CMZ - rewrite tests/fuzz/corpus_decode from the IGES seeds (see README.md)
+set -euo pipefail
+cmz=${1:?usage: make_decode_seeds.sh path/to/cmz}
+here=$(cd "$(dirname "$0")" && pwd)
+out=$here/corpus_decode
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$out"
+for f in "$here"/corpus_iges/box_hole_144.igs "$here"/corpus_iges/box_hole_186.igs \
+         "$here"/corpus_iges/half_cylinder_120.igs "$here"/corpus_iges/bicubic_128_inch.igs \
+         "$here"/../data/as1_pe_203.igs "$here"/../data/geo_example.igs; do
+    b=$(basename "$f" .igs)
+    "$cmz" encode -q "$f" -o "$tmp/$b.cmz"
+    for sel in 0 200; do
+        { printf "\\x$(printf %02x $sel)"; cat "$tmp/$b.cmz"; } > "$out/${b}_chunk$sel.cmzf"
+    done
+done
