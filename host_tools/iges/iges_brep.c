@@ -213,6 +213,94 @@ static double curve_length(const hcurve *c)
     return len;
 }
 
+static cm_vec3 curve_end(const hcurve *c, int at_end)
+{
+    double t0, t1;
+    hcurve_domain(c, &t0, &t1);
+    cm_curve v = hcurve_view(c);
+    cm_vec3 d[1] = {{0, 0, 0}};
+    if (cm_curve_eval(&v, at_end ? t1 : t0, 0, d, NULL) != CM_OK)
+        return cm_v3(0, 0, 0);
+    return d[0];
+}
+
+/*
+ * Some exporters (ICEM among them) write a loop's curves out of order and
+ * some of them backwards: the 102 composite of a trimmed surface lists the
+ * outer boundary, then the pieces of a notch in any order.  When consecutive
+ * curves do not meet (gap above tol) the loop is chained again by its end
+ * points, greedily from its first curve, reversing curves as needed, and
+ * kept only if that narrows the widest gap; returns 1 if it was reordered.
+ */
+static int chain_loop(hcurve_list *L, double tol)
+{
+    int n = L->n;
+    if (n < 2)
+        return 0;
+    cm_vec3 *ends = malloc((size_t)n * 2 * sizeof *ends);
+    int *order = malloc((size_t)n * sizeof *order);
+    unsigned char *rev = calloc((size_t)n, 1);
+    hcurve *tmp = malloc((size_t)n * sizeof *tmp);
+    int changed = 0;
+    if (!ends || !order || !rev || !tmp)
+        goto done;
+    for (int k = 0; k < n; k++) {
+        ends[2 * k] = curve_end(&L->c[k], 0);
+        ends[2 * k + 1] = curve_end(&L->c[k], 1);
+        order[k] = k;
+    }
+    /* gap after position i: end of order[i] (start if reversed) to start of order[i+1] */
+#define CHAIN_END(i) ends[2 * order[i] + (rev[i] ? 0 : 1)]
+#define CHAIN_START(i) ends[2 * order[i] + (rev[i] ? 1 : 0)]
+    double before = 0;
+    for (int i = 0; i < n; i++) {
+        double d = cm_dist(ends[2 * i + 1], ends[2 * ((i + 1) % n)]);
+        before = d > before ? d : before;
+    }
+    if (before <= tol)
+        goto done;
+    for (int i = 0; i + 1 < n; i++) {
+        cm_vec3 end = CHAIN_END(i);
+        int best = i + 1, best_rev = 0;
+        double best_d = INFINITY;
+        for (int j = i + 1; j < n; j++)
+            for (int r = 0; r < 2; r++) {
+                double d = cm_dist(end, ends[2 * order[j] + r]);
+                if (d < best_d) {
+                    best_d = d;
+                    best = j;
+                    best_rev = r; /* matched its end point: run it backwards */
+                }
+            }
+        int t = order[i + 1];
+        order[i + 1] = order[best];
+        order[best] = t;
+        rev[i + 1] = (unsigned char)best_rev;
+    }
+    double after = 0;
+    for (int i = 0; i < n; i++) {
+        double d = cm_dist(CHAIN_END(i), CHAIN_START((i + 1) % n));
+        after = d > after ? d : after;
+    }
+#undef CHAIN_END
+#undef CHAIN_START
+    if (!(after < before))
+        goto done;
+    for (int i = 0; i < n; i++) {
+        tmp[i] = L->c[order[i]];
+        if (rev[i])
+            hcurve_reverse(&tmp[i]);
+    }
+    memcpy(L->c, tmp, (size_t)n * sizeof *tmp);
+    changed = 1;
+done:
+    free(ends);
+    free(order);
+    free(rev);
+    free(tmp);
+    return changed;
+}
+
 /*
  * Add a face from its loops (lists of model-space curves in loop order;
  * loops[0] outer unless `natural`), building the surface over their extent.
@@ -282,6 +370,9 @@ static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const h
     }
     double diag = box.empty ? 0 : cm_dist(box.lo, box.hi);
     for (int l = 0; l < nloops; l++) {
+        if (chain_loop(&loops[l], 1e-5 * diag))
+            iges_warn(im->f, fe->pd_line, "DE %d: loop %d lists its curves out of order; chained by their end points",
+                      fe->de, l + 1);
         int first = m->nsegs;
         for (int i = 0; i < loops[l].n; i++) {
             if (curve_length(&loops[l].c[i]) <= 1e-9 * diag)

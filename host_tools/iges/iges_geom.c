@@ -872,8 +872,19 @@ static cm_err surface_rec(iges_file *f, int de, const haffine *parent, const hbo
         mark_used(f, axis);
         hcurve g = {0};
         err = single_curve(f, dc, &m, &g, st);
+        /*
+         * The generatrix turns about the axis by the right-hand rule in the entity's own frame.
+         * Axis and generatrix arrive here already mapped to model space; when the entity's
+         * transformation mirrors (determinant < 0, a 124 of form 1, as OCCT writes mirrored parts)
+         * the mapped rotation turns the other way, so the axis is reversed (OCCT revolves in the
+         * local frame and moves the result: the same surface).
+         */
+        double det = m.R[0][0] * (m.R[1][1] * m.R[2][2] - m.R[1][2] * m.R[2][1]) -
+                     m.R[0][1] * (m.R[1][0] * m.R[2][2] - m.R[1][2] * m.R[2][0]) +
+                     m.R[0][2] * (m.R[1][0] * m.R[2][1] - m.R[1][1] * m.R[2][0]);
+        cm_vec3 dir = det < 0 ? cm_sub(A, B) : cm_sub(B, A);
         if (err == CM_OK)
-            err = hsurf_revolve(&g, A, cm_sub(B, A), sa, ta, out, st);
+            err = hsurf_revolve(&g, A, dir, sa, ta, out, st);
         hcurve_free(&g);
         break;
     }

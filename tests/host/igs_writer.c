@@ -278,6 +278,25 @@ void igw_box_with_hole_144(igw *w, double a, double b, double c, double r)
     igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, 4)));
 }
 
+void igw_square_scrambled_144(igw *w, double a)
+{
+    v3 p00 = {0, 0, 0}, p10 = {a, 0, 0}, p11 = {a, a, 0}, p01 = {0, a, 0};
+    int s = bilinear_128(w, p00, p10, p01, p11);
+    /* the loop p00 -> p10 -> p11 -> p01 -> p00, listed as: first side, third side backwards,
+       second side, fourth side backwards (as ICEM writes a notch's pieces) */
+    int m[4] = {line(w, p00, p10), line(w, p01, p11), line(w, p10, p11), line(w, p00, p01)};
+    igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 4)));
+}
+
+void igw_half_cylinder_120_mirrored(igw *w, double r, double h)
+{
+    int axis = line(w, (v3){0, 0, 0}, (v3){0, 0, 1});
+    int gen = line(w, (v3){r, 0, 0}, (v3){r, 0, h});
+    int mirror = igw_add(w, 124, 1, "1,0,0,0,0,-1,0,0,0,0,1,0"); /* y -> -y, determinant -1 */
+    int surf = igw_add(w, 120, 0, "%d,%d,0,%.17g", axis, gen, M_PI);
+    igw_set(w, surf, 0, mirror, 0);
+}
+
 static int point_116(igw *w, v3 p)
 {
     int de = igw_add(w, 116, 0, "%.17g,%.17g,%.17g,0", p.x, p.y, p.z);

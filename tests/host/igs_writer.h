@@ -46,6 +46,13 @@ void igw_box_with_hole_186(igw *w, double a, double b, double c, double r);
 /** Half cylinder radius r, height h, as an untrimmed 120 surface of revolution (line revolved by pi). */
 void igw_half_cylinder_120(igw *w, double r, double h);
 
+/** The same half cylinder under a mirroring 124 (form 1, y -> -y): the surface must be the half at y <= 0. */
+void igw_half_cylinder_120_mirrored(igw *w, double r, double h);
+
+/** A planar square [0,a]^2 (z = 0) as a 144 whose boundary composite lists its sides out of order,
+ *  two of them backwards. */
+void igw_square_scrambled_144(igw *w, double a);
+
 /** An untrimmed bicubic 128 patch: P_ij = (i, j, z_ij) with z from a fixed table. */
 void igw_bicubic_128(igw *w);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */

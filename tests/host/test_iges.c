@@ -170,6 +170,55 @@ static void test_half_cylinder_120(void **state)
     igw_free(&w);
 }
 
+static int on_mirrored_half_cylinder(const loaded_model *lm, int face, cm_vec3 p, double tol)
+{
+    (void)lm;
+    (void)face;
+    return fabs(hypot(p.x, p.y) - 5.0) <= tol && p.y <= tol && p.z >= -tol && p.z <= 12.0 + tol;
+}
+
+/* a 120 under a mirroring transformation: revolved in its own frame, then mirrored (as OCCT reads it) */
+static void test_half_cylinder_120_mirrored(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    igw_half_cylinder_120_mirrored(&w, 5.0, 12.0);
+    loaded_model lm;
+    assert_ok(load(&w, &lm));
+    assert_int_equal(lm.brep.nfaces, 1);
+    check_samples(&lm, on_mirrored_half_cylinder, 40);
+    model_free(&lm);
+    igw_free(&w);
+}
+
+static int on_square(const loaded_model *lm, int face, cm_vec3 p, double tol)
+{
+    (void)lm;
+    (void)face;
+    return fabs(p.z) <= tol && p.x >= -tol && p.x <= 10 + tol && p.y >= -tol && p.y <= 10 + tol;
+}
+
+/* a trimming loop whose curves are listed out of order, some backwards, is chained by its end points */
+static void test_scrambled_loop(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    igw_square_scrambled_144(&w, 10.0);
+    loaded_model lm;
+    assert_ok(load(&w, &lm));
+    assert_int_equal(lm.brep.nfaces, 1);
+    assert_int_equal(lm.mesh.nverts, 4); /* no joint forced between curves that do not meet */
+    assert_int_equal(lm.mesh.nedges, 4);
+    assert_int_equal(lm.mesh.nforced, 0);
+    assert_int_equal(count_kind(&lm.mesh, CMESH_FREE), 4);
+    assert_true(lm.iges.nwarn >= 1); /* and says so */
+    check_samples(&lm, on_square, 30);
+    model_free(&lm);
+    igw_free(&w);
+}
+
 static int on_bicubic(const loaded_model *lm, int face, cm_vec3 p, double tol)
 {
     (void)lm;
@@ -385,6 +434,8 @@ int main(void)
         cmocka_unit_test(test_box_with_hole_144),
         cmocka_unit_test(test_box_with_hole_186),
         cmocka_unit_test(test_half_cylinder_120),
+        cmocka_unit_test(test_half_cylinder_120_mirrored),
+        cmocka_unit_test(test_scrambled_loop),
         cmocka_unit_test(test_bicubic_128),
         cmocka_unit_test(test_units_inch),
         cmocka_unit_test(test_truncated),
