@@ -227,7 +227,7 @@ $(STACK_CHECK): tests/tools/check_stack.c
 	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
 .PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-fuzz-decode-replay \
-	check-corpus-roundtrip check-corpus-occt deps
+	check-corpus-roundtrip check-decode-cross check-corpus-occt deps
 # `make check` on a fresh machine: install what is missing, then test.
 check:
 	$(Q)$(MAKE) --no-print-directory deps
@@ -251,7 +251,8 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:iges-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
-		"gate:cross:$(MAKE) --no-print-directory -s check-cross"
+		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
+		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross"
 
 # layer (a) of the no-heap gate: the decoder/kernel archive may only call allowlisted libc/libm symbols
 check-noheap: $(B)/libcmdecoder.a
@@ -330,6 +331,14 @@ check-corpus-occt: $(CMZ) oracle
 check-corpus-roundtrip: $(CMZ) $(MESH_CHECK) oracle gltf-check-tool
 	$(Q)tests/tools/check_corpus_roundtrip.sh $(CMZ) $(MESH_CHECK) $(ORACLE_BIN) $(GLTF_CHECK_BIN) $(SHARED_MODELS)
 
+# cmz-decode for aarch64 under qemu-user: byte-identical GLB on every model; tiny refuses by limit
+# (the host profile's limits are too large for static arrays: there `cmz decode`, same decoder, is compared)
+check-decode-cross: $(CMZ) $(call bdir,terminal)/cmz-decode $(call bdir,tiny)/cmz-decode
+	$(Q)$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- CC=aarch64-linux-gnu-gcc AR=aarch64-linux-gnu-ar \
+		PKG_CONFIG=aarch64-linux-gnu-pkg-config $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-decode \
+		$(BUILD_ROOT)/aarch64-linux-gnu-host/cmz
+	$(Q)tests/tools/check_decode_cross.sh $(CMZ) $(BUILD_ROOT) $(SHARED_MODELS)
+
 # unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine
 check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 	$(Q)for x in $(CROSS_TARGETS); do \
@@ -358,11 +367,22 @@ check-readme: $(LIMIT_TOOLS)
 
 # ---- demo (needs the encoder and decoder of later work) ----
 .PHONY: demo bench
+# the main job on a bundled model: packages for building, then encode on the "workstation" and
+# decode with the terminal's heap-free decoder (terminal profile) into out/demo.glb
+DEMO_MODEL ?= tests/data/as1_pe_203.igs
+DEMO_PKGS := gcc make xz-utils gzip
 demo:
-	@echo "make demo: not yet - the encoder and decoder are not built yet (see README, Status)."
+	$(Q)DEPS_ARCHS= tests/tools/deps.sh $(DEMO_PKGS)
+	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode
+	$(Q)host_tools/scripts/demo.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(DEMO_MODEL) out
 
+# size, speed and memory on the bundled models and the shared corpus (not part of check);
+# BENCH_CALLGRIND=1 adds the decoder's instruction counts (valgrind)
+BENCH_MODELS ?= $(wildcard tests/data/*.igs) $(wildcard $(SHARED_MODELS)/iges/*)
 bench:
-	@echo "make bench: not yet - nothing to benchmark before the encoder exists (see README, Status)."
+	$(Q)DEPS_ARCHS= tests/tools/deps.sh $(DEMO_PKGS) time bc valgrind
+	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode
+	$(Q)host_tools/scripts/bench.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(BUILD_ROOT)/bench $(BENCH_MODELS)
 
 # ---- install / clean ----
 .PHONY: install clean

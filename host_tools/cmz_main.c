@@ -719,6 +719,12 @@ int main(int argc, char **argv)
         cm_report_limits(stdout);
         return EXIT_OK;
     }
+    /* `cmz COMMAND --help` (anywhere among its arguments) is the same text */
+    for (int i = 2; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            usage(stdout);
+            return EXIT_OK;
+        }
     if (strcmp(cmd, "info") == 0)
         return cmd_info(argc - 2, argv + 2);
     if (strcmp(cmd, "sample") == 0)

@@ -130,17 +130,11 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     return CM_OK;
 }
 
-cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
+/* append header bytes (n fits the buffer and does not pass the header's end) and check what is in */
+static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
 {
-    if (d->state == CM_DEC_FAILED || d->state == CM_DEC_DONE)
-        return cm_fail(st, CM_E_ARG, "cm_dec_feed");
-    uint32_t limit = d->state == CM_DEC_BODY ? d->file_len : (uint32_t)CM_MAX_FILE_BYTES;
-    if (n > (size_t)(limit - d->len))
-        return fail(d, st, d->state == CM_DEC_BODY ? CM_E_RANGE : CM_E_LIMIT, limit, "more bytes than the file");
     memcpy(d->buf + d->len, p, n);
     d->len += (uint32_t)n;
-    if (d->state != CM_DEC_HEADER)
-        return CM_OK;
     /* magic first: a wrong file is refused at its first bytes */
     static const uint8_t magic[4] = {CM_FMT_MAGIC0, CM_FMT_MAGIC1, CM_FMT_MAGIC2, CM_FMT_MAGIC3};
     for (uint32_t i = 0; i < d->len && i < 4; i++)
@@ -153,12 +147,43 @@ cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
     d->header_len = cm_get_u32(d->buf + 8);
     if (d->header_len < CM_FMT_FIXED_HEADER + 4u || d->header_len > CM_FMT_MAX_HEADER)
         return fail(d, st, CM_E_FORMAT, 8, "header length");
+    if (d->header_len > (uint32_t)CM_MAX_FILE_BYTES) {
+        d->state = CM_DEC_FAILED;
+        cm_fail_limit(st, CM_LIMIT_MAX_FILE_BYTES, d->header_len, CM_MAX_FILE_BYTES, "header length");
+        if (st)
+            st->offset = 8;
+        return CM_E_LIMIT;
+    }
     if (d->len < d->header_len)
         return CM_OK;
-    cm_err e = check_header(d, st);
-    if (e == CM_OK && d->len > d->file_len)
+    return check_header(d, st);
+}
+
+cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
+{
+    if (d->state == CM_DEC_FAILED || d->state == CM_DEC_DONE)
+        return cm_fail(st, CM_E_ARG, "cm_dec_feed");
+    /*
+     * The header first, however the bytes arrive: its checks (magic, version, the model's needs
+     * against this build) decide before anything is said about the body, so a file too large for
+     * this build is refused by name (MAX_FILE_BYTES, or whatever else it needs) and not as excess.
+     */
+    while (n > 0 && d->state == CM_DEC_HEADER) {
+        uint32_t upto = d->len < 12 ? 12u : d->header_len; /* the next point where a check can run */
+        size_t step = upto - d->len < n ? upto - d->len : n;
+        cm_err e = feed_header(d, p, step, st);
+        if (e != CM_OK)
+            return e;
+        p += step;
+        n -= step;
+    }
+    if (n == 0)
+        return CM_OK;
+    if (n > (size_t)(d->file_len - d->len))
         return fail(d, st, CM_E_RANGE, d->file_len, "more bytes than the file");
-    return e;
+    memcpy(d->buf + d->len, p, n);
+    d->len += (uint32_t)n;
+    return CM_OK;
 }
 
 /* ---- sections ---- */

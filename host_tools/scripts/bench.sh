@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# bench.sh CMZ CMZ_DECODE OUTDIR MODEL... - size, speed and memory of the whole job per model.
+#
+# For every model: the IGES size, what gzip -9 and xz -9 make of it, the .cmz size and the
+# ratios; faces by method; encode time (workstation, host profile); decode time of the
+# terminal's decoder (terminal profile, to .glb; best of 3 runs); its peak resident memory;
+# triangles; and, with BENCH_CALLGRIND=1, the decoder's instruction count under callgrind
+# (stable where wall time is noisy).  Times on a shared machine are noisy: compare ratios
+# within one run.  Writes OUTDIR/bench.tsv and prints a Markdown table (README's).
+set -u
+cmz=$1 dec=$2 out=$3
+shift 3
+mkdir -p "$out"
+tsv=$out/bench.tsv
+printf 'model\tiges_bytes\tgzip9\txz9\tcmz_bytes\tx_iges\tx_gzip\tx_xz\tfaces\tplane\tkeep\tenc_s\tdec_s\tdec_rss_kib\ttriangles\tdec_instr\tterminal\n' > "$tsv"
+now() { date +%s.%N; }
+for m in "$@"; do
+    name=$(basename "${m%.*}")
+    c=$out/$name.cmz g=$out/$name.glb
+    t0=$(now)
+    if ! enc=$("$cmz" encode -q "$m" -o "$c" 2>&1); then
+        echo "# $name: encode failed: $(tail -n 1 <<<"$enc")" >&2
+        continue
+    fi
+    t1=$(now)
+    # the terminal's decoder; a model over its limits is refused before its body is read: then the
+    # workstation's decoder (host profile, same code) stands in for the timings, and the table says why
+    term=ok
+    run=("$dec")
+    if ! decout=$("$dec" "$c" -o "$g" 2>&1); then
+        term=$(sed -n 's/.*needs \([A-Z_]*=[0-9]*\), this build (profile terminal) has \([0-9]*\).*/\1 > \2/p' <<<"$decout")
+        [ -n "$term" ] || term="failed"
+        run=("$cmz" decode)
+    fi
+    best=
+    for r in 1 2 3; do
+        s=$(now)
+        if ! decout=$("${run[@]}" "$c" -o "$g" 2>&1); then
+            echo "# $name: decode failed: $decout" >&2
+            best=
+            break
+        fi
+        e=$(now)
+        d=$(echo "$e - $s" | bc)
+        if [ -z "$best" ] || [ "$(echo "$d < $best" | bc)" = 1 ]; then best=$d; fi
+    done
+    [ -n "$best" ] || continue
+    rss=-
+    if [ -x /usr/bin/time ]; then
+        rss=$(/usr/bin/time -f %M "${run[@]}" "$c" -o "$g" 2>&1 >/dev/null | tail -n 1)
+    fi
+    instr=-
+    if [ "${BENCH_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
+        instr=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null "${run[@]}" "$c" -o "$g" 2>&1 |
+                sed -n 's/.*Collected : \([0-9]*\).*/\1/p')
+        [ -n "$instr" ] || instr=-
+    fi
+    igs=$(stat -c %s "$m") gz=$(gzip -9 -c "$m" | wc -c) xz=$(xz -9 -c "$m" | wc -c) cz=$(stat -c %s "$c")
+    faces=$(sed -n 's/.*: \([0-9]*\) faces (\([0-9]*\) plane, \([0-9]*\) kept).*/\1 \2 \3/p' <<<"$enc")
+    tris=$(sed -n 's/.*faces\( ([^)]*)\)\{0,1\}, \([0-9]*\) triangles.*/\2/p' <<<"$decout")
+    read -r nf np nk <<<"$faces"
+    awk -v n="$name" -v i="$igs" -v g="$gz" -v x="$xz" -v c="$cz" -v nf="$nf" -v np="$np" -v nk="$nk" \
+        -v te="$(echo "$t1 - $t0" | bc)" -v td="$best" -v rss="$rss" -v tr="$tris" -v ins="$instr" -v term="$term" 'BEGIN {
+        printf "%s\t%d\t%d\t%d\t%d\t%.1f\t%.1f\t%.1f\t%d\t%d\t%d\t%.3f\t%.3f\t%s\t%d\t%s\t%s\n",
+               n, i, g, x, c, i / c, g / c, x / c, nf, np, nk, te, td, rss, tr, ins, term }' >> "$tsv"
+done
+# the Markdown table
+awk -F'\t' 'NR == 1 {
+        print "| model | IGES | gzip -9 | xz -9 | .cmz | ×IGES | ×gzip | ×xz | faces (plane/kept) | encode s | decode s | decode RSS MiB | triangles | terminal profile |" (ENVIRON["BENCH_CALLGRIND"] == 1 ? " decode Minstr |" : "")
+        print "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---|" (ENVIRON["BENCH_CALLGRIND"] == 1 ? "---:|" : "")
+        next }
+    { rss = $14 == "-" ? "-" : sprintf("%.1f", $14 / 1024)
+      ins = $16 == "-" ? "" : sprintf(" %.1f |", $16 / 1e6)
+      printf "| %s | %d | %d | %d | %d | %.1f | %.1f | %.1f | %d (%d/%d) | %.2f | %.3f | %s | %d | %s |%s\n",
+             $1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, rss, $15, ($17 == "ok" ? "loads" : "refused: " $17 " (host decoder timed)"), ins
+      si += $2; sg += $3; sx += $4; sc += $5 }
+    END { if (sc > 0) printf "| **all** | %d | %d | %d | %d | %.1f | %.1f | %.1f | | | | | | |\n", si, sg, sx, sc, si / sc, sg / sc, sx / sc }' "$tsv"
+echo "(written to $tsv)"
