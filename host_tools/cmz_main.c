@@ -152,6 +152,28 @@ static int count_types(const iges_file *f, type_count *tc, int cap)
     return n;
 }
 
+/*
+ * The arguments every command shares: -q, the one input file, and the refusal of anything else.
+ * Returns 0 when `a` was taken, EXIT_USAGE (after saying why) otherwise.
+ */
+static int common_arg(const char *cmd, const char *a, const char **path)
+{
+    if (strcmp(a, "-q") == 0) {
+        quiet = 1;
+        return 0;
+    }
+    if (a[0] == '-' && a[1]) {
+        fprintf(stderr, "%s %s: unknown option %s (see cmz --help)\n", prog, cmd, a);
+        return EXIT_USAGE;
+    }
+    if (*path) {
+        fprintf(stderr, "%s %s: one file at a time (got %s and %s)\n", prog, cmd, *path, a);
+        return EXIT_USAGE;
+    }
+    *path = a;
+    return 0;
+}
+
 typedef struct solid_info {
     int faces, free_edges, seams;
 } solid_info;
@@ -163,17 +185,8 @@ static int cmd_info(int argc, char **argv)
     for (int i = 0; i < argc; i++) {
         if (strcmp(argv[i], "--json") == 0)
             json = 1;
-        else if (strcmp(argv[i], "-q") == 0)
-            quiet = 1;
-        else if (argv[i][0] == '-' && argv[i][1]) {
-            fprintf(stderr, "%s info: unknown option %s (see cmz --help)\n", prog, argv[i]);
+        else if (common_arg("info", argv[i], &path))
             return EXIT_USAGE;
-        } else if (!path)
-            path = argv[i];
-        else {
-            fprintf(stderr, "%s info: one model at a time (got %s and %s)\n", prog, path, argv[i]);
-            return EXIT_USAGE;
-        }
     }
     if (!path) {
         fprintf(stderr, "%s info: which model? usage: cmz info MODEL.igs [--json]\n", prog);
@@ -390,17 +403,8 @@ static int cmd_sample(int argc, char **argv)
                 return EXIT_USAGE;
             }
             per_face = (int)v;
-        } else if (strcmp(argv[i], "-q") == 0)
-            quiet = 1;
-        else if (argv[i][0] == '-' && argv[i][1]) {
-            fprintf(stderr, "%s sample: unknown option %s (see cmz --help)\n", prog, argv[i]);
+        } else if (common_arg("sample", argv[i], &path))
             return EXIT_USAGE;
-        } else if (!path)
-            path = argv[i];
-        else {
-            fprintf(stderr, "%s sample: one model at a time (got %s and %s)\n", prog, path, argv[i]);
-            return EXIT_USAGE;
-        }
     }
     if (!path || !out) {
         fprintf(stderr, "%s sample: usage: cmz sample MODEL.igs -o POINTS.xyz [--per-face N]\n", prog);
@@ -540,15 +544,7 @@ static int cmd_encode(int argc, char **argv)
             if (parse_real(a, v, 1e-7, 0.1, &o.tess_rel))
                 return EXIT_USAGE;
             i++;
-        } else if (strcmp(a, "-q") == 0) {
-            quiet = 1;
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "%s encode: unknown option %s (see cmz --help)\n", prog, a);
-            return EXIT_USAGE;
-        } else if (!path) {
-            path = a;
-        } else {
-            fprintf(stderr, "%s encode: one model at a time (got %s and %s)\n", prog, path, a);
+        } else if (common_arg("encode", a, &path)) {
             return EXIT_USAGE;
         }
     }
@@ -637,15 +633,7 @@ static int cmd_decode(int argc, char **argv)
             if (parse_real(a, v, 1e-9, 1e9, &tol))
                 return EXIT_USAGE;
             i++;
-        } else if (strcmp(a, "-q") == 0) {
-            quiet = 1;
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "%s decode: unknown option %s (see cmz --help)\n", prog, a);
-            return EXIT_USAGE;
-        } else if (!path) {
-            path = a;
-        } else {
-            fprintf(stderr, "%s decode: one file at a time (got %s and %s)\n", prog, path, a);
+        } else if (common_arg("decode", a, &path)) {
             return EXIT_USAGE;
         }
     }

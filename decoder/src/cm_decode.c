@@ -5,6 +5,7 @@
 
 #include "cm/cm_arith.h"
 #include "cm/cm_bspline.h"
+#include "cm/cm_sections.h"
 
 #define COORD_MAX (1ll << 40)   /* integer grid coordinates beyond this are hostile */
 #define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
@@ -247,17 +248,15 @@ static cm_err sec_vert(reader *r)
 {
     cm_decoder *d = r->d;
     cm_model *m = &d->model;
-    cm_ac_int mn, mc[3];
-    cm_ac_int_init(&mn);
-    for (int k = 0; k < 3; k++)
-        cm_ac_int_init(&mc[k]);
-    cm_err e = read_count(r, &mn, CM_LIMIT_MAX_VERTICES, CM_MAX_VERTICES, &m->nverts, "vertex count");
+    cm_vert_ctx ctx;
+    cm_vert_ctx_init(&ctx);
+    cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_VERTICES, CM_MAX_VERTICES, &m->nverts, "vertex count");
     if (e != CM_OK)
         return e;
     int64_t prev[3] = {0, 0, 0};
     for (uint32_t i = 0; i < m->nverts; i++) {
         for (int k = 0; k < 3; k++) {
-            if ((e = read_coord(r, &mc[k], prev[k], &d->vq[i][k], "vertex")) != CM_OK)
+            if ((e = read_coord(r, &ctx.coord[k], prev[k], &d->vq[i][k], "vertex")) != CM_OK)
                 return e;
             prev[k] = d->vq[i][k];
         }
@@ -322,43 +321,30 @@ static cm_err sec_edge(reader *r)
 {
     cm_decoder *d = r->d;
     cm_model *m = &d->model;
-    cm_ac_int mn, mback, mp, mnc, mk, mc[3], mw;
-    cm_ac_prob pnew, pg1, pkind, prat, puni;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mback);
-    cm_ac_int_init(&mp);
-    cm_ac_int_init(&mnc);
-    cm_ac_int_init(&mk);
-    cm_ac_int_init(&mw);
-    for (int k = 0; k < 3; k++)
-        cm_ac_int_init(&mc[k]);
-    cm_ac_prob_init(&pnew);
-    cm_ac_prob_init(&pg1);
-    cm_ac_prob_init(&pkind);
-    cm_ac_prob_init(&prat);
-    cm_ac_prob_init(&puni);
-    cm_err e = read_count(r, &mn, CM_LIMIT_MAX_EDGES, CM_MAX_EDGES, &m->nedges, "edge count");
+    cm_edge_ctx ctx;
+    cm_edge_ctx_init(&ctx);
+    cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_EDGES, CM_MAX_EDGES, &m->nedges, "edge count");
     if (e != CM_OK)
         return e;
     uint32_t vnext = 0;
     for (uint32_t i = 0; i < m->nedges; i++) {
         cm_edge *E = &m->edges[i];
-        if ((e = read_vref(r, &pnew, &mback, &vnext, &E->v0)) != CM_OK ||
-            (e = read_vref(r, &pnew, &mback, &vnext, &E->v1)) != CM_OK)
+        if ((e = read_vref(r, &ctx.is_new, &ctx.back, &vnext, &E->v0)) != CM_OK ||
+            (e = read_vref(r, &ctx.is_new, &ctx.back, &vnext, &E->v1)) != CM_OK)
             return e;
-        E->g1 = (uint8_t)cm_ac_dec_bit(&r->ac, &pg1);
-        E->kind = (uint8_t)cm_ac_dec_bit(&r->ac, &pkind);
+        E->g1 = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.g1);
+        E->kind = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.kind);
         int p = 1, n = 2, rational = 0;
         if (E->kind == CM_EDGE_CURVE) {
-            uint64_t pv = cm_ac_dec_uint(&r->ac, &mp) + 1;
+            uint64_t pv = cm_ac_dec_uint(&r->ac, &ctx.degree) + 1;
             if (pv > CM_MAX_DEGREE)
                 return rlimit(r, CM_LIMIT_MAX_DEGREE, pv, CM_MAX_DEGREE, "edge degree");
             p = (int)pv;
-            uint64_t nv = cm_ac_dec_uint(&r->ac, &mnc) + (uint64_t)p + 1;
+            uint64_t nv = cm_ac_dec_uint(&r->ac, &ctx.ncoef) + (uint64_t)p + 1;
             if (nv > CM_MAX_EDGE_CTRL)
                 return rlimit(r, CM_LIMIT_MAX_EDGE_CTRL, nv, CM_MAX_EDGE_CTRL, "edge control points");
             n = (int)nv;
-            rational = (int)cm_ac_dec_bit(&r->ac, &prat);
+            rational = (int)cm_ac_dec_bit(&r->ac, &ctx.rational);
         }
         if ((uint32_t)n > CM_MAX_MODEL_CTRL - m->nctrl)
             return rlimit(r, CM_LIMIT_MAX_MODEL_CTRL, (uint64_t)m->nctrl + (uint32_t)n, CM_MAX_MODEL_CTRL,
@@ -374,7 +360,7 @@ static cm_err sec_edge(reader *r)
             K[2] = K[3] = 1.0;
             E->knot0 = m->nknots;
             m->nknots += 4;
-        } else if ((e = read_knots(r, &puni, &mk, p, n, &E->knot0)) != CM_OK) {
+        } else if ((e = read_knots(r, &ctx.uniform, &ctx.knot, p, n, &E->knot0)) != CM_OK) {
             return e;
         }
         E->ctrl0 = m->nctrl;
@@ -385,7 +371,7 @@ static cm_err sec_edge(reader *r)
         for (int j = 1; j < n - 1; j++) {
             int64_t k3[3];
             for (int k = 0; k < 3; k++) {
-                if ((e = read_coord(r, &mc[k], prev[k], &k3[k], "edge control point")) != CM_OK)
+                if ((e = read_coord(r, &ctx.coord[k], prev[k], &k3[k], "edge control point")) != CM_OK)
                     return e;
                 prev[k] = k3[k];
             }
@@ -396,7 +382,7 @@ static cm_err sec_edge(reader *r)
         W[0] = 1.0;
         for (int j = 1; j < n; j++) {
             if (rational) {
-                wq += cm_ac_dec_sint(&r->ac, &mw);
+                wq += cm_ac_dec_sint(&r->ac, &ctx.weight);
                 if (r->ac.overrun)
                     return rfail(r, CM_E_TRUNCATED, "weights");
                 if (wq <= 0 || wq > WEIGHT_MAX)
@@ -421,28 +407,19 @@ static cm_err sec_surf(reader *r)
 {
     cm_decoder *d = r->d;
     cm_model *m = &d->model;
-    cm_ac_int mn, mp, mnc, mk, mc[3], mw;
-    cm_ac_prob prat, puni;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mp);
-    cm_ac_int_init(&mnc);
-    cm_ac_int_init(&mk);
-    cm_ac_int_init(&mw);
-    for (int k = 0; k < 3; k++)
-        cm_ac_int_init(&mc[k]);
-    cm_ac_prob_init(&prat);
-    cm_ac_prob_init(&puni);
-    cm_err e = read_count(r, &mn, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nsurfs, "surface count");
+    cm_surf_ctx ctx;
+    cm_surf_ctx_init(&ctx);
+    cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nsurfs, "surface count");
     if (e != CM_OK)
         return e;
     for (uint32_t s = 0; s < m->nsurfs; s++) {
         cm_ksurf *S = &m->surfs[s];
         int deg[2], cnt[2];
         for (int dir = 0; dir < 2; dir++) {
-            uint64_t pv = cm_ac_dec_uint(&r->ac, &mp) + 1;
+            uint64_t pv = cm_ac_dec_uint(&r->ac, &ctx.degree) + 1;
             if (pv > CM_MAX_DEGREE)
                 return rlimit(r, CM_LIMIT_MAX_DEGREE, pv, CM_MAX_DEGREE, "surface degree");
-            uint64_t nv = cm_ac_dec_uint(&r->ac, &mnc) + pv + 1;
+            uint64_t nv = cm_ac_dec_uint(&r->ac, &ctx.ncoef) + pv + 1;
             if (nv > CM_MAX_SURF_CTRL_DIR)
                 return rlimit(r, CM_LIMIT_MAX_SURF_CTRL_DIR, nv, CM_MAX_SURF_CTRL_DIR, "surface control points");
             deg[dir] = (int)pv;
@@ -457,9 +434,9 @@ static cm_err sec_surf(reader *r)
         S->q = (uint8_t)deg[1];
         S->nu = (uint16_t)cnt[0];
         S->nv = (uint16_t)cnt[1];
-        S->rational = (uint8_t)cm_ac_dec_bit(&r->ac, &prat);
-        if ((e = read_knots(r, &puni, &mk, deg[0], cnt[0], &S->uknot0)) != CM_OK ||
-            (e = read_knots(r, &puni, &mk, deg[1], cnt[1], &S->vknot0)) != CM_OK)
+        S->rational = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.rational);
+        if ((e = read_knots(r, &ctx.uniform, &ctx.knot, deg[0], cnt[0], &S->uknot0)) != CM_OK ||
+            (e = read_knots(r, &ctx.uniform, &ctx.knot, deg[1], cnt[1], &S->vknot0)) != CM_OK)
             return e;
         S->ctrl0 = m->nctrl;
         int nu = cnt[0], nv = cnt[1];
@@ -472,7 +449,7 @@ static cm_err sec_surf(reader *r)
                                    : i    ? d->sq[idx - nv][k]
                                    : j    ? d->sq[idx - 1][k]
                                           : 0;
-                    if ((e = read_coord(r, &mc[k], pred, &d->sq[idx][k], "surface control point")) != CM_OK)
+                    if ((e = read_coord(r, &ctx.coord[k], pred, &d->sq[idx][k], "surface control point")) != CM_OK)
                         return e;
                 }
                 m->ctrl[S->ctrl0 + (uint32_t)idx] = grid_point(m, d->sq[idx]);
@@ -481,7 +458,7 @@ static cm_err sec_surf(reader *r)
                     int64_t pred = i && j ? d->sw[idx - nv] + d->sw[idx - 1] - d->sw[idx - nv - 1]
                                    : i    ? d->sw[idx - nv]
                                           : d->sw[idx - 1];
-                    wq = pred + cm_ac_dec_sint(&r->ac, &mw);
+                    wq = pred + cm_ac_dec_sint(&r->ac, &ctx.weight);
                     if (r->ac.overrun)
                         return rfail(r, CM_E_TRUNCATED, "weights");
                     if (wq <= 0 || wq > WEIGHT_MAX)
@@ -504,31 +481,22 @@ static cm_err sec_surf(reader *r)
 static cm_err sec_face(reader *r)
 {
     cm_model *m = &r->d->model;
-    cm_ac_int mn, mmeth, mloops, mnuse, mback;
-    cm_ac_prob pflip, pnew, prev_new, prev_old;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mmeth);
-    cm_ac_int_init(&mloops);
-    cm_ac_int_init(&mnuse);
-    cm_ac_int_init(&mback);
-    cm_ac_prob_init(&pflip);
-    cm_ac_prob_init(&pnew);
-    cm_ac_prob_init(&prev_new);
-    cm_ac_prob_init(&prev_old);
-    cm_err e = read_count(r, &mn, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nfaces, "face count");
+    cm_face_ctx ctx;
+    cm_face_ctx_init(&ctx);
+    cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nfaces, "face count");
     if (e != CM_OK)
         return e;
     uint32_t enext = 0, snext = 0;
     m->nloops = m->nuses = 0;
     for (uint32_t f = 0; f < m->nfaces; f++) {
         cm_face *F = &m->faces[f];
-        uint64_t meth = cm_ac_dec_uint(&r->ac, &mmeth);
+        uint64_t meth = cm_ac_dec_uint(&r->ac, &ctx.method);
         if (r->ac.overrun)
             return rfail(r, CM_E_TRUNCATED, "face method");
         if (meth >= CM_METHOD_COUNT)
             return rfail(r, CM_E_UNSUPPORTED, "face method");
         F->method = (uint8_t)meth;
-        F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &pflip);
+        F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.flip);
         F->color = 0;
         F->surf = 0;
         if (F->method == CM_METHOD_KEEP) {
@@ -537,7 +505,7 @@ static cm_err sec_face(reader *r)
             F->surf = snext++;
         }
         uint32_t nl, face_uses = 0;
-        if ((e = read_count(r, &mloops, CM_LIMIT_MAX_LOOPS, CM_MAX_LOOPS, &nl, "loop count")) != CM_OK)
+        if ((e = read_count(r, &ctx.loops, CM_LIMIT_MAX_LOOPS, CM_MAX_LOOPS, &nl, "loop count")) != CM_OK)
             return e;
         if (nl == 0)
             return rfail(r, CM_E_FORMAT, "face without loops");
@@ -548,7 +516,7 @@ static cm_err sec_face(reader *r)
         for (uint32_t l = 0; l < nl; l++) {
             cm_loop *L = &m->loops[m->nloops++];
             uint32_t nu;
-            if ((e = read_count(r, &mnuse, CM_LIMIT_MAX_LOOP_EDGES, CM_MAX_LOOP_EDGES, &nu, "loop size")) != CM_OK)
+            if ((e = read_count(r, &ctx.uses, CM_LIMIT_MAX_LOOP_EDGES, CM_MAX_LOOP_EDGES, &nu, "loop size")) != CM_OK)
                 return e;
             if (nu == 0)
                 return rfail(r, CM_E_FORMAT, "empty loop");
@@ -561,19 +529,19 @@ static cm_err sec_face(reader *r)
             L->nuse = (uint16_t)nu;
             for (uint32_t k = 0; k < nu; k++) {
                 cm_use *U = &m->uses[m->nuses++];
-                if (cm_ac_dec_bit(&r->ac, &pnew)) {
+                if (cm_ac_dec_bit(&r->ac, &ctx.is_new)) {
                     if (enext >= m->nedges)
                         return rfail(r, CM_E_RANGE, "edge reference");
                     U->edge = enext++;
-                    U->rev = (uint8_t)cm_ac_dec_bit(&r->ac, &prev_new);
+                    U->rev = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.rev_new);
                 } else {
-                    uint64_t back = cm_ac_dec_uint(&r->ac, &mback);
+                    uint64_t back = cm_ac_dec_uint(&r->ac, &ctx.back);
                     if (r->ac.overrun)
                         return rfail(r, CM_E_TRUNCATED, "edge reference");
                     if (back >= enext)
                         return rfail(r, CM_E_RANGE, "edge reference");
                     U->edge = (uint32_t)(enext - 1 - back);
-                    U->rev = (uint8_t)cm_ac_dec_bit(&r->ac, &prev_old);
+                    U->rev = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.rev_old);
                 }
             }
             /* the loop must close: each use ends where the next begins */
@@ -596,10 +564,9 @@ static cm_err sec_face(reader *r)
 static cm_err sec_colr(reader *r)
 {
     cm_model *m = &r->d->model;
-    cm_ac_int mn, mi;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mi);
-    uint64_t np = cm_ac_dec_uint(&r->ac, &mn);
+    cm_colr_ctx ctx;
+    cm_colr_ctx_init(&ctx);
+    uint64_t np = cm_ac_dec_uint(&r->ac, &ctx.count);
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, "palette");
     if (np > CM_FMT_MAX_PALETTE)
@@ -611,7 +578,7 @@ static cm_err sec_colr(reader *r)
     if (m->npalette == 0)
         return r->ac.overrun ? rfail(r, CM_E_TRUNCATED, "palette") : CM_OK;
     for (uint32_t f = 0; f < m->nfaces; f++) {
-        uint64_t c = cm_ac_dec_uint(&r->ac, &mi);
+        uint64_t c = cm_ac_dec_uint(&r->ac, &ctx.index);
         if (c > m->npalette)
             return rfail(r, CM_E_RANGE, "face colour");
         m->faces[f].color = (uint8_t)c;

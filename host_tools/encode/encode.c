@@ -10,6 +10,7 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_format.h"
 #include "cm/cm_rebuild.h"
+#include "cm/cm_sections.h"
 #include "cm/cm_tessellate.h"
 
 #define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
@@ -63,29 +64,6 @@ typedef struct tx {
     int *color;         /* per face palette index */
 } tx;
 
-static void tx_free(tx *t)
-{
-    for (int i = 0; i < t->nedges; i++) {
-        free(t->edges[i].kq);
-        free(t->edges[i].cq);
-        free(t->edges[i].wq);
-    }
-    for (int i = 0; i < t->nfaces; i++) {
-        free(t->surfs[i].ku);
-        free(t->surfs[i].kv);
-        free(t->surfs[i].cq);
-        free(t->surfs[i].wq);
-    }
-    free(t->vq);
-    free(t->edges);
-    free(t->edge_tx);
-    free(t->vert_tx);
-    free(t->surfs);
-    free(t->method);
-    free(t->color);
-    memset(t, 0, sizeof *t);
-}
-
 /* drop the transmitted edges and vertices (build_edges makes them again) */
 static void tx_free_edges(tx *t)
 {
@@ -103,6 +81,22 @@ static void tx_free_edges(tx *t)
     t->edge_tx = t->vert_tx = NULL;
     t->nedges = t->nverts = 0;
 }
+
+static void tx_free(tx *t)
+{
+    tx_free_edges(t);
+    for (int i = 0; i < t->nfaces; i++) {
+        free(t->surfs[i].ku);
+        free(t->surfs[i].kv);
+        free(t->surfs[i].cq);
+        free(t->surfs[i].wq);
+    }
+    free(t->surfs);
+    free(t->method);
+    free(t->color);
+    memset(t, 0, sizeof *t);
+}
+
 
 static void quantise(const tx *t, cm_vec3 p, int64_t out[3])
 {
@@ -467,15 +461,13 @@ static void put_knots(cm_ac_enc *e, cm_ac_prob *puni, cm_ac_int *mk, int uniform
 static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
-    cm_ac_int mn, mc[3];
-    cm_ac_int_init(&mn);
-    for (int k = 0; k < 3; k++)
-        cm_ac_int_init(&mc[k]);
-    cm_ac_enc_uint(e, &mn, (uint64_t)t->nverts);
+    cm_vert_ctx ctx;
+    cm_vert_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nverts);
     int64_t prev[3] = {0, 0, 0};
     for (int i = 0; i < t->nverts; i++)
         for (int k = 0; k < 3; k++) {
-            cm_ac_enc_sint(e, &mc[k], t->vq[i][k] - prev[k]);
+            cm_ac_enc_sint(e, &ctx.coord[k], t->vq[i][k] - prev[k]);
             prev[k] = t->vq[i][k];
         }
 }
@@ -494,76 +486,54 @@ static void put_vref(cm_ac_enc *e, cm_ac_prob *pnew, cm_ac_int *mb, int *next, i
 static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
-    cm_ac_int mn, mback, mp, mnc, mk, mc[3], mw;
-    cm_ac_prob pnew, pg1, pkind, prat, puni;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mback);
-    cm_ac_int_init(&mp);
-    cm_ac_int_init(&mnc);
-    cm_ac_int_init(&mk);
-    cm_ac_int_init(&mw);
-    for (int k = 0; k < 3; k++)
-        cm_ac_int_init(&mc[k]);
-    cm_ac_prob_init(&pnew);
-    cm_ac_prob_init(&pg1);
-    cm_ac_prob_init(&pkind);
-    cm_ac_prob_init(&prat);
-    cm_ac_prob_init(&puni);
-    cm_ac_enc_uint(e, &mn, (uint64_t)t->nedges);
+    cm_edge_ctx ctx;
+    cm_edge_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nedges);
     int vnext = 0;
     for (int i = 0; i < t->nedges; i++) {
         const tx_edge *X = &t->edges[i];
-        put_vref(e, &pnew, &mback, &vnext, X->v0);
-        put_vref(e, &pnew, &mback, &vnext, X->v1);
-        cm_ac_enc_bit(e, &pg1, (unsigned)X->g1);
-        cm_ac_enc_bit(e, &pkind, (unsigned)X->kind);
+        put_vref(e, &ctx.is_new, &ctx.back, &vnext, X->v0);
+        put_vref(e, &ctx.is_new, &ctx.back, &vnext, X->v1);
+        cm_ac_enc_bit(e, &ctx.g1, (unsigned)X->g1);
+        cm_ac_enc_bit(e, &ctx.kind, (unsigned)X->kind);
         if (X->kind == CM_EDGE_LINE)
             continue;
-        cm_ac_enc_uint(e, &mp, (uint64_t)(X->p - 1));
-        cm_ac_enc_uint(e, &mnc, (uint64_t)(X->n - X->p - 1));
-        cm_ac_enc_bit(e, &prat, (unsigned)X->rational);
-        put_knots(e, &puni, &mk, X->uniform, X->kq, X->n - X->p - 1);
+        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(X->p - 1));
+        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(X->n - X->p - 1));
+        cm_ac_enc_bit(e, &ctx.rational, (unsigned)X->rational);
+        put_knots(e, &ctx.uniform, &ctx.knot, X->uniform, X->kq, X->n - X->p - 1);
         int64_t prev[3] = {X->cq[0][0], X->cq[0][1], X->cq[0][2]};
         for (int j = 1; j < X->n - 1; j++)
             for (int k = 0; k < 3; k++) {
-                cm_ac_enc_sint(e, &mc[k], X->cq[j][k] - prev[k]);
+                cm_ac_enc_sint(e, &ctx.coord[k], X->cq[j][k] - prev[k]);
                 prev[k] = X->cq[j][k];
             }
         if (X->rational)
             for (int j = 1; j < X->n; j++)
-                cm_ac_enc_sint(e, &mw, X->wq[j] - X->wq[j - 1]);
+                cm_ac_enc_sint(e, &ctx.weight, X->wq[j] - X->wq[j - 1]);
     }
 }
 
 static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
-    cm_ac_int mn, mp, mnc, mk, mc[3], mw;
-    cm_ac_prob prat, puni;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mp);
-    cm_ac_int_init(&mnc);
-    cm_ac_int_init(&mk);
-    cm_ac_int_init(&mw);
-    for (int k = 0; k < 3; k++)
-        cm_ac_int_init(&mc[k]);
-    cm_ac_prob_init(&prat);
-    cm_ac_prob_init(&puni);
+    cm_surf_ctx ctx;
+    cm_surf_ctx_init(&ctx);
     int nkeep = 0;
     for (int f = 0; f < t->nfaces; f++)
         nkeep += t->method[f] == CM_METHOD_KEEP;
-    cm_ac_enc_uint(e, &mn, (uint64_t)nkeep);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)nkeep);
     for (int f = 0; f < t->nfaces; f++) {
         if (t->method[f] != CM_METHOD_KEEP)
             continue;
         const tx_surf *S = &t->surfs[f];
-        cm_ac_enc_uint(e, &mp, (uint64_t)(S->p - 1));
-        cm_ac_enc_uint(e, &mnc, (uint64_t)(S->nu - S->p - 1));
-        cm_ac_enc_uint(e, &mp, (uint64_t)(S->q - 1));
-        cm_ac_enc_uint(e, &mnc, (uint64_t)(S->nv - S->q - 1));
-        cm_ac_enc_bit(e, &prat, (unsigned)S->rational);
-        put_knots(e, &puni, &mk, S->uniform_u, S->ku, S->nu - S->p - 1);
-        put_knots(e, &puni, &mk, S->uniform_v, S->kv, S->nv - S->q - 1);
+        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->p - 1));
+        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nu - S->p - 1));
+        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->q - 1));
+        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nv - S->q - 1));
+        cm_ac_enc_bit(e, &ctx.rational, (unsigned)S->rational);
+        put_knots(e, &ctx.uniform, &ctx.knot, S->uniform_u, S->ku, S->nu - S->p - 1);
+        put_knots(e, &ctx.uniform, &ctx.knot, S->uniform_v, S->kv, S->nv - S->q - 1);
         int nu = S->nu, nv = S->nv;
         for (int i = 0; i < nu; i++)
             for (int j = 0; j < nv; j++) {
@@ -573,13 +543,13 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
                                    : i    ? S->cq[idx - nv][k]
                                    : j    ? S->cq[idx - 1][k]
                                           : 0;
-                    cm_ac_enc_sint(e, &mc[k], S->cq[idx][k] - pred);
+                    cm_ac_enc_sint(e, &ctx.coord[k], S->cq[idx][k] - pred);
                 }
                 if (S->rational && idx > 0) {
                     int64_t pred = i && j ? S->wq[idx - nv] + S->wq[idx - 1] - S->wq[idx - nv - 1]
                                    : i    ? S->wq[idx - nv]
                                           : S->wq[idx - 1];
-                    cm_ac_enc_sint(e, &mw, S->wq[idx] - pred);
+                    cm_ac_enc_sint(e, &ctx.weight, S->wq[idx] - pred);
                 }
             }
     }
@@ -588,39 +558,30 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     const cmesh *cm = &lm->mesh;
-    cm_ac_int mn, mmeth, mloops, mnuse, mback;
-    cm_ac_prob pflip, pnew, prev_new, prev_old;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mmeth);
-    cm_ac_int_init(&mloops);
-    cm_ac_int_init(&mnuse);
-    cm_ac_int_init(&mback);
-    cm_ac_prob_init(&pflip);
-    cm_ac_prob_init(&pnew);
-    cm_ac_prob_init(&prev_new);
-    cm_ac_prob_init(&prev_old);
-    cm_ac_enc_uint(e, &mn, (uint64_t)t->nfaces);
+    cm_face_ctx ctx;
+    cm_face_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nfaces);
     int enext = 0;
     for (int f = 0; f < t->nfaces; f++) {
         const cmesh_face *cf = &cm->faces[f];
-        cm_ac_enc_uint(e, &mmeth, (uint64_t)t->method[f]);
-        cm_ac_enc_bit(e, &pflip, (unsigned)lm->brep.faces[cf->brep_face].flip);
-        cm_ac_enc_uint(e, &mloops, (uint64_t)cf->nloops);
+        cm_ac_enc_uint(e, &ctx.method, (uint64_t)t->method[f]);
+        cm_ac_enc_bit(e, &ctx.flip, (unsigned)lm->brep.faces[cf->brep_face].flip);
+        cm_ac_enc_uint(e, &ctx.loops, (uint64_t)cf->nloops);
         for (int l = 0; l < cf->nloops; l++) {
             const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
-            cm_ac_enc_uint(e, &mnuse, (uint64_t)cl->n);
+            cm_ac_enc_uint(e, &ctx.uses, (uint64_t)cl->n);
             for (int i = 0; i < cl->n; i++) {
                 const cmesh_use *u = &cm->uses[cl->first + i];
                 int ex = t->edge_tx[u->edge];
                 /* the transmitted edge runs in its cmesh direction: rev carries over */
                 if (ex == enext) {
-                    cm_ac_enc_bit(e, &pnew, 1);
-                    cm_ac_enc_bit(e, &prev_new, (unsigned)u->rev);
+                    cm_ac_enc_bit(e, &ctx.is_new, 1);
+                    cm_ac_enc_bit(e, &ctx.rev_new, (unsigned)u->rev);
                     enext++;
                 } else {
-                    cm_ac_enc_bit(e, &pnew, 0);
-                    cm_ac_enc_uint(e, &mback, (uint64_t)(enext - 1 - ex));
-                    cm_ac_enc_bit(e, &prev_old, (unsigned)u->rev);
+                    cm_ac_enc_bit(e, &ctx.is_new, 0);
+                    cm_ac_enc_uint(e, &ctx.back, (uint64_t)(enext - 1 - ex));
+                    cm_ac_enc_bit(e, &ctx.rev_old, (unsigned)u->rev);
                 }
             }
         }
@@ -630,16 +591,15 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 static void sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
-    cm_ac_int mn, mi;
-    cm_ac_int_init(&mn);
-    cm_ac_int_init(&mi);
-    cm_ac_enc_uint(e, &mn, (uint64_t)t->npalette);
+    cm_colr_ctx ctx;
+    cm_colr_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->npalette);
     for (int i = 1; i <= t->npalette; i++)
         cm_ac_enc_direct(e, t->palette[i], 24);
     if (t->npalette == 0)
         return;
     for (int f = 0; f < t->nfaces; f++)
-        cm_ac_enc_uint(e, &mi, (uint64_t)t->color[f]);
+        cm_ac_enc_uint(e, &ctx.index, (uint64_t)t->color[f]);
 }
 
 static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, outbuf *out, cm_status *st)

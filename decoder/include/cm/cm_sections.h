@@ -1,0 +1,48 @@
+/*
+ * cm_sections.h - the coding contexts of each .cmz section (docs/FORMAT.md:
+ * "each field named below has its own model").  One struct per section,
+ * started by one function, used by the writer (host_tools/encode) and the
+ * reader (cm_decode.c) alike: the two cannot disagree on which adaptive
+ * model codes which field, and a new field is added in one place.
+ */
+#ifndef CM_SECTIONS_H
+#define CM_SECTIONS_H
+
+#include "cm/cm_arith.h"
+
+/* VERT: count, then grid coordinates as deltas */
+typedef struct cm_vert_ctx {
+    cm_ac_int count, coord[3];
+} cm_vert_ctx;
+
+/* EDGE: count; per edge its vertex references, G1 bit, kind, and a curve's degree, size, knots,
+   control points and weights */
+typedef struct cm_edge_ctx {
+    cm_ac_int count, back, degree, ncoef, knot, coord[3], weight;
+    cm_ac_prob is_new, g1, kind, rational, uniform;
+} cm_edge_ctx;
+
+/* SURF: count; per kept surface its degrees, sizes, knots, net and weights */
+typedef struct cm_surf_ctx {
+    cm_ac_int count, degree, ncoef, knot, coord[3], weight;
+    cm_ac_prob rational, uniform;
+} cm_surf_ctx;
+
+/* FACE: count; per face its method, orientation, loops and edge uses */
+typedef struct cm_face_ctx {
+    cm_ac_int count, method, loops, uses, back;
+    cm_ac_prob flip, is_new, rev_new, rev_old;
+} cm_face_ctx;
+
+/* COLR: palette size, then a palette index per face */
+typedef struct cm_colr_ctx {
+    cm_ac_int count, index;
+} cm_colr_ctx;
+
+void cm_vert_ctx_init(cm_vert_ctx *c);
+void cm_edge_ctx_init(cm_edge_ctx *c);
+void cm_surf_ctx_init(cm_surf_ctx *c);
+void cm_face_ctx_init(cm_face_ctx *c);
+void cm_colr_ctx_init(cm_colr_ctx *c);
+
+#endif /* CM_SECTIONS_H */

@@ -1,0 +1,61 @@
+/* cm_sections.c - every section's coding contexts at their starting state (see cm_sections.h). */
+#include "cm/cm_sections.h"
+
+static void ints(cm_ac_int *m, int n)
+{
+    for (int i = 0; i < n; i++)
+        cm_ac_int_init(&m[i]);
+}
+
+void cm_vert_ctx_init(cm_vert_ctx *c)
+{
+    cm_ac_int_init(&c->count);
+    ints(c->coord, 3);
+}
+
+void cm_edge_ctx_init(cm_edge_ctx *c)
+{
+    cm_ac_int_init(&c->count);
+    cm_ac_int_init(&c->back);
+    cm_ac_int_init(&c->degree);
+    cm_ac_int_init(&c->ncoef);
+    cm_ac_int_init(&c->knot);
+    ints(c->coord, 3);
+    cm_ac_int_init(&c->weight);
+    cm_ac_prob_init(&c->is_new);
+    cm_ac_prob_init(&c->g1);
+    cm_ac_prob_init(&c->kind);
+    cm_ac_prob_init(&c->rational);
+    cm_ac_prob_init(&c->uniform);
+}
+
+void cm_surf_ctx_init(cm_surf_ctx *c)
+{
+    cm_ac_int_init(&c->count);
+    cm_ac_int_init(&c->degree);
+    cm_ac_int_init(&c->ncoef);
+    cm_ac_int_init(&c->knot);
+    ints(c->coord, 3);
+    cm_ac_int_init(&c->weight);
+    cm_ac_prob_init(&c->rational);
+    cm_ac_prob_init(&c->uniform);
+}
+
+void cm_face_ctx_init(cm_face_ctx *c)
+{
+    cm_ac_int_init(&c->count);
+    cm_ac_int_init(&c->method);
+    cm_ac_int_init(&c->loops);
+    cm_ac_int_init(&c->uses);
+    cm_ac_int_init(&c->back);
+    cm_ac_prob_init(&c->flip);
+    cm_ac_prob_init(&c->is_new);
+    cm_ac_prob_init(&c->rev_new);
+    cm_ac_prob_init(&c->rev_old);
+}
+
+void cm_colr_ctx_init(cm_colr_ctx *c)
+{
+    cm_ac_int_init(&c->count);
+    cm_ac_int_init(&c->index);
+}
