@@ -297,7 +297,7 @@ check-fuzz-decode-replay:
 .PHONY: fuzz-decode
 fuzz-decode:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 PROFILE=terminal \
-		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION" \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION" \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode.o \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
 	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_decode \
@@ -313,7 +313,7 @@ FUZZ_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
 .PHONY: fuzz-iges
 fuzz-iges:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 \
-		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined" \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all" \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_iges.o \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a
 	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_iges \

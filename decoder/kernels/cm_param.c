@@ -151,6 +151,10 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
     unsigned char *pole = ws->pole;
     double u = 0, v = 0;
     cm_err e;
+    /* global searches (a grid of 41 x 41 evaluations each) are for the few points where the walk
+       loses its way; a loop that needs them everywhere (a hostile or garbled surface) gets a bounded
+       number, so a face costs O(n) projections whatever the file holds */
+    int global_left = 32 + n / 8;
     /* 1. project by continuation; index n is the loop's start once more (for the winding) */
     for (int k = 0; k <= n; k++) {
         cm_vec3 P = pts[k < n ? k : 0];
@@ -164,7 +168,8 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
         } else {
             if ((e = cm_psurf_project_from(ps, P, &uu, &vv, &dist, st)) != CM_OK)
                 return e;
-            if (dist > accept) {
+            if (dist > accept && global_left > 0) {
+                global_left--;
                 /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
                 double gu, gv, gd;
                 if ((e = cm_psurf_project_grid(ps, P, 41, &gu, &gv, &gd, st)) != CM_OK)

@@ -415,10 +415,16 @@ cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *me
         double du = kuu > 0 ? sqrt(8.0 * tol / kuu) : umax - umin;
         double dv = kvv > 0 ? sqrt(8.0 * tol / kvv) : vmax - vmin;
         double nu_f = (umax - umin) / du, nv_f = (vmax - vmin) / dv;
-        if (nu_f < 1)
+        /* NaN or infinity (a hostile surface's curvature) counts as one cell, and no direction may
+           ask for more cells than a face has points */
+        if (!(nu_f >= 1))
             nu_f = 1;
-        if (nv_f < 1)
+        if (!(nv_f >= 1))
             nv_f = 1;
+        if (nu_f > (double)CM_MAX_TESS_POINTS)
+            nu_f = (double)CM_MAX_TESS_POINTS;
+        if (nv_f > (double)CM_MAX_TESS_POINTS)
+            nv_f = (double)CM_MAX_TESS_POINTS;
         double room = (double)(CM_MAX_TESS_POINTS - npts) * 0.5;
         if (nu_f * nv_f > room && room >= 1) {
             double shrink = sqrt(room / (nu_f * nv_f));
