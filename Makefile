@@ -353,7 +353,7 @@ DEPS_ARCHS := arm64 armhf
 DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzzer-14-dev \
 	libtinygltf-dev nlohmann-json3-dev \
 	libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev \
-	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf qemu-user \
+	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf libc6-dev-arm64-cross libc6-dev-armhf-cross qemu-user \
 	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf
 deps:
 	$(Q)DEPS_ARCHS="$(DEPS_ARCHS)" tests/tools/deps.sh $(DEPS_PKGS)

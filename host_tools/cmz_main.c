@@ -521,6 +521,7 @@ static int cmd_encode(int argc, char **argv)
     const char *path = NULL, *out = NULL, *report = NULL, *profile = NULL;
     encode_opts o;
     encode_opts_default(&o);
+    o.progress = progress;
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "-o") == 0 && v) {

@@ -23,6 +23,8 @@ void encode_opts_default(encode_opts *o)
     o->tess_rel = 5e-4;   /* chordal tolerance for viewers: 0.05 % of the diagonal */
     o->target = NULL;
     o->target_name = NULL;
+    o->progress = NULL;
+    o->progress_ctx = NULL;
 }
 
 void encode_result_free(encode_result *r)
@@ -789,13 +791,15 @@ static cm_tess_ws tess_ws;
 static float face_pos[CM_MAX_TESS_POINTS][3], face_nrm[CM_MAX_TESS_POINTS][3];
 static uint32_t face_idx[3 * CM_MAX_TESS_TRIS];
 
-static cm_err tessellation_needs(uint32_t *need, double *face_volume, cm_status *st)
+static cm_err tessellation_needs(uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st)
 {
     const cm_model *m = &dec.model;
     cm_mesh_face mf;
     cm_mesh mesh = {face_pos, face_nrm, face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1};
     uint64_t tris = 0;
     for (uint32_t f = 0; f < m->nfaces; f++) {
+        if (o->progress)
+            o->progress("tessellating", (int)f + 1, (int)m->nfaces, o->progress_ctx);
         cm_tess_info info;
         cm_mesh_clear(&mesh);
         cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess_ws, &info, st);
@@ -943,6 +947,8 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
         e = decode_back(r, st);
     if (e == CM_OK) {
         for (int f = 0; f < t.nfaces; f++) {
+            if (o->progress)
+                o->progress("choosing methods", f + 1, t.nfaces, o->progress_ctx);
             face_report *rep = &r->faces[f];
             if (try_plane(lm, f, o->rel_tol, rep)) {
                 t.method[f] = CM_METHOD_PLANE;
@@ -969,7 +975,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
         e = cm_fail(st, CM_E_IO, "out of memory");
     if (e == CM_OK) {
         compute_needs(r, r->need);
-        e = tessellation_needs(r->need, fvol, st);
+        e = tessellation_needs(r->need, fvol, o, st);
     }
     /* closed parts face outwards: a part whose volume comes out negative is turned inside out */
     if (e == CM_OK && outward_parts(lm, fvol, r) > 0) {
@@ -983,7 +989,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             e = decode_back(r, st);
         if (e == CM_OK) {
             compute_needs(r, r->need);
-            e = tessellation_needs(r->need, fvol, st);
+            e = tessellation_needs(r->need, fvol, o, st);
         }
     }
     free(fvol);

@@ -28,6 +28,8 @@ typedef struct encode_opts {
     double tess_rel;   /* recommended chordal tolerance, fraction of the model diagonal */
     const cm_limit_info *target; /* limits of the profile the file must load on (NULL: none) */
     const char *target_name;
+    model_progress progress;     /* called per face in the long stages (NULL: none) */
+    void *progress_ctx;
 } encode_opts;
 
 void encode_opts_default(encode_opts *o);

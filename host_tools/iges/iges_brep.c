@@ -262,7 +262,7 @@ static int chain_loop(hcurve_list *L, double tol)
     for (int i = 0; i + 1 < n; i++) {
         cm_vec3 end = CHAIN_END(i);
         int best = i + 1, best_rev = 0;
-        double best_d = INFINITY;
+        double best_d = HUGE_VAL;
         for (int j = i + 1; j < n; j++)
             for (int r = 0; r < 2; r++) {
                 double d = cm_dist(end, ends[2 * order[j] + r]);

@@ -6,11 +6,12 @@
 // (trimmed) faces, and how far a decoded triangle mesh is from the model in both
 // directions.  This tool gives those answers using OCCT only.
 //
-//   occt_oracle info     MODEL.igs
-//   occt_oracle points   MODEL.igs POINTS.xyz [--tol-rel 1e-6]
-//   occt_oracle mesh-dev MODEL.igs MESH.stl   [--defl-rel 1e-4]
-//   occt_oracle sample   MODEL.igs OUT.xyz    [--per-face N]
-//   occt_oracle write-stl MODEL.igs OUT.stl   [--defl-rel 1e-4]   (hidden: test meshes)
+//   occt_oracle info      MODEL.igs [--sew-rel 1e-6]
+//   occt_oracle points    MODEL.igs POINTS.xyz [--tol-rel 1e-6] [--out FILE]
+//   occt_oracle mesh-dev  MODEL.igs MESH.stl   [--defl-rel 1e-4] [--max-points N]
+//   occt_oracle sample    MODEL.igs OUT.xyz    [--per-face 20]
+//   occt_oracle write-stl MODEL.igs OUT.stl    [--defl-rel 1e-4]   (hidden: test meshes)
+//   every command: [--curves file|3d]   (which IGES trim curves define the faces)
 //
 // Output: machine-readable "key value" lines on stdout, human-readable lines start
 // with "# ".  Exit status: 0 success, 1 a check failed (points farther than tol),
@@ -20,6 +21,10 @@
 //
 // See tests/oracle/README.md for the method and the OCCT pitfalls met.
 
+#include <Bnd_Box.hxx>
+#include <BndLib_AddSurface.hxx>
+#include <BRep_Tool.hxx>
+#include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
@@ -28,11 +33,23 @@
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>
 #include <BRepTopAdaptor_FClass2d.hxx>
-#include <BRep_Tool.hxx>
-#include <Bnd_Box.hxx>
-#include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <Extrema_ExtPElS.hxx>
+#include <Extrema_ExtPS.hxx>
+#include <Extrema_GenExtPS.hxx>
+#include <Extrema_POnSurf.hxx>
+#include <BndLib_Add3dCurve.hxx>
+#include <Geom_BezierCurve.hxx>
+#include <Geom_BezierSurface.hxx>
+#include <Geom_BSplineCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_Curve.hxx>
 #include <Geom_Surface.hxx>
+#include <GeomAdaptor_Curve.hxx>
+#include <GeomAdaptor_Surface.hxx>
+#include <GeomAPI_ProjectPointOnCurve.hxx>
+#include <gp_Pnt.hxx>
+#include <gp_Pnt2d.hxx>
+#include <gp_Trsf.hxx>
 #include <IGESControl_Controller.hxx>
 #include <IGESControl_Reader.hxx>
 #include <IGESData_GlobalSection.hxx>
@@ -41,24 +58,23 @@
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
+#include <Poly_PolygonOnTriangulation.hxx>
 #include <Poly_Triangulation.hxx>
 #include <Precision.hxx>
 #include <Standard_Failure.hxx>
 #include <TCollection_HAsciiString.hxx>
+#include <TColStd_Array1OfReal.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopLoc_Location.hxx>
-#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
-#include <TopTools_IndexedMapOfShape.hxx>
-#include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Vertex.hxx>
-#include <gp_Pnt.hxx>
-#include <gp_Pnt2d.hxx>
-#include <gp_Trsf.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
 
 #include <algorithm>
 #include <cerrno>
@@ -69,8 +85,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <fstream>
-#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -88,6 +104,7 @@ namespace {
 
 FILE* g_out = stdout;   // our results; a duplicate of the original stdout (see main)
 bool g_verbose = false;
+bool g_curves_3d = false;  // --curves 3d: trim curves from the 3D curves (see load_model)
 
 // Usage and input errors both end the run with status 2; the message says which.
 struct InputError : std::runtime_error {
@@ -168,6 +185,7 @@ inline V3 cross(const V3& a, const V3& b) {
     return V3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
 inline double norm(const V3& a) { return std::sqrt(dot(a, a)); }
+inline double sq(double x) { return x * x; }
 
 // Axis-aligned box.  Empty boxes have lo > hi.
 struct Box3 {
@@ -186,6 +204,7 @@ struct Box3 {
         }
     }
     double centre(int a) const { return 0.5 * (lo[a] + hi[a]); }
+    double diag() const { return std::sqrt(sq(hi[0] - lo[0]) + sq(hi[1] - lo[1]) + sq(hi[2] - lo[2])); }
     // Euclidean distance from p to the box (0 inside): a lower bound of the distance
     // to anything the box contains.
     double dist(const V3& p) const {
@@ -349,8 +368,6 @@ void set_static(const char* name, int value) {
         warn("could not set OCCT parameter %s=%d", name, value);
 }
 
-inline double sq(double x) { return x * x; }
-
 Box3 to_box3(const Bnd_Box& b) {
     Box3 r;
     if (b.IsVoid()) return r;
@@ -468,6 +485,13 @@ Model load_model(const char* path) {
     // Tolerances of the file (read.precision.mode 0 = "File") so healing does not
     // invent coarser ones.
     set_static("read.precision.mode", 0);
+    // Trim curves: an IGES 142 curve-on-surface may carry both a parameter-space
+    // curve and a 3D curve, with a preference flag.  By default (mode 0) OCCT follows
+    // the flag, as the standard says.  Some exporters' two curves disagree badly
+    // (SolidWorks, PREF=1 "2D preferred": up to 0.57 mm on the 20 mm hex nut), which
+    // shows as large edge tolerances (info: max_tol); --curves 3d (mode -3) rebuilds
+    // every parameter-space curve from the 3D one instead, to cross-check.
+    set_static("read.surfacecurve.mode", g_curves_3d ? -3 : 0);
 
     IGESControl_Reader reader;
     IFSelect_ReturnStatus st = IFSelect_RetError;
@@ -507,8 +531,9 @@ Model load_model(const char* path) {
 }
 
 void print_unit_note(const Model& m) {
-    note("file unit: %s (IGES unit flag %d); all lengths below are millimetres",
-         m.unit_name.empty() ? "?" : m.unit_name.c_str(), m.unit_flag);
+    note("file unit: %s (IGES unit flag %d); all lengths below are millimetres; trim curves: %s",
+         m.unit_name.empty() ? "?" : m.unit_name.c_str(), m.unit_flag,
+         g_curves_3d ? "3d (forced)" : "as the file prefers");
 }
 
 // ---------------------------------------------------------------------------------
@@ -518,25 +543,129 @@ void print_unit_note(const Model& m) {
 // Distances below this (relative to the model diagonal) count as "on the model":
 // the search stops there instead of looking for an even smaller distance.  The value
 // reported is still a true distance to a face, so it is within 1e-9*diag of exact.
+// (`points` lowers it to 1% of its tolerance when that is smaller.)
 const double kStopRel = 1e-9;
+// Seed points (see FaceDistance) over all faces; the per-face grid adapts to this.
+const double kSeedBudget = 300000;
 
+// Number of knot spans of a knot vector that overlap [lo, hi].
+int knot_spans(const TColStd_Array1OfReal& k, double lo, double hi) {
+    int n = 0;
+    for (int i = k.Lower(); i < k.Upper(); i++)
+        if (k(i + 1) > lo && k(i) < hi) n++;
+    return n;
+}
+
+// Lengths of the u- and v-isolines of surface s over [u0,u1] x [v0,v1], times
+// `scale`: the longest of three isolines each way, as polylines of 8 points per knot
+// span (32 to 512 points).  It sizes patches and sampling grids, so an estimate is
+// enough.
+void iso_lengths(const Handle(Geom_Surface)& s, double u0, double u1, double v0, double v1, double scale,
+                 double& lu, double& lv) {
+    int nu = 32, nv = 32;
+    Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(s);
+    if (!bs.IsNull()) {
+        nu = std::max(32, std::min(512, 8 * knot_spans(bs->UKnots(), u0, u1)));
+        nv = std::max(32, std::min(512, 8 * knot_spans(bs->VKnots(), v0, v1)));
+    }
+    lu = lv = 0;
+    for (int k = 0; k < 3; k++) {
+        const double v = v0 + (v1 - v0) * k / 2, u = u0 + (u1 - u0) * k / 2;
+        double a = 0, b = 0;
+        gp_Pnt pa = s->Value(u0, v), pb = s->Value(u, v0);
+        for (int i = 1; i <= nu; i++) {
+            gp_Pnt q = s->Value(u0 + (u1 - u0) * i / nu, v);
+            a += pa.Distance(q);
+            pa = q;
+        }
+        for (int i = 1; i <= nv; i++) {
+            gp_Pnt q = s->Value(u, v0 + (v1 - v0) * i / nv);
+            b += pb.Distance(q);
+            pb = q;
+        }
+        lu = std::max(lu, a * scale);
+        lv = std::max(lv, b * scale);
+    }
+}
+
+// Length of curve c over [f, l], times `scale`: a polyline of 8 points per knot span
+// (16 to 512 points).
+double curve_length(const Handle(Geom_Curve)& c, double f, double l, double scale) {
+    int n = 16;
+    GeomAdaptor_Curve gc(c, f, l);
+    if (gc.GetType() == GeomAbs_BSplineCurve)
+        n = std::max(16, std::min(512, 8 * knot_spans(gc.BSpline()->Knots(), f, l)));
+    double len = 0;
+    gp_Pnt prev = c->Value(f);
+    for (int k = 1; k <= n; k++) {
+        gp_Pnt q = c->Value(f + (l - f) * k / n);
+        len += prev.Distance(q);
+        prev = q;
+    }
+    return len * scale;
+}
+
+// Exact distance from points to the union of the trimmed faces.
+//
+// For one face F on surface S, the nearest point of F is either an interior critical
+// point of the distance to S that lies on F, or a point of F's boundary, so
+//
+//     dist(p, F) = min( nearest extremum of |p - S(u,v)| classified IN/ON F,
+//                       distance to the boundary edge curves of F ).
+//
+// The extrema come from OCCT's Extrema package (see extrema(): closed form for
+// analytic surfaces, a global grid + Newton search over a UV patch otherwise) and are
+// classified against the trim loops with BRepTopAdaptor_FClass2d; the edges are
+// projected with GeomAPI_ProjectPointOnCurve.
+// This is the decomposition BRepExtrema_DistShapeShape(vertex, face) uses; calling
+// DistShapeShape itself costs ~4 ms because it rebuilds its extrema grids every time,
+// so the projectors here are built once and reused, and DistShapeShape is only the
+// fallback for faces whose projector or edges cannot be set up.  Note that the nearest
+// extremum alone is not enough even when it classifies IN: it may be a maximum or a
+// far critical point while the real minimum sits on the boundary -- hence the edges,
+// which cost nothing when their boxes are farther than the distance already found.
+//
+// Which faces are evaluated: every patch (see add_patches) whose box is closer than
+// the best distance so far, near-first through a BVH, so the result is exact as long
+// as the boxes contain their geometry; this subsumes "test the faces whose enlarged box
+// contains the point, else all faces".  To keep that to about one evaluation per
+// point on the model, the patches holding the seeds (points inside every face) nearest
+// to the query are evaluated first; a distance below the stop threshold ends the
+// search.
 class FaceDistance {
 public:
-    explicit FaceDistance(const Model& m) {
+    // stop: see kStopRel.
+    FaceDistance(const Model& m, double stop) {
+        Stopwatch sw;
         const int n = m.faces.Extent();
         faces_.resize(static_cast<size_t>(n));
-        stop_ = kStopRel * m.diag;
-        for (int i = 0; i < n; i++) faces_[static_cast<size_t>(i)].face = TopoDS::Face(m.faces(i + 1));
-        // The containing boxes, padded by a hair for rounding in the box computation
-        // (the pruning below is only exact if no face pokes out of its box).
-        std::vector<Box3> boxes = m.face_boxes;
-        const double pad = 1e-7 * m.diag;
-        for (Box3& bx : boxes)
-            for (int k = 0; k < 3; k++) {
-                bx.lo[k] -= pad;
-                bx.hi[k] += pad;
-            }
-        bvh_.build(boxes);
+        stop_ = stop;
+        nudge_ = std::max(kNudgeRel * m.diag, 10 * Precision::Confusion());
+        const int g = std::max(2, std::min(12, static_cast<int>(std::lround(std::sqrt(kSeedBudget / n)))));
+        // Boxes are padded by a hair for the rounding (and optimiser slack) of the box
+        // computations: the pruning is only exact if no face pokes out of its boxes.
+        const double pad = 1e-6 * m.diag;
+        pad_ = pad;
+        edge_target_ = kPatchRel * m.diag;
+        std::vector<Box3> items;
+        for (int i = 0; i < n; i++) {
+            FaceRec& r = faces_[static_cast<size_t>(i)];
+            r.face = TopoDS::Face(m.faces(i + 1));
+            prepare(r, i + 1);
+            Box3 fb = search_box(r.face, m.face_boxes[static_cast<size_t>(i)], pad);
+            add_patches(r, i, fb, pad, kPatchRel * m.diag, items);
+            if (r.usable) add_seeds(r, g);
+        }
+        // Edge pieces are BVH items too, after the patches (see consider()).
+        TopTools_IndexedMapOfShape seen;  // an edge shared by two faces is measured once
+        for (int i = 0; i < n; i++)
+            if (faces_[static_cast<size_t>(i)].usable) add_edges(i, seen);
+        for (const EdgeRec& e : edges_) items.push_back(e.box);
+        bvh_.build(items);
+        std::vector<Box3> sb(seeds_.size());
+        for (size_t k = 0; k < seeds_.size(); k++) sb[k].add(seeds_[k].p);
+        seed_bvh_.build(sb);
+        prepare_seconds_ = sw.seconds();
     }
 
     struct Result {
@@ -544,74 +673,89 @@ public:
         int face = 0;  // OCCT face index (1-based), 0 when nothing was found
     };
 
-    // Exact distance from p to the union of the trimmed faces.
-    //
-    // Faces are visited near-first through the BVH of their boxes; a face is tried
-    // only while its box is closer than the best distance so far, so faces whose box
-    // contains p are always tried, and a point far from everything still finds its
-    // true nearest face (this subsumes "test faces whose enlarged box contains the
-    // point, else all faces").  Per face, the cheap test is an orthogonal projection on
-    // the surface followed by a 2D classification of the foot point against the trim
-    // loops: IN/ON means the projection distance is the distance to the face.  When the
-    // foot point is outside the trim (or the projection fails), the nearest point of the
-    // face is on its boundary or elsewhere; that exact case is computed with
-    // BRepExtrema_DistShapeShape, but only after all cheap tests, and only if the face's
-    // box is still closer than the best distance found -- usually it is not.
     Result distance(const V3& p) {
         Result res;
         double best = HUGE_VAL;
-        deferred_.clear();
-        bvh_.nearest(p, best, [&](int item, double lb, double& b) {
-            FaceRec& r = faces_[static_cast<size_t>(item)];
-            double d;
-            if (project_inside(r, p, d)) {
-                if (d < b) {
-                    b = d;
-                    res.face = item + 1;
-                }
-            } else {
-                deferred_.push_back({item, lb});
-            }
-            return b <= stop_;
-        });
-        if (best > stop_ && !deferred_.empty()) {
-            std::sort(deferred_.begin(), deferred_.end(),
-                      [](const Deferred& a, const Deferred& c) { return a.lb < c.lb; });
-            for (const Deferred& df : deferred_) {
-                if (df.lb >= best) break;
-                double d = exact(faces_[static_cast<size_t>(df.item)], p);
-                if (d < best) {
-                    best = d;
-                    res.face = df.item + 1;
-                }
-            }
-        }
+        stamp_++;
+        int first[kSeedPatches];
+        int ns = seed_patches(p, first);
+        bool done = false;
+        for (int k = 0; k < ns && !done; k++) done = consider(first[k], p, best, res);
+        if (!done)
+            bvh_.nearest(p, best, [&](int item, double, double&) { return consider(item, p, best, res); });
         res.dist = best;
         return res;
     }
 
-    long long exact_calls() const { return exact_calls_; }
-    long long exact_failures() const { return exact_failures_; }
+    long long projections() const { return projections_; }
+    long long edge_projections() const { return edge_projections_; }
+    long long fallbacks() const { return fallbacks_; }
+    long long failures() const { return failures_; }
+    long long nudges() const { return nudges_; }
+    size_t seeds() const { return seeds_.size(); }
+    size_t patches() const { return patches_.size(); }
+    double prepare_seconds() const { return prepare_seconds_; }
 
 private:
+    static constexpr int kSeedPatches = 3;     // patches of the nearest seeds tried first
+    static constexpr int kSeedK = 8;           // nearest seeds looked at to find them
+    static constexpr double kPatchRel = 0.02;  // target patch box size, relative to diag
+    static constexpr int kMaxPatchDiv = 8;     // size-based patches: at most 8 x 8 per face
+    static constexpr int kMaxSplineDiv = 512;  // length-based B-spline patches: per direction
+    static constexpr int kMaxFacePatches = 4096;
+    static constexpr int kMaxEdgePieces = 256; // pieces of one edge (see add_edges)
+    static constexpr size_t kMaxLiveEdges = 20000;  // live edge piece projectors
+    static constexpr size_t kMaxLive = 1000;   // live patch projectors (~150 KB each at worst)
+    static constexpr double kNudgeRel = 1e-8;  // see nearest_inside
+
+    // A piece [a, b] of an edge's 3D curve.
+    struct EdgeRec {
+        int face = 0;              // a face it bounds (index into faces_)
+        Handle(Geom_Curve) curve;  // in the edge's own frame
+        double a = 0, b = 0;
+        gp_Trsf to_local;
+        double scale = 1;
+        Box3 box;                  // contains the piece (world)
+        V3 p0, p1;                 // piece end points (world)
+        // Built on first use, dropped when too many are alive (see edge_projector()).
+        std::unique_ptr<GeomAPI_ProjectPointOnCurve> proj;
+    };
     struct FaceRec {
         TopoDS_Face face;
         Handle(Geom_Surface) surf;  // surface in the face's own frame (parameter space of the pcurves)
         gp_Trsf to_local;           // world -> surface frame
+        gp_Trsf to_world;
         double scale = 1;           // world length = local length * scale
-        std::unique_ptr<GeomAPI_ProjectPointOnSurf> proj;
+        double u0 = 0, u1 = 0, v0 = 0, v1 = 0;  // UV box of the face (pcurves)
+        int first_patch = 0, du = 1, dv = 1;    // patches: first_patch + a*dv + b
         std::unique_ptr<BRepTopAdaptor_FClass2d> cls;
-        // Prepared on first use: a query touches few faces, and the 2D classifier is
-        // not cheap to build (27734 faces in the largest model).
-        enum { kNew, kUsable, kFailed } state = kNew;  // kFailed: only the exact path works
+        std::unique_ptr<GeomAdaptor_Surface> adaptor;  // the surface, for Extrema
+        GeomAbs_SurfaceType stype = GeomAbs_OtherSurface;
+        enum Kind { kAnalytic, kSpline, kGeneral } kind = kGeneral;  // see extrema()
+        bool usable = false;        // projector/classifier available
+        unsigned stamp = 0;         // query that last measured this face with DistShapeShape
+        unsigned proj_stamp = 0;    // kAnalytic: query that last projected on this face
+        // The boundary edges are edge pieces (edges_), unless one of them cannot be
+        // measured (no 3D curve...): then DistShapeShape measures the whole face.
+        bool edges_ok = true;
     };
-    struct Deferred {
-        int item;
-        double lb;
+    struct Patch {
+        int face = 0;
+        double a0 = 0, a1 = 0, b0 = 0, b1 = 0;  // UV rectangle, with a margin
+        int nbu = 0, nbv = 0;                   // sampling grid (B-spline/Bezier patches)
+        // Built on first use, dropped when too many are alive (see projector()).
+        std::unique_ptr<Extrema_GenExtPS> gen;  // kSpline: minima only, small grid
+        std::unique_ptr<Extrema_ExtPS> ext;     // kGeneral
+        unsigned stamp = 0;
+    };
+    struct Seed {
+        V3 p;
+        int patch;
     };
 
+    // ---- setup ----
+
     void prepare(FaceRec& r, int index) {
-        r.state = FaceRec::kFailed;
         try {
             TopLoc_Location loc;
             r.surf = BRep_Tool::Surface(r.face, loc);
@@ -623,68 +767,575 @@ private:
             // live in the parameter space of the untransformed surface.  The point is
             // moved instead of the surface, and the distance scaled back (IGES
             // transforms may carry a scale factor).
-            gp_Trsf t = loc.Transformation();
-            r.scale = std::fabs(t.ScaleFactor());
-            r.to_local = t.Inverted();
-            double u0, u1, v0, v1;
-            BRepTools::UVBounds(r.face, u0, u1, v0, v1);
-            // A small margin keeps foot points that fall just on the trim boundary
-            // inside the search rectangle; clamp to the surface where it is bounded.
-            double su0, su1, sv0, sv1;
-            r.surf->Bounds(su0, su1, sv0, sv1);
-            double mu = 1e-3 * (u1 - u0), mv = 1e-3 * (v1 - v0);
-            u0 -= mu; u1 += mu; v0 -= mv; v1 += mv;
-            if (!r.surf->IsUPeriodic()) { u0 = std::max(u0, su0); u1 = std::min(u1, su1); }
-            if (!r.surf->IsVPeriodic()) { v0 = std::max(v0, sv0); v1 = std::min(v1, sv1); }
-            r.proj.reset(new GeomAPI_ProjectPointOnSurf());
-            r.proj->Init(r.surf, u0, u1, v0, v1);
+            r.to_world = loc.Transformation();
+            r.scale = std::fabs(r.to_world.ScaleFactor());
+            r.to_local = r.to_world.Inverted();
+            BRepTools::UVBounds(r.face, r.u0, r.u1, r.v0, r.v1);
+            if (!(r.u1 > r.u0) || !(r.v1 > r.v0)) throw Standard_Failure("empty UV box");
             r.cls.reset(new BRepTopAdaptor_FClass2d(r.face, Precision::PConfusion()));
-            r.state = FaceRec::kUsable;
+            r.adaptor.reset(new GeomAdaptor_Surface(r.surf));
+            r.stype = r.adaptor->GetType();
+            switch (r.stype) {
+            case GeomAbs_Plane: case GeomAbs_Cylinder: case GeomAbs_Cone: case GeomAbs_Sphere: case GeomAbs_Torus:
+                r.kind = FaceRec::kAnalytic;
+                break;
+            case GeomAbs_BSplineSurface: case GeomAbs_BezierSurface:
+                r.kind = FaceRec::kSpline;
+                break;
+            default:
+                r.kind = FaceRec::kGeneral;
+            }
+            r.usable = true;
         } catch (const Standard_Failure& e) {
-            warn("face %d: cannot prepare projection (%s); exact distance only", index,
+            warn("face %d: cannot prepare projection (%s); using BRepExtrema for it", index,
                  occt_what(e).c_str());
+            r.usable = false;
         }
     }
 
-    // Projection + classification.  True when the nearest foot point on the surface
-    // lies on the trimmed face; d is then the distance to the face.
-    bool project_inside(FaceRec& r, const V3& p, double& d) {
-        if (r.state == FaceRec::kNew) prepare(r, static_cast<int>(&r - faces_.data()) + 1);
-        if (r.state != FaceRec::kUsable) return false;
+    // The face-level box.  B-spline and Bezier faces get AddOptimal (their pole boxes
+    // are loose); it is cheap for them, unlike for surfaces of revolution.  The result
+    // is intersected with the containing box: both contain the face.
+    static Box3 search_box(const TopoDS_Face& f, const Box3& containing, double pad) {
+        Box3 b = containing;
         try {
-            gp_Pnt q = p.pnt().Transformed(r.to_local);
-            r.proj->Perform(q);
-            if (!r.proj->IsDone() || r.proj->NbPoints() == 0) return false;
-            double u, v;
-            r.proj->LowerDistanceParameters(u, v);
-            TopAbs_State s = r.cls->Perform(gp_Pnt2d(u, v));
-            if (s != TopAbs_IN && s != TopAbs_ON) return false;
-            d = r.proj->LowerDistance() * r.scale;
-            return std::isfinite(d);
+            GeomAbs_SurfaceType t = BRepAdaptor_Surface(f, Standard_False).GetType();
+            if (t == GeomAbs_BSplineSurface || t == GeomAbs_BezierSurface) {
+                Bnd_Box ob;
+                BRepBndLib::AddOptimal(f, ob, Standard_False, Standard_True);  // with tolerances
+                if (!ob.IsVoid()) {
+                    Box3 o = to_box3(ob);
+                    for (int k = 0; k < 3; k++) {
+                        b.lo[k] = std::max(b.lo[k], o.lo[k]);
+                        b.hi[k] = std::min(b.hi[k], o.hi[k]);
+                    }
+                    if (!(b.lo[0] <= b.hi[0] && b.lo[1] <= b.hi[1] && b.lo[2] <= b.hi[2])) b = containing;
+                }
+            }
         } catch (const Standard_Failure&) {
-            return false;
+            b = containing;
+        }
+        for (int k = 0; k < 3; k++) {
+            b.lo[k] -= pad;
+            b.hi[k] += pad;
+        }
+        return b;
+    }
+
+    // Patches: the BVH items and the unit of projection.  A big face has one box that
+    // contains many query points although the face is far from most of them, and a
+    // B-spline with hundreds of knot spans (a thread: 529 poles, 65 extrema per point)
+    // costs ~3 ms per global projection.  So the face's UV box is cut into patches of
+    // about kPatchRel*diag (at most 8 x 8), B-splines also one per knot span (at most
+    // 64 per direction, 256 per face); each patch gets its own containing box (control
+    // point hull of the segmented B-spline/Bezier, analytic bounds otherwise), clipped
+    // to the face box and grown by the largest edge tolerance (edge curves may stray
+    // that far from the surface), and its own projector on its UV rectangle.
+    void add_patches(FaceRec& r, int item, const Box3& fb, double pad, double target, std::vector<Box3>& items) {
+        r.first_patch = static_cast<int>(patches_.size());
+        r.du = r.dv = 1;
+        if (r.usable) {
+            double size = std::sqrt(sq(fb.hi[0] - fb.lo[0]) + sq(fb.hi[1] - fb.lo[1]) + sq(fb.hi[2] - fb.lo[2]));
+            int du = std::max(1, std::min(kMaxPatchDiv, static_cast<int>(std::ceil(size / target))));
+            int dv = du;
+            if (r.kind == FaceRec::kSpline) {
+                // Size from the 3D lengths of the isolines, not from the face box: the box
+                // of a long, thin, curved face (a helical spring's wire: 780 x 8 mm in a
+                // 35 x 35 x 72 mm box) says nothing about its shape, and a patch spanning
+                // a quarter turn has a box that contains every query point near that
+                // quarter turn, so each of them gets projected on dozens of patches.
+                double lu = 0, lv = 0;
+                iso_lengths(r.surf, r.u0, r.u1, r.v0, r.v1, r.scale, lu, lv);
+                du = std::max(1, std::min(kMaxSplineDiv, static_cast<int>(std::ceil(lu / target))));
+                dv = std::max(1, std::min(kMaxSplineDiv, static_cast<int>(std::ceil(lv / target))));
+            }
+            Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(r.surf);
+            if (!bs.IsNull()) {
+                du = std::max(du, std::min(64, knot_spans(bs->UKnots(), r.u0, r.u1)));
+                dv = std::max(dv, std::min(64, knot_spans(bs->VKnots(), r.v0, r.v1)));
+            }
+            while (du * dv > kMaxFacePatches) {
+                if (du >= dv) du = (du + 1) / 2;
+                else dv = (dv + 1) / 2;
+            }
+            try {
+                std::vector<Box3> boxes;
+                std::vector<Patch> ps;
+                for (int a = 0; a < du; a++)
+                    for (int b = 0; b < dv; b++) {
+                        Patch pt;
+                        pt.face = item;
+                        pt.a0 = r.u0 + (r.u1 - r.u0) * a / du;
+                        pt.a1 = r.u0 + (r.u1 - r.u0) * (a + 1) / du;
+                        pt.b0 = r.v0 + (r.v1 - r.v0) * b / dv;
+                        pt.b1 = r.v0 + (r.v1 - r.v0) * (b + 1) / dv;
+                        // Margin: an extremum on the line between two patches is then
+                        // interior to both rectangles, so the search finds it.
+                        double mu = 1e-3 * (pt.a1 - pt.a0), mv = 1e-3 * (pt.b1 - pt.b0);
+                        pt.a0 -= mu; pt.a1 += mu; pt.b0 -= mv; pt.b1 += mv;
+                        clamp_to_surface(r, pt.a0, pt.a1, pt.b0, pt.b1);
+                        grid_size(r, pt);
+                        const Box3 own = (du * dv == 1) ? fb : patch_box(r, pt.a0, pt.a1, pt.b0, pt.b1, pad);
+                        Box3 pb = own;
+                        for (int k = 0; k < 3; k++) {
+                            pb.lo[k] = std::max(pb.lo[k], fb.lo[k]);
+                            pb.hi[k] = std::min(pb.hi[k], fb.hi[k]);
+                        }
+                        // An empty intersection means that this part of the untrimmed
+                        // surface is outside the face's box (the face is trimmed away
+                        // here: the Spring's wire is cut by a plane across its UV box).
+                        // Keep the patch's own box: it contains the patch, and it is
+                        // far from the face.  (The face box, used here before, contains
+                        // every query near the face and made such patches be projected
+                        // for all of them.)
+                        if (!(pb.lo[0] <= pb.hi[0] && pb.lo[1] <= pb.hi[1] && pb.lo[2] <= pb.hi[2])) pb = own;
+                        boxes.push_back(pb);
+                        ps.push_back(std::move(pt));
+                    }
+                for (size_t k = 0; k < ps.size(); k++) {
+                    items.push_back(boxes[k]);
+                    patches_.push_back(std::move(ps[k]));
+                }
+                r.du = du;
+                r.dv = dv;
+                return;
+            } catch (const Standard_Failure&) {
+                // fall back to one patch over the whole face
+            }
+        }
+        Patch pt;
+        pt.face = item;
+        pt.a0 = r.u0; pt.a1 = r.u1; pt.b0 = r.v0; pt.b1 = r.v1;
+        if (r.usable) {
+            double mu = 1e-3 * (r.u1 - r.u0), mv = 1e-3 * (r.v1 - r.v0);
+            pt.a0 -= mu; pt.a1 += mu; pt.b0 -= mv; pt.b1 += mv;
+            clamp_to_surface(r, pt.a0, pt.a1, pt.b0, pt.b1);
+            grid_size(r, pt);
+        }
+        items.push_back(fb);
+        patches_.push_back(std::move(pt));
+    }
+
+    // Sampling grid of a B-spline/Bezier patch for Extrema_GenExtPS: about two samples
+    // per polynomial degree and knot span inside the patch, 8..44 per direction.
+    // (Extrema_ExtPS always uses 44 x 44, and 300 along a degenerate iso: ~0.35-2.5 MB
+    // per projector, which multiplied by thousands of patches is gigabytes.)
+    static void grid_size(const FaceRec& r, Patch& pt) {
+        Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(r.surf);
+        Handle(Geom_BezierSurface) bz = Handle(Geom_BezierSurface)::DownCast(r.surf);
+        int su = 1, sv = 1, deg_u = 3, deg_v = 3;
+        if (!bs.IsNull()) {
+            su = std::max(1, knot_spans(bs->UKnots(), pt.a0, pt.a1));
+            sv = std::max(1, knot_spans(bs->VKnots(), pt.b0, pt.b1));
+            deg_u = bs->UDegree();
+            deg_v = bs->VDegree();
+        } else if (!bz.IsNull()) {
+            deg_u = bz->UDegree();
+            deg_v = bz->VDegree();
+        }
+        pt.nbu = std::max(8, std::min(44, 2 * (deg_u + 1) * su));
+        pt.nbv = std::max(8, std::min(44, 2 * (deg_v + 1) * sv));
+    }
+
+    static void clamp_to_surface(const FaceRec& r, double& a0, double& a1, double& b0, double& b1) {
+        double su0, su1, sv0, sv1;
+        r.surf->Bounds(su0, su1, sv0, sv1);
+        if (!r.surf->IsUPeriodic()) { a0 = std::max(a0, su0); a1 = std::min(a1, su1); }
+        if (!r.surf->IsVPeriodic()) { b0 = std::max(b0, sv0); b1 = std::min(b1, sv1); }
+        if (!(a1 > a0) || !(b1 > b0)) throw Standard_Failure("UV box outside the surface");
+    }
+
+    // Containing box of the surface over a UV rectangle, in world coordinates.
+    static Box3 patch_box(const FaceRec& r, double a0, double a1, double b0, double b1, double grow) {
+        Bnd_Box b;
+        Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(r.surf);
+        Handle(Geom_BezierSurface) bz = Handle(Geom_BezierSurface)::DownCast(r.surf);
+        if (!bs.IsNull()) {
+            // convex hull property (weights are positive): the poles of the segment bound it
+            Handle(Geom_BSplineSurface) c = Handle(Geom_BSplineSurface)::DownCast(bs->Copy());
+            c->Segment(a0, a1, b0, b1);
+            for (int i = 1; i <= c->NbUPoles(); i++)
+                for (int j = 1; j <= c->NbVPoles(); j++) b.Add(c->Pole(i, j));
+        } else if (!bz.IsNull()) {
+            Handle(Geom_BezierSurface) c = Handle(Geom_BezierSurface)::DownCast(bz->Copy());
+            c->Segment(a0, a1, b0, b1);
+            for (int i = 1; i <= c->NbUPoles(); i++)
+                for (int j = 1; j <= c->NbVPoles(); j++) b.Add(c->Pole(i, j));
+        } else {
+            GeomAdaptor_Surface ga(r.surf, a0, a1, b0, b1);
+            BndLib_AddSurface::Add(ga, 0.0, b);
+            GeomAbs_SurfaceType t = ga.GetType();
+            if (t != GeomAbs_Plane && t != GeomAbs_Cylinder && t != GeomAbs_Cone && t != GeomAbs_Sphere &&
+                t != GeomAbs_Torus)
+                b.Enlarge(0.1 * std::sqrt(b.SquareExtent()));  // sampled by OCCT: see containing_box
+        }
+        if (b.IsVoid()) throw Standard_Failure("empty patch box");
+        b.Enlarge(grow);
+        if (r.to_world.Form() != gp_Identity) b = b.Transformed(r.to_world);
+        return to_box3(b);
+    }
+
+    // Cell centres of a g x g grid over the face's UV box that classify IN.
+    void add_seeds(const FaceRec& r, int g) {
+        try {
+            for (int i = 0; i < g; i++)
+                for (int j = 0; j < g; j++) {
+                    double u = r.u0 + (r.u1 - r.u0) * (i + 0.5) / g;
+                    double v = r.v0 + (r.v1 - r.v0) * (j + 0.5) / g;
+                    if (r.cls->Perform(gp_Pnt2d(u, v)) != TopAbs_IN) continue;
+                    gp_Pnt q = r.surf->Value(u, v).Transformed(r.to_world);
+                    int a = std::min(r.du - 1, static_cast<int>((u - r.u0) / (r.u1 - r.u0) * r.du));
+                    int b = std::min(r.dv - 1, static_cast<int>((v - r.v0) / (r.v1 - r.v0) * r.dv));
+                    seeds_.push_back({V3(q), r.first_patch + a * r.dv + b});
+                }
+        } catch (const Standard_Failure&) {
+            // seeds only order the search; a face without seeds is still searched
         }
     }
 
-    // Exact point-to-trimmed-face distance (interior extrema, edges and vertices).
-    double exact(const FaceRec& r, const V3& p) {
-        exact_calls_++;
+    // Adds the pieces of the boundary edges of face i that are not in `seen` yet.
+    // Each edge is cut into pieces of about kPatchRel*diag (at most kMaxEdgePieces),
+    // each with its own box and projector.  The box of a whole long edge (the
+    // Spring's helical edges are 650 to 900 mm long) contains every query point near
+    // the face, and one projection on such a curve costs ~0.1 ms and has to find one
+    // extremum per turn from a few samples.
+    void add_edges(int i, TopTools_IndexedMapOfShape& seen) {
+        FaceRec& r = faces_[static_cast<size_t>(i)];
+        try {
+            for (TopExp_Explorer ex(r.face, TopAbs_EDGE); ex.More(); ex.Next()) {
+                const TopoDS_Edge& e = TopoDS::Edge(ex.Current());
+                if (BRep_Tool::Degenerated(e)) continue;  // a pole: its point ends other edges
+                TopLoc_Location loc;
+                double f, l;
+                Handle(Geom_Curve) c = BRep_Tool::Curve(e, loc, f, l);
+                if (c.IsNull() || !(l > f)) {  // no 3D curve
+                    r.edges_ok = false;
+                    continue;
+                }
+                if (seen.Contains(e)) continue;
+                const gp_Trsf t = loc.Transformation();
+                const double scale = std::fabs(t.ScaleFactor());
+                const GeomAbs_CurveType ct = GeomAdaptor_Curve(c, f, l).GetType();
+                // Short edges (the box diagonal says so) are one piece; for the others
+                // the length is estimated with a polyline of 8 points per knot span
+                // (16 to 512 points).
+                const Box3 whole = curve_box(c, ct, f, l, t, pad_);
+                int pieces = 1;
+                if (whole.diag() > edge_target_) {
+                    const double len = curve_length(c, f, l, scale);
+                    pieces = std::max(1, std::min(kMaxEdgePieces, static_cast<int>(std::ceil(len / edge_target_))));
+                }
+                for (int k = 0; k < pieces; k++) {
+                    EdgeRec er;
+                    er.face = i;
+                    er.curve = c;
+                    er.a = f + (l - f) * k / pieces;
+                    er.b = k + 1 == pieces ? l : f + (l - f) * (k + 1) / pieces;
+                    er.scale = scale;
+                    er.to_local = t.Inverted();
+                    er.p0 = V3(c->Value(er.a).Transformed(t));
+                    er.p1 = V3(c->Value(er.b).Transformed(t));
+                    er.box = pieces == 1 ? whole : curve_box(c, ct, er.a, er.b, t, pad_);
+                    edges_.push_back(std::move(er));
+                }
+                seen.Add(e);
+            }
+        } catch (const Standard_Failure& ex) {
+            // The pieces added so far are true distances to the edge; DistShapeShape
+            // covers the rest of the face.
+            warn("face %d: cannot prepare its edges (%s); using BRepExtrema for it", i + 1, occt_what(ex).c_str());
+            r.edges_ok = false;
+        }
+    }
+
+    // A box that contains the curve over [a, b], in world coordinates: control point
+    // hull of the segment for B-splines and Bezier curves, OCCT's exact box for
+    // lines and conics, and OCCT's sampled box plus 10% for anything else.
+    static Box3 curve_box(const Handle(Geom_Curve)& c, GeomAbs_CurveType ct, double a, double b, const gp_Trsf& t,
+                          double pad) {
+        Bnd_Box bb;
+        GeomAdaptor_Curve gc(c, a, b);
+        if (ct == GeomAbs_BSplineCurve) {
+            Handle(Geom_BSplineCurve) s = Handle(Geom_BSplineCurve)::DownCast(gc.BSpline()->Copy());
+            s->Segment(a, b);
+            for (int i = 1; i <= s->NbPoles(); i++) bb.Add(s->Pole(i));
+        } else if (ct == GeomAbs_BezierCurve) {
+            Handle(Geom_BezierCurve) s = Handle(Geom_BezierCurve)::DownCast(gc.Bezier()->Copy());
+            // Bezier parameters are always [0, 1]
+            s->Segment(a, b);
+            for (int i = 1; i <= s->NbPoles(); i++) bb.Add(s->Pole(i));
+        } else {
+            BndLib_Add3dCurve::Add(gc, 0.0, bb);
+            if (ct != GeomAbs_Line && ct != GeomAbs_Circle && ct != GeomAbs_Ellipse)
+                bb.Enlarge(0.1 * std::sqrt(bb.SquareExtent()));
+        }
+        if (bb.IsVoid()) throw Standard_Failure("empty edge box");
+        bb.Enlarge(pad);
+        if (t.Form() != gp_Identity) bb = bb.Transformed(t);
+        return to_box3(bb);
+    }
+
+    // ---- queries ----
+
+    // Patches of the seeds nearest to p, nearest first.
+    int seed_patches(const V3& p, int out[kSeedPatches]) const {
+        double kd[kSeedK];
+        int ki[kSeedK];
+        int cnt = 0;
+        double bound = HUGE_VAL;
+        seed_bvh_.nearest(p, bound, [&](int item, double, double& b) {
+            double d = norm(seeds_[static_cast<size_t>(item)].p - p);
+            if (cnt == kSeedK && d >= kd[kSeedK - 1]) return false;
+            int k = cnt < kSeedK ? cnt++ : kSeedK - 1;
+            while (k > 0 && kd[k - 1] > d) {
+                kd[k] = kd[k - 1];
+                ki[k] = ki[k - 1];
+                k--;
+            }
+            kd[k] = d;
+            ki[k] = item;
+            if (cnt == kSeedK) b = kd[kSeedK - 1];
+            return false;
+        });
+        int n = 0;
+        for (int k = 0; k < cnt && n < kSeedPatches; k++) {
+            int pt = seeds_[static_cast<size_t>(ki[k])].patch;
+            if (std::find(out, out + n, pt) == out + n) out[n++] = pt;
+        }
+        return n;
+    }
+
+    void improve(double d, int face_item, double& best, Result& res) {
+        if (d < best) {
+            best = d;
+            res.face = face_item + 1;
+        }
+    }
+
+    // Evaluates one patch (and, the first time its face is met for this point, the
+    // face's boundary edges).  Returns true when the search can stop.
+    bool consider(int item, const V3& p, double& best, Result& res) {
+        if (static_cast<size_t>(item) >= patches_.size()) {
+            consider_edge(edges_[static_cast<size_t>(item) - patches_.size()], p, best, res);
+            return best <= stop_;
+        }
+        Patch& pt = patches_[static_cast<size_t>(item)];
+        if (pt.stamp == stamp_) return best <= stop_;
+        pt.stamp = stamp_;
+        FaceRec& r = faces_[static_cast<size_t>(pt.face)];
+        // an analytic face is projected as a whole: once per point is enough
+        const bool skip = r.kind == FaceRec::kAnalytic && r.proj_stamp == stamp_;
+        r.proj_stamp = stamp_;
+        if (r.usable && !skip) {
+            bool ok = false;
+            try {
+                double d;
+                ok = nearest_inside(r, pt, p, best, d);
+                if (ok) improve(d, pt.face, best, res);
+            } catch (const Standard_Failure&) {
+                ok = false;
+            }
+            if (!ok && r.stamp != stamp_) {
+                // No answer even from nudged points: BRepExtrema decides this face
+                // for this point.
+                failures_++;
+                r.stamp = stamp_;
+                improve(dist_shape_shape(r, p), pt.face, best, res);
+            }
+        }
+        if ((!r.usable || !r.edges_ok) && r.stamp != stamp_) {
+            r.stamp = stamp_;
+            improve(dist_shape_shape(r, p), pt.face, best, res);
+        }
+        return best <= stop_;
+    }
+
+    // Distance to an edge piece: its end points and the extrema inside it.
+    void consider_edge(EdgeRec& e, const V3& p, double& best, Result& res) {
+        if (e.box.dist(p) >= best) return;
+        edge_projections_++;
+        double d = std::min(norm(p - e.p0), norm(p - e.p1));
+        try {
+            GeomAPI_ProjectPointOnCurve& pr = edge_projector(e);
+            pr.Perform(p.pnt().Transformed(e.to_local));
+            if (pr.NbPoints() > 0) d = std::min(d, pr.LowerDistance() * e.scale);
+        } catch (const Standard_Failure&) {
+            failures_++;
+            FaceRec& r = faces_[static_cast<size_t>(e.face)];
+            if (r.stamp != stamp_) {
+                r.stamp = stamp_;
+                d = std::min(d, dist_shape_shape(r, p));
+            }
+        }
+        improve(d, e.face, best, res);
+    }
+
+    // The piece's projector, created if needed; at most kMaxLiveEdges at a time.
+    GeomAPI_ProjectPointOnCurve& edge_projector(EdgeRec& e) {
+        if (!e.proj) {
+            e.proj.reset(new GeomAPI_ProjectPointOnCurve());
+            e.proj->Init(e.curve, e.a, e.b);
+            live_edges_.push_back(static_cast<int>(&e - edges_.data()));
+            if (live_edges_.size() > kMaxLiveEdges) {
+                edges_[static_cast<size_t>(live_edges_.front())].proj.reset();
+                live_edges_.pop_front();
+            }
+        }
+        return *e.proj;
+    }
+
+    // d = distance to the nearest extremum on the patch that classifies IN/ON the
+    // face (HUGE_VAL if none is closer than `best`); false if OCCT could not project.
+    // Extrema are classified nearest first and only while they can still win:
+    // classification costs ~0.3 ms on long trim loops and a B-spline projection may
+    // report dozens of extrema.
+    //
+    // OCCT reports "not done" when the point has infinitely many nearest points: on
+    // the axis of a cylinder, cone or surface of revolution, at the centre of a
+    // sphere -- common in CAD, e.g. the centre of a hole's end cap.  The point is then
+    // nudged by kNudgeRel*diag and projected again.  Distances are always measured
+    // from the ORIGINAL point to the surface points found, so a nudged answer is a
+    // true distance to the face and within 2*nudge of the exact one (the distance is
+    // 1-Lipschitz in the point).
+    bool nearest_inside(FaceRec& r, Patch& pt, const V3& p, double best, double& d_out) {
+        static const V3 dirs[3] = {V3(0.5773502691896258, 0.5773502691896258, 0.5773502691896258),
+                                   V3(0.8017837257372732, -0.5345224838248488, 0.2672612419124244),
+                                   V3(-0.2672612419124244, 0.8017837257372732, 0.5345224838248488)};
+        d_out = HUGE_VAL;
+        bool done = extrema(r, pt, p);
+        for (int k = 0; !done && k < 3; k++) {
+            nudges_++;
+            done = extrema(r, pt, p + nudge_ * dirs[k]);
+        }
+        if (!done) return false;
+        order_.clear();
+        for (size_t k = 0; k < uv_.size(); k++) {
+            double d = norm(p - V3(r.surf->Value(uv_[k].X(), uv_[k].Y()).Transformed(r.to_world)));
+            if (std::isfinite(d) && d < best) order_.push_back({d, static_cast<int>(k)});
+        }
+        std::sort(order_.begin(), order_.end());
+        for (const auto& o : order_) {
+            TopAbs_State st = r.cls->Perform(uv_[static_cast<size_t>(o.second)]);
+            if (st == TopAbs_IN || st == TopAbs_ON) {
+                d_out = o.first;
+                break;
+            }
+        }
+        return true;
+    }
+
+    // Extrema of the distance from p (world) to the surface, as UV points in uv_;
+    // false when OCCT could not answer.  Three engines:
+    //   kAnalytic  plane, cylinder, cone, sphere, torus: closed form (Extrema_ExtPElS)
+    //              on the whole surface; the classifier brings periodic parameters
+    //              back into the face's range.
+    //   kSpline    B-spline/Bezier: Extrema_GenExtPS on the patch rectangle with a
+    //              small grid (see grid_size), minima only.
+    //   kGeneral   revolution, extrusion, offset...: Extrema_ExtPS on the patch
+    //              rectangle (it has dedicated algorithms for the first two).
+    bool extrema(FaceRec& r, Patch& pt, const V3& p) {
+        projections_++;
+        uv_.clear();
+        const gp_Pnt q = p.pnt().Transformed(r.to_local);
+        double u, v;
+        if (r.kind == FaceRec::kAnalytic) {
+            Extrema_ExtPElS e;
+            const double tol = Precision::Confusion();
+            switch (r.stype) {
+            case GeomAbs_Plane: e.Perform(q, r.adaptor->Plane(), tol); break;
+            case GeomAbs_Cylinder: e.Perform(q, r.adaptor->Cylinder(), tol); break;
+            case GeomAbs_Cone: e.Perform(q, r.adaptor->Cone(), tol); break;
+            case GeomAbs_Sphere: e.Perform(q, r.adaptor->Sphere(), tol); break;
+            default: e.Perform(q, r.adaptor->Torus(), tol); break;
+            }
+            if (!e.IsDone()) return false;
+            for (int k = 1; k <= e.NbExt(); k++) {
+                e.Point(k).Parameter(u, v);
+                uv_.emplace_back(u, v);
+            }
+            return true;
+        }
+        projector(r, pt);
+        if (pt.gen) {
+            pt.gen->Perform(q);
+            if (!pt.gen->IsDone()) return false;
+            for (int k = 1; k <= pt.gen->NbExt(); k++) {
+                pt.gen->Point(k).Parameter(u, v);
+                uv_.emplace_back(u, v);
+            }
+        } else {
+            pt.ext->Perform(q);
+            if (!pt.ext->IsDone()) return false;
+            for (int k = 1; k <= pt.ext->NbExt(); k++) {
+                pt.ext->Point(k).Parameter(u, v);
+                uv_.emplace_back(u, v);
+            }
+        }
+        return true;
+    }
+
+    // Creates the patch's projector if needed.  At most kMaxLive exist at a time, the
+    // oldest being dropped (and rebuilt if needed again): memory stays bounded on
+    // models with tens of thousands of patches, and points usually come face by face.
+    void projector(FaceRec& r, Patch& pt) {
+        if (pt.gen || pt.ext) return;
+        const double pc = Precision::PConfusion();
+        if (r.kind == FaceRec::kSpline) {
+            pt.gen.reset(new Extrema_GenExtPS());
+            pt.gen->SetFlag(Extrema_ExtFlag_MIN);  // only minima can be the nearest point
+            pt.gen->SetAlgo(Extrema_ExtAlgo_Grad);
+            pt.gen->Initialize(*r.adaptor, pt.nbu, pt.nbv, pt.a0, pt.a1, pt.b0, pt.b1, pc, pc);
+        } else {
+            pt.ext.reset(new Extrema_ExtPS());
+            pt.ext->Initialize(*r.adaptor, pt.a0, pt.a1, pt.b0, pt.b1, pc, pc);
+        }
+        live_.push_back(static_cast<int>(&pt - patches_.data()));
+        if (live_.size() > kMaxLive) {
+            Patch& old = patches_[static_cast<size_t>(live_.front())];
+            old.gen.reset();
+            old.ext.reset();
+            live_.pop_front();
+        }
+    }
+
+    // Whole-face fallback.
+    double dist_shape_shape(const FaceRec& r, const V3& p) {
+        fallbacks_++;
         try {
             TopoDS_Vertex v = BRepBuilderAPI_MakeVertex(p.pnt()).Vertex();
             BRepExtrema_DistShapeShape dss(v, r.face, Extrema_ExtFlag_MIN);
             if (dss.IsDone() && dss.NbSolution() > 0) return dss.Value();
         } catch (const Standard_Failure&) {
         }
-        exact_failures_++;
+        failures_++;
         return HUGE_VAL;
     }
 
     std::vector<FaceRec> faces_;
+    std::vector<Patch> patches_;
     Bvh bvh_;
-    std::vector<Deferred> deferred_;
+    std::vector<Seed> seeds_;
+    Bvh seed_bvh_;
+    std::vector<std::pair<double, int>> order_;
+    std::vector<gp_Pnt2d> uv_;  // extrema of the current projection
+    std::deque<int> live_;
+    std::vector<EdgeRec> edges_;  // BVH items patches_.size() + k
+    std::deque<int> live_edges_;
     double stop_ = 0;
-    long long exact_calls_ = 0, exact_failures_ = 0;
+    double nudge_ = 0;
+    double pad_ = 0;          // box padding for rounding (see the constructor)
+    double edge_target_ = 0;  // edge piece length (see add_edges)
+    unsigned stamp_ = 0;
+    double prepare_seconds_ = 0;
+    long long projections_ = 0, edge_projections_ = 0, fallbacks_ = 0, failures_ = 0, nudges_ = 0;
 };
+
+void print_search_stats(const Model& m, const FaceDistance& fd) {
+    note("diag %.10g mm, %d OCCT faces, %zu patches, %zu seeds; %lld surface projections (%lld nudged), "
+         "%lld edge projections, %lld BRepExtrema fallbacks, %lld failures",
+         m.diag, m.faces.Extent(), fd.patches(), fd.seeds(), fd.projections(), fd.nudges(), fd.edge_projections(),
+         fd.fallbacks(), fd.failures());
+}
 
 // Keeps the k largest entries (the "worst" points).
 template <class T>
@@ -715,6 +1366,16 @@ double parse_positive(const std::string& s, const char* what) {
     double v = strtod(s.c_str(), &end);
     if (s.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v) || !(v > 0))
         throw UsageError(strf("%s must be a positive number, got '%s'", what, s.c_str()));
+    return v;
+}
+
+// Parses a strictly positive integer (whole string), at most 1e12.
+long long parse_count(const std::string& s, const char* what) {
+    errno = 0;
+    char* end = nullptr;
+    long long v = strtoll(s.c_str(), &end, 10);
+    if (s.empty() || *end != '\0' || errno == ERANGE || v < 1 || v > 1000000000000LL)
+        throw UsageError(strf("%s must be a positive integer, got '%s'", what, s.c_str()));
     return v;
 }
 
@@ -762,6 +1423,18 @@ int cmd_info(const Args& a) {
     TopTools_IndexedMapOfShape shells, solids;
     TopExp::MapShapes(m.shape, TopAbs_SHELL, shells);
     TopExp::MapShapes(m.shape, TopAbs_SOLID, solids);
+    // Largest tolerance OCCT attached to the model (after its shape healing): edge
+    // curves may be that far from the surfaces they bound, so distances of points
+    // near face boundaries are only defined to about this much.
+    double max_tol = 0;
+    for (int i = 1; i <= m.faces.Extent(); i++) {
+        const TopoDS_Face& f = TopoDS::Face(m.faces(i));
+        max_tol = std::max(max_tol, BRep_Tool::Tolerance(f));
+        for (TopExp_Explorer ex(f, TopAbs_EDGE); ex.More(); ex.Next())
+            max_tol = std::max(max_tol, BRep_Tool::Tolerance(TopoDS::Edge(ex.Current())));
+        for (TopExp_Explorer ex(f, TopAbs_VERTEX); ex.More(); ex.Next())
+            max_tol = std::max(max_tol, BRep_Tool::Tolerance(TopoDS::Vertex(ex.Current())));
+    }
 
     // Sew all faces at a tight tolerance, then count edges that bound exactly one
     // face.  Seam edges appear twice in their face and are not free; degenerated
@@ -799,6 +1472,7 @@ int cmd_info(const Args& a) {
     fprintf(g_out, "bbox %.10g %.10g %.10g %.10g %.10g %.10g\n", m.box.lo[0], m.box.lo[1], m.box.lo[2],
             m.box.hi[0], m.box.hi[1], m.box.hi[2]);
     kv("diag", m.diag);
+    kv("max_tol", max_tol);
     kv("sew_tol", sew_tol);
     if (free_edges < 0) {
         note("sewing failed; free_edges unknown");
@@ -841,7 +1515,8 @@ std::vector<InPoint> read_points(const char* path) {
         for (int k = 0; k < 3 && ok; k++) {
             errno = 0;
             c[k] = strtod(s, &end);
-            if (end == s || errno == ERANGE || !std::isfinite(c[k])) ok = false;
+            // |c| > 1e12 mm is garbage for a CAD part, and squares of it overflow
+            if (end == s || errno == ERANGE || !std::isfinite(c[k]) || std::fabs(c[k]) > 1e12) ok = false;
             s = end;
         }
         long long id = 0;
@@ -859,7 +1534,7 @@ std::vector<InPoint> read_points(const char* path) {
         if (!ok) {
             std::string shown = line.substr(0, 80);
             if (!shown.empty() && shown.back() == '\r') shown.pop_back();
-            throw InputError(strf("%s:%lld: expected 'x y z face_id' (3 finite numbers and an integer), got '%s'",
+            throw InputError(strf("%s:%lld: expected 'x y z face_id' (3 numbers within +-1e12 and an integer), got '%s'",
                                   path, lineno, shown.c_str()));
         }
         pts.push_back({V3(c[0], c[1], c[2]), id});
@@ -874,20 +1549,21 @@ int cmd_points(const Args& a) {
     double tol_rel = 1e-6;
     if (a.opt.count("--tol-rel")) tol_rel = parse_positive(a.opt.at("--tol-rel"), "--tol-rel");
     std::vector<InPoint> pts = read_points(a.pos[1].c_str());  // cheap: fail early on bad input
-    FILE* dump = nullptr;
+    // --out: one line per point, for finding the bad ones (opened before the model
+    // read, so that a wrong path fails fast)
+    std::unique_ptr<FILE, int (*)(FILE*)> dump(nullptr, fclose);
     if (a.opt.count("--out")) {
-        dump = fopen(a.opt.at("--out").c_str(), "w");
+        dump.reset(fopen(a.opt.at("--out").c_str(), "w"));
         if (!dump) throw InputError(strf("cannot write '%s': %s", a.opt.at("--out").c_str(), strerror(errno)));
-        fprintf(dump, "# x y z face_id distance nearest_occt_face\n");
+        fprintf(dump.get(), "# x y z face_id distance nearest_occt_face\n");
     }
     Stopwatch sw;
     Model m = load_model(a.pos[0].c_str());
     double t_read = sw.seconds();
     const double tol = tol_rel * m.diag;
 
-    Stopwatch sw2;
-    FaceDistance fd(m);
-    double t_prep = sw2.seconds();
+    FaceDistance fd(m, std::min(kStopRel * m.diag, 0.01 * tol));
+    double t_prep = fd.prepare_seconds();
 
     Stopwatch sw3;
     struct PerFace { double max = 0; long long over = 0; };
@@ -899,7 +1575,7 @@ int cmd_points(const Args& a) {
         FaceDistance::Result r = fd.distance(ip.p);
         double d = r.dist;
         if (dump)
-            fprintf(dump, "%.17g %.17g %.17g %lld %.10g %d\n", ip.p.x, ip.p.y, ip.p.z, ip.id, d, r.face);
+            fprintf(dump.get(), "%.17g %.17g %.17g %lld %.10g %d\n", ip.p.x, ip.p.y, ip.p.z, ip.id, d, r.face);
         if (!std::isfinite(d)) unresolved++;
         if (d > tol) {
             over++;
@@ -912,7 +1588,7 @@ int cmd_points(const Args& a) {
         worst.add(d, ip);
     }
     double t_query = sw3.seconds();
-    if (dump && fclose(dump) != 0) throw InputError(strf("error writing '%s'", a.opt.at("--out").c_str()));
+    if (dump && fclose(dump.release()) != 0) throw InputError(strf("error writing '%s'", a.opt.at("--out").c_str()));
 
     print_unit_note(m);
     kv("points", static_cast<long long>(pts.size()));
@@ -925,8 +1601,7 @@ int cmd_points(const Args& a) {
     for (const auto& w : worst.items())
         note("worst: %.10g %.10g %.10g %lld %.10g", w.second.p.x, w.second.p.y, w.second.p.z, w.second.id, w.first);
     if (unresolved) note("%lld points: OCCT found no distance (reported as inf)", unresolved);
-    note("diag %.10g mm, %d OCCT faces; exact boundary distances %lld (%lld failed)", m.diag,
-         m.faces.Extent(), fd.exact_calls(), fd.exact_failures());
+    print_search_stats(m, fd);
     note("time: read %.2f s, prepare %.2f s, %zu queries %.2f s", t_read, t_prep, pts.size(), t_query);
     return over > 0 ? 1 : 0;
 }
@@ -1065,31 +1740,109 @@ private:
     Bvh bvh_;
 };
 
-// Meshes the model with OCCT.  Linear deflection is absolute (defl_rel * diag).
+// Meshes the model with OCCT, face by face.  Linear deflection is absolute
+// (defl_rel * diag), the angle 0.5 rad.
+//
+// One BRepMesh_IncrementalMesh call for the whole shape ran for more than 10 minutes
+// on occt__bug22869_Spring (--curves 3d or not) and took 1.6 GB, in BRepMesh_Delaun's
+// frontierAdjust on one of the two long helical faces, and then gave that face no
+// triangles anyway.  Meshed on its own, the same face fails at once
+// (IMeshData_SelfIntersectingWire).  So every face is meshed by its own call; faces
+// that still get no triangles are sampled by sample_face_grid instead.  The calls are
+// sequential: BRepMesh's parallel mode works across the faces of one call.
 void mesh_model(const Model& m, double defl) {
-    BRepMesh_IncrementalMesh mesher(m.shape, defl, Standard_False, 0.5, Standard_True);
-    if (!mesher.IsDone()) warn("BRepMesh_IncrementalMesh reported not done");
+    for (int i = 1; i <= m.faces.Extent(); i++) {
+        try {
+            BRepMesh_IncrementalMesh mesher(m.faces(i), defl, Standard_False, 0.5, Standard_False);
+        } catch (const Standard_Failure& e) {
+            warn("face %d: BRepMesh failed: %s", i, occt_what(e).c_str());
+        }
+    }
 }
 
-// A point of the OCCT tessellation, in world coordinates, with its face.
+// A point on the model, in world coordinates, with its face.
 struct ModelSample {
     V3 p;
     int face;
 };
 
-// Tessellation vertices, plus one point per triangle.  The per-triangle point is the
-// triangle's UV centroid mapped through the surface, so it lies ON the model (the 3D
-// centroid would be off the surface by up to the deflection, and that sag would be
-// blamed on MESH).  Faces without UV nodes fall back to the 3D centroid.
-std::vector<ModelSample> model_samples(const Model& m, long long& faces_without_mesh) {
+// Points on a face that BRepMesh could not triangulate: the centres of a UV grid
+// whose cells are about h long on the surface (from the isoline lengths; at most
+// kMaxGridPerFace cells), kept when they classify IN or ON the face, plus points
+// every h along the 3D curves of its edges.  Returns how many were added.
+long long sample_face_grid(const TopoDS_Face& f, int index, double h, std::vector<ModelSample>& out) {
+    const long long kMaxGridPerFace = 100000;
+    const size_t before = out.size();
+    TopLoc_Location loc;
+    Handle(Geom_Surface) s = BRep_Tool::Surface(f, loc);
+    if (s.IsNull()) return 0;
+    const gp_Trsf t = loc.Transformation();
+    const double scale = std::fabs(t.ScaleFactor());
+    double u0, u1, v0, v1;
+    BRepTools::UVBounds(f, u0, u1, v0, v1);
+    if (u1 > u0 && v1 > v0) {
+        double lu = 0, lv = 0;
+        iso_lengths(s, u0, u1, v0, v1, scale, lu, lv);
+        long long nu = std::max(1LL, std::min(100000LL, static_cast<long long>(std::ceil(lu / h))));
+        long long nv = std::max(1LL, std::min(100000LL, static_cast<long long>(std::ceil(lv / h))));
+        while (nu * nv > kMaxGridPerFace) {
+            if (nu >= nv) nu = (nu + 1) / 2;
+            else nv = (nv + 1) / 2;
+        }
+        BRepTopAdaptor_FClass2d cls(f, Precision::PConfusion());
+        for (long long i = 0; i < nu; i++)
+            for (long long j = 0; j < nv; j++) {
+                const double u = u0 + (u1 - u0) * (static_cast<double>(i) + 0.5) / static_cast<double>(nu);
+                const double v = v0 + (v1 - v0) * (static_cast<double>(j) + 0.5) / static_cast<double>(nv);
+                if (cls.Perform(gp_Pnt2d(u, v)) == TopAbs_OUT) continue;
+                out.push_back({V3(s->Value(u, v).Transformed(t)), index});
+            }
+    }
+    for (TopExp_Explorer ex(f, TopAbs_EDGE); ex.More(); ex.Next()) {
+        const TopoDS_Edge& e = TopoDS::Edge(ex.Current());
+        if (BRep_Tool::Degenerated(e)) continue;
+        TopLoc_Location eloc;
+        double a, b;
+        Handle(Geom_Curve) c = BRep_Tool::Curve(e, eloc, a, b);
+        if (c.IsNull() || !(b > a)) continue;
+        const gp_Trsf et = eloc.Transformation();
+        const double len = curve_length(c, a, b, std::fabs(et.ScaleFactor()));
+        const long long n = std::max(1LL, std::min(100000LL, static_cast<long long>(std::ceil(len / h))));
+        for (long long k = 0; k <= n; k++)
+            out.push_back({V3(c->Value(a + (b - a) * static_cast<double>(k) / static_cast<double>(n)).Transformed(et)), index});
+    }
+    return static_cast<long long>(out.size() - before);
+}
+
+// Points on the model for model -> mesh: for every face that BRepMesh triangulated,
+// the tessellation vertices plus one point per triangle.  The per-triangle point is
+// the triangle's UV centroid mapped through the surface, so it lies ON the model
+// (the 3D centroid would be off the surface by up to the deflection, and that sag
+// would be blamed on MESH).  Faces without UV nodes fall back to the 3D centroid.
+//
+// BRepMesh's triangles are not always inside their face in UV: on the Spring it
+// joins boundary nodes across the bulge of a trim curve, and the UV centroid of such
+// a sliver maps to the untrimmed surface 2.2 mm off the model.  So the UV centroid of
+// every triangle with a node on the boundary is classified, and dropped (counted in
+// `outside`) when it is OUT.  Faces without triangles get sample_face_grid with
+// spacing `grid_h`.
+std::vector<ModelSample> model_samples(const Model& m, double grid_h,
+                                       std::vector<std::pair<int, long long>>& grid_faces, long long& outside) {
     std::vector<ModelSample> out;
-    faces_without_mesh = 0;
+    grid_faces.clear();
+    outside = 0;
     for (int i = 1; i <= m.faces.Extent(); i++) {
         const TopoDS_Face& f = TopoDS::Face(m.faces(i));
         TopLoc_Location loc;
         Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(f, loc);
         if (tri.IsNull() || tri->NbTriangles() == 0) {
-            faces_without_mesh++;
+            long long got = 0;
+            try {
+                got = sample_face_grid(f, i, grid_h, out);
+            } catch (const Standard_Failure& e) {
+                warn("face %d: grid sampling failed: %s", i, occt_what(e).c_str());
+            }
+            grid_faces.emplace_back(i, got);
             continue;
         }
         gp_Trsf t = loc.Transformation();
@@ -1097,6 +1850,23 @@ std::vector<ModelSample> model_samples(const Model& m, long long& faces_without_
         TopLoc_Location sloc;
         Handle(Geom_Surface) s = BRep_Tool::Surface(f, sloc);
         gp_Trsf st = sloc.Transformation();
+        // boundary nodes: those of the edges' polygons on this triangulation (all
+        // nodes count as boundary if an edge has none)
+        std::vector<char> bnd(static_cast<size_t>(tri->NbNodes()) + 1, 0);
+        for (TopExp_Explorer ex(f, TopAbs_EDGE); ex.More(); ex.Next()) {
+            TopLoc_Location eloc;
+            Handle(Poly_PolygonOnTriangulation) pp =
+                BRep_Tool::PolygonOnTriangulation(TopoDS::Edge(ex.Current()), tri, eloc);
+            if (pp.IsNull()) {
+                std::fill(bnd.begin(), bnd.end(), 1);
+                break;
+            }
+            for (int k = 1; k <= pp->NbNodes(); k++) {
+                int nd = pp->Node(k);
+                if (nd >= 1 && nd <= tri->NbNodes()) bnd[static_cast<size_t>(nd)] = 1;
+            }
+        }
+        std::unique_ptr<BRepTopAdaptor_FClass2d> cls;
         for (int k = 1; k <= tri->NbTriangles(); k++) {
             int n1, n2, n3;
             tri->Triangle(k).Get(n1, n2, n3);
@@ -1105,6 +1875,13 @@ std::vector<ModelSample> model_samples(const Model& m, long long& faces_without_
             if (tri->HasUVNodes() && !s.IsNull()) {
                 gp_XY uv = (tri->UVNode(n1).XY() + tri->UVNode(n2).XY() + tri->UVNode(n3).XY()) / 3.0;
                 try {
+                    if (bnd[static_cast<size_t>(n1)] || bnd[static_cast<size_t>(n2)] || bnd[static_cast<size_t>(n3)]) {
+                        if (!cls) cls.reset(new BRepTopAdaptor_FClass2d(f, Precision::PConfusion()));
+                        if (cls->Perform(gp_Pnt2d(uv.X(), uv.Y())) == TopAbs_OUT) {
+                            outside++;
+                            continue;
+                        }
+                    }
                     c = s->Value(uv.X(), uv.Y()).Transformed(st);
                     done = true;
                 } catch (const Standard_Failure&) {
@@ -1121,17 +1898,35 @@ std::vector<ModelSample> model_samples(const Model& m, long long& faces_without_
 // mesh-dev
 // ---------------------------------------------------------------------------------
 
+// Indices of an evenly strided subset of n of `total` items (all of them if n is 0
+// or not smaller): floor(k*total/n), k = 0..n-1.  Deterministic, and spread over the
+// whole list, whatever its order.
+std::vector<size_t> strided(size_t total, size_t n) {
+    std::vector<size_t> idx;
+    if (n == 0 || n >= total) {
+        idx.resize(total);
+        for (size_t k = 0; k < total; k++) idx[k] = k;
+        return idx;
+    }
+    idx.resize(n);
+    for (size_t k = 0; k < n; k++)
+        idx[k] = static_cast<size_t>(static_cast<unsigned long long>(k) * total / n);
+    return idx;
+}
+
 int cmd_mesh_dev(const Args& a) {
     if (a.pos.size() != 2) throw UsageError("mesh-dev needs MODEL.igs MESH.stl");
     double defl_rel = 1e-4;
     if (a.opt.count("--defl-rel")) defl_rel = parse_positive(a.opt.at("--defl-rel"), "--defl-rel");
+    long long max_points = 0;  // 0: no cap
+    if (a.opt.count("--max-points")) max_points = parse_count(a.opt.at("--max-points"), "--max-points");
     Stopwatch sw;
     TriMesh mesh(read_stl(a.pos[1].c_str()));
     Model m = load_model(a.pos[0].c_str());
     double t_read = sw.seconds();
 
     // (a) mesh -> model: unique mesh vertices (STL repeats them per triangle) and
-    // triangle centroids.
+    // triangle centroids; with --max-points, a strided subset of that list.
     Stopwatch sw2;
     std::vector<V3> q;
     for (const Tri& t : mesh.tris()) {
@@ -1147,12 +1942,14 @@ int cmd_mesh_dev(const Args& a) {
     q.erase(std::unique(q.begin(), q.end(), eq), q.end());
     const size_t nverts = q.size();
     for (const Tri& t : mesh.tris()) q.push_back((1.0 / 3.0) * (t.a + t.b + t.c));
+    const std::vector<size_t> qa = strided(q.size(), static_cast<size_t>(max_points));
 
-    FaceDistance fd(m);
+    FaceDistance fd(m, kStopRel * m.diag);
     WorstK<V3> worst_a(10);
     double max_a = 0, sum_a = 0;
     long long unresolved = 0;
-    for (const V3& p : q) {
+    for (size_t k : qa) {
+        const V3& p = q[k];
         double d = fd.distance(p).dist;
         if (!std::isfinite(d)) unresolved++;
         max_a = std::max(max_a, d);
@@ -1165,11 +1962,16 @@ int cmd_mesh_dev(const Args& a) {
     Stopwatch sw3;
     const double defl = defl_rel * m.diag;
     mesh_model(m, defl);
-    long long unmeshed = 0;
-    std::vector<ModelSample> ms = model_samples(m, unmeshed);
+    std::vector<std::pair<int, long long>> grid_faces;
+    // grid spacing for faces BRepMesh fails on: the chord with sagitta `defl` on a
+    // radius of diag/8
+    long long outside = 0;
+    std::vector<ModelSample> ms = model_samples(m, std::sqrt(defl * m.diag), grid_faces, outside);
+    const std::vector<size_t> qb = strided(ms.size(), static_cast<size_t>(max_points));
     WorstK<ModelSample> worst_b(10);
     double max_b = 0, sum_b = 0;
-    for (const ModelSample& s : ms) {
+    for (size_t k : qb) {
+        const ModelSample& s = ms[k];
         double d = mesh.distance(s.p);
         max_b = std::max(max_b, d);
         sum_b += d;
@@ -1181,22 +1983,33 @@ int cmd_mesh_dev(const Args& a) {
     kv("diag", m.diag);
     kv("mesh_triangles", static_cast<long long>(mesh.tris().size()));
     kv("mesh_vertices", static_cast<long long>(nverts));
-    kv("mesh_to_model_points", static_cast<long long>(q.size()));
+    kv("mesh_to_model_points", static_cast<long long>(qa.size()));
+    kv("mesh_to_model_total", static_cast<long long>(q.size()));
     kv("mesh_to_model_max", max_a);
-    kv("mesh_to_model_mean", q.empty() ? 0.0 : sum_a / static_cast<double>(q.size()));
+    kv("mesh_to_model_mean", qa.empty() ? 0.0 : sum_a / static_cast<double>(qa.size()));
     kv("model_defl", defl);
-    kv("model_to_mesh_points", static_cast<long long>(ms.size()));
+    kv("model_to_mesh_points", static_cast<long long>(qb.size()));
+    kv("model_to_mesh_total", static_cast<long long>(ms.size()));
     kv("model_to_mesh_max", max_b);
-    kv("model_to_mesh_mean", ms.empty() ? 0.0 : sum_b / static_cast<double>(ms.size()));
+    kv("model_to_mesh_mean", qb.empty() ? 0.0 : sum_b / static_cast<double>(qb.size()));
+    kv("model_grid_faces", static_cast<long long>(grid_faces.size()));
     for (const auto& w : worst_a.items())
         note("worst mesh_to_model: %.10g %.10g %.10g %.10g", w.second.x, w.second.y, w.second.z, w.first);
     for (const auto& w : worst_b.items())
         note("worst model_to_mesh: %.10g %.10g %.10g occt_face %d %.10g", w.second.p.x, w.second.p.y,
              w.second.p.z, w.second.face, w.first);
     if (unresolved) note("%lld mesh points: OCCT found no distance (reported as inf)", unresolved);
-    if (unmeshed) note("%lld faces got no OCCT triangulation (not sampled for model_to_mesh)", unmeshed);
-    note("time: read %.2f s, mesh->model %.2f s (%lld exact boundary distances), model->mesh %.2f s", t_read, t_a,
-         fd.exact_calls(), t_b);
+    if (outside)
+        note("%lld OCCT triangles have their UV centroid outside their face (not used)", outside);
+    for (const auto& g : grid_faces)
+        note("face %d: BRepMesh gave no triangles; %lld points from a UV grid and the edges instead", g.first,
+             g.second);
+    if (max_points > 0 && (qa.size() < q.size() || qb.size() < ms.size()))
+        note("--max-points %lld: measured every %.3g-th mesh point and every %.3g-th model point", max_points,
+             static_cast<double>(q.size()) / static_cast<double>(qa.size()),
+             static_cast<double>(ms.size()) / static_cast<double>(std::max<size_t>(1, qb.size())));
+    print_search_stats(m, fd);
+    note("time: read %.2f s, mesh->model %.2f s, model->mesh %.2f s", t_read, t_a, t_b);
     return 0;
 }
 
@@ -1215,9 +2028,11 @@ int cmd_sample(const Args& a) {
         if (s.empty() || *end || errno || per_face < 1 || per_face > 1000000)
             throw UsageError(strf("--per-face must be an integer in 1..1000000, got '%s'", s.c_str()));
     }
-    Model m = load_model(a.pos[0].c_str());
+    // Open the output first: a typo in its path should not cost a model read.
     FILE* out = fopen(a.pos[1].c_str(), "w");
     if (!out) throw InputError(strf("cannot write '%s': %s", a.pos[1].c_str(), strerror(errno)));
+    std::unique_ptr<FILE, int (*)(FILE*)> guard(out, fclose);
+    Model m = load_model(a.pos[0].c_str());
     fprintf(out, "# occt_oracle sample of %s: x y z occt_face_index (mm)\n", a.pos[0].c_str());
 
     // Fixed seed: the same model gives the same file.
@@ -1266,7 +2081,7 @@ int cmd_sample(const Args& a) {
         }
         total += got;
     }
-    if (fclose(out) != 0) throw InputError(strf("error writing '%s'", a.pos[1].c_str()));
+    if (fclose(guard.release()) != 0) throw InputError(strf("error writing '%s'", a.pos[1].c_str()));
     print_unit_note(m);
     kv("faces", static_cast<long long>(m.faces.Extent()));
     kv("points", total);
@@ -1353,8 +2168,12 @@ const char* kUsage =
     "                    [--out FILE]               (default R 1e-6; exit 1 if any point > R*diag;\n"
     "                                               FILE gets every point's distance and nearest face)\n"
     "  mesh-dev MODEL.igs MESH.stl [--defl-rel R]   two-sided deviation mesh <-> model\n"
-    "                                               (model tessellated at R*diag, default 1e-4)\n"
+    "                    [--max-points N]           (model tessellated at R*diag, default 1e-4;\n"
+    "                                               N: measure at most N evenly strided points\n"
+    "                                               each way, default all)\n"
     "  sample   MODEL.igs OUT.xyz [--per-face N]    N points (default 20) inside every face\n"
+    "Every command also takes --curves file|3d: trim curves as the IGES file prefers\n"
+    "(default) or rebuilt from the 3D curves.\n"
     "Output: 'key value' lines on stdout, '# ' lines for people; lengths in mm.\n"
     "Exit: 0 ok, 1 check failed, 2 usage or input error.  -v shows OCCT's own messages.\n";
 
@@ -1379,11 +2198,23 @@ int run(int argc, char** argv) {
     if (first >= argc) throw UsageError("no command");
     configure_messages();
     std::string cmd = argv[first];
-    if (cmd == "info") return cmd_info(parse_args(argc, argv, first + 1, {"--sew-rel"}));
-    if (cmd == "points") return cmd_points(parse_args(argc, argv, first + 1, {"--tol-rel", "--out"}));
-    if (cmd == "mesh-dev") return cmd_mesh_dev(parse_args(argc, argv, first + 1, {"--defl-rel"}));
-    if (cmd == "sample") return cmd_sample(parse_args(argc, argv, first + 1, {"--per-face"}));
-    if (cmd == "write-stl") return cmd_write_stl(parse_args(argc, argv, first + 1, {"--defl-rel"}));
+    // --curves is accepted by every command
+    auto args = [&](std::vector<std::string> known) {
+        known.push_back("--curves");
+        Args a = parse_args(argc, argv, first + 1, known);
+        if (a.opt.count("--curves")) {
+            const std::string& c = a.opt.at("--curves");
+            if (c == "file") g_curves_3d = false;
+            else if (c == "3d") g_curves_3d = true;
+            else throw UsageError(strf("--curves must be 'file' or '3d', got '%s'", c.c_str()));
+        }
+        return a;
+    };
+    if (cmd == "info") return cmd_info(args({"--sew-rel"}));
+    if (cmd == "points") return cmd_points(args({"--tol-rel", "--out"}));
+    if (cmd == "mesh-dev") return cmd_mesh_dev(args({"--defl-rel", "--max-points"}));
+    if (cmd == "sample") return cmd_sample(args({"--per-face"}));
+    if (cmd == "write-stl") return cmd_write_stl(args({"--defl-rel"}));
     throw UsageError(strf("unknown command '%s'", cmd.c_str()));
 }
 

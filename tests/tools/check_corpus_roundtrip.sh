@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# check_corpus_roundtrip.sh CMZ MESH_CHECK ORACLE GLTF_CHECK [MODELS_DIR]
+#
+# The whole product on every model of the shared corpus: IGES -> cmz encode
+# -> .cmz -> decode as the terminal does -> triangles, then judged by tools
+# that share no code with the decoder's output path:
+#   1. mesh_check: welded by position, no degenerate or overlapping
+#      triangles, open exactly along the model's free edges;
+#   2. Open CASCADE (occt_oracle mesh-dev --curves 3d: trimmed by the same 3D
+#      curves curvemesh reads) reads the original IGES and
+#      measures the STL both ways: every mesh point within the chordal
+#      tolerance plus the encoder's own verified rebuild error of the face
+#      (cmz encode --report), and every point of the true surfaces that
+#      close to the mesh (plus OCCT's own meshing deflection);
+#   3. the GLB through tinygltf (gltf_check): valid glTF 2.0, every
+#      accessor, index and bound consistent.
+# The slack 1e-5 x diagonal covers the coordinate grid (1e-6 x diagonal),
+# float output and the oracle's projections.  One TAP line per model.
+set -u
+ORACLE_OPTS=${ORACLE_OPTS:-}
+cmz=$1 mesh_check=$2 oracle=$3 gltf=$4 dir=${5:-../shared/models}/iges
+if [ ! -d "$dir" ]; then
+    echo "# SKIP: $dir not found (the shared corpus is not beside this checkout)"
+    echo "ok 1 - corpus round trip skipped"
+    exit 0
+fi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+n=0 fail=0
+for f in "$dir"/*; do
+    n=$((n + 1))
+    b=$(basename "$f")
+    if ! "$cmz" encode -q "$f" -o "$tmp/m.cmz" --report "$tmp/faces.tsv" > "$tmp/enc" 2>&1; then
+        echo "not ok $n - $b: encode failed: $(tail -n 1 "$tmp/enc")"
+        fail=$((fail + 1))
+        continue
+    fi
+    size=$(stat -c %s "$tmp/m.cmz")
+    if ! "$cmz" decode "$tmp/m.cmz" -o "$tmp/m.stl" > "$tmp/dec" 2>&1 ||
+       ! "$cmz" decode -q "$tmp/m.cmz" -o "$tmp/m.glb" >> "$tmp/dec" 2>&1; then
+        echo "not ok $n - $b: decode failed: $(tail -n 1 "$tmp/dec")"
+        fail=$((fail + 1))
+        continue
+    fi
+    tess=$(sed -n 's/.*chordal tolerance \([0-9.e+-]*\) mm.*/\1/p' "$tmp/dec" | head -n 1)
+    rebuild=$(awk -F'\t' 'NR > 1 && $8 + 0 > m { m = $8 + 0 } END { print m + 0 }' "$tmp/faces.tsv")
+    topo=$("$mesh_check" "$tmp/m.cmz" 2>&1)
+    topo_rc=$?
+    dev=$("$oracle" mesh-dev "$f" "$tmp/m.stl" --curves 3d $ORACLE_OPTS 2>/dev/null)
+    dev_rc=$?
+    glb=$("$gltf" "$tmp/m.glb" 2>&1)
+    glb_rc=$?
+    get() { sed -n "s/^$1 //p" <<<"$dev"; }
+    diag=$(get diag) m2m=$(get mesh_to_model_max) mm2=$(get model_to_mesh_max) defl=$(get model_defl)
+    faces=$(sed -n 's/.* -> .*: \([0-9]*\) faces .*/\1/p' "$tmp/enc")
+    occt_faces=$(sed -n 's/^# diag .*, \([0-9]*\) OCCT faces.*/\1/p' <<<"$dev")
+    note=""
+    if [ -n "$occt_faces" ] && [ "$occt_faces" != "$faces" ]; then
+        # the two readers disagree on what the file places (bug33327: an independent 186 also
+        # instanced by a 308): the model's side is not comparable, the mesh's side still is
+        note=" (OCCT places $occt_faces faces, cmz $faces: model->mesh not compared)"
+        mm2=0
+    fi
+    verdict=$(awk -v t="$tess" -v r="$rebuild" -v d="$diag" -v a="$m2m" -v b="$mm2" -v e="$defl" 'BEGIN {
+        if (d == "" || a == "" || b == "") { print "no oracle result"; exit }
+        s = 1e-5 * d
+        if (a > t + r + s) { printf "mesh->model %.4g mm > tess %.4g + rebuild %.4g + %.2g", a, t, r, s; exit }
+        if (b > t + r + e + s) { printf "model->mesh %.4g mm > tess %.4g + rebuild %.4g + defl %.4g + %.2g", b, t, r, e, s; exit }
+        print "ok" }')
+    summary="$size bytes, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$note"
+    if [ $topo_rc -ne 0 ]; then
+        echo "not ok $n - $b: mesh topology: ${topo#* - }"
+        fail=$((fail + 1))
+    elif [ $dev_rc -gt 1 ] || [ "$verdict" != ok ]; then
+        echo "not ok $n - $b: deviation: $verdict ($summary)"
+        fail=$((fail + 1))
+    elif [ $glb_rc -ne 0 ]; then
+        echo "not ok $n - $b: GLB rejected: $(tail -n 1 <<<"$glb")"
+        fail=$((fail + 1))
+    else
+        echo "ok $n - $b: $summary"
+    fi
+done
+echo "$((n - fail)) passed, $fail failed"
+[ $fail -eq 0 ]
