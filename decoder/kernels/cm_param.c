@@ -6,6 +6,9 @@
 #include "cm/cm_limits_info.h"
 #include "cm/cm_lsq.h"
 
+#define CM_PARAM_MAX_TIES 16   /* chords over a pole considered per loop */
+#define CM_PARAM_POLE_PROBES 8 /* evaluations round a side to tell a pole */
+
 static double wrap(double x, double a, double b, int periodic)
 {
     if (periodic) {
@@ -151,60 +154,161 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
     unsigned char *pole = ws->pole;
     double u = 0, v = 0;
     cm_err e;
-    /* global searches (a grid of 41 x 41 evaluations each) are for the few points where the walk
-       loses its way; a loop that needs them everywhere (a hostile or garbled surface) gets a bounded
-       number, so a face costs O(n) projections whatever the file holds */
-    int global_left = 32 + n / 8;
-    /* 1. project by continuation; index n is the loop's start once more (for the winding) */
-    for (int k = 0; k <= n; k++) {
-        cm_vec3 P = pts[k < n ? k : 0];
-        double uu = u, vv = v, dist;
-        if (k == 0) {
-            /* the first point: a coarse grid, a fine one only if that lands badly */
-            if ((e = cm_psurf_project_grid(ps, P, 17, &uu, &vv, &dist, st)) != CM_OK)
-                return e;
-            if (dist > accept && (e = cm_psurf_project_grid(ps, P, 41, &uu, &vv, &dist, st)) != CM_OK)
-                return e;
-        } else {
-            if ((e = cm_psurf_project_from(ps, P, &uu, &vv, &dist, st)) != CM_OK)
-                return e;
-            if (dist > accept && global_left > 0) {
-                global_left--;
-                /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
-                double gu, gv, gd;
-                if ((e = cm_psurf_project_grid(ps, P, 41, &gu, &gv, &gd, st)) != CM_OK)
+    /* 1. project by continuation; index n is the loop's start once more (for the winding).  The
+       first point's grid search can land on a wrong local minimum (a helical strip's neighbouring
+       turn, one pitch away, where a 41-point grid aliases the turns); the walk then finds its way
+       by a global search a few points on, and the loop comes back to its start from the right side.
+       When the start was far worse than that return, the loop is walked once more from there. */
+    double gap = 0.0;
+    for (int pass = 0; pass < 2; pass++) {
+        /* global searches (a grid of 41 x 41 evaluations each) are for the few points where the walk
+           loses its way; a loop that needs them everywhere (a hostile or garbled surface) gets a
+           bounded number, so a face costs O(n) projections whatever the file holds */
+        int global_left = 32 + n / 8;
+        double dist_start = 0.0, dist_end = 0.0;
+        gap = 0.0;
+        for (int k = 0; k <= n; k++) {
+            cm_vec3 P = pts[k < n ? k : 0];
+            double uu = u, vv = v, dist;
+            if (k == 0 && pass == 0) {
+                /* the first point: a coarse grid, a fine one only if that lands badly */
+                if ((e = cm_psurf_project_grid(ps, P, 17, &uu, &vv, &dist, st)) != CM_OK)
                     return e;
-                if (gd < dist) {
-                    if (ps->closed_u)
-                        gu += pu * floor((u - gu) / pu + 0.5);
-                    if (ps->closed_v)
-                        gv += pv * floor((v - gv) / pv + 0.5);
-                    uu = gu;
-                    vv = gv;
-                    dist = gd;
+                if (dist > accept && (e = cm_psurf_project_grid(ps, P, 41, &uu, &vv, &dist, st)) != CM_OK)
+                    return e;
+            } else {
+                /* (the second pass starts from where the first came back to the start) */
+                if ((e = cm_psurf_project_from(ps, P, &uu, &vv, &dist, st)) != CM_OK)
+                    return e;
+                if (dist > accept && global_left > 0) {
+                    global_left--;
+                    /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
+                    double gu, gv, gd;
+                    if ((e = cm_psurf_project_grid(ps, P, 41, &gu, &gv, &gd, st)) != CM_OK)
+                        return e;
+                    if (gd < dist) {
+                        if (ps->closed_u)
+                            gu += pu * floor((u - gu) / pu + 0.5);
+                        if (ps->closed_v)
+                            gv += pv * floor((v - gv) / pv + 0.5);
+                        uu = gu;
+                        vv = gv;
+                        dist = gd;
+                    }
+                }
+            }
+            if (k > 0) {
+                /* consecutive samples are far closer than half a period: take the periodic copy nearest
+                   to the previous point (a Newton walk may have gone round the long way) */
+                if (ps->closed_u)
+                    uu += pu * floor((u - uu) / pu + 0.5);
+                if (ps->closed_v)
+                    vv += pv * floor((v - vv) / pv + 0.5);
+            }
+            cm_vec3 dd[3];
+            if ((e = cm_psurf_eval(ps, uu, vv, dd, st)) != CM_OK)
+                return e;
+            /* a pole: the iso-line through the point in one direction is shorter than `accept`
+             * (exporters leave a generatrix end a little off the axis) */
+            double lu = cm_norm(dd[1]) * pu, lv = cm_norm(dd[2]) * pv;
+            pole[k] = (unsigned char)(lu <= accept && lu < lv ? 1 : (lv <= accept && lv < lu ? 2 : 0));
+            if (k < n && dist > gap)
+                gap = dist;
+            if (k == 0)
+                dist_start = dist;
+            if (k == n)
+                dist_end = dist;
+            u = uu;
+            v = vv;
+            uv[k] = cm_v2(u, v);
+        }
+        if (!(dist_start > accept && dist_end < 0.5 * dist_start))
+            break;
+        /* the second pass starts from the return, its periodic copy in the domain */
+        if (ps->closed_u)
+            u -= pu * floor((u - ps->u0) / pu);
+        if (ps->closed_v)
+            v -= pv * floor((v - ps->v0) / pv);
+    }
+    if (max_gap && gap > *max_gap)
+        *max_gap = gap;
+    /* 1b. a chord passing over a pole (a meridian of a sphere through its pole: its ends half a period
+       apart round the axis) can be drawn either way round, and the nearest copy is a rounding tie.  A
+       loop through a pole does not enclose it (drawn round it, its (u,v) polygon would take in the far
+       half of the pole's neighbourhood, outside the face: triangles folded over the chord), so such
+       ties are turned, latest first, until the loop winds no more (or none is left) */
+    if (ps->closed_u || ps->closed_v) {
+        int tie_k[CM_PARAM_MAX_TIES], tie_dir[CM_PARAM_MAX_TIES], ntie = 0;
+        for (int dir = 0; dir < 2; dir++) {
+            /* dir 0: v closed, poles at u = u0, u1; dir 1: u closed, poles at v = v0, v1 */
+            if (dir == 0 ? !ps->closed_v : !ps->closed_u)
+                continue;
+            double period = dir == 0 ? pv : pu;
+            for (int side = 0; side < 2; side++) {
+                double fixed = dir == 0 ? (side ? ps->u1 : ps->u0) : (side ? ps->v1 : ps->v0);
+                cm_vec3 q = cm_v3(0, 0, 0), axis = cm_v3(0, 0, 0), t_prev = cm_v3(0, 0, 0), t_first = cm_v3(0, 0, 0);
+                double spread = 0.0;
+                for (int j = 0; j <= CM_PARAM_POLE_PROBES; j++) {
+                    double w = (dir == 0 ? ps->v0 : ps->u0) + period * (double)j / (double)CM_PARAM_POLE_PROBES;
+                    cm_vec3 d[3];
+                    if ((e = cm_psurf_eval(ps, dir == 0 ? fixed : w, dir == 0 ? w : fixed, d, st)) != CM_OK)
+                        return e;
+                    cm_vec3 t = dir == 0 ? d[1] : d[2]; /* the tangent leaving the pole */
+                    if (j == 0) {
+                        q = d[0];
+                        t_first = t;
+                    } else {
+                        double g = cm_dist(d[0], q);
+                        spread = g > spread ? g : spread;
+                        axis = cm_add(axis, cm_cross(t_prev, j == CM_PARAM_POLE_PROBES ? t_first : t));
+                    }
+                    t_prev = t;
+                }
+                double la = cm_norm(axis);
+                if (spread > accept || !(la > 0))
+                    continue; /* not a pole */
+                axis = cm_scale(axis, 1.0 / la);
+                for (int k = 1; k <= n && ntie < CM_PARAM_MAX_TIES; k++) {
+                    double dk = dir == 0 ? uv[k].y - uv[k - 1].y : uv[k].x - uv[k - 1].x;
+                    if (pole[k] || pole[k - 1] || fabs(dk) < 0.25 * period)
+                        continue;
+                    /* the chord's ends seen from the pole, across its axis */
+                    cm_vec3 a = cm_sub(pts[k - 1], q), b = cm_sub(pts[k < n ? k : 0], q);
+                    a = cm_sub(a, cm_scale(axis, cm_dot(a, axis)));
+                    b = cm_sub(b, cm_scale(axis, cm_dot(b, axis)));
+                    double lc = cm_dist(a, b);
+                    if (!(cm_dot(a, b) < 0) || !(lc > 0))
+                        continue;
+                    int known = 0; /* a sphere's two poles share the axis */
+                    for (int t = 0; t < ntie; t++)
+                        known |= tie_k[t] == k && tie_dir[t] == dir;
+                    if (!known && fabs(cm_dot(cm_cross(a, b), axis)) <= accept * lc) {
+                        tie_k[ntie] = k;
+                        tie_dir[ntie++] = dir;
+                    }
                 }
             }
         }
-        if (k > 0) {
-            /* consecutive samples are far closer than half a period: take the periodic copy nearest
-               to the previous point (a Newton walk may have gone round the long way) */
-            if (ps->closed_u)
-                uu += pu * floor((u - uu) / pu + 0.5);
-            if (ps->closed_v)
-                vv += pv * floor((v - vv) / pv + 0.5);
+        for (int dir = 0; dir < 2 && ntie > 0; dir++) {
+            double period = dir == 0 ? pv : pu;
+            for (int t = ntie - 1; t >= 0; t--) {
+                double turns = dir == 0 ? (uv[n].y - uv[0].y) / period : (uv[n].x - uv[0].x) / period;
+                int w = (int)floor(turns + 0.5);
+                if (w == 0)
+                    break;
+                int k = tie_k[t];
+                double dk = dir == 0 ? uv[k].y - uv[k - 1].y : uv[k].x - uv[k - 1].x;
+                if (tie_dir[t] != dir || (dk > 0) != (w > 0))
+                    continue;
+                double adj = w > 0 ? -period : period;
+                for (int j = k; j <= n; j++) {
+                    if (dir == 0)
+                        uv[j].y += adj;
+                    else
+                        uv[j].x += adj;
+                }
+            }
         }
-        cm_vec3 dd[3];
-        if ((e = cm_psurf_eval(ps, uu, vv, dd, st)) != CM_OK)
-            return e;
-        /* a pole: the iso-line through the point in one direction is shorter than `accept`
-         * (exporters leave a generatrix end a little off the axis) */
-        double lu = cm_norm(dd[1]) * pu, lv = cm_norm(dd[2]) * pv;
-        pole[k] = (unsigned char)(lu <= accept && lu < lv ? 1 : (lv <= accept && lv < lu ? 2 : 0));
-        if (k < n && max_gap && dist > *max_gap)
-            *max_gap = dist;
-        u = uu;
-        v = vv;
-        uv[k] = cm_v2(u, v);
     }
     /* 2. redraw pole runs along the pole line; shift what follows to stay continuous */
     double shift_u = 0, shift_v = 0;

@@ -746,6 +746,28 @@ static int fold_ok(const tess_ctx *c, cm_vec2 A, cm_vec2 B, cm_vec2 C, double sc
     return longest > 0.0 && fabs(cross3(A, B, C)) <= c->fold * longest;
 }
 
+/*
+ * A slit tip, when the caller allows folds: the ring turns back at b (by more than a right angle)
+ * and the triangle (prev b, b, next b) is no higher over its longest side than c->fold.  Two
+ * boundary runs that lie along each other closer than the tessellation tolerance (a zero-width
+ * sliver of the region) cross each other by rounding; cutting their tips first closes the sliver
+ * like a zip, with triangles between points that are near each other along both runs.  Left to
+ * the general ear search, the crossing runs make it fall back to folded ears reaching far along a
+ * nearly straight boundary, which no flip removes.
+ */
+static int slit_tip(const tess_ctx *c, int b)
+{
+    const cm_tri_ws *ws = c->ws;
+    if (!(c->fold > 0.0))
+        return 0;
+    cm_vec2 A = npos(ws, ws->prev[b]), B = npos(ws, b), C = npos(ws, ws->next[b]);
+    if (!((B.x - A.x) * (C.x - B.x) + (B.y - A.y) * (C.y - B.y) < 0.0))
+        return 0;
+    double l = dist2(A, B), m = dist2(B, C), n = dist2(C, A);
+    double longest = sqrt(l > m ? (l > n ? l : n) : (m > n ? m : n));
+    return longest > 0.0 && fabs(cross3(A, B, C)) <= c->fold * longest && is_ear(c, b, 1, 0);
+}
+
 /* cut ear b and clean the ring around it; the node to go on from */
 static int cut(tess_ctx *c, int b, int *rem, int len)
 {
@@ -780,6 +802,28 @@ static cm_err ear_clip(tess_ctx *c, int start, int len, cm_status *st)
     }
     for (int g = 0; g < len && rem >= 3; g++)
         k = ws->next[settle(c, k, &rem, len)];
+    /* slits first (only when folds are allowed): one turn, each tip zipped up to the slit's mouth;
+       after a tip is cut only its two neighbours can have become tips */
+    for (int g = 0; c->fold > 0.0 && g < len && rem > 3; g++) {
+        int b = k;
+        k = ws->next[k];
+        while (rem > 3 && slit_tip(c, b)) {
+            int a = ws->prev[b], d = ws->next[b];
+            int r = cut(c, b, &rem, len);
+            if (r < 0)
+                return cm_fail(st, CM_E_RANGE, __func__);
+            k = r;
+            if (rem <= 3)
+                break;
+            if (!(ws->nflag[a] & NF_DEAD) && slit_tip(c, a))
+                b = a;
+            else if (!(ws->nflag[d] & NF_DEAD))
+                b = d;
+            else
+                break;
+            k = ws->next[b];
+        }
+    }
     int ear = k, stop = k, skipped = 0;
     /* each turn of at most rem tests either cuts a node, or clears the cache (then the next
        turn tests everything), or falls back (which cuts or fails) */
