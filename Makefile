@@ -251,6 +251,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:iges-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
+		"gate:corpus-roundtrip:$(MAKE) --no-print-directory -s check-corpus-roundtrip" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross"
 
@@ -327,16 +328,20 @@ fuzz-iges:
 check-corpus-occt: $(CMZ) oracle
 	$(Q)tests/tools/check_corpus_occt.sh $(CMZ) $(ORACLE_BIN) $(SHARED_MODELS)
 
-# encode -> decode -> mesh on the shared corpus, judged by mesh_check, OCCT and tinygltf (skips without it)
+# encode -> decode -> mesh on the shared corpus, judged by mesh_check, OCCT, tinygltf and cmz eval
+# (skips without it)
 check-corpus-roundtrip: $(CMZ) $(MESH_CHECK) oracle gltf-check-tool
 	$(Q)tests/tools/check_corpus_roundtrip.sh $(CMZ) $(MESH_CHECK) $(ORACLE_BIN) $(GLTF_CHECK_BIN) $(SHARED_MODELS)
 
-# cmz-decode for aarch64 under qemu-user: byte-identical GLB on every model; tiny refuses by limit
+# cmz-decode for aarch64 under qemu-user and built at -O0: byte-identical GLB on every model (the
+# GREGORY checksums of the x86-64 -O2 encoder verified by each: spec §17 T11); tiny refuses by limit
 # (the host profile's limits are too large for static arrays: there `cmz decode`, same decoder, is compared)
 check-decode-cross: $(CMZ) $(call bdir,terminal)/cmz-decode $(call bdir,tiny)/cmz-decode
 	$(Q)$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- CC=aarch64-linux-gnu-gcc AR=aarch64-linux-gnu-ar \
 		PKG_CONFIG=aarch64-linux-gnu-pkg-config $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-decode \
 		$(BUILD_ROOT)/aarch64-linux-gnu-host/cmz
+	$(Q)$(MAKE) --no-print-directory -s BUILD_ROOT=$(BUILD_ROOT)/O0 CFLAGS="-O0 -g" CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		$(BUILD_ROOT)/O0/$(TRIPLET)-terminal/cmz-decode
 	$(Q)tests/tools/check_decode_cross.sh $(CMZ) $(BUILD_ROOT) $(SHARED_MODELS)
 
 # unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine

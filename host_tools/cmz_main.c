@@ -22,6 +22,7 @@
 #include "cm_report.h"
 #include "encode/encode.h"
 #include "model_load.h"
+#include "encode/verify.h"
 #include "profiles.h"
 
 #define CMZ_VERSION "0.1.0"
@@ -43,15 +44,23 @@ static void usage(FILE *f)
             "      (read / used / skipped), faces by surface kind, loops and holes, vertices,\n"
             "      edges (shared / free / seam / non-manifold), G1 edges, solids, bounding box,\n"
             "      tolerances and warnings.  --json prints the same as one JSON object.\n"
-            "  encode MODEL.igs -o MODEL.cmz [--tol REL] [--quant REL] [--tess REL]\n"
-            "         [--profile NAME] [--report FACES.tsv]\n"
-            "      Compress the model: every face becomes a PLANE rebuilt from its boundary\n"
-            "      when that is within --tol (default 0.01: 1 %% of the face's bounding box),\n"
-            "      else its surface is kept.  --quant: coordinate grid as a fraction of the\n"
-            "      model diagonal (default 1e-6); --tess: recommended chordal tolerance for\n"
-            "      viewers (default 5e-4).  --profile refuses, with the reason, a file the\n"
+            "  encode MODEL.igs -o MODEL.cmz [--tol REL] [--tol-abs MM] [--quant REL] [--tess REL]\n"
+            "         [--no-gregory] [--profile NAME] [--report FACES.tsv]\n"
+            "      Compress the model: each face's surface is deleted and rebuilt from its\n"
+            "      boundary curves - a PLANE, else Gregory patches (3 to 8 sides) - when the\n"
+            "      rebuilt surface, measured by the decoder's own code, stays within the\n"
+            "      tolerance of the original and keeps tangent edges within 1 deg; else the\n"
+            "      surface is kept.  --tol: fraction of the face's bounding box (default 0.01,\n"
+            "      1 %%); --tol-abs: millimetres instead (with --tol too, the smaller applies).\n"
+            "      --quant: coordinate grid as a fraction of the model diagonal (default 1e-6);\n"
+            "      --tess: recommended chordal tolerance for viewers (default 5e-4).\n"
+            "      --no-gregory: planes only.  --profile refuses, with the reason, a file the\n"
             "      named board profile (terminal, host, tiny) cannot load.  Prints one\n"
-            "      summary line; --report writes a row per face.\n"
+            "      summary line; --report writes a row per face (method, errors, G1, why kept).\n"
+            "  eval MODEL.igs MODEL.cmz [--tol REL] [--tol-abs MM] [--report FACES.tsv]\n"
+            "      Rebuild every face of MODEL.cmz with the terminal's code and measure it\n"
+            "      against MODEL.igs (spec §12 grid and boundary, §13 G1 across tangent edges);\n"
+            "      prints the summary per method, exit status 1 if a face is out of tolerance.\n"
             "  decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n"
             "      Rebuild every face and tessellate it (chordal tolerance --tess in mm,\n"
             "      default the file's recommendation) into binary glTF (metres, +Y up),\n"
@@ -513,7 +522,7 @@ static int parse_real(const char *opt, const char *text, double lo, double hi, d
 
 static const char *method_name(int m)
 {
-    return m == CM_METHOD_PLANE ? "plane" : m == CM_METHOD_KEEP ? "keep" : "?";
+    return m == CM_METHOD_PLANE ? "plane" : m == CM_METHOD_GREGORY ? "gregory" : m == CM_METHOD_KEEP ? "keep" : "?";
 }
 
 static int cmd_encode(int argc, char **argv)
@@ -536,7 +545,14 @@ static int cmd_encode(int argc, char **argv)
         } else if (strcmp(a, "--tol") == 0 && v) {
             if (parse_real(a, v, 1e-9, 0.5, &o.rel_tol))
                 return EXIT_USAGE;
+            o.rel_set = 1;
             i++;
+        } else if (strcmp(a, "--tol-abs") == 0 && v) {
+            if (parse_real(a, v, 1e-9, 1e9, &o.abs_tol))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "--no-gregory") == 0) {
+            o.gregory = 0;
         } else if (strcmp(a, "--quant") == 0 && v) {
             if (parse_real(a, v, 1e-12, 1e-2, &o.quant_rel))
                 return EXIT_USAGE;
@@ -588,12 +604,16 @@ static int cmd_encode(int argc, char **argv)
             fprintf(stderr, "%s: %s: %s\n", prog, report, strerror(errno));
             rc = EXIT_IO;
         } else {
-            fprintf(f, "face\tde\tentity\tsurface\tmethod\tbbox_mm\tplane_dev_mm\tmax_err_mm\tratio\tsurf_ctrl\n");
+            fprintf(f, "face\tde\tentity\tsurface\tmethod\tbbox_mm\tplane_dev_mm\tmax_err_mm\tratio\tsurf_ctrl"
+                       "\tlayout\tavg_err_mm\tg1_worst_deg\tgregory_ratio\twhy_kept\n");
             for (int i = 0; i < lm.brep.nfaces; i++) {
                 const face_report *fr = &r.faces[i];
-                fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\n", i, lm.brep.faces[i].src_de,
-                        lm.brep.faces[i].src_type, lm.brep.faces[i].surf_type, method_name(fr->method), fr->bbox,
-                        fr->plane_dev, fr->rebuild_max, fr->ratio, fr->surf_ctrl);
+                double c = fr->g1_cos > 1.0 ? 1.0 : fr->g1_cos;
+                fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\t%d\t%.6g\t%.4g\t%.6g\t%s\n", i,
+                        lm.brep.faces[i].src_de, lm.brep.faces[i].src_type, lm.brep.faces[i].surf_type,
+                        method_name(fr->method), fr->bbox, fr->plane_dev, fr->rebuild_max, fr->ratio, fr->surf_ctrl,
+                        fr->layout, fr->rebuild_avg, acos(c) * 57.29577951308232, fr->greg_ratio,
+                        fr->method == CM_METHOD_KEEP && fr->why ? fr->why : "-");
             }
             if (fclose(f) != 0)
                 rc = EXIT_IO;
@@ -607,9 +627,10 @@ static int cmd_encode(int argc, char **argv)
             isize = ftell(in);
             fclose(in);
         }
-        printf("%s -> %s: %d faces (%d plane, %d kept), %d edges (%d lines), %zu bytes, %.1fx smaller than the "
-               "IGES (%ld bytes)%s\n",
-               path, out, lm.brep.nfaces, r.faces_plane, r.faces_keep, r.edges_line + r.edges_curve, r.edges_line,
+        printf("%s -> %s: %d faces (%d plane, %d gregory, %d kept), %d edges (%d lines), %zu bytes, %.1fx smaller "
+               "than the IGES (%ld bytes)%s\n",
+               path, out, lm.brep.nfaces, r.faces_plane, r.faces_gregory, r.faces_keep, r.edges_line + r.edges_curve,
+               r.edges_line,
                r.len, r.len ? (double)isize / (double)r.len : 0.0, isize,
                r.faces_flipped ? "" : "");
     }
@@ -677,15 +698,182 @@ static int cmd_decode(int argc, char **argv)
         cm_report_status(stderr, prog, path, &st);
         rc = st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
     } else if (!quiet) {
-        printf("%s -> %s: %u faces (%u plane, %u kept), %u triangles, %u vertices, chordal tolerance %.3g mm, "
-               "%llu bytes\n",
-               path, out, sum.faces, sum.faces_plane, sum.faces_keep, sum.triangles, sum.vertices, sum.tess_tol,
+        printf("%s -> %s: %u faces (%u plane, %u gregory, %u kept), %u triangles, %u vertices, chordal tolerance "
+               "%.3g mm, %llu bytes\n",
+               path, out, sum.faces, sum.faces_plane, sum.faces_gregory, sum.faces_keep, sum.triangles, sum.vertices, sum.tess_tol,
                (unsigned long long)bytes);
     }
     free(mesh.pos);
     free(mesh.nrm);
     free(mesh.idx);
     free(mesh.faces);
+    return rc;
+}
+
+static cm_rebuild_ws eval_ws;
+
+/* `cmz eval`: re-measure a finished file against its model with the terminal's rebuild */
+static int cmd_eval(int argc, char **argv)
+{
+    const char *paths[2] = {NULL, NULL}, *report = NULL;
+    double rel = 0, abs_tol = 0;
+    int rel_set = 0, np = 0;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(a, "--tol") == 0 && v) {
+            if (parse_real(a, v, 1e-9, 0.5, &rel))
+                return EXIT_USAGE;
+            rel_set = 1;
+            i++;
+        } else if (strcmp(a, "--tol-abs") == 0 && v) {
+            if (parse_real(a, v, 1e-9, 1e9, &abs_tol))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "--report") == 0 && v) {
+            report = v;
+            i++;
+        } else if (strcmp(a, "-q") == 0) {
+            quiet = 1;
+        } else if ((a[0] == '-' && a[1]) || np == 2) {
+            fprintf(stderr, "%s eval: usage: cmz eval MODEL.igs MODEL.cmz [--tol REL] [--tol-abs MM] [--report F]\n",
+                    prog);
+            return EXIT_USAGE;
+        } else {
+            paths[np++] = a;
+        }
+    }
+    if (np != 2) {
+        fprintf(stderr, "%s eval: usage: cmz eval MODEL.igs MODEL.cmz [--tol REL] [--tol-abs MM] [--report F]\n", prog);
+        return EXIT_USAGE;
+    }
+    cm_status st;
+    cm_status_init(&st);
+    if (cm_decode_read(paths[1], &decoder, &st) != CM_OK) {
+        cm_report_status(stderr, prog, paths[1], &st);
+        return st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+    }
+    loaded_model lm;
+    cm_err e = model_load(paths[0], &lm, progress, NULL, &st);
+    if (e != CM_OK) {
+        int rc = load_failed(paths[0], &lm, &st);
+        model_free(&lm);
+        return rc;
+    }
+    const cm_model *m = &decoder.model;
+    if (!rel_set)
+        rel = m->rel_tol > 0 ? m->rel_tol : 0.01;
+    if ((int)m->nfaces != lm.brep.nfaces) {
+        fprintf(stderr, "%s eval: %s has %u faces, %s %d: not the same model\n", prog, paths[1], m->nfaces, paths[0],
+                lm.brep.nfaces);
+        model_free(&lm);
+        return EXIT_INPUT;
+    }
+    int nf = (int)m->nfaces, rc = EXIT_OK, fails = 0;
+    face_surface *fs = calloc((size_t)nf + 1, sizeof *fs);
+    face_error *fe = calloc((size_t)nf + 1, sizeof *fe);
+    double *g1c = malloc(((size_t)nf + 1) * sizeof *g1c);
+    if (!fs || !fe || !g1c) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        free(fs);
+        free(fe);
+        free(g1c);
+        model_free(&lm);
+        return EXIT_NOMEM;
+    }
+    int count[CM_METHOD_COUNT] = {0};
+    double worst_ratio[CM_METHOD_COUNT] = {0}, sum_ratio[CM_METHOD_COUNT] = {0};
+    for (int f = 0; f < nf; f++) {
+        progress("measuring", f + 1, nf, NULL);
+        g1c[f] = 1.0;
+        int meth = m->faces[f].method;
+        count[meth]++;
+        fs[f].method = CM_METHOD_KEEP;
+        if (meth == CM_METHOD_KEEP)
+            continue;
+        cm_rebuilt rb;
+        if (cm_rebuild_face(m, (uint32_t)f, &rb, &eval_ws, &st) != CM_OK) {
+            cm_report_status(stderr, prog, paths[1], &st);
+            rc = EXIT_INPUT;
+            break;
+        }
+        if (!face_surface_set(&fs[f], &rb)) {
+            rc = EXIT_NOMEM;
+            break;
+        }
+        if (!verify_face(&lm, m, f, &rb, HUGE_VAL, &fe[f])) {
+            fprintf(stderr, "%s eval: face %d: no parameter domain in the model to measure against\n", prog, f);
+            fails++;
+            continue;
+        }
+        double tol = encode_face_tol(rel, rel_set || !(abs_tol > 0), abs_tol, rb.bbox);
+        worst_ratio[meth] = fe[f].ratio > worst_ratio[meth] ? fe[f].ratio : worst_ratio[meth];
+        sum_ratio[meth] += fe[f].ratio;
+        if (!(fe[f].max < tol)) {
+            fprintf(stderr, "%s eval: face %d (%s): max error %.4g mm > tolerance %.4g mm (ratio %.4g %%)\n", prog, f,
+                    method_name(meth), fe[f].max, tol, 100 * fe[f].ratio);
+            fails++;
+        }
+    }
+    /* §13 on every G1 edge next to a rebuilt face */
+    int g1_edges = 0, g1_fail = 0;
+    double g1_worst = 1.0;
+    for (uint32_t ed = 0; rc == EXIT_OK && ed < m->nedges; ed++) {
+        int32_t a = m->edge_face[ed][0], b = m->edge_face[ed][1];
+        if (!m->edges[ed].g1 || a < 0 || b < 0 || a == b)
+            continue;
+        if (fs[a].method == CM_METHOD_KEEP && fs[b].method == CM_METHOD_KEEP)
+            continue;
+        double c = verify_g1_edge(&lm, m, ed, fs, NULL);
+        g1_edges++;
+        g1c[a] = c < g1c[a] ? c : g1c[a];
+        g1c[b] = c < g1c[b] ? c : g1c[b];
+        g1_worst = c < g1_worst ? c : g1_worst;
+        if (c < 0.9998476951563913) {
+            fprintf(stderr, "%s eval: G1 edge %u between faces %d and %d: normals %.3g deg apart\n", prog, ed, a, b,
+                    acos(c > 1 ? 1 : c) * 57.29577951308232);
+            g1_fail++;
+        }
+    }
+    if (rc == EXIT_OK && report) {
+        FILE *out = fopen(report, "w");
+        if (!out) {
+            fprintf(stderr, "%s: %s: %s\n", prog, report, strerror(errno));
+            rc = EXIT_IO;
+        } else {
+            fprintf(out, "face\tmethod\tlayout\tbbox_mm\tavg_err_mm\tmax_err_mm\tratio\tg1_worst_deg\n");
+            for (int f = 0; f < nf; f++) {
+                const cm_face *F = &m->faces[f];
+                double c = g1c[f] > 1 ? 1 : g1c[f];
+                fprintf(out, "%d\t%s\t%d\t%.6g\t%.6g\t%.6g\t%.6g\t%.4g\n", f, method_name(F->method),
+                        F->method == CM_METHOD_GREGORY ? F->layout : -1, fe[f].bbox,
+                        fe[f].avg, fe[f].max, fe[f].ratio, acos(c) * 57.29577951308232);
+            }
+            if (fclose(out) != 0)
+                rc = EXIT_IO;
+        }
+    }
+    if (rc == EXIT_OK) {
+        printf("%s against %s: %d faces: plane %d (worst ratio %.3g %%), gregory %d (worst ratio %.3g %%, mean %.3g %%), "
+               "kept %d\n",
+               paths[1], paths[0], nf, count[CM_METHOD_PLANE], 100 * worst_ratio[CM_METHOD_PLANE],
+               count[CM_METHOD_GREGORY], 100 * worst_ratio[CM_METHOD_GREGORY],
+               count[CM_METHOD_GREGORY] ? 100 * sum_ratio[CM_METHOD_GREGORY] / count[CM_METHOD_GREGORY] : 0.0,
+               count[CM_METHOD_KEEP]);
+        printf("G1: %d tangent edges next to rebuilt faces, worst %.3g deg%s\n", g1_edges,
+               acos(g1_worst > 1 ? 1 : g1_worst) * 57.29577951308232, g1_fail ? "" : " (all within 1 deg)");
+        if (fails || g1_fail) {
+            printf("FAILED: %d faces out of tolerance, %d G1 edges over 1 deg\n", fails, g1_fail);
+            rc = EXIT_INPUT;
+        } else {
+            printf("ok: every rebuilt face within tolerance\n");
+        }
+    }
+    for (int f = 0; f < nf; f++)
+        face_surface_free(&fs[f]);
+    free(fs);
+    free(fe);
+    free(g1c);
+    model_free(&lm);
     return rc;
 }
 
@@ -722,6 +910,8 @@ int main(int argc, char **argv)
         return cmd_encode(argc - 2, argv + 2);
     if (strcmp(cmd, "decode") == 0)
         return cmd_decode(argc - 2, argv + 2);
+    if (strcmp(cmd, "eval") == 0)
+        return cmd_eval(argc - 2, argv + 2);
     fprintf(stderr, "%s: unknown command '%s' (cmz --help lists them)\n", prog, cmd);
     return EXIT_USAGE;
 }

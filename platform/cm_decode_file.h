@@ -17,7 +17,7 @@
 
 typedef struct cm_decode_summary {
     uint32_t faces, triangles, vertices;
-    uint32_t faces_plane, faces_keep;
+    uint32_t faces_plane, faces_gregory, faces_keep;
     double tess_tol;
     uint64_t out_bytes;
     double max_gap;

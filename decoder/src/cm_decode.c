@@ -141,7 +141,7 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
     for (uint32_t i = 0; i < d->len && i < 4; i++)
         if (d->buf[i] != magic[i])
             return fail(d, st, CM_E_MAGIC, i, "magic");
-    if (d->len >= 6 && d->buf[4] != CM_FMT_VERSION_MAJOR)
+    if (d->len >= 6 && (d->buf[4] < CM_FMT_VERSION_MIN_MAJOR || d->buf[4] > CM_FMT_VERSION_MAJOR))
         return fail(d, st, CM_E_VERSION, 4, "version");
     if (d->len < 12)
         return CM_OK;
@@ -493,9 +493,24 @@ static cm_err sec_face(reader *r)
         uint64_t meth = cm_ac_dec_uint(&r->ac, &ctx.method);
         if (r->ac.overrun)
             return rfail(r, CM_E_TRUNCATED, "face method");
-        if (meth >= CM_METHOD_COUNT)
+        /* format 1 knows KEEP and PLANE only */
+        if (meth >= CM_METHOD_COUNT || (meth >= CM_METHOD_GREGORY && r->d->buf[4] < 2))
             return rfail(r, CM_E_UNSUPPORTED, "face method");
         F->method = (uint8_t)meth;
+        F->layout = F->corner = 0;
+        F->checksum = 0;
+        if (F->method == CM_METHOD_GREGORY) {
+            uint64_t layout = cm_ac_dec_uint(&r->ac, &ctx.layout);
+            uint64_t corner = cm_ac_dec_uint(&r->ac, &ctx.corner);
+            F->checksum = cm_ac_dec_direct(&r->ac, 16);
+            F->checksum |= cm_ac_dec_direct(&r->ac, 16) << 16;
+            if (r->ac.overrun)
+                return rfail(r, CM_E_TRUNCATED, "face record");
+            if (layout > 2 || corner >= CM_MAX_SIDES || (layout != 2 && corner != 0))
+                return rfail(r, CM_E_RANGE, "face record");
+            F->layout = (uint8_t)layout;
+            F->corner = (uint8_t)corner;
+        }
         F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.flip);
         F->color = 0;
         F->surf = 0;
@@ -558,6 +573,16 @@ static cm_err sec_face(reader *r)
         return rfail(r, CM_E_TRUNCATED, "faces");
     if (enext != m->nedges || snext != m->nsurfs)
         return rfail(r, CM_E_FORMAT, "unused edges or surfaces");
+    /* GREGORY needs an outer loop of 3..CM_MAX_SIDES edges; layout 2 only for 3 */
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        const cm_face *F = &m->faces[f];
+        uint32_t n = m->loops[F->loop0].nuse;
+        if (F->method == CM_METHOD_GREGORY && (n < 3 || F->nloops != 1 || (F->layout == 2 && (n != 3 || F->corner >= n))))
+            return rfail(r, CM_E_FORMAT, "face record");
+        if (F->method == CM_METHOD_GREGORY && n > CM_MAX_SIDES)
+            return rlimit(r, CM_LIMIT_MAX_SIDES, n, CM_MAX_SIDES, "sides");
+    }
+    cm_model_adjacency(m);
     return CM_OK;
 }
 

@@ -47,3 +47,38 @@ void cm_model_surface(const cm_model *m, uint32_t s, cm_surf *out)
     out->ctrl = m->ctrl + S->ctrl0;
     out->w = S->rational ? m->w + S->ctrl0 : NULL;
 }
+
+void cm_model_adjacency(cm_model *m)
+{
+    for (uint32_t e = 0; e < m->nedges; e++) {
+        m->edge_face[e][0] = m->edge_face[e][1] = CM_NO_FACE;
+        m->edge_split[e] = 0;
+    }
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        const cm_face *F = &m->faces[f];
+        int split = F->method == CM_METHOD_GREGORY && F->layout == 1;
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            const cm_loop *L = &m->loops[F->loop0 + l];
+            for (uint32_t u = 0; u < L->nuse; u++) {
+                uint32_t e = m->uses[L->use0 + u].edge;
+                int32_t *ef = m->edge_face[e];
+                if (split && l == 0)
+                    m->edge_split[e] = 1;
+                if (ef[0] == CM_NO_FACE)
+                    ef[0] = (int32_t)f;
+                else if (ef[1] == CM_NO_FACE)
+                    ef[1] = (int32_t)f;
+                else
+                    ef[1] = CM_MANY_FACES;
+            }
+        }
+    }
+}
+
+int32_t cm_model_partner(const cm_model *m, uint32_t e, uint32_t f)
+{
+    const int32_t *ef = m->edge_face[e];
+    if (ef[1] < 0 || ef[0] == ef[1])
+        return CM_NO_FACE; /* free, non-manifold, or a seam of one face */
+    return ef[0] == (int32_t)f ? ef[1] : (ef[1] == (int32_t)f ? ef[0] : CM_NO_FACE);
+}

@@ -1,4 +1,4 @@
-/* cm_rebuild.c - PLANE and KEEP reconstruction of a face (see cm_rebuild.h). */
+/* cm_rebuild.c - PLANE, GREGORY and KEEP reconstruction of a face (see cm_rebuild.h). */
 #include "cm/cm_rebuild.h"
 
 #include <stddef.h>
@@ -47,6 +47,12 @@ static double diag_of(const cm_vec3 *p, int n)
 
 cm_err cm_rebuild_face(const cm_model *m, uint32_t f, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st)
 {
+    return cm_rebuild_face_ex(m, f, 1, out, ws, st);
+}
+
+cm_err cm_rebuild_face_ex(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws,
+                          cm_status *st)
+{
     const cm_face *F = &m->faces[f];
     int n, n_outer;
     cm_err e = cm_face_samples(m, f, ws->samples, CM_MAX_FACE_SAMPLES, &n, &n_outer, st);
@@ -54,8 +60,24 @@ cm_err cm_rebuild_face(const cm_model *m, uint32_t f, cm_rebuilt *out, cm_rebuil
         return e;
     out->method = F->method;
     out->bbox = diag_of(ws->samples, n);
+    out->greg = NULL;
+    out->checksum = 0;
     if (F->method == CM_METHOD_KEEP) {
         cm_model_surface(m, F->surf, &out->surf);
+        return CM_OK;
+    }
+    if (F->method == CM_METHOD_GREGORY) {
+        if ((e = cm_greg_input_build(m, f, &ws->gin, &ws->corner, st)) != CM_OK)
+            return e;
+        if ((e = cm_greg_build(&ws->gin, F->layout, F->corner, &ws->greg, st)) != CM_OK)
+            return e;
+        out->greg = &ws->greg;
+        out->checksum = cm_greg_surface_checksum(&ws->greg);
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+        check = 0; /* as with the CRCs: mutated records must reach the tessellation */
+#endif
+        if (check && out->checksum != F->checksum)
+            return cm_fail(st, CM_E_CHECKSUM, "GREGORY face rebuilt differently from the encoder");
         return CM_OK;
     }
     /* PLANE (spec 5A): EPS_LEN = 1e-12 of the model is approximated by the face here: the

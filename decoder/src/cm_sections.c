@@ -48,6 +48,8 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_int_init(&c->loops);
     cm_ac_int_init(&c->uses);
     cm_ac_int_init(&c->back);
+    cm_ac_int_init(&c->layout);
+    cm_ac_int_init(&c->corner);
     cm_ac_prob_init(&c->flip);
     cm_ac_prob_init(&c->is_new);
     cm_ac_prob_init(&c->rev_new);

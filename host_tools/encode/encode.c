@@ -1,5 +1,6 @@
 /* encode.c - loaded model -> .cmz v1 (see encode.h and docs/FORMAT.md). */
 #include "encode.h"
+#include "verify.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -7,6 +8,8 @@
 #include <string.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_corner.h"
+#include "cm/cm_cubic_convert.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_format.h"
 #include "cm/cm_rebuild.h"
@@ -23,8 +26,18 @@ void encode_opts_default(encode_opts *o)
     o->tess_rel = 5e-4;   /* chordal tolerance for viewers: 0.05 % of the diagonal */
     o->target = NULL;
     o->target_name = NULL;
+    o->gregory = 1;
+    o->abs_tol = 0;
+    o->rel_set = 0;
     o->progress = NULL;
     o->progress_ctx = NULL;
+}
+
+double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox)
+{
+    if (!(abs_tol > 0))
+        return rel_tol * bbox;
+    return rel_set && rel_tol * bbox < abs_tol ? rel_tol * bbox : abs_tol;
 }
 
 void encode_result_free(encode_result *r)
@@ -61,6 +74,8 @@ typedef struct tx {
     int *vert_tx;       /* cmesh vertex -> transmission number */
     tx_surf *surfs;     /* one per face (used for KEEP faces) */
     int *method;        /* per face */
+    int *layout, *corner; /* per GREGORY face: its record (spec 15.2) */
+    uint32_t *checksum;
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
     int npalette;
     int *color;         /* per face palette index */
@@ -95,6 +110,9 @@ static void tx_free(tx *t)
     }
     free(t->surfs);
     free(t->method);
+    free(t->layout);
+    free(t->corner);
+    free(t->checksum);
     free(t->color);
     memset(t, 0, sizeof *t);
 }
@@ -567,6 +585,12 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     for (int f = 0; f < t->nfaces; f++) {
         const cmesh_face *cf = &cm->faces[f];
         cm_ac_enc_uint(e, &ctx.method, (uint64_t)t->method[f]);
+        if (t->method[f] == CM_METHOD_GREGORY) {
+            cm_ac_enc_uint(e, &ctx.layout, (uint64_t)t->layout[f]);
+            cm_ac_enc_uint(e, &ctx.corner, (uint64_t)t->corner[f]);
+            cm_ac_enc_direct(e, t->checksum[f] & 0xffffu, 16);
+            cm_ac_enc_direct(e, t->checksum[f] >> 16, 16);
+        }
         cm_ac_enc_bit(e, &ctx.flip, (unsigned)lm->brep.faces[cf->brep_face].flip);
         cm_ac_enc_uint(e, &ctx.loops, (uint64_t)cf->nloops);
         for (int l = 0; l < cf->nloops; l++) {
@@ -652,8 +676,12 @@ static cm_err write_file(const tx *t, const loaded_model *lm, const encode_opts 
         b[1] = CM_FMT_MAGIC1;
         b[2] = CM_FMT_MAGIC2;
         b[3] = CM_FMT_MAGIC3;
-        b[4] = CM_FMT_VERSION_MAJOR;
-        b[5] = CM_FMT_VERSION_MINOR;
+        /* the oldest version that can say it: format 1 readers still load PLANE/KEEP-only files */
+        int greg = 0;
+        for (int f = 0; f < t->nfaces; f++)
+            greg |= t->method[f] == CM_METHOD_GREGORY;
+        b[4] = greg ? CM_FMT_VERSION_MAJOR : 1;
+        b[5] = greg ? CM_FMT_VERSION_MINOR : 0;
         cm_put_u16(b + 6, (uint16_t)(t->npalette ? 1 : 0));
         cm_put_u32(b + 8, (uint32_t)H);
         cm_put_u32(b + 12, (uint32_t)total);
@@ -703,28 +731,33 @@ static cm_err decode_back(const encode_result *r, cm_status *st)
 
 /* ---- method choice per face ---- */
 
-static double dist_to_plane_patch(const cm_rebuilt *rb, cm_vec3 p)
-{
-    cm_vec3 l = cm_frame_local(&rb->frame, p);
-    double x = l.x < rb->rect[0] ? rb->rect[0] : (l.x > rb->rect[1] ? rb->rect[1] : l.x);
-    double y = l.y < rb->rect[2] ? rb->rect[2] : (l.y > rb->rect[3] ? rb->rect[3] : l.y);
-    return sqrt((l.x - x) * (l.x - x) + (l.y - y) * (l.y - y) + l.z * l.z);
-}
-
 static cm_rebuild_ws rbws;
 
+/* spec §1 SIN_FLAT and the K7 acceptance of spec 6 */
+#define SIN_FLAT 0.08715574274765817
+#define K7_ACCEPT 0.25
+
+/* rebuild face f of the decoded model with a trial record (decoder code, no checksum yet) */
+static cm_err trial_rebuild(int f, int method, int layout, int corner, cm_rebuilt *rb)
+{
+    cm_face *F = &dec.model.faces[f];
+    cm_face saved = *F;
+    F->method = (uint8_t)method;
+    F->layout = (uint8_t)layout;
+    F->corner = (uint8_t)corner;
+    cm_err e = cm_rebuild_face_ex(&dec.model, (uint32_t)f, 0, rb, &rbws, NULL);
+    *F = saved;
+    return e;
+}
+
 /* spec 5A applicability and §12 verification of PLANE for face f of the decoded model */
-static int try_plane(const loaded_model *lm, int f, double rel_tol, face_report *rep)
+static int try_plane(const loaded_model *lm, int f, const encode_opts *o, face_report *rep, face_surface *fs)
 {
     cm_model *m = &dec.model;
-    uint8_t saved = m->faces[f].method;
-    m->faces[f].method = CM_METHOD_PLANE;
     cm_rebuilt rb;
-    cm_err e = cm_rebuild_face(m, (uint32_t)f, &rb, &rbws, NULL);
-    m->faces[f].method = saved;
-    if (e != CM_OK)
+    if (trial_rebuild(f, CM_METHOD_PLANE, 0, 0, &rb) != CM_OK)
         return 0;
-    double tol = rel_tol * rb.bbox;
+    double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rb.bbox);
     int n, n_outer;
     if (cm_face_samples(m, (uint32_t)f, rbws.samples, CM_MAX_FACE_SAMPLES, &n, &n_outer, NULL) != CM_OK)
         return 0;
@@ -735,30 +768,139 @@ static int try_plane(const loaded_model *lm, int f, double rel_tol, face_report 
     rep->bbox = rb.bbox;
     if (dev > 0.25 * tol)
         return 0; /* spec 5A: the boundary is not flat enough */
-    /* §12: the original surface on a 21 x 21 grid inside the outer loop, distance to the plane */
-    const face_domain *fd = &lm->fds[f];
-    if (!fd->uv)
+    face_error fe;
+    if (!verify_face(lm, m, f, &rb, tol, &fe))
         return 0;
-    double worst = 0;
-    int kept = 0;
-    for (int i = 0; i <= 20; i++)
-        for (int j = 0; j <= 20; j++) {
-            cm_vec2 uv = cm_v2(fd->umin + (fd->umax - fd->umin) * i / 20.0, fd->vmin + (fd->vmax - fd->vmin) * j / 20.0);
-            if (!cm_point_in_polygon(fd->uv + fd->loops[0].first, fd->loops[0].n, uv))
-                continue;
-            cm_vec3 P;
-            if (face_domain_eval(&lm->brep, fd, uv.x, uv.y, &P, NULL, NULL) != CM_OK)
-                return 0;
-            worst = fmax(worst, dist_to_plane_patch(&rb, P));
-            kept++;
+    rep->rebuild_max = fe.max;
+    rep->rebuild_avg = fe.avg;
+    rep->ratio = fe.ratio;
+    if (!(fe.max < tol))
+        return 0;
+    return face_surface_set(&fs[f], &rb);
+}
+
+/*
+ * Spec §6 applicability of GREGORY for face f: an outer loop of 3..CM_MAX_SIDES edges, each
+ * cubic-convertible within a quarter of the tolerance (K7), no reflex corner.  This version also
+ * asks for no holes: the rebuilt patches cover the outer loop, and a terminal would have to trim
+ * them by the holes' projections (left to the fitting methods).  Fills the corner angles' cosines
+ * for the layout-2 order.  Returns 0 (and why, in rep->why) when not applicable.
+ */
+static int gregory_applicable(int f, double tol, double *corner_cos, face_report *rep)
+{
+    const cm_model *m = &dec.model;
+    const cm_face *F = &m->faces[f];
+    const cm_loop *L = &m->loops[F->loop0];
+    int n = (int)L->nuse;
+    if (F->nloops != 1) {
+        rep->why = "holes";
+        return 0;
+    }
+    if (n < 3 || n > CM_MAX_SIDES) {
+        rep->why = n < 3 ? "fewer than 3 sides" : "too many sides";
+        return 0;
+    }
+    cm_cubic cub[CM_MAX_SIDES];
+    for (int k = 0; k < n; k++) {
+        const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
+        cm_curve c;
+        cm_model_edge_curve(m, U->edge, &c);
+        double delta = 0;
+        if (cm_cubic_convert(&c, 0.0, 1.0, &cub[k], &delta, NULL, NULL) != CM_OK || !(delta <= K7_ACCEPT * tol)) {
+            rep->why = "edge not cubic-convertible";
+            return 0;
         }
-    for (int i = 0; i < fd->npts; i++) /* and the original boundary (§12 step 3) */
-        if (cm_finite3(fd->xyz[i]))
-            worst = fmax(worst, dist_to_plane_patch(&rb, fd->xyz[i]));
-    (void)kept;
-    rep->rebuild_max = worst;
-    rep->ratio = rb.bbox > 0 ? worst / rb.bbox : 0;
-    return rep->ratio < rel_tol;
+        if (U->rev)
+            cub[k] = cm_cubic_reverse(&cub[k]);
+    }
+    double bbox;
+    cm_vec3 nF;
+    if (cm_face_normal(m, (uint32_t)f, rbws.samples, &bbox, &nF, NULL) != CM_OK) {
+        rep->why = "no face normal";
+        return 0;
+    }
+    for (int k = 0; k < n; k++) {
+        const cm_cubic *in = &cub[(k + n - 1) % n], *out = &cub[k];
+        cm_vec3 ta = cm_sub(in->c[3], in->c[2]), tb = cm_sub(out->c[1], out->c[0]);
+        if (!(cm_norm(ta) > 0) || !(cm_norm(tb) > 0)) {
+            rep->why = "degenerate edge";
+            return 0;
+        }
+        cm_vec3 a = cm_neg(cm_unit(ta)), b = cm_unit(tb), x = cm_cross(b, a);
+        corner_cos[k] = cm_dot(a, b);
+        if (cm_norm(x) >= SIN_FLAT && cm_dot(x, nF) <= 0) {
+            rep->why = "reflex corner";
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* spec §14 candidate list of the GREGORY family; the first that passes §12 wins */
+static int try_gregory(const loaded_model *lm, int f, const encode_opts *o, face_report *rep, face_surface *fs,
+                       tx *t)
+{
+    double ccos[CM_MAX_SIDES];
+    double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
+    if (!gregory_applicable(f, tol, ccos, rep))
+        return 0;
+    int n = (int)dec.model.loops[dec.model.faces[f].loop0].nuse;
+    int cand_layout[4], cand_j[4], nc = 0;
+    if (n == 4) {
+        cand_layout[nc] = CM_GREG_LAYOUT_QUAD;
+        cand_j[nc++] = 0;
+    } else {
+        cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
+        cand_j[nc++] = 0;
+    }
+    if (n == 3) {
+        /* layout 2 with j by increasing corner angle: decreasing cosine of the angle between a, b */
+        int order[3] = {0, 1, 2};
+        for (int i = 1; i < 3; i++)
+            for (int k = i; k > 0 && ccos[order[k]] > ccos[order[k - 1]]; k--) {
+                int x = order[k];
+                order[k] = order[k - 1];
+                order[k - 1] = x;
+            }
+        for (int i = 0; i < 3; i++) {
+            cand_layout[nc] = CM_GREG_LAYOUT_DEGEN;
+            cand_j[nc++] = order[i];
+        }
+    }
+    double best_ratio = HUGE_VAL;
+    for (int c = 0; c < nc; c++) {
+        cm_rebuilt rb;
+        if (trial_rebuild(f, CM_METHOD_GREGORY, cand_layout[c], cand_j[c], &rb) != CM_OK) {
+            rep->why = "construction failed";
+            continue;
+        }
+        face_error fe;
+        if (!verify_face(lm, &dec.model, f, &rb, tol, &fe)) {
+            rep->why = "no source domain";
+            continue;
+        }
+        if (fe.ratio < best_ratio) {
+            best_ratio = fe.ratio;
+            rep->greg_ratio = fe.ratio;
+        }
+        if (!(fe.max < tol)) {
+            rep->why = "error";
+            continue;
+        }
+        if (!face_surface_set(&fs[f], &rb))
+            return 0;
+        t->layout[f] = cand_layout[c];
+        t->corner[f] = cand_j[c];
+        t->checksum[f] = rb.checksum;
+        rep->layout = cand_layout[c];
+        rep->corner = cand_j[c];
+        rep->rebuild_max = fe.max;
+        rep->rebuild_avg = fe.avg;
+        rep->ratio = fe.ratio;
+        rep->why = NULL;
+        return 1;
+    }
+    return 0;
 }
 
 /* distance between the original surface and the kept one at a 21 x 21 grid of the same parameters */
@@ -782,6 +924,140 @@ static void measure_keep(const loaded_model *lm, int f, face_report *rep)
     rep->rebuild_max = worst;
     rep->ratio = rep->bbox > 0 ? worst / rep->bbox : 0;
     rep->surf_ctrl = kept.nu * kept.nv;
+}
+
+/* spec §1 COS_G1 = cos 1 deg */
+#define COS_G1 0.9998476951563913
+
+/*
+ * Spec §14 steps 3-4 on the decoded model (the transmitted edges): per face PLANE, then the
+ * GREGORY candidates, else KEEP; then the G1 fix-point: every G1 edge next to a rebuilt face is
+ * checked on the final surfaces (§13), and where it fails the rebuilt face with the larger error
+ * goes back to KEEP, until nothing changes (faces only move to KEEP: at most #faces rounds).
+ */
+static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, cm_status *st)
+{
+    const cm_model *m = &dec.model;
+    int nf = t->nfaces;
+    face_surface *fs = calloc((size_t)nf + 1, sizeof *fs);
+    if (!fs)
+        return cm_fail(st, CM_E_IO, "out of memory");
+    for (int f = 0; f < nf; f++) {
+        if (o->progress)
+            o->progress("choosing methods", f + 1, nf, o->progress_ctx);
+        face_report *rep = &r->faces[f];
+        memset(rep, 0, sizeof *rep);
+        rep->g1_cos = 1.0;
+        rep->layout = -1;
+        t->method[f] = CM_METHOD_KEEP;
+        t->layout[f] = t->corner[f] = 0;
+        t->checksum[f] = 0;
+        if (try_plane(lm, f, o, rep, fs))
+            t->method[f] = CM_METHOD_PLANE;
+        else if (o->gregory && try_gregory(lm, f, o, rep, fs, t))
+            t->method[f] = CM_METHOD_GREGORY;
+        fs[f].method = t->method[f];
+    }
+    /* each G1 edge is measured once, and again only when one of its faces went back to KEEP */
+    double *ecos = malloc(((size_t)m->nedges + 1) * sizeof *ecos);
+    int *eworse = malloc(((size_t)m->nedges + 1) * sizeof *eworse);
+    unsigned char *dirty = malloc((size_t)m->nedges + 1);
+    if (!ecos || !eworse || !dirty) {
+        free(ecos);
+        free(eworse);
+        free(dirty);
+        for (int f = 0; f < nf; f++)
+            face_surface_free(&fs[f]);
+        free(fs);
+        return cm_fail(st, CM_E_IO, "out of memory");
+    }
+    memset(dirty, 1, (size_t)m->nedges + 1);
+    for (int round = 0; round <= nf; round++) {
+        int changed = 0;
+        for (int f = 0; f < nf; f++)
+            r->faces[f].g1_cos = 1.0;
+        for (uint32_t e = 0; e < m->nedges; e++) {
+            int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
+            if (!m->edges[e].g1 || a < 0 || b < 0 || a == b)
+                continue;
+            if (t->method[a] == CM_METHOD_KEEP && t->method[b] == CM_METHOD_KEEP)
+                continue;
+            if (dirty[e])
+                ecos[e] = verify_g1_edge(lm, m, e, fs, &eworse[e]);
+            dirty[e] = 0;
+            double c = ecos[e];
+            for (int s = 0; s < 2; s++) {
+                face_report *rep = &r->faces[s ? b : a];
+                rep->g1_cos = c < rep->g1_cos ? c : rep->g1_cos;
+            }
+            if (c >= COS_G1)
+                continue;
+            /* spec 14.4 reverts the rebuilt face with the larger Max error; on the corpus that often
+               turned back an exact PLANE next to a Gregory face whose error is smaller in millimetres
+               but whose normal is the one that strays.  The face whose normal is farther from its own
+               source surface goes back (a KEEP face's is exact, so a rebuilt one is always picked). */
+            int pick = t->method[a] == CM_METHOD_KEEP ? b : a;
+            if (t->method[a] != CM_METHOD_KEEP && t->method[b] != CM_METHOD_KEEP)
+                pick = eworse[e] ? b : a;
+            t->method[pick] = CM_METHOD_KEEP;
+            fs[pick].method = CM_METHOD_KEEP;
+            face_surface_free(&fs[pick]);
+            r->faces[pick].why = "G1";
+            r->faces[pick].g1_reverted = 1;
+            changed = 1;
+            /* its edges are measured again next round (this one included: now against a KEEP face) */
+            const cm_face *F = &m->faces[pick];
+            for (uint32_t l = 0; l < F->nloops; l++) {
+                const cm_loop *L = &m->loops[F->loop0 + l];
+                for (uint32_t u = 0; u < L->nuse; u++)
+                    dirty[m->uses[L->use0 + u].edge] = 1;
+            }
+        }
+        if (!changed)
+            break;
+    }
+    free(ecos);
+    free(eworse);
+    free(dirty);
+    r->faces_plane = r->faces_gregory = r->faces_keep = 0;
+    for (int f = 0; f < nf; f++) {
+        face_report *rep = &r->faces[f];
+        rep->method = t->method[f];
+        if (t->method[f] == CM_METHOD_PLANE)
+            r->faces_plane++;
+        else if (t->method[f] == CM_METHOD_GREGORY)
+            r->faces_gregory++;
+        else {
+            r->faces_keep++;
+            t->layout[f] = t->corner[f] = 0;
+            t->checksum[f] = 0;
+            rep->layout = -1;
+            measure_keep(lm, f, rep);
+        }
+        face_surface_free(&fs[f]);
+    }
+    free(fs);
+    return CM_OK;
+}
+
+/*
+ * The file with every face kept (so that every face can be measured against a decoded model that
+ * has all surfaces), decoded; the methods chosen on it; the file with those, decoded again.
+ */
+static cm_err choose_and_write(loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, cm_status *st)
+{
+    for (int f = 0; f < t->nfaces; f++)
+        t->method[f] = CM_METHOD_KEEP;
+    cm_err e = write_file(t, lm, o, NULL, r, st);
+    if (e == CM_OK)
+        e = decode_back(r, st);
+    if (e == CM_OK)
+        e = choose_methods(lm, t, o, r, st);
+    if (e == CM_OK)
+        e = write_file(t, lm, o, NULL, r, st);
+    if (e == CM_OK)
+        e = decode_back(r, st);
+    return e;
 }
 
 /* ---- needs ---- */
@@ -878,6 +1154,10 @@ static void compute_needs(const encode_result *r, uint32_t *need)
         const cm_face *F = &m->faces[f];
         uint32_t uses = 0;
         NEED(MAX_LOOPS, F->nloops);
+        if (F->method == CM_METHOD_GREGORY) { /* sides of the outer loop; N-split: one patch per side */
+            NEED(MAX_SIDES, m->loops[F->loop0].nuse);
+            NEED(MAX_GREG, F->layout == CM_GREG_LAYOUT_SPLIT ? m->loops[F->loop0].nuse : 1u);
+        }
         for (uint32_t l = 0; l < F->nloops; l++) {
             NEED(MAX_LOOP_EDGES, m->loops[F->loop0 + l].nuse);
             uses += m->loops[F->loop0 + l].nuse;
@@ -916,10 +1196,13 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     t.origin[2] = lm->brep.box.lo.z;
     t.nfaces = lm->mesh.nfaces;
     t.method = calloc((size_t)t.nfaces + 1, sizeof(int));
+    t.layout = calloc((size_t)t.nfaces + 1, sizeof(int));
+    t.corner = calloc((size_t)t.nfaces + 1, sizeof(int));
+    t.checksum = calloc((size_t)t.nfaces + 1, sizeof(uint32_t));
     t.color = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.surfs = calloc((size_t)t.nfaces + 1, sizeof *t.surfs);
     r->faces = calloc((size_t)t.nfaces + 1, sizeof *r->faces);
-    if (!t.method || !t.color || !t.surfs || !r->faces) {
+    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.color || !t.surfs || !r->faces) {
         tx_free(&t);
         return cm_fail(st, CM_E_IO, "out of memory");
     }
@@ -940,36 +1223,16 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             t.color[f] = k <= t.npalette ? k : 0;
         }
     }
-    /* pass 1: everything kept; decode it back to have exactly the transmitted edges */
+    /* pass 1: everything kept, decoded back to have exactly the transmitted edges; the methods;
+       pass 2: the final methods, decoded again, needs taken from what the terminal will see */
     if (e == CM_OK)
-        e = write_file(&t, lm, o, NULL, r, st);
-    if (e == CM_OK)
-        e = decode_back(r, st);
+        e = choose_and_write(lm, &t, o, r, st);
     if (e == CM_OK) {
-        for (int f = 0; f < t.nfaces; f++) {
-            if (o->progress)
-                o->progress("choosing methods", f + 1, t.nfaces, o->progress_ctx);
-            face_report *rep = &r->faces[f];
-            if (try_plane(lm, f, o->rel_tol, rep)) {
-                t.method[f] = CM_METHOD_PLANE;
-                r->faces_plane++;
-            } else {
-                t.method[f] = CM_METHOD_KEEP;
-                r->faces_keep++;
-                measure_keep(lm, f, rep);
-            }
-            rep->method = t.method[f];
-        }
         for (int i = 0; i < t.nedges; i++) {
             r->edges_line += t.edges[i].kind == CM_EDGE_LINE;
             r->edges_curve += t.edges[i].kind == CM_EDGE_CURVE;
         }
     }
-    /* pass 2: the final methods; decoded again, needs taken from what the terminal will see */
-    if (e == CM_OK)
-        e = write_file(&t, lm, o, NULL, r, st);
-    if (e == CM_OK)
-        e = decode_back(r, st);
     double *fvol = calloc((size_t)t.nfaces + 1, sizeof(double));
     if (e == CM_OK && !fvol)
         e = cm_fail(st, CM_E_IO, "out of memory");
@@ -983,10 +1246,9 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
            first use in that walk, so number them again */
         tx_free_edges(&t);
         e = build_edges(lm, &t, st);
+        /* the turned faces' loops run the other way: their Gregory patches change; choose again */
         if (e == CM_OK)
-            e = write_file(&t, lm, o, NULL, r, st);
-        if (e == CM_OK)
-            e = decode_back(r, st);
+            e = choose_and_write(lm, &t, o, r, st);
         if (e == CM_OK) {
             compute_needs(r, r->need);
             e = tessellation_needs(r->need, fvol, o, st);

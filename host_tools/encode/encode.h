@@ -28,14 +28,26 @@ typedef struct encode_opts {
     double tess_rel;   /* recommended chordal tolerance, fraction of the model diagonal */
     const cm_limit_info *target; /* limits of the profile the file must load on (NULL: none) */
     const char *target_name;
+    double abs_tol;              /* > 0: a face's tolerance in mm (with rel_tol too when rel_set) */
+    int rel_set;                 /* rel_tol was asked for (with abs_tol the smaller one applies) */
+    int gregory;                 /* try GREGORY (spec §6) on non-planar faces (default 1) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;
 } encode_opts;
 
 void encode_opts_default(encode_opts *o);
 
+/** A face's rebuild tolerance in mm (spec §1 tol_F): rel_tol x bbox_F, or abs_tol, or the smaller. */
+double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox);
+
 typedef struct face_report {
     int method;        /* CM_METHOD_* */
+    int layout, corner; /* GREGORY: layout 0/1/2 and layout 2's vertex; -1 otherwise */
+    double rebuild_avg;/* mean distance over the §12 points (mm) */
+    double greg_ratio; /* best §12 ratio any GREGORY candidate reached (0: none tried) */
+    double g1_cos;     /* worst |nF.nG| on the face's G1 edges, final surfaces (§13; 1: none) */
+    int g1_reverted;   /* rebuilt, then turned back to KEEP by the G1 fix-point */
+    const char *why;   /* KEEP: why GREGORY did not apply or failed (NULL: not tried) */
     double bbox;       /* face bounding-box diagonal (mm) */
     double plane_dev;  /* largest boundary distance from the face's plane (mm) */
     double rebuild_max;/* largest distance of the original surface to the sent one (§12 grid, mm) */
@@ -47,7 +59,7 @@ typedef struct encode_result {
     uint8_t *bytes;    /* malloc'd file */
     size_t len;
     uint32_t need[CM_LIMIT_COUNT];
-    int faces_plane, faces_keep;
+    int faces_plane, faces_gregory, faces_keep;
     int edges_line, edges_curve;
     int faces_flipped; /* faces turned to make every part consistently oriented */
     double q;          /* grid step (mm) */

@@ -55,6 +55,9 @@ void igw_square_scrambled_144(igw *w, double a);
 
 /** An untrimmed bicubic 128 patch: P_ij = (i, j, z_ij) with z from a fixed table. */
 void igw_bicubic_128(igw *w);
+/** Half cylinder (radius r, height h, axis z, angles 0..pi) as two 144 quarter faces, each on a
+ *  120 surface of revolution, sharing the line at angle pi/2 (spec §17 T5). */
+void igw_split_half_cylinder_144(igw *w, double r, double h);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 

@@ -13,7 +13,16 @@
 #      (cmz encode --report), and every point of the true surfaces that
 #      close to the mesh (plus OCCT's own meshing deflection);
 #   3. the GLB through tinygltf (gltf_check): valid glTF 2.0, every
-#      accessor, index and bound consistent.
+#      accessor, index and bound consistent;
+#   4. `cmz eval`, which imports the IGES again and rebuilds every PLANE and
+#      GREGORY face with the terminal's code: every rebuilt face within its
+#      tolerance (spec §12), every tangent edge next to one within 1 deg
+#      (§13).  The share of faces whose surface was deleted is printed, and
+#      its median over the models last.
+# Where OCCT's reading of the 3D trim curves drops curves (ovt__asmo: three
+# faces whose 102 composites list their pieces out of order come out as bare
+# rectangles, their notches filled), model->mesh is measured again with the
+# file's preferred curves and that result stands, with a note.
 # The slack 1e-5 x diagonal covers the coordinate grid (1e-6 x diagonal),
 # float output and the oracle's projections.  One TAP line per model.
 set -u
@@ -26,7 +35,7 @@ if [ ! -d "$dir" ]; then
 fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-n=0 fail=0
+n=0 fail=0 shares=()
 for f in "$dir"/*; do
     n=$((n + 1))
     b=$(basename "$f")
@@ -50,6 +59,9 @@ for f in "$dir"/*; do
     dev_rc=$?
     glb=$("$gltf" "$tmp/m.glb" 2>&1)
     glb_rc=$?
+    ev=$("$cmz" eval -q "$f" "$tmp/m.cmz" 2>&1)
+    ev_rc=$?
+    read -r np ng <<<"$(sed -n 's/.* faces (\([0-9]*\) plane, \([0-9]*\) gregory.*/\1 \2/p' "$tmp/enc")"
     get() { sed -n "s/^$1 //p" <<<"$dev"; }
     diag=$(get diag) m2m=$(get mesh_to_model_max) mm2=$(get model_to_mesh_max) defl=$(get model_defl)
     faces=$(sed -n 's/.* -> .*: \([0-9]*\) faces .*/\1/p' "$tmp/enc")
@@ -61,13 +73,28 @@ for f in "$dir"/*; do
         note=" (OCCT places $occt_faces faces, cmz $faces: model->mesh not compared)"
         mm2=0
     fi
-    verdict=$(awk -v t="$tess" -v r="$rebuild" -v d="$diag" -v a="$m2m" -v b="$mm2" -v e="$defl" 'BEGIN {
-        if (d == "" || a == "" || b == "") { print "no oracle result"; exit }
-        s = 1e-5 * d
-        if (a > t + r + s) { printf "mesh->model %.4g mm > tess %.4g + rebuild %.4g + %.2g", a, t, r, s; exit }
-        if (b > t + r + e + s) { printf "model->mesh %.4g mm > tess %.4g + rebuild %.4g + defl %.4g + %.2g", b, t, r, e, s; exit }
-        print "ok" }')
-    summary="$size bytes, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$note"
+    judge() {
+        awk -v t="$tess" -v r="$rebuild" -v d="$diag" -v a="$m2m" -v b="$mm2" -v e="$defl" 'BEGIN {
+            if (d == "" || a == "" || b == "") { print "no oracle result"; exit }
+            s = 1e-5 * d
+            if (a > t + r + s) { printf "mesh->model %.4g mm > tess %.4g + rebuild %.4g + %.2g", a, t, r, s; exit }
+            if (b > t + r + e + s) { printf "model->mesh %.4g mm > tess %.4g + rebuild %.4g + defl %.4g + %.2g", b, t, r, e, s; exit }
+            print "ok" }'
+    }
+    verdict=$(judge)
+    if [[ "$verdict" == model-\>mesh* ]]; then
+        dev2=$("$oracle" mesh-dev "$f" "$tmp/m.stl" $ORACLE_OPTS 2>/dev/null)
+        mm2_file=$(sed -n "s/^model_to_mesh_max //p" <<<"$dev2")
+        old=$mm2
+        mm2=$mm2_file
+        if [ "$(judge)" = ok ]; then
+            note="$note (model->mesh $old mm with OCCT's 3D-curve trimming, $mm2_file with the file's curves)"
+            verdict=ok
+        fi
+    fi
+    share=$(awk -v a="${np:-0}" -v b="${ng:-0}" -v n="${faces:-0}" 'BEGIN { printf "%.1f", (n > 0 ? 100 * (a + b) / n : 0) }')
+    shares+=("$share")
+    summary="$size bytes, $share % of faces deleted, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$note"
     if [ $topo_rc -ne 0 ]; then
         echo "not ok $n - $b: mesh topology: ${topo#* - }"
         fail=$((fail + 1))
@@ -77,9 +104,16 @@ for f in "$dir"/*; do
     elif [ $glb_rc -ne 0 ]; then
         echo "not ok $n - $b: GLB rejected: $(tail -n 1 <<<"$glb")"
         fail=$((fail + 1))
+    elif [ $ev_rc -ne 0 ]; then
+        echo "not ok $n - $b: cmz eval: $(grep -m 3 'eval\|FAILED' <<<"$ev" | tr '\n' ' ')"
+        fail=$((fail + 1))
     else
         echo "ok $n - $b: $summary"
     fi
 done
+if [ ${#shares[@]} -gt 0 ]; then
+    median=$(printf '%s\n' "${shares[@]}" | sort -g | awk '{ a[NR] = $1 } END { print NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2 }')
+    echo "# median share of faces whose surface is deleted: $median %"
+fi
 echo "$((n - fail)) passed, $fail failed"
 [ $fail -eq 0 ]

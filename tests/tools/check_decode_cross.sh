@@ -7,7 +7,9 @@
 #    both (the host profile: the same decoder, the workstation's limits): the
 #    GLB files must be byte-identical (spec §2: binary64 and no contraction
 #    everywhere), and a model the terminal refuses must be refused the same
-#    way on both.
+#    way on both.  The terminal decoder built at -O0 must give the same bytes
+#    too.  Each decoder checks every GREGORY face's checksum against the one
+#    the x86-64 -O2 encoder wrote (spec §17 T11): a differing rebuild fails.
 # 2. The tiny profile must refuse a real model within its header (at a byte
 #    offset below 200) with CM_E_LIMIT naming the limit, the need and the
 #    build's value, and write nothing.
@@ -48,12 +50,17 @@ for m in "${models[@]}"; do
             else
                 bad "$b ($prof): decode failed: $(cat "$tmp/xe")"
             fi
+        elif [ $prof = terminal ] && ! "$root/O0/$native-terminal/cmz-decode" "$tmp/$b.cmz" -o "$tmp/o.glb" \
+                > /dev/null 2> "$tmp/oe"; then
+            bad "$b ($prof): the -O0 build failed: $(cat "$tmp/oe")"
+        elif [ $prof = terminal ] && ! cmp -s "$tmp/x.glb" "$tmp/o.glb"; then
+            bad "$b ($prof): GLB differs between -O2 and -O0 ($(cmp "$tmp/x.glb" "$tmp/o.glb" | head -n 1))"
         elif cmp -s "$tmp/x.glb" "$tmp/a.glb"; then
-            ok "$b ($prof): GLB byte-identical on aarch64 ($(stat -c %s "$tmp/x.glb") bytes)"
+            ok "$b ($prof): GLB byte-identical on aarch64$([ $prof = terminal ] && echo " and at -O0") ($(stat -c %s "$tmp/x.glb") bytes)"
         else
             bad "$b ($prof): GLB differs between x86-64 and aarch64 ($(cmp "$tmp/x.glb" "$tmp/a.glb" | head -n 1))"
         fi
-        rm -f "$tmp/x.glb" "$tmp/a.glb"
+        rm -f "$tmp/x.glb" "$tmp/a.glb" "$tmp/o.glb"
     done
 done
 

@@ -21,8 +21,9 @@
 #define CM_FMT_MAGIC1 'C'
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
-#define CM_FMT_VERSION_MAJOR 1
+#define CM_FMT_VERSION_MAJOR 2     /* what this writer emits when a face needs it (GREGORY) */
 #define CM_FMT_VERSION_MINOR 0
+#define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
 #define CM_FMT_SECTION_ENTRY 16u  /* tag, 3 reserved, offset, length, crc */
@@ -31,6 +32,8 @@
 #define CM_FMT_WEIGHT_BITS 24     /* weights quantised to 2^-24 of the first weight */
 #define CM_FMT_MAX_PALETTE 255    /* colours (index 0 = none) */
 #define CM_FMT_SEG_PER_EDGE 10    /* boundary samples per edge use (spec 8.1 / 5A) */
+/** Boundary samples of a face: CM_FMT_SEG_PER_EDGE per edge use (spec 8.1), all loops. */
+#define CM_MAX_FACE_SAMPLES (CM_MAX_FACE_EDGES * CM_FMT_SEG_PER_EDGE)
 
 enum cm_fmt_section {
     CM_SEC_VERT = 1,
@@ -44,7 +47,8 @@ enum cm_fmt_section {
 enum cm_fmt_method {
     CM_METHOD_KEEP = 0,   /* the original surface travels in the SURF section */
     CM_METHOD_PLANE = 1,  /* spec 5A: rebuilt from the boundary */
-    CM_METHOD_COUNT = 2   /* methods this version knows */
+    CM_METHOD_GREGORY = 2, /* spec §6: Gregory patches from the boundary curves (format 2) */
+    CM_METHOD_COUNT = 3   /* methods this version knows */
 };
 
 enum cm_fmt_edge_kind {
@@ -80,8 +84,13 @@ typedef struct cm_face {
     uint32_t loop0;       /* loop0 is the outer loop */
     uint16_t nloops;
     uint8_t method, flip, color; /* color: palette index, 0 = none */
+    uint8_t layout, corner; /* GREGORY record (spec 15.2): layout 0/1/2 and layout 2's vertex j */
     uint32_t surf;        /* KEEP: index of its kept surface */
+    uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */
 } cm_face;
+
+#define CM_NO_FACE (-1)   /* edge_face: no face on that side */
+#define CM_MANY_FACES (-2) /* edge_face[e][1]: a third face uses the edge (non-manifold) */
 
 /** The decoded model: everything the reconstruction reads (spec §2 rule 5). */
 typedef struct cm_model {
@@ -91,6 +100,10 @@ typedef struct cm_model {
     uint32_t nverts, nedges, nfaces, nloops, nuses, nsurfs, nctrl, nknots, npalette;
     cm_vec3 verts[CM_MAX_VERTICES];
     cm_edge edges[CM_MAX_EDGES];
+    /* derived when the faces are read: the (up to) two faces that use each edge, and whether an
+       N-split GREGORY face uses it (its tessellation then needs the edge's midpoint, t = 1/2) */
+    int32_t edge_face[CM_MAX_EDGES][2];
+    uint8_t edge_split[CM_MAX_EDGES];
     cm_ksurf surfs[CM_MAX_FACES];
     cm_face faces[CM_MAX_FACES];
     cm_loop loops[CM_MAX_MODEL_LOOPS];
@@ -128,5 +141,10 @@ struct cm_curve;
 struct cm_surf;
 void cm_model_edge_curve(const cm_model *m, uint32_t e, struct cm_curve *out);
 void cm_model_surface(const cm_model *m, uint32_t s, struct cm_surf *out);
+
+/** Fill edge_face and edge_split from the faces' loops (the decoder calls it after FACE). */
+void cm_model_adjacency(cm_model *m);
+/** The other face of edge e seen from face f, or CM_NO_FACE (free, non-manifold, a seam of f). */
+int32_t cm_model_partner(const cm_model *m, uint32_t e, uint32_t f);
 
 #endif /* CM_FORMAT_H */

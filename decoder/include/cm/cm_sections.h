@@ -28,9 +28,10 @@ typedef struct cm_surf_ctx {
     cm_ac_prob rational, uniform;
 } cm_surf_ctx;
 
-/* FACE: count; per face its method, orientation, loops and edge uses */
+/* FACE: count; per face its method, its record (GREGORY: layout, corner, checksum), orientation,
+   loops and edge uses */
 typedef struct cm_face_ctx {
-    cm_ac_int count, method, loops, uses, back;
+    cm_ac_int count, method, loops, uses, back, layout, corner;
     cm_ac_prob flip, is_new, rev_new, rev_old;
 } cm_face_ctx;
 

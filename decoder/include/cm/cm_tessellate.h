@@ -33,6 +33,8 @@ typedef struct cm_tess_ws {
     int src2[CM_MAX_TESS_POINTS];          /* polygon joins: sources of the joined points */
     int ssrc[CM_MAX_TESS_POINTS];          /* polygon joins: sources of the winding loops' copies */
     cm_vec3 xyz[CM_MAX_TESS_POINTS];       /* refinement: 3D position of each triangulation point */
+    int use_first[CM_MAX_LOOP_EDGES];      /* outer loop: each use's first bpts index and sample count */
+    int use_n[CM_MAX_LOOP_EDGES];
     int tris[CM_MAX_TESS_TRIS][3];
     uint32_t vmap[CM_MAX_TESS_POINTS];     /* triangulation point -> mesh vertex (or UINT32_MAX) */
     double ts[CM_MAX_EDGE_SAMPLES];

@@ -1,0 +1,190 @@
+/*
+ * cm_gregface.h - the GREGORY method's surface construction (spec §5.4,
+ * §6.2-§6.5): from a face's outer loop of cubic edges and the basis
+ * normals at their ends, 1..CM_MAX_GREG bicubic Gregory patches that
+ * interpolate the loop with the cross-boundary tangent planes of §5.4.
+ *
+ * Contract: pure functions of their explicit inputs; no heap, no VLA, no
+ * recursion, no I/O; only + - * / sqrt fabs and comparisons, fixed loop
+ * orders (spec §2 rules 3-4), so encoder and decoder rebuild bit-identical
+ * surfaces under -ffp-contract=off.  Over-limit counts return CM_E_LIMIT.
+ *
+ * ---- patch layouts (what the tessellator needs) ----------------------
+ * Every patch is a cm_gregory on [0,1]^2; P[i][j] has i along u, j along v.
+ * "side k" is in->side[k] (E_k: V_k -> V_{k+1}, indices mod n).
+ *
+ * layout 0 (QUAD, n = 4, npatch = 1), spec §6.3:
+ *     S(u,0) = E_0(u)      S(1,v) = E_1(v)
+ *     S(u,1) = E_2(1-u)    S(0,v) = E_3(1-v)
+ *   corners (0,0)=V_0, (1,0)=V_1, (1,1)=V_2, (0,1)=V_3.
+ *
+ * layout 2 (DEGEN, n = 3, npatch = 1, vertex j), spec §6.5: the loop is
+ *   re-indexed so that it starts at V_j; with E'_m = side (j+m) mod 3:
+ *     S(u,0) = E'_0(u)     S(1,v) = E'_1(v)
+ *     S(u,1) = E'_2(1-u)   S(0,v) = V_j for every v (collapsed side)
+ *   corners (0,0)=(0,1)=V_j, (1,0)=V_{j+1}, (1,1)=V_{j+2}.
+ *
+ * layout 1 (SPLIT, n = 3..CM_MAX_SIDES, npatch = n), spec §6.4: E_k is split
+ *   at t = CM_GREG_SPLIT_T (= 1/2) into H_k^a (V_k -> M_k) and H_k^b
+ *   (M_k -> V_{k+1}); inner[k] = I_k runs M_k -> C (C = centre).
+ *   Patch k is the quad around V_k, loop [H_k^a, I_k, rev(I_{k-1}), H_{k-1}^b]:
+ *     S_k(u,0) = H_k^a(u)     = E_k(u/2)
+ *     S_k(1,v) = I_k(v)
+ *     S_k(u,1) = I_{k-1}(u)                   (I_{k-1} in its own direction)
+ *     S_k(0,v) = H_{k-1}^b(1-v) = E_{k-1}(1 - v/2)
+ *   corners (0,0)=V_k, (1,0)=M_k, (1,1)=C, (0,1)=M_{k-1}.
+ *   So the point E_k(t) lies on patch k at (2t, 0) for t <= 1/2 and on
+ *   patch k+1 at (0, 2-2t) for t >= 1/2 (power-of-two scalings: the
+ *   parameter maps are exact), and the internal curve I_k(t) is patch k at
+ *   (1,t) and patch k+1 at (t,1): sample inner[k] once and use it for both.
+ *   The patch boundaries equal these curves up to rounding only (the halves
+ *   are de Casteljau splits): a tessellator that must not crack samples the
+ *   edge curves and inner[] themselves, and maps parameters as above.
+ *
+ * ---- checksum (spec §2 rule 6) ----------------------------------------
+ * FNV-1a 32 over the bytes of the doubles x, y, z of, for patch
+ * k = 0..npatch-1 in turn: the 12 boundary points P[i][j] (i = 0..3 outer,
+ * j = 0..3 inner, skipping i,j both in {1,2}), then the 8 interior points
+ * I[a][b][c] (a, b, c = 0..1, a outermost).  Each double is serialised as
+ * its IEEE-754 bit pattern, least significant byte first, on every host.
+ */
+#ifndef CM_GREGFACE_H
+#define CM_GREGFACE_H
+
+#include <stdint.h>
+
+#include "cm/cm_bezier.h"
+#include "cm/cm_error.h"
+#include "cm/cm_gregory.h"
+#include "cm/cm_vec.h"
+#include "cm_limits.h"
+
+enum { CM_GREG_LAYOUT_QUAD = 0, CM_GREG_LAYOUT_SPLIT = 1, CM_GREG_LAYOUT_DEGEN = 2 };
+
+/** Layout 1 splits every edge at this parameter (spec 6.4 step 1). */
+#define CM_GREG_SPLIT_T 0.5
+
+/* Spec 6.4 step 2: the centroid's position along a median of the regular
+ * N-gon for odd N, written as the spec writes them (format constants). */
+#define CM_GREG_SPOKE_R3 0.3333333333333334
+#define CM_GREG_SPOKE_R5 0.4472135954999579
+#define CM_GREG_SPOKE_R7 0.47395245819915655
+
+/* A product of two unit vectors shorter than this is "parallel" (dimensionless). */
+#define CM_GREG_EPS_DIR 1e-12
+
+/*
+ * One side of the face's outer loop, in the face's direction (material on
+ * the left when the face normal points at the viewer); side k runs
+ * V_k -> V_{k+1}.
+ */
+typedef struct cm_greg_side {
+    cm_cubic c;     /* the K7 cubic of the edge, in face direction */
+    cm_vec3 Ns, Ne; /* basis normals at its start and end vertex (spec 5.4; the caller applies the G1 symmetric rule) */
+} cm_greg_side;
+
+typedef struct cm_greg_input {
+    int n;                               /* number of sides, 3..CM_MAX_SIDES */
+    cm_greg_side side[CM_MAX_SIDES];
+    cm_vec3 corner_normal[CM_MAX_SIDES]; /* N(F, V_k) of spec 5.3 at V_k (start of side k); odd-N spoke rule */
+    cm_vec3 nF;                          /* face reference normal n_F (unit) */
+    double eps_len;                      /* spec EPS_LEN: lengths <= this are zero */
+} cm_greg_input;
+
+/*
+ * The rebuilt surface (layouts: see the top of this file).  Patches
+ * g[npatch..CM_MAX_GREG-1] and the unused P[1..2][1..2] of every patch are
+ * zero.  inner/centre are set for layout 1 only (zero otherwise).
+ */
+typedef struct cm_greg_surface {
+    int layout;                  /* CM_GREG_LAYOUT_* */
+    int j;                       /* layout 2: the collapsed vertex V_j (original index); else 0 */
+    int n;                       /* sides of the face */
+    int npatch;                  /* 1 (layouts 0, 2) or n (layout 1) */
+    double t_split;              /* layout 1: CM_GREG_SPLIT_T; else 0 */
+    cm_gregory g[CM_MAX_GREG];
+    cm_cubic inner[CM_MAX_SIDES]; /* layout 1: I_k, M_k -> C (inner[k].c[0] = M_k) */
+    cm_vec3 centre;              /* layout 1: C */
+    cm_vec3 centre_normal;       /* layout 1: n_C (spec 6.4 step 2) */
+} cm_greg_surface;
+
+/*
+ * A side of a 4-sided patch given by its basis vectors directly (spec 6.4
+ * step 4 uses this for sub-patches; 6.3 derives A_s, A_e from normals).
+ */
+typedef struct cm_greg_quad_side {
+    cm_cubic c;     /* in the patch loop's direction */
+    cm_vec3 As, Ae; /* cross-boundary basis at the start and the end, pointing into the patch */
+} cm_greg_quad_side;
+
+/**
+ * Spec 5.4 basis vectors of one edge use: A_s = unit(N_s x ĉ_s),
+ * A_e = unit(N_e x ĉ_e), with ĉ the unit end tangents of the cubic (c0 at
+ * the start, c2 at the end; if that control vector is <= eps_len long,
+ * c1 instead).
+ * @return CM_E_DEGENERATE if a tangent is still zero or N is parallel to it
+ */
+CM_NODISCARD cm_err cm_greg_edge_basis(const cm_cubic *c, cm_vec3 Ns, cm_vec3 Ne, double eps_len, cm_vec3 *As,
+                                       cm_vec3 *Ae, cm_status *st);
+
+/**
+ * Spec 6.2: the inner control points X1 = C1 + b1, X2 = C2 + b2 of the
+ * cross-boundary derivative k(t)A(t) + h(t)c(t) along cubic c, with
+ * A(t) = (1-t)As + t Ae, fitted to the corner vectors b0 (at C0) and b3
+ * (at C3).  A corner vector <= eps_len long gives k = h = 0 at that end;
+ * a control vector c0 (c2) <= eps_len long gives h = 0 and k = A.b/|A|^2
+ * there (the 2x2 system is rank one).
+ * @param[out] kh  k0, h0, k1, h1 (may be NULL)
+ * @return CM_E_DEGENERATE when |A|^2|c|^2 - (A.c)^2 < 1e-20 |A|^2 |c|^2
+ *         (the edge is tangent to its basis vector: "method fails")
+ */
+CM_NODISCARD cm_err cm_greg_cross(const cm_cubic *c, cm_vec3 As, cm_vec3 Ae, cm_vec3 b0, cm_vec3 b3, double eps_len,
+                                  cm_vec3 *X1, cm_vec3 *X2, double kh[4], cm_status *st);
+
+/**
+ * The 4-sided Gregory patch of spec 6.3 for the loop s[0..3] with the given
+ * bases: boundary P from the cubics (side 0 v=0, 1 u=1, 2 v=1 reversed,
+ * 3 u=0 reversed; where loop ends disagree, the later side in that order
+ * wins), corner vectors from the neighbouring sides, interior pairs by
+ * cm_greg_cross.  No orientation check (see cm_greg_build).
+ * @param skip_side3  1: leave side 3's pair (I[0][*][1]) untouched (layout 2 fills it)
+ */
+CM_NODISCARD cm_err cm_greg_quad(const cm_greg_quad_side s[4], int skip_side3, double eps_len, cm_gregory *g,
+                                 cm_status *st);
+
+/** arc_handle of spec 6.4: (2/3)|Q-P| / (1 + sqrt((1 + clamp(t0.t1,-1,1))/2)). */
+double cm_greg_arc_handle(cm_vec3 P, cm_vec3 t0, cm_vec3 Q, cm_vec3 t1);
+
+/**
+ * Build the surface of spec §6 for the given layout (and j for layout 2).
+ * Each patch must pass the orientation check of 6.3: (Su x Sv)(1/2,1/2) . nF > 0.
+ * @return CM_OK;
+ *         CM_E_ARG for NULL pointers or a negative / non-finite eps_len;
+ *         CM_E_NONFINITE for NaN or infinity in the input;
+ *         CM_E_LIMIT when n > CM_MAX_SIDES, or layout 1 needs n > CM_MAX_GREG patches;
+ *         CM_E_RANGE for n < 3, an unknown layout, layout 0 with n != 4,
+ *                    layout 2 with n != 3 or j outside 0..2;
+ *         CM_E_DEGENERATE when the construction fails as the spec says (zero
+ *                    tangents, basis parallel to the edge, short projections,
+ *                    |M_k - C| <= eps_len, the orientation check).
+ *         On failure *out is zeroed except layout/n/j.
+ */
+CM_NODISCARD cm_err cm_greg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface *out, cm_status *st);
+
+/**
+ * Nearest point of the surface to p (spec K9 per patch: best of a 17x17
+ * grid, then Levenberg-Marquardt with clamping, cm_patch_project), minimum
+ * over patches 0..npatch-1 (the first patch wins a tie).
+ * @param[out] patch, u, v  foot point (any may be NULL); -1, 0, 0 if npatch == 0
+ * @return the distance; HUGE_VAL if there is no patch
+ */
+double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, double *u, double *v);
+
+/** Evaluate patch k at (u,v) (clamped to [0,1]^2): point and first partials (Su, Sv may be NULL).
+ *  A k outside 0..npatch-1 gives zero vectors. */
+void cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv);
+
+/** FNV-1a 32 of the rebuilt control data (order: top of this file; spec §2 rule 6). */
+uint32_t cm_greg_surface_checksum(const cm_greg_surface *s);
+
+#endif /* CM_GREGFACE_H */

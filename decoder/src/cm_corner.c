@@ -1,0 +1,197 @@
+/*
+ * cm_corner.c - corner normals (spec 5.3), the edge basis normals (5.4) and the
+ * input of the Gregory construction, read from the decoded curve mesh only.
+ *
+ * A face's rebuild depends on the mesh, the G1 bits and its own record: across
+ * a G1 edge it also reads the partner face's loop geometry at the shared
+ * vertices and its outer-loop normal (spec 15.4), never the partner's record.
+ * Everything is computed in the edge's stored direction and reversed after, so
+ * both faces of an edge get bit-identical cubics and opposite basis vectors.
+ */
+#include "cm/cm_corner.h"
+
+#include <stddef.h>
+
+#include "cm/cm_cubic_convert.h"
+#include "cm/cm_limits_info.h"
+#include "cm/cm_rebuild.h"
+
+/* spec §1 SIN_FLAT = sin 5 deg: corners flatter than this have no geometric normal */
+#define SIN_FLAT 0.08715574274765817
+
+/* unit tangent of use U at its start (at_end = 0) or end, in the use's direction; 0 if degenerate */
+static int use_tangent(const cm_model *m, const cm_use *U, int at_end, double eps, cm_vec3 *t)
+{
+    cm_curve c;
+    cm_model_edge_curve(m, U->edge, &c);
+    double s = (at_end != 0) != (U->rev != 0) ? 1.0 : 0.0; /* curve parameter of that end */
+    cm_vec3 d[2];
+    if (cm_curve_eval(&c, s, 1, d, NULL) != CM_OK)
+        return 0;
+    cm_vec3 dir = d[1];
+    if (!(cm_norm(dir) > eps)) {
+        /* a vanishing end derivative (doubled control point): the chord to a nearby point */
+        cm_vec3 q[1];
+        if (cm_curve_eval(&c, s == 0.0 ? 1e-3 : 1.0 - 1e-3, 0, q, NULL) != CM_OK)
+            return 0;
+        dir = s == 0.0 ? cm_sub(q[0], d[0]) : cm_sub(d[0], q[0]);
+    }
+    int ok;
+    cm_vec3 u = cm_unit_or(dir, eps, cm_v3(0, 0, 0), &ok);
+    *t = U->rev ? cm_neg(u) : u;
+    return ok;
+}
+
+cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *samples, double *bbox, cm_vec3 *n, cm_status *st)
+{
+    int ns, n_outer;
+    cm_err e = cm_face_samples(m, f, samples, CM_MAX_FACE_SAMPLES, &ns, &n_outer, st);
+    if (e != CM_OK)
+        return e;
+    cm_vec3 lo = samples[0], hi = samples[0];
+    for (int i = 1; i < ns; i++) {
+        cm_vec3 p = samples[i];
+        lo = cm_v3(p.x < lo.x ? p.x : lo.x, p.y < lo.y ? p.y : lo.y, p.z < lo.z ? p.z : lo.z);
+        hi = cm_v3(p.x > hi.x ? p.x : hi.x, p.y > hi.y ? p.y : hi.y, p.z > hi.z ? p.z : hi.z);
+    }
+    *bbox = cm_dist(lo, hi);
+    cm_frame fr;
+    if ((e = cm_face_frame(samples, n_outer, samples, ns, 1e-12 * *bbox, &fr, st)) != CM_OK)
+        return e;
+    *n = fr.ez;
+    return CM_OK;
+}
+
+/* N_geo at the corner between uses `in` and `out` (spec 5.3), turned to nF; 0 where undefined */
+static int geo_normal(const cm_model *m, const cm_use *in, const cm_use *out, cm_vec3 nF, double eps, cm_vec3 *N)
+{
+    cm_vec3 ta, tb;
+    if (!use_tangent(m, in, 1, eps, &ta) || !use_tangent(m, out, 0, eps, &tb))
+        return 0;
+    cm_vec3 a = cm_neg(ta), c = cm_cross(tb, a);
+    if (!(cm_norm(c) >= SIN_FLAT))
+        return 0;
+    *N = cm_unit(c);
+    if (cm_dot(*N, nF) < 0)
+        *N = cm_neg(*N);
+    return 1;
+}
+
+/* the partner's corner at vertex v next to edge e (as its incoming or outgoing use): N_geo(G, v) */
+static int partner_geo(const cm_model *m, uint32_t g, uint32_t e, int32_t v, cm_vec3 nG, double eps, cm_vec3 *N)
+{
+    const cm_face *G = &m->faces[g];
+    for (uint32_t l = 0; l < G->nloops; l++) {
+        const cm_loop *L = &m->loops[G->loop0 + l];
+        for (uint32_t k = 0; k < L->nuse; k++) {
+            const cm_use *in = &m->uses[L->use0 + (k + L->nuse - 1) % L->nuse], *out = &m->uses[L->use0 + k];
+            const cm_edge *Ei = &m->edges[in->edge];
+            int32_t at = in->rev ? Ei->v0 : Ei->v1; /* the corner's vertex: where `in` ends */
+            if (at == v && (in->edge == e || out->edge == e))
+                return geo_normal(m, in, out, nG, eps, N);
+        }
+    }
+    return 0;
+}
+
+/* a vertex of F's outer loop: its index, the uses around it and their partners */
+typedef struct corner_ctx {
+    const cm_model *m;
+    uint32_t f;
+    cm_vec3 nF;
+    double eps;
+    cm_vec3 *scratch; /* samples for partner normals */
+} corner_ctx;
+
+static cm_err partner_normal(const corner_ctx *c, uint32_t g, double *bbox_g, cm_vec3 *nG, cm_status *st)
+{
+    cm_err e = cm_face_normal(c->m, g, c->scratch, bbox_g, nG, st);
+    if (e == CM_OK && cm_dot(*nG, c->nF) < 0)
+        *nG = cm_neg(*nG); /* sign-matched to n_F (spec 5.3 (i), 5.4) */
+    return e;
+}
+
+cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_corner_ws *ws, cm_status *st)
+{
+    const cm_face *F = &m->faces[f];
+    const cm_loop *L = &m->loops[F->loop0];
+    int n = (int)L->nuse;
+    if (n < 3)
+        return cm_fail(st, CM_E_UNSUPPORTED, "GREGORY needs 3 or more sides");
+    if (n > CM_MAX_SIDES)
+        return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, __func__);
+    double bbox;
+    cm_err e = cm_face_normal(m, f, ws->samples, &bbox, &in->nF, st);
+    if (e != CM_OK)
+        return e;
+    in->n = n;
+    in->eps_len = 1e-12 * bbox;
+    corner_ctx c = {m, f, in->nF, in->eps_len, ws->scratch};
+    /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */
+    for (int k = 0; k < n; k++) {
+        const cm_use *uin = &m->uses[L->use0 + (uint32_t)((k + n - 1) % n)], *uout = &m->uses[L->use0 + (uint32_t)k];
+        const cm_edge *Ei = &m->edges[uin->edge];
+        int32_t v = uin->rev ? Ei->v0 : Ei->v1;
+        ws->vert[k] = v;
+        ws->has_geo[k] = geo_normal(m, uin, uout, in->nF, c.eps, &ws->geo[k]);
+        in->corner_normal[k] = ws->geo[k];
+        if (ws->has_geo[k])
+            continue;
+        /* (i) across a G1 edge at this corner, the partner's geometric normal; (iii) n_F */
+        in->corner_normal[k] = in->nF;
+        for (int s = 0; s < 2; s++) {
+            const cm_use *U = s == 0 ? uin : uout;
+            int32_t g = m->edges[U->edge].g1 ? cm_model_partner(m, U->edge, f) : CM_NO_FACE;
+            if (g < 0)
+                continue;
+            double bg;
+            cm_vec3 nG, Ng;
+            if ((e = partner_normal(&c, (uint32_t)g, &bg, &nG, st)) != CM_OK)
+                return e;
+            if (partner_geo(m, (uint32_t)g, U->edge, v, nG, 1e-12 * bg, &Ng)) {
+                in->corner_normal[k] = cm_dot(Ng, in->nF) < 0 ? cm_neg(Ng) : Ng;
+                break;
+            }
+        }
+    }
+    /* per side k (use k, V_k -> V_k+1): the K7 cubic in the edge's stored direction, and the basis normals */
+    for (int k = 0; k < n; k++) {
+        const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
+        cm_curve cv;
+        cm_model_edge_curve(m, U->edge, &cv);
+        cm_cubic cub;
+        if ((e = cm_cubic_convert(&cv, 0.0, 1.0, &cub, NULL, NULL, st)) != CM_OK)
+            return e;
+        cm_greg_side *S = &in->side[k];
+        S->c = U->rev ? cm_cubic_reverse(&cub) : cub;
+        int k1 = (k + 1) % n;
+        S->Ns = in->corner_normal[k];
+        S->Ne = in->corner_normal[k1];
+        int32_t g = m->edges[U->edge].g1 ? cm_model_partner(m, U->edge, f) : CM_NO_FACE;
+        if (g < 0)
+            continue;
+        /* G1 edge (spec 5.4): the symmetric rule, the same normals from both faces */
+        double bg;
+        cm_vec3 nG;
+        if ((e = partner_normal(&c, (uint32_t)g, &bg, &nG, st)) != CM_OK)
+            return e;
+        for (int end = 0; end < 2; end++) {
+            int kv = end ? k1 : k;
+            cm_vec3 Ng, N;
+            int has_g = partner_geo(m, (uint32_t)g, U->edge, ws->vert[kv], nG, 1e-12 * bg, &Ng);
+            if (ws->has_geo[kv] && has_g)
+                N = cm_unit(cm_add(ws->geo[kv], Ng));
+            else if (ws->has_geo[kv])
+                N = ws->geo[kv];
+            else if (has_g)
+                N = Ng;
+            else
+                N = cm_unit(cm_add(in->nF, nG));
+            if (end)
+                S->Ne = N;
+            else
+                S->Ns = N;
+        }
+    }
+    return CM_OK;
+}

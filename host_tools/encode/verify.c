@@ -1,0 +1,332 @@
+/* verify.c - spec §12 error evaluation and §13 G1 verification (see verify.h). */
+#include "verify.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cm/cm_geom.h"
+
+int face_surface_set(face_surface *fs, const cm_rebuilt *rb)
+{
+    face_surface_free(fs);
+    fs->method = rb->method;
+    fs->bbox = rb->bbox;
+    fs->frame = rb->frame;
+    memcpy(fs->rect, rb->rect, sizeof fs->rect);
+    if (rb->method == CM_METHOD_GREGORY && rb->greg) {
+        fs->greg = malloc(sizeof *fs->greg);
+        if (!fs->greg)
+            return 0;
+        *fs->greg = *rb->greg;
+    }
+    return 1;
+}
+
+void face_surface_free(face_surface *fs)
+{
+    free(fs->greg);
+    fs->greg = NULL;
+    fs->method = CM_METHOD_KEEP;
+}
+
+static double dist_to_plane_patch(const cm_frame *fr, const double rect[4], cm_vec3 p)
+{
+    cm_vec3 l = cm_frame_local(fr, p);
+    double x = l.x < rect[0] ? rect[0] : (l.x > rect[1] ? rect[1] : l.x);
+    double y = l.y < rect[2] ? rect[2] : (l.y > rect[3] ? rect[3] : l.y);
+    return sqrt((l.x - x) * (l.x - x) + (l.y - y) * (l.y - y) + l.z * l.z);
+}
+
+static double clamp01(double t) { return t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t); }
+
+/* Gauss-Newton on patch k from (u,v), clamped to the patch, step halved when it does not improve */
+static double greg_local(const cm_greg_surface *s, int k, cm_vec3 p, double *u, double *v)
+{
+    cm_vec3 S, Su, Sv;
+    cm_greg_surface_eval(s, k, *u, *v, &S, &Su, &Sv);
+    double best = cm_dist(S, p);
+    for (int it = 0; it < 30; it++) {
+        cm_vec3 r = cm_sub(p, S);
+        double a = cm_dot(Su, Su), b = cm_dot(Su, Sv), c = cm_dot(Sv, Sv);
+        double gu = cm_dot(Su, r), gv = cm_dot(Sv, r), det = a * c - b * b;
+        if (!(det > 1e-24 * a * c))
+            break;
+        double du = (c * gu - b * gv) / det, dv = (a * gv - b * gu) / det;
+        int moved = 0;
+        for (int h = 0; h < 8 && !moved; h++, du *= 0.5, dv *= 0.5) {
+            double nu = clamp01(*u + du), nv = clamp01(*v + dv);
+            cm_vec3 T, Tu, Tv;
+            cm_greg_surface_eval(s, k, nu, nv, &T, &Tu, &Tv);
+            double d = cm_dist(T, p);
+            if (d < best) {
+                moved = fabs(nu - *u) > 1e-13 || fabs(nv - *v) > 1e-13 ? 1 : 2;
+                *u = nu;
+                *v = nv;
+                best = d;
+                S = T;
+                Su = Tu;
+                Sv = Tv;
+            }
+        }
+        if (moved != 1)
+            break;
+    }
+    return best;
+}
+
+/* a search that remembers its last foot point: neighbouring queries start there */
+typedef struct greg_walk {
+    const cm_greg_surface *s;
+    double accept;   /* a local answer at most this far is taken without a global search */
+    int have, patch;
+    double u, v;
+} greg_walk;
+
+/*
+ * greg_local, and across the internal curves of an N-split: patch k's side u = 1 is I_k, which is
+ * patch k+1's side v = 1 (patch k at (1,t) is patch k+1 at (t,1)); a foot stopped there goes on in
+ * the neighbour (cm_gregface.h gives the layout).  *inner: the foot came to rest strictly inside
+ * a patch (a minimum of the distance there, not a stop against a side).
+ */
+static double greg_local_hop(const cm_greg_surface *s, int *k, cm_vec3 p, double *u, double *v, int *inner)
+{
+    double d = greg_local(s, *k, p, u, v);
+    int split = s->layout == CM_GREG_LAYOUT_SPLIT && s->npatch > 1;
+    for (int hop = 0; split && hop < 4; hop++) {
+        int nk;
+        double nu, nv;
+        if (*u >= 1.0) {
+            nk = (*k + 1) % s->npatch;
+            nu = *v;
+            nv = 1.0;
+        } else if (*v >= 1.0) {
+            nk = (*k + s->npatch - 1) % s->npatch;
+            nu = 1.0;
+            nv = *u;
+        } else {
+            break;
+        }
+        double d2 = greg_local(s, nk, p, &nu, &nv);
+        if (!(d2 < d))
+            break;
+        d = d2;
+        *k = nk;
+        *u = nu;
+        *v = nv;
+    }
+    /* at rest inside: away from the sides, and the residual orthogonal to both tangents (a walk
+       stalled against a corner is neither) */
+    cm_vec3 S, Su, Sv;
+    cm_greg_surface_eval(s, *k, *u, *v, &S, &Su, &Sv);
+    cm_vec3 r = cm_sub(p, S);
+    double lr = cm_norm(r);
+    *inner = *u > 1e-6 && *u < 1.0 - 1e-6 && *v > 1e-6 && *v < 1.0 - 1e-6 &&
+             fabs(cm_dot(r, Su)) <= 1e-6 * lr * cm_norm(Su) && fabs(cm_dot(r, Sv)) <= 1e-6 * lr * cm_norm(Sv);
+    return d;
+}
+
+static double greg_dist(greg_walk *w, cm_vec3 p)
+{
+    double d = HUGE_VAL;
+    if (w->have) {
+        double u = w->u, v = w->v;
+        int k = w->patch, inner;
+        d = greg_local_hop(w->s, &k, p, &u, &v, &inner);
+        /* a local foot is a point of the surface, so its distance is never below the true one: it
+           is taken when small, or when it came to rest inside a patch (a minimum there); a foot
+           stopped against a side with a large distance asks the global search */
+        if (d <= w->accept || inner) {
+            w->patch = k;
+            w->u = u;
+            w->v = v;
+            return d;
+        }
+    }
+    int k;
+    double u, v, g = cm_greg_surface_project(w->s, p, &k, &u, &v);
+    if (g < d) {
+        d = g;
+        w->patch = k;
+        w->u = u;
+        w->v = v;
+        w->have = 1;
+    }
+    return d;
+}
+
+double rebuilt_distance(const cm_rebuilt *rb, cm_vec3 p)
+{
+    if (rb->method == CM_METHOD_PLANE)
+        return dist_to_plane_patch(&rb->frame, rb->rect, p);
+    if (rb->method == CM_METHOD_GREGORY && rb->greg)
+        return cm_greg_surface_project(rb->greg, p, NULL, NULL, NULL);
+    return HUGE_VAL;
+}
+
+static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
+{
+
+    return rb->method == CM_METHOD_GREGORY ? greg_dist(w, p) : dist_to_plane_patch(&rb->frame, rb->rect, p);
+}
+
+int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol, face_error *out)
+{
+    memset(out, 0, sizeof *out);
+    const face_domain *fd = &lm->fds[f];
+    if (!fd->uv || (rb->method == CM_METHOD_GREGORY && !rb->greg))
+        return 0;
+    /* a walk's local answer is a distance to a point of the surface, so never below the true one:
+       one within a tenth of the tolerance cannot change the verdict and needs no global search */
+    greg_walk w = {rb->greg, tol < HUGE_VAL ? 0.1 * tol : 1e-4 * rb->bbox, 0, 0, 0, 0};
+    double sum = 0, worst = 0;
+    int n = 0;
+    /* 1-2: the source surface on the 21 x 21 grid, points inside the outer loop, row by row in a
+       serpentine so that each point starts from its neighbour's foot */
+    for (int i = 0; i <= 20; i++) {
+        for (int jj = 0; jj <= 20; jj++) {
+            int j = i % 2 ? 20 - jj : jj;
+            cm_vec2 uv = cm_v2(fd->umin + (fd->umax - fd->umin) * i / 20.0, fd->vmin + (fd->vmax - fd->vmin) * j / 20.0);
+            if (!cm_point_in_polygon(fd->uv + fd->loops[0].first, fd->loops[0].n, uv))
+                continue;
+            cm_vec3 P;
+            if (face_domain_eval(&lm->brep, fd, uv.x, uv.y, &P, NULL, NULL) != CM_OK)
+                return 0;
+            double d = face_dist(rb, &w, P);
+            sum += d;
+            worst = d > worst ? d : worst;
+            n++;
+            if (!(worst < tol))
+                goto done; /* failed: the rest cannot save it */
+        }
+    }
+    out->grid_points = n;
+    /* 3: the boundary, every edge use of every loop at t = k/20 */
+    const cm_face *F = &m->faces[f];
+    for (uint32_t l = 0; l < F->nloops; l++) {
+        const cm_loop *L = &m->loops[F->loop0 + l];
+        w.have = 0; /* a loop starts with a global search, then walks along it */
+        for (uint32_t u = 0; u < L->nuse; u++) {
+            const cm_use *U = &m->uses[L->use0 + u];
+            cm_curve c;
+            cm_model_edge_curve(m, U->edge, &c);
+            for (int k = 0; k <= 20; k++) {
+                cm_vec3 d3[1];
+                if (cm_curve_eval(&c, U->rev ? 1.0 - k / 20.0 : k / 20.0, 0, d3, NULL) != CM_OK)
+                    return 0;
+                double d = face_dist(rb, &w, d3[0]);
+                sum += d;
+                worst = d > worst ? d : worst;
+                n++;
+                out->boundary_points++;
+                if (!(worst < tol))
+                    goto done;
+            }
+        }
+    }
+done:
+    out->complete = worst < tol;
+    out->max = worst;
+    out->avg = n > 0 ? sum / n : 0;
+    out->ratio = rb->bbox > 0 ? worst / rb->bbox : 0;
+    out->bbox = rb->bbox;
+    return 1;
+}
+
+/* unit normal of face f's source surface near P, projected from the nearest boundary sample */
+static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n)
+{
+    const face_domain *D = &lm->fds[f];
+    if (!D->uv)
+        return 0;
+    int best = 0;
+    double bd = HUGE_VAL;
+    for (int i = 0; i < D->npts; i++) {
+        double d = cm_finite3(D->xyz[i]) ? cm_norm2(cm_sub(D->xyz[i], P)) : HUGE_VAL;
+        if (d < bd) {
+            bd = d;
+            best = i;
+        }
+    }
+    double u = D->uv[best].x, v = D->uv[best].y, dist;
+    cm_vec3 d3[3];
+    if (cm_psurf_project_from(&D->ps, P, &u, &v, &dist, NULL) != CM_OK || cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK)
+        return 0;
+    cm_vec3 c = cm_cross(d3[1], d3[2]);
+    if (!(cm_norm(c) > 1e-12 * cm_norm(d3[1]) * cm_norm(d3[2])) || !(cm_norm(c) > 0))
+        return 0;
+    *n = cm_unit(c);
+    return 1;
+}
+
+/* unit normal of face f's final surface near P (0 where it cannot be had); a Gregory face's foot
+ * point is walked along from the previous point of the same edge (w) */
+static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg_walk *w, cm_vec3 P, cm_vec3 *n)
+{
+    const face_surface *S = &fs[f];
+    if (S->method == CM_METHOD_PLANE) {
+        *n = S->frame.ez;
+        return 1;
+    }
+    if (S->method != CM_METHOD_GREGORY || !S->greg)
+        return source_normal_at(lm, f, P, n); /* KEEP: the surface as it was */
+    cm_vec3 Su, Sv, X;
+    w->s = S->greg;
+    greg_dist(w, P);
+    cm_greg_surface_eval(S->greg, w->patch, w->u, w->v, &X, &Su, &Sv);
+    cm_vec3 c = cm_cross(Su, Sv);
+    if (!(cm_norm(c) > 1e-12 * cm_norm(Su) * cm_norm(Sv)) || !(cm_norm(c) > 0))
+        return 0;
+    *n = cm_unit(c);
+    return 1;
+}
+
+double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, const face_surface *fs, int *worse)
+{
+    int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
+    if (worse)
+        *worse = 0;
+    if (a < 0 || b < 0 || a == b)
+        return 1.0;
+    cm_curve c;
+    cm_model_edge_curve(m, e, &c);
+    double worst = 1.0;
+    /* the edge lies on both surfaces (within the §12 tolerance): a local foot within 1e-3 of the
+       face's size is the right one */
+    greg_walk walk[2] = {{NULL, 0, 0, 0, 0, 0}, {NULL, 0, 0, 0, 0, 0}};
+    for (int side = 0; side < 2; side++)
+        walk[side].accept = fs[side ? b : a].greg ? 1e-3 * fs[side ? b : a].bbox : 0;
+    for (int k = 1; k <= 9; k++) {
+        cm_vec3 n[2], P[2];
+        int ok = 1;
+        for (int side = 0; side < 2 && ok; side++) {
+            int f = side ? b : a;
+            ok = 0;
+            /* a degenerate normal (a collapsed corner, a pole): 1e-3 along the edge instead (spec §13) */
+            for (int tries = 0; tries < 3 && !ok; tries++) {
+                double t = k / 10.0 + (tries == 0 ? 0.0 : (tries == 1 ? 1e-3 : -1e-3));
+                cm_vec3 d3[1];
+                if (cm_curve_eval(&c, t, 0, d3, NULL) != CM_OK)
+                    break;
+                P[side] = d3[0];
+                ok = normal_at(lm, f, fs, &walk[side], d3[0], &n[side]);
+            }
+        }
+        if (!ok)
+            return 0.0;
+        double cs = fabs(cm_dot(n[0], n[1]));
+        if (cs < worst) {
+            worst = cs;
+            /* the face whose final normal strays farther from its own source surface's is to blame */
+            if (worse) {
+                double dev[2];
+                for (int side = 0; side < 2; side++) {
+                    cm_vec3 ns;
+                    dev[side] = source_normal_at(lm, side ? b : a, P[side], &ns) ? fabs(cm_dot(ns, n[side])) : 0.0;
+                }
+                *worse = dev[1] < dev[0];
+            }
+        }
+    }
+    return worst;
+}

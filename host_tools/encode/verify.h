@@ -1,0 +1,66 @@
+/*
+ * verify.h - the workstation's measurements of a rebuilt face against the
+ * original model: spec §12 (error evaluation) and §13 (G1 verification).
+ * The encoder decides with them and `cmz eval` re-measures a finished file
+ * with them, so neither has to trust the other's log.
+ *
+ * The rebuilt surfaces come from the decoder's own cm_rebuild_face(); the
+ * originals from the import (loaded_model: the face's source surface and
+ * its loops in parameter space).
+ */
+#ifndef VERIFY_H
+#define VERIFY_H
+
+#include "cm/cm_format.h"
+#include "cm/cm_gregface.h"
+#include "cm/cm_rebuild.h"
+#include "model_load.h"
+
+/** A face's surface as the terminal shows it, kept for the G1 check across its edges. */
+typedef struct face_surface {
+    int method;           /* CM_METHOD_* */
+    cm_frame frame;       /* PLANE */
+    double rect[4];
+    cm_greg_surface *greg; /* GREGORY: malloc'd copy (face_surface_free) */
+    double bbox;           /* bbox_F */
+} face_surface;
+
+/** spec §12 numbers of one face */
+typedef struct face_error {
+    double avg, max;      /* over the surface grid and the boundary points (mm) */
+    double ratio;         /* max / bbox_F */
+    double bbox;          /* bbox_F: diagonal of the box of the face's boundary samples (mm) */
+    int grid_points;      /* 21 x 21 grid points inside the outer loop */
+    int boundary_points;  /* 21 per edge use of every loop */
+    int complete;         /* every point measured (0: stopped at the first one over the tolerance) */
+} face_error;
+
+/** Keep what cm_rebuild_face() gave for face f (copies the Gregory patches). 0 on out of memory. */
+int face_surface_set(face_surface *fs, const cm_rebuilt *rb);
+void face_surface_free(face_surface *fs);
+
+/**
+ * Spec §12 for face f of the decoded model m, rebuilt as rb (PLANE or
+ * GREGORY): the source surface on the 21 x 21 grid of its parameter box,
+ * points inside the outer loop (holes included, as the papers say), and the
+ * transmitted edges of every loop at t = k/20, each projected on the rebuilt
+ * surface.  Stops at the first point at or over `tol` mm (the face fails; HUGE_VAL measures all
+ * points).  Returns 0 when the face's domain is unknown (no verdict).
+ */
+int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol,
+                face_error *out);
+
+/**
+ * Spec §13 for edge e of m: at t = k/10, k = 1..9, the unit normals of the
+ * final surfaces of its two faces (rebuilt from `fs`, KEEP faces from the
+ * source surface).  Returns min |nF . nG| (1 for an edge without two faces;
+ * 0 where a normal cannot be had).  *worse (may be NULL): at the worst point,
+ * 0 if face edge_face[e][0]'s final normal is farther from its source
+ * surface's than the other face's is, else 1.
+ */
+double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, const face_surface *fs, int *worse);
+
+/** Distance from p to a rebuilt PLANE or GREGORY surface (a global search; for single points). */
+double rebuilt_distance(const cm_rebuilt *rb, cm_vec3 p);
+
+#endif /* VERIFY_H */

@@ -1,0 +1,259 @@
+/*
+ * test_gregory_face.c - GREGORY faces through the whole product: synthetic
+ * IGES -> encoder (decision flow, §12, §13) -> .cmz -> the terminal's
+ * decoder (checksum) -> triangles.  Spec §17 T4 and T5 on real records,
+ * the fallback to KEEP, the checksum check and the watertight mesh.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "../unit/test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "cm/cm_decode.h"
+#include "cm/cm_rebuild.h"
+#include "cm/cm_tessellate.h"
+#include "encode/encode.h"
+#include "encode/verify.h"
+#include "igs_writer.h"
+#include "mesh_topo.h"
+#include "model_load.h"
+
+static cm_decoder dec;
+static cm_tess_ws tess;
+static cm_rebuild_ws rbws[2];
+#define MESH_TRIS 100000
+static float pos[MESH_TRIS + 1024][3], nrm[MESH_TRIS + 1024][3];
+static uint32_t idx[3 * MESH_TRIS];
+static cm_mesh_face mfaces[64];
+
+#define CR 10.0 /* spec T4/T5: radius 10, length 20 */
+#define CH 20.0
+
+static void load_split_cylinder(loaded_model *lm)
+{
+    igw w;
+    igw_init(&w);
+    igw_split_half_cylinder_144(&w, CR, CH);
+    size_t len = 0;
+    char *text = igw_text(&w, &len);
+    igw_free(&w);
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(model_load_data("split-cylinder", text, len, lm, NULL, NULL, &st));
+    free(text);
+    assert_int_equal(lm->mesh.nfaces, 2);
+}
+
+static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    o.rel_tol = rel_tol;
+    o.rel_set = 1;
+    o.gregory = gregory;
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+/* the split cylinder encoded at the default tolerance: both faces GREGORY */
+static void split_cylinder_gregory(loaded_model *lm, encode_result *r)
+{
+    load_split_cylinder(lm);
+    encode_with(lm, 0.01, 1, r);
+    assert_int_equal(r->faces_gregory, 2);
+    assert_int_equal(r->faces_keep, 0);
+}
+
+static void decode(const encode_result *r)
+{
+    cm_status st;
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    assert_ok(cm_dec_feed(&dec, r->bytes, r->len, &st));
+    assert_ok(cm_dec_finish(&dec, &st));
+}
+
+/* unit normal of a rebuilt Gregory face at the surface point nearest p */
+static cm_vec3 greg_normal(const cm_greg_surface *g, cm_vec3 p)
+{
+    int k;
+    double u, v;
+    cm_vec3 S, Su, Sv;
+    cm_greg_surface_project(g, p, &k, &u, &v);
+    cm_greg_surface_eval(g, k, u, v, &S, &Su, &Sv);
+    return cm_unit(cm_cross(Su, Sv));
+}
+
+/* T4 + T5: both quarter faces become GREGORY (layout 0), each within the spec's bound of the true
+ * cylinder, tangent to each other along the shared line, and the mesh closes along it */
+static void test_split_cylinder_gregory(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    split_cylinder_gregory(&lm, &r);
+    for (int f = 0; f < 2; f++) {
+        assert_int_equal(r.faces[f].layout, CM_GREG_LAYOUT_QUAD);
+        /* T4: prototype Max 1.98e-3 for R = 10: require < 3e-3 */
+        if (!(r.faces[f].rebuild_max < 3e-3))
+            fail_msg("face %d: Max %.4g >= 3e-3 (spec T4)", f, r.faces[f].rebuild_max);
+    }
+    decode(&r);
+    const cm_model *m = &dec.model;
+    assert_int_equal(m->nfaces, 2);
+    assert_int_equal(dec.buf[4], 2); /* GREGORY faces need format 2 */
+    cm_rebuilt rb[2];
+    cm_status st;
+    cm_status_init(&st);
+    for (int f = 0; f < 2; f++) {
+        assert_ok(cm_rebuild_face(m, (uint32_t)f, &rb[f], &rbws[f], &st)); /* the checksum matches */
+        assert_int_equal(rb[f].method, CM_METHOD_GREGORY);
+    }
+    /* the shared edge: the one both faces use */
+    int shared = -1;
+    for (uint32_t e = 0; e < m->nedges; e++)
+        if (m->edge_face[e][0] >= 0 && m->edge_face[e][1] >= 0)
+            shared = (int)e;
+    assert_true(shared >= 0);
+    assert_true(m->edges[shared].g1);
+    /* T5: normals of the two rebuilt faces along it agree within 1e-3 deg (cos 1e-3 deg) */
+    cm_curve c;
+    cm_model_edge_curve(m, (uint32_t)shared, &c);
+    double worst = 1.0;
+    for (int k = 1; k <= 9; k++) {
+        cm_vec3 P[1];
+        assert_ok(cm_curve_eval(&c, k / 10.0, 0, P, &st));
+        double cs = fabs(cm_dot(greg_normal(rb[0].greg, P[0]), greg_normal(rb[1].greg, P[0])));
+        worst = cs < worst ? cs : worst;
+    }
+    if (!(worst >= 0.99999999984769128)) /* cos(1e-3 deg) */
+        fail_msg("T5: normals differ by %.3g deg along the shared edge", acos(worst) * 180 / M_PI);
+    /* §12 again, independently of the encoder's log, on the decoded file */
+    for (int f = 0; f < 2; f++) {
+        face_error fe;
+        assert_true(verify_face(&lm, m, f, &rb[f], HUGE_VAL, &fe));
+        assert_true(fe.complete);
+        assert_true(fe.grid_points > 0);
+        assert_true(fe.ratio < 0.01);
+        assert_near(fe.max, r.faces[f].rebuild_max, 1e-12 + 1e-9 * fe.max);
+    }
+    /* the mesh: every vertex on the cylinder within the rebuild error, closed along the shared edge */
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64};
+    cm_mesh_clear(&mesh);
+    for (uint32_t f = 0; f < m->nfaces; f++)
+        assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));
+    double side = 0;
+    for (uint32_t i = 0; i < mesh.nverts; i++) {
+        double rho = hypot((double)pos[i][0], (double)pos[i][1]);
+        assert_near(rho, CR, 3e-3 + 1e-4);
+        /* normals radial, all to the same side of the surface (an open surface has no outside) */
+        cm_vec3 n = cm_v3f(nrm[i]);
+        double radial = (n.x * (double)pos[i][0] + n.y * (double)pos[i][1]) / rho;
+        if (side == 0)
+            side = radial > 0 ? 1 : -1;
+        if (!(radial * side > 0.99))
+            fail_msg("vertex %u: normal %.3g %.3g %.3g is not radial to the face's side", i, n.x, n.y, n.z);
+    }
+    mesh_topo t;
+    assert_int_equal(mesh_topo_analyse(&mesh, &t), 0);
+    assert_int_equal((int)t.degenerate, 0);
+    assert_int_equal((int)t.duplicate, 0);
+    /* open only along the six free edges of the half cylinder: the shared line is closed */
+    size_t free_segments = t.unpaired;
+    mesh_topo_free(&t);
+    assert_true(free_segments > 0);
+    /* the same model with a corrupted record: the terminal refuses it by checksum */
+    dec.model.faces[1].checksum ^= 1u;
+    cm_status_init(&st);
+    assert_int_equal(cm_rebuild_face(&dec.model, 1, &rb[1], &rbws[1], &st), CM_E_CHECKSUM);
+    assert_int_equal(st.code, CM_E_CHECKSUM);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+/* faces that cannot be rebuilt within the tolerance go back to KEEP and say why */
+static void test_gregory_falls_back_to_keep(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    /* the cylinder at 1e-5 of its size: its arcs are not cubics that closely (K7 rejects them) */
+    load_split_cylinder(&lm);
+    encode_with(&lm, 1e-5, 1, &r);
+    assert_int_equal(r.faces_gregory, 0);
+    assert_int_equal(r.faces_keep, 2);
+    for (int f = 0; f < 2; f++) {
+        assert_non_null(r.faces[f].why);
+        assert_string_equal(r.faces[f].why, "edge not cubic-convertible");
+    }
+    decode(&r);
+    assert_int_equal(dec.buf[4], 1); /* nothing needs format 2: the oldest readers still load it */
+    encode_result_free(&r);
+    /* and --no-gregory keeps them too */
+    encode_with(&lm, 0.01, 0, &r);
+    assert_int_equal(r.faces_gregory, 0);
+    assert_int_equal(r.faces_keep, 2);
+    encode_result_free(&r);
+    model_free(&lm);
+    /* a bicubic patch whose interior bulges beyond what its boundary says: the boundary is exactly
+       cubic, the Gregory patch is built, and its §12 error is over 1 %: KEEP, "error" */
+    igw w;
+    igw_init(&w);
+    igw_bicubic_128(&w);
+    size_t len = 0;
+    char *text = igw_text(&w, &len);
+    igw_free(&w);
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(model_load_data("bicubic", text, len, &lm, NULL, NULL, &st));
+    free(text);
+    encode_with(&lm, 0.01, 1, &r);
+    assert_int_equal(r.faces_keep, 1);
+    assert_non_null(r.faces[0].why);
+    assert_string_equal(r.faces[0].why, "error");
+    assert_true(r.faces[0].greg_ratio >= 0.01);
+    /* and the same face passes at a tolerance above its Gregory error (6.6 %) and below the
+       error of a plane through its boundary (11 %) */
+    encode_result_free(&r);
+    encode_with(&lm, 0.1, 1, &r);
+    assert_int_equal(r.faces_gregory, 1);
+    assert_true(r.faces[0].ratio >= 0.01 && r.faces[0].ratio < 0.1);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+/* a format-1 reader's view: a GREGORY method in a version-1 file is refused, not guessed */
+static void test_gregory_needs_format_2(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    split_cylinder_gregory(&lm, &r);
+    r.bytes[4] = 1; /* claim version 1: the header CRC then fails first, as it must */
+    cm_status st;
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    cm_err e = cm_dec_feed(&dec, r.bytes, r.len, &st);
+    if (e == CM_OK)
+        e = cm_dec_finish(&dec, &st);
+    assert_int_not_equal(e, CM_OK);
+    r.bytes[4] = 3; /* a major version this reader does not know */
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    assert_int_equal(cm_dec_feed(&dec, r.bytes, r.len, &st), CM_E_VERSION);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_split_cylinder_gregory),
+        cmocka_unit_test(test_gregory_falls_back_to_keep),
+        cmocka_unit_test(test_gregory_needs_format_2),
+    };
+    return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
+}
