@@ -674,8 +674,9 @@ static int cmd_decode(int argc, char **argv)
     uint64_t tris = decoder.need[CM_LIMIT_MAX_TRIS];
     if (tol > 0 && tol < decoder.model.tess_tol)
         tris = tris * (uint64_t)(decoder.model.tess_tol / tol + 1.0) * 2; /* finer than the file planned */
-    if (tris < 1024)
-        tris = 1024;
+    /* the header's need is what the encoder's decoder made; a newer decoder may tessellate a little
+       finer (its refinement improves), so the workstation leaves room for twice that */
+    tris = 2 * tris + 1024;
     if (tris > CM_MAX_TRIS)
         tris = CM_MAX_TRIS;
     cm_mesh mesh;

@@ -33,23 +33,22 @@ if [ ! -d "$dir" ]; then
     echo "ok 1 - corpus round trip skipped"
     exit 0
 fi
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-n=0 fail=0 shares=()
-for f in "$dir"/*; do
-    n=$((n + 1))
+base=$(mktemp -d)
+trap 'rm -rf "$base"' EXIT
+# one model: its TAP line on stdout (numbered n), its share of deleted faces in $tmp/share
+one() {
+    local n=$1 f=$2 tmp=$base/$1
+    mkdir -p "$tmp"
     b=$(basename "$f")
     if ! "$cmz" encode -q "$f" -o "$tmp/m.cmz" --report "$tmp/faces.tsv" > "$tmp/enc" 2>&1; then
         echo "not ok $n - $b: encode failed: $(tail -n 1 "$tmp/enc")"
-        fail=$((fail + 1))
-        continue
+        return
     fi
     size=$(stat -c %s "$tmp/m.cmz")
     if ! "$cmz" decode "$tmp/m.cmz" -o "$tmp/m.stl" > "$tmp/dec" 2>&1 ||
        ! "$cmz" decode -q "$tmp/m.cmz" -o "$tmp/m.glb" >> "$tmp/dec" 2>&1; then
         echo "not ok $n - $b: decode failed: $(tail -n 1 "$tmp/dec")"
-        fail=$((fail + 1))
-        continue
+        return
     fi
     tess=$(sed -n 's/.*chordal tolerance \([0-9.e+-]*\) mm.*/\1/p' "$tmp/dec" | head -n 1)
     rebuild=$(awk -F'\t' 'NR > 1 && $8 + 0 > m { m = $8 + 0 } END { print m + 0 }' "$tmp/faces.tsv")
@@ -93,23 +92,38 @@ for f in "$dir"/*; do
         fi
     fi
     share=$(awk -v a="${np:-0}" -v b="${ng:-0}" -v n="${faces:-0}" 'BEGIN { printf "%.1f", (n > 0 ? 100 * (a + b) / n : 0) }')
-    shares+=("$share")
+    echo "$share" > "$tmp/share"
     summary="$size bytes, $share % of faces deleted, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$note"
     if [ $topo_rc -ne 0 ]; then
         echo "not ok $n - $b: mesh topology: ${topo#* - }"
-        fail=$((fail + 1))
     elif [ $dev_rc -gt 1 ] || [ "$verdict" != ok ]; then
         echo "not ok $n - $b: deviation: $verdict ($summary)"
-        fail=$((fail + 1))
     elif [ $glb_rc -ne 0 ]; then
         echo "not ok $n - $b: GLB rejected: $(tail -n 1 <<<"$glb")"
-        fail=$((fail + 1))
     elif [ $ev_rc -ne 0 ]; then
         echo "not ok $n - $b: cmz eval: $(grep -m 3 'eval\|FAILED' <<<"$ev" | tr '\n' ' ')"
-        fail=$((fail + 1))
     else
         echo "ok $n - $b: $summary"
     fi
+
+}
+# two models at a time (the machine has 2 cores; each model is one single-threaded pipeline),
+# the lines printed in corpus order
+jobs_max=${ROUNDTRIP_JOBS:-2}
+n=0
+for f in "$dir"/*; do
+    n=$((n + 1))
+    while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do
+        wait -n
+    done
+    one "$n" "$f" > "$base/$n.out" 2>&1 &
+done
+wait
+fail=0 shares=()
+for i in $(seq 1 "$n"); do
+    cat "$base/$i.out"
+    grep -q '^not ok' "$base/$i.out" && fail=$((fail + 1))
+    [ -s "$base/$i/share" ] && shares+=("$(cat "$base/$i/share")")
 done
 if [ ${#shares[@]} -gt 0 ]; then
     median=$(printf '%s\n' "${shares[@]}" | sort -g | awk '{ a[NR] = $1 } END { print NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2 }')
