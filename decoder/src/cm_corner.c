@@ -48,13 +48,7 @@ cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *samples, double *b
     cm_err e = cm_face_samples(m, f, samples, CM_MAX_FACE_SAMPLES, &ns, &n_outer, st);
     if (e != CM_OK)
         return e;
-    cm_vec3 lo = samples[0], hi = samples[0];
-    for (int i = 1; i < ns; i++) {
-        cm_vec3 p = samples[i];
-        lo = cm_v3(p.x < lo.x ? p.x : lo.x, p.y < lo.y ? p.y : lo.y, p.z < lo.z ? p.z : lo.z);
-        hi = cm_v3(p.x > hi.x ? p.x : hi.x, p.y > hi.y ? p.y : hi.y, p.z > hi.z ? p.z : hi.z);
-    }
-    *bbox = cm_dist(lo, hi);
+    *bbox = cm_points_diag(samples, ns);
     cm_frame fr;
     if ((e = cm_face_frame(samples, n_outer, samples, ns, 1e-12 * *bbox, &fr, st)) != CM_OK)
         return e;
@@ -94,10 +88,9 @@ static int partner_geo(const cm_model *m, uint32_t g, uint32_t e, int32_t v, cm_
     return 0;
 }
 
-/* a vertex of F's outer loop: its index, the uses around it and their partners */
+/* what the partner lookups of one face share */
 typedef struct corner_ctx {
     const cm_model *m;
-    uint32_t f;
     cm_vec3 nF;
     double eps;
     cm_vec3 *scratch; /* samples for partner normals */
@@ -126,7 +119,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
         return e;
     in->n = n;
     in->eps_len = 1e-12 * bbox;
-    corner_ctx c = {m, f, in->nF, in->eps_len, ws->scratch};
+    corner_ctx c = {m, in->nF, in->eps_len, ws->scratch};
     /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */
     for (int k = 0; k < n; k++) {
         const cm_use *uin = &m->uses[L->use0 + (uint32_t)((k + n - 1) % n)], *uout = &m->uses[L->use0 + (uint32_t)k];

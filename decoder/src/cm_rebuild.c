@@ -35,7 +35,7 @@ cm_err cm_face_samples(const cm_model *m, uint32_t f, cm_vec3 *out, int cap, int
     return CM_OK;
 }
 
-static double diag_of(const cm_vec3 *p, int n)
+double cm_points_diag(const cm_vec3 *p, int n)
 {
     cm_vec3 lo = p[0], hi = p[0];
     for (int i = 1; i < n; i++) {
@@ -59,7 +59,7 @@ cm_err cm_rebuild_face_ex(const cm_model *m, uint32_t f, int check, cm_rebuilt *
     if (e != CM_OK)
         return e;
     out->method = F->method;
-    out->bbox = diag_of(ws->samples, n);
+    out->bbox = cm_points_diag(ws->samples, n);
     out->greg = NULL;
     out->checksum = 0;
     if (F->method == CM_METHOD_KEEP) {

@@ -1003,7 +1003,6 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             fs[pick].method = CM_METHOD_KEEP;
             face_surface_free(&fs[pick]);
             r->faces[pick].why = "G1";
-            r->faces[pick].g1_reverted = 1;
             changed = 1;
             /* its edges are measured again next round (this one included: now against a KEEP face) */
             const cm_face *F = &m->faces[pick];

@@ -46,7 +46,6 @@ typedef struct face_report {
     double rebuild_avg;/* mean distance over the §12 points (mm) */
     double greg_ratio; /* best §12 ratio any GREGORY candidate reached (0: none tried) */
     double g1_cos;     /* worst |nF.nG| on the face's G1 edges, final surfaces (§13; 1: none) */
-    int g1_reverted;   /* rebuilt, then turned back to KEEP by the G1 fix-point */
     const char *why;   /* KEEP: why GREGORY did not apply or failed (NULL: not tried) */
     double bbox;       /* face bounding-box diagonal (mm) */
     double plane_dev;  /* largest boundary distance from the face's plane (mm) */

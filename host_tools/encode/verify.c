@@ -155,15 +155,6 @@ static double greg_dist(greg_walk *w, cm_vec3 p)
     return d;
 }
 
-double rebuilt_distance(const cm_rebuilt *rb, cm_vec3 p)
-{
-    if (rb->method == CM_METHOD_PLANE)
-        return dist_to_plane_patch(&rb->frame, rb->rect, p);
-    if (rb->method == CM_METHOD_GREGORY && rb->greg)
-        return cm_greg_surface_project(rb->greg, p, NULL, NULL, NULL);
-    return HUGE_VAL;
-}
-
 static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
 {
 

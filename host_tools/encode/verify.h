@@ -60,7 +60,4 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
  */
 double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, const face_surface *fs, int *worse);
 
-/** Distance from p to a rebuilt PLANE or GREGORY surface (a global search; for single points). */
-double rebuilt_distance(const cm_rebuilt *rb, cm_vec3 p);
-
 #endif /* VERIFY_H */

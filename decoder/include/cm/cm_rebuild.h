@@ -43,6 +43,9 @@ typedef struct cm_rebuilt {
 CM_NODISCARD cm_err cm_face_samples(const cm_model *m, uint32_t f, cm_vec3 *out, int cap, int *n, int *n_outer,
                                     cm_status *st);
 
+/** Diagonal of the axis-aligned box of n > 0 points (spec §1 bbox_F of a face's samples). */
+double cm_points_diag(const cm_vec3 *p, int n);
+
 /**
  * Rebuild face f's surface (spec §2 rule 1: the same code on both sides).
  * PLANE: K11 frame of its boundary samples, rectangle of their (x, y)
