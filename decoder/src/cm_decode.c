@@ -493,9 +493,11 @@ static cm_err sec_face(reader *r)
         uint64_t meth = cm_ac_dec_uint(&r->ac, &ctx.method);
         if (r->ac.overrun)
             return rfail(r, CM_E_TRUNCATED, "face method");
-        /* format 1 knows KEEP and PLANE only */
-        if (meth >= CM_METHOD_COUNT || (meth >= CM_METHOD_GREGORY && r->d->buf[4] < 2))
+        if (meth >= CM_METHOD_COUNT)
             return rfail(r, CM_E_UNSUPPORTED, "face method");
+        /* format 1 knows KEEP and PLANE only */
+        if (meth == CM_METHOD_GREGORY && r->d->buf[4] < 2)
+            return rfail(r, CM_E_UNSUPPORTED, "GREGORY face in a format 1 file");
         F->method = (uint8_t)meth;
         F->layout = F->corner = 0;
         F->checksum = 0;
@@ -506,8 +508,10 @@ static cm_err sec_face(reader *r)
             F->checksum |= cm_ac_dec_direct(&r->ac, 16) << 16;
             if (r->ac.overrun)
                 return rfail(r, CM_E_TRUNCATED, "face record");
-            if (layout > 2 || corner >= CM_MAX_SIDES || (layout != 2 && corner != 0))
-                return rfail(r, CM_E_RANGE, "face record");
+            if (layout > 2)
+                return rfail(r, CM_E_RANGE, "GREGORY layout");
+            if (corner >= CM_MAX_SIDES || (layout != 2 && corner != 0))
+                return rfail(r, CM_E_RANGE, "GREGORY corner");
             F->layout = (uint8_t)layout;
             F->corner = (uint8_t)corner;
         }
@@ -573,14 +577,22 @@ static cm_err sec_face(reader *r)
         return rfail(r, CM_E_TRUNCATED, "faces");
     if (enext != m->nedges || snext != m->nsurfs)
         return rfail(r, CM_E_FORMAT, "unused edges or surfaces");
-    /* GREGORY needs an outer loop of 3..CM_MAX_SIDES edges; layout 2 only for 3 */
+    /* GREGORY needs one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3 */
     for (uint32_t f = 0; f < m->nfaces; f++) {
         const cm_face *F = &m->faces[f];
         uint32_t n = m->loops[F->loop0].nuse;
-        if (F->method == CM_METHOD_GREGORY && (n < 3 || F->nloops != 1 || (F->layout == 2 && (n != 3 || F->corner >= n))))
-            return rfail(r, CM_E_FORMAT, "face record");
-        if (F->method == CM_METHOD_GREGORY && n > CM_MAX_SIDES)
-            return rlimit(r, CM_LIMIT_MAX_SIDES, n, CM_MAX_SIDES, "sides");
+        if (F->method != CM_METHOD_GREGORY)
+            continue;
+        if (F->nloops != 1)
+            return rfail(r, CM_E_FORMAT, "GREGORY face with holes");
+        if (n < 3)
+            return rfail(r, CM_E_FORMAT, "GREGORY face with fewer than 3 sides");
+        if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3))
+            return rfail(r, CM_E_FORMAT, "GREGORY sides do not fit the layout");
+        if (F->layout == 2 && F->corner >= n)
+            return rfail(r, CM_E_FORMAT, "GREGORY corner beyond the loop");
+        if (n > CM_MAX_SIDES)
+            return rlimit(r, CM_LIMIT_MAX_SIDES, n, CM_MAX_SIDES, "GREGORY sides");
     }
     cm_model_adjacency(m);
     return CM_OK;

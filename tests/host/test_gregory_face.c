@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "cm/cm_arith.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_rebuild.h"
 #include "cm/cm_tessellate.h"
@@ -232,14 +233,27 @@ static void test_gregory_needs_format_2(void **state)
     loaded_model lm;
     encode_result r;
     split_cylinder_gregory(&lm, &r);
-    r.bytes[4] = 1; /* claim version 1: the header CRC then fails first, as it must */
+    /* claim version 1: the header CRC covers the version byte, so that alone is refused by CRC */
+    r.bytes[4] = 1;
     cm_status st;
     cm_status_init(&st);
     cm_dec_init(&dec);
-    cm_err e = cm_dec_feed(&dec, r.bytes, r.len, &st);
-    if (e == CM_OK)
-        e = cm_dec_finish(&dec, &st);
-    assert_int_not_equal(e, CM_OK);
+    assert_int_equal(cm_dec_feed(&dec, r.bytes, r.len, &st), CM_E_CRC);
+    /* a well-made 1.0 file: the header's and the file's CRCs recomputed (no section holds the
+       version); the header is accepted and the FACE section refuses the GREGORY method */
+    uint32_t H = cm_get_u32(r.bytes + 8);
+    cm_put_u32(r.bytes + H - 4, cm_crc32(r.bytes, H - 4));
+    cm_put_u32(r.bytes + r.len - 4, cm_crc32(r.bytes, r.len - 4));
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    assert_ok(cm_dec_feed(&dec, r.bytes, r.len, &st));
+    assert_int_equal(dec.version_major, 1);
+    assert_int_equal(cm_dec_finish(&dec, &st), CM_E_UNSUPPORTED);
+    assert_int_equal(st.code, CM_E_UNSUPPORTED);
+    assert_non_null(st.where);
+    assert_string_equal(st.where, "GREGORY face in a format 1 file");
+    const cm_dec_section *face = &dec.sec[CM_SEC_FACE - 1];
+    assert_true(st.offset >= face->off && st.offset <= face->off + face->len);
     r.bytes[4] = 3; /* a major version this reader does not know */
     cm_status_init(&st);
     cm_dec_init(&dec);

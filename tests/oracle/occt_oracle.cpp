@@ -8,7 +8,7 @@
 //
 //   occt_oracle info      MODEL.igs [--sew-rel 1e-6]
 //   occt_oracle points    MODEL.igs POINTS.xyz [--tol-rel 1e-6] [--out FILE]
-//   occt_oracle mesh-dev  MODEL.igs MESH.stl   [--defl-rel 1e-4] [--max-points N]
+//   occt_oracle mesh-dev  MODEL.igs MESH.stl   [--defl-rel 1e-4] [--max-points N] [--per-face-out F]
 //   occt_oracle sample    MODEL.igs OUT.xyz    [--per-face 20]
 //   occt_oracle write-stl MODEL.igs OUT.stl    [--defl-rel 1e-4]   (hidden: test meshes)
 //   every command: [--curves file|3d]   (which IGES trim curves define the faces)
@@ -1948,10 +1948,18 @@ int cmd_mesh_dev(const Args& a) {
     WorstK<V3> worst_a(10);
     double max_a = 0, sum_a = 0;
     long long unresolved = 0;
+    // per OCCT face (index-1): the worst mesh point whose nearest face it is, the worst
+    // sample of it, and the box of its samples (for --per-face-out)
+    const size_t nf = static_cast<size_t>(m.faces.Extent());
+    std::vector<double> face_a(nf, 0.0), face_b(nf, 0.0);
+    std::vector<Box3> face_box(nf);
     for (size_t k : qa) {
         const V3& p = q[k];
-        double d = fd.distance(p).dist;
+        FaceDistance::Result r = fd.distance(p);
+        double d = r.dist;
         if (!std::isfinite(d)) unresolved++;
+        if (r.face >= 1 && static_cast<size_t>(r.face) <= nf && std::isfinite(d))
+            face_a[static_cast<size_t>(r.face - 1)] = std::max(face_a[static_cast<size_t>(r.face - 1)], d);
         max_a = std::max(max_a, d);
         sum_a += d;
         worst_a.add(d, p);
@@ -1973,11 +1981,28 @@ int cmd_mesh_dev(const Args& a) {
     for (size_t k : qb) {
         const ModelSample& s = ms[k];
         double d = mesh.distance(s.p);
+        if (s.face >= 1 && static_cast<size_t>(s.face) <= nf)
+            face_b[static_cast<size_t>(s.face - 1)] = std::max(face_b[static_cast<size_t>(s.face - 1)], d);
         max_b = std::max(max_b, d);
         sum_b += d;
         worst_b.add(d, s);
     }
     double t_b = sw3.seconds();
+    if (a.opt.count("--per-face-out")) {
+        // the box of every sample (BRepMesh nodes and the UV centroids), a tight inner
+        // box of the face; the loose containing box where a face has no sample
+        for (const ModelSample& s : ms)
+            if (s.face >= 1 && static_cast<size_t>(s.face) <= nf) face_box[static_cast<size_t>(s.face - 1)].add(s.p);
+        const std::string& path = a.opt.at("--per-face-out");
+        FILE* f = fopen(path.c_str(), "w");
+        if (!f) throw InputError(strf("cannot write '%s': %s", path.c_str(), strerror(errno)));
+        fprintf(f, "face\tbox_diag\tmesh_to_model_max\tmodel_to_mesh_max\n");
+        for (size_t i = 0; i < nf; i++) {
+            const Box3& b = face_box[i].lo[0] <= face_box[i].hi[0] ? face_box[i] : m.face_boxes[i];
+            fprintf(f, "%zu\t%.10g\t%.10g\t%.10g\n", i + 1, b.diag(), face_a[i], face_b[i]);
+        }
+        if (fclose(f) != 0) throw InputError(strf("cannot write '%s': %s", path.c_str(), strerror(errno)));
+    }
 
     print_unit_note(m);
     kv("diag", m.diag);
@@ -2171,6 +2196,8 @@ const char* kUsage =
     "                    [--max-points N]           (model tessellated at R*diag, default 1e-4;\n"
     "                                               N: measure at most N evenly strided points\n"
     "                                               each way, default all)\n"
+    "                    [--per-face-out F.tsv]     per OCCT face: box diagonal, worst\n"
+    "                                               mesh point nearest it, worst sample of it\n"
     "  sample   MODEL.igs OUT.xyz [--per-face N]    N points (default 20) inside every face\n"
     "Every command also takes --curves file|3d: trim curves as the IGES file prefers\n"
     "(default) or rebuilt from the 3D curves.\n"
@@ -2212,7 +2239,7 @@ int run(int argc, char** argv) {
     };
     if (cmd == "info") return cmd_info(args({"--sew-rel"}));
     if (cmd == "points") return cmd_points(args({"--tol-rel", "--out"}));
-    if (cmd == "mesh-dev") return cmd_mesh_dev(args({"--defl-rel", "--max-points"}));
+    if (cmd == "mesh-dev") return cmd_mesh_dev(args({"--defl-rel", "--max-points", "--per-face-out"}));
     if (cmd == "sample") return cmd_sample(args({"--per-face"}));
     if (cmd == "write-stl") return cmd_write_stl(args({"--defl-rel"}));
     throw UsageError(strf("unknown command '%s'", cmd.c_str()));

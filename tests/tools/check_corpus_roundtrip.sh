@@ -11,7 +11,9 @@
 #      measures the STL both ways: every mesh point within the chordal
 #      tolerance plus the encoder's own verified rebuild error of the face
 #      (cmz encode --report), and every point of the true surfaces that
-#      close to the mesh (plus OCCT's own meshing deflection);
+#      close to the mesh (plus OCCT's own meshing deflection); and per OCCT
+#      face: its points within 1 % of its bounding box plus the chordal
+#      tolerance of the mesh (the papers' criterion);
 #   3. the GLB through tinygltf (gltf_check): valid glTF 2.0, every
 #      accessor, index and bound consistent;
 #   4. `cmz eval`, which imports the IGES again and rebuilds every PLANE and
@@ -54,7 +56,7 @@ one() {
     rebuild=$(awk -F'\t' 'NR > 1 && $8 + 0 > m { m = $8 + 0 } END { print m + 0 }' "$tmp/faces.tsv")
     topo=$("$mesh_check" "$tmp/m.cmz" 2>&1)
     topo_rc=$?
-    dev=$("$oracle" mesh-dev "$f" "$tmp/m.stl" --curves 3d $ORACLE_OPTS 2>/dev/null)
+    dev=$("$oracle" mesh-dev "$f" "$tmp/m.stl" --curves 3d --per-face-out "$tmp/pf.tsv" $ORACLE_OPTS 2>/dev/null)
     dev_rc=$?
     glb=$("$gltf" "$tmp/m.glb" 2>&1)
     glb_rc=$?
@@ -72,6 +74,21 @@ one() {
         note=" (OCCT places $occt_faces faces, cmz $faces: model->mesh not compared)"
         mm2=0
     fi
+    # per OCCT face (the issue's criterion): every point of the true face within 1 % of the face's
+    # box plus the chordal tolerance (plus OCCT's deflection) of the mesh.  The other way the
+    # oracle only knows the NEAREST true face of a mesh point, not the face it was rebuilt for
+    # (a point of a large rebuilt face can lie nearest a small neighbour), so mesh->model stays
+    # judged by the global bound above and its per-face figure is reported, not judged.
+    # Prints "ok WORST_B WORST_A" (% of the box beyond the chordal tolerance) or why not.
+    judge_faces() {
+        awk -F'\t' -v t="$tess" -v d="$diag" -v e="$defl" -v skip_b="$1" 'NR == FNR { if (FNR > 1) b2[$1] = $4; next }
+            FNR > 1 {
+                s = 1e-5 * d; bb = $2; a = $3; b = (skip_b ? 0 : b2[$1])
+                if (b > 0.01 * bb + t + e + s) { printf "face %d: model->mesh %.4g mm > 1 %% of box %.4g + tess %.4g + defl %.4g", $1, b, bb, t, e; bad = 1; exit }
+                if (bb > 0) { if ((b - t - e) / bb > wb) wb = (b - t - e) / bb; if ((a - t) / bb > wa) wa = (a - t) / bb }
+            }
+            END { if (!bad) printf "ok %.3g %.3g", 100 * wb, 100 * wa }' "$2" "$3"
+    }
     judge() {
         awk -v t="$tess" -v r="$rebuild" -v d="$diag" -v a="$m2m" -v b="$mm2" -v e="$defl" 'BEGIN {
             if (d == "" || a == "" || b == "") { print "no oracle result"; exit }
@@ -80,20 +97,36 @@ one() {
             if (b > t + r + e + s) { printf "model->mesh %.4g mm > tess %.4g + rebuild %.4g + defl %.4g + %.2g", b, t, r, e, s; exit }
             print "ok" }'
     }
+    skip_b=0
+    [ "$mm2" = 0 ] && skip_b=1
     verdict=$(judge)
-    if [[ "$verdict" == model-\>mesh* ]]; then
-        dev2=$("$oracle" mesh-dev "$f" "$tmp/m.stl" $ORACLE_OPTS 2>/dev/null)
+    pf_b=$tmp/pf.tsv
+    [ "$verdict" = ok ] && [ -s "$tmp/pf.tsv" ] && verdict=$(judge_faces $skip_b "$tmp/pf.tsv" "$tmp/pf.tsv")
+    if [[ "$verdict" == model-\>mesh* || "$verdict" == face*model-\>mesh* ]]; then
+        dev2=$("$oracle" mesh-dev "$f" "$tmp/m.stl" --per-face-out "$tmp/pf2.tsv" $ORACLE_OPTS 2>/dev/null)
         mm2_file=$(sed -n "s/^model_to_mesh_max //p" <<<"$dev2")
         old=$mm2
         mm2=$mm2_file
-        if [ "$(judge)" = ok ]; then
+        if [ "$(judge)" = ok ] && [ -s "$tmp/pf2.tsv" ] &&
+           [[ "$(judge_faces $skip_b "$tmp/pf2.tsv" "$tmp/pf.tsv")" == ok* ]]; then
             note="$note (model->mesh $old mm with OCCT's 3D-curve trimming, $mm2_file with the file's curves)"
+            pf_b=$tmp/pf2.tsv
             verdict=ok
+        fi
+    fi
+    worst_face=""
+    if [[ "$verdict" == ok* ]]; then
+        if [ -s "$tmp/pf.tsv" ]; then
+            read -r _ wb wa <<<"$(judge_faces $skip_b "$pf_b" "$tmp/pf.tsv")"
+            worst_face=", worst face model->mesh $wb % of its box beyond tess (mesh->model, by nearest face: $wa %)"
+            verdict=ok
+        else
+            verdict="no per-face result from the oracle"
         fi
     fi
     share=$(awk -v a="${np:-0}" -v b="${ng:-0}" -v n="${faces:-0}" 'BEGIN { printf "%.1f", (n > 0 ? 100 * (a + b) / n : 0) }')
     echo "$share" > "$tmp/share"
-    summary="$size bytes, $share % of faces deleted, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$note"
+    summary="$size bytes, $share % of faces deleted, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$worst_face$note"
     if [ $topo_rc -ne 0 ]; then
         echo "not ok $n - $b: mesh topology: ${topo#* - }"
     elif [ $dev_rc -gt 1 ] || [ "$verdict" != ok ]; then

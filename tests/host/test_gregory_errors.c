@@ -1,0 +1,610 @@
+/*
+ * test_gregory_errors.c - the terminal decoder's refusals of malformed
+ * GREGORY faces (docs/FORMAT.md, FACE and Errors), one named test per path:
+ * GREGORY in a 1.x file, a record field out of range, holes and side
+ * counts that do not fit the layout, more sides than this build's
+ * MAX_SIDES, and a record whose checksum no longer matches.
+ *
+ * Every malformed file is a well-formed one in all but the one field under
+ * test: a model is built in memory (the encoder's split cylinder, decoded,
+ * or a polygon made here), the field is changed, and the model is written
+ * back with write_cmz() below, valid CRCs included, so the decoder reaches
+ * the check under test and not an earlier one.  write_cmz() codes every
+ * section as the encoder's writer does (the shared contexts of
+ * cm_sections.h, the range coder, cm_crc32); the first test proves it by
+ * reproducing the encoder's file byte for byte.  Each test asserts the exact
+ * code and that the status, as cm_format_status() prints it, names the cause.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "../unit/test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "cm/cm_arith.h"
+#include "cm/cm_decode.h"
+#include "cm/cm_limits_info.h"
+#include "cm/cm_rebuild.h"
+#include "cm/cm_sections.h"
+#include "cm_report.h"
+#include "encode/encode.h"
+#include "igs_writer.h"
+#include "model_load.h"
+
+/* src holds the model a test alters, dec decodes the result: 2 x 750 MB with the host profile,
+   too much for static storage next to the encoder's own decoder, so allocated (lazily mapped) */
+static cm_decoder *src, *dec;
+static cm_rebuild_ws rbws;
+
+#define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
+#define KNOT_ONE (1ll << CM_FMT_KNOT_BITS)
+#define SECTION_CAP (1u << 20) /* far more than the test models need; overflow fails the test */
+
+/* ---- a .cmz writer for models held in a cm_model ---- */
+
+/* the grid integer of coordinate x on axis a; a point off the file's grid is a bug of the test */
+static int64_t grid_coord(const cm_model *m, int a, double x)
+{
+    int64_t k = llround((x - m->origin[a]) / m->q);
+    if (!(m->origin[a] + m->q * (double)k == x))
+        fail_msg("coordinate %.17g (axis %d) is not on the grid", x, a);
+    return k;
+}
+
+static void grid_point(const cm_model *m, cm_vec3 p, int64_t k[3])
+{
+    k[0] = grid_coord(m, 0, p.x);
+    k[1] = grid_coord(m, 1, p.y);
+    k[2] = grid_coord(m, 2, p.z);
+}
+
+/* a quantised value v (knot or weight) as the integer v * one; it must be exact */
+static int64_t fixed_point(double v, int64_t one, const char *what)
+{
+    int64_t k = llround(v * (double)one);
+    if (!((double)k / (double)one == v))
+        fail_msg("%s %.17g is not a multiple of 1/%lld", what, v, (long long)one);
+    return k;
+}
+
+static void put_vertices(const cm_model *m, cm_ac_enc *e)
+{
+    cm_vert_ctx c;
+    cm_vert_ctx_init(&c);
+    cm_ac_enc_uint(e, &c.count, m->nverts);
+    int64_t prev[3] = {0, 0, 0};
+    for (uint32_t i = 0; i < m->nverts; i++) {
+        int64_t k[3];
+        grid_point(m, m->verts[i], k);
+        for (int a = 0; a < 3; a++) {
+            cm_ac_enc_sint(e, &c.coord[a], k[a] - prev[a]);
+            prev[a] = k[a];
+        }
+    }
+}
+
+/* a vertex reference: the next vertex not referenced yet, or one already referenced */
+static void put_vertex_ref(cm_ac_enc *e, cm_edge_ctx *c, uint32_t *next, int32_t v)
+{
+    if ((uint32_t)v == *next) {
+        cm_ac_enc_bit(e, &c->is_new, 1);
+        (*next)++;
+        return;
+    }
+    if (v < 0 || (uint32_t)v > *next)
+        fail_msg("vertex %d referenced before vertex %u: not expressible in the format", v, *next);
+    cm_ac_enc_bit(e, &c->is_new, 0);
+    cm_ac_enc_uint(e, &c->back, *next - 1 - (uint32_t)v);
+}
+
+static void put_edges(const cm_model *m, cm_ac_enc *e)
+{
+    cm_edge_ctx c;
+    cm_edge_ctx_init(&c);
+    cm_ac_enc_uint(e, &c.count, m->nedges);
+    uint32_t vnext = 0;
+    for (uint32_t i = 0; i < m->nedges; i++) {
+        const cm_edge *E = &m->edges[i];
+        put_vertex_ref(e, &c, &vnext, E->v0);
+        put_vertex_ref(e, &c, &vnext, E->v1);
+        cm_ac_enc_bit(e, &c.g1, E->g1);
+        cm_ac_enc_bit(e, &c.kind, E->kind);
+        if (E->kind == CM_EDGE_LINE)
+            continue;
+        int p = E->p, n = E->nctrl, interior = n - p - 1;
+        cm_ac_enc_uint(e, &c.degree, (uint64_t)(p - 1));
+        cm_ac_enc_uint(e, &c.ncoef, (uint64_t)interior);
+        cm_ac_enc_bit(e, &c.rational, E->rational);
+        /* the decoder's uniform vector is exactly j / (interior + 1): any other vector has gaps */
+        const double *K = m->knots + E->knot0;
+        int uniform = 1;
+        for (int j = 1; j <= interior; j++)
+            uniform &= K[p + j] == (double)j / (double)(interior + 1);
+        cm_ac_enc_bit(e, &c.uniform, (unsigned)uniform);
+        int64_t kprev = 0;
+        for (int j = 1; j <= interior && !uniform; j++) {
+            int64_t kq = fixed_point(K[p + j], KNOT_ONE, "knot");
+            cm_ac_enc_uint(e, &c.knot, (uint64_t)(kq - kprev));
+            kprev = kq;
+        }
+        int64_t prev[3];
+        grid_point(m, m->verts[E->v0], prev);
+        for (int j = 1; j < n - 1; j++) {
+            int64_t k[3];
+            grid_point(m, m->ctrl[E->ctrl0 + (uint32_t)j], k);
+            for (int a = 0; a < 3; a++) {
+                cm_ac_enc_sint(e, &c.coord[a], k[a] - prev[a]);
+                prev[a] = k[a];
+            }
+        }
+        int64_t wprev = WEIGHT_ONE;
+        for (int j = 1; j < n && E->rational; j++) {
+            int64_t wq = fixed_point(m->w[E->ctrl0 + (uint32_t)j], WEIGHT_ONE, "weight");
+            cm_ac_enc_sint(e, &c.weight, wq - wprev);
+            wprev = wq;
+        }
+    }
+}
+
+/* the test models have no kept surface (GREGORY and PLANE faces only) */
+static void put_surfaces(const cm_model *m, cm_ac_enc *e)
+{
+    cm_surf_ctx c;
+    cm_surf_ctx_init(&c);
+    for (uint32_t f = 0; f < m->nfaces; f++)
+        if (m->faces[f].method == CM_METHOD_KEEP)
+            fail_msg("face %u is KEEP: write_cmz does not write kept surfaces", f);
+    cm_ac_enc_uint(e, &c.count, 0);
+}
+
+/* FACE exactly as the format says, whatever the record holds: the fields under test go out as set */
+static void put_faces(const cm_model *m, cm_ac_enc *e)
+{
+    cm_face_ctx c;
+    cm_face_ctx_init(&c);
+    cm_ac_enc_uint(e, &c.count, m->nfaces);
+    uint32_t enext = 0;
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        const cm_face *F = &m->faces[f];
+        cm_ac_enc_uint(e, &c.method, F->method);
+        if (F->method == CM_METHOD_GREGORY) {
+            cm_ac_enc_uint(e, &c.layout, F->layout);
+            cm_ac_enc_uint(e, &c.corner, F->corner);
+            cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
+            cm_ac_enc_direct(e, F->checksum >> 16, 16);
+        }
+        cm_ac_enc_bit(e, &c.flip, F->flip);
+        cm_ac_enc_uint(e, &c.loops, F->nloops);
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            const cm_loop *L = &m->loops[F->loop0 + l];
+            cm_ac_enc_uint(e, &c.uses, L->nuse);
+            for (uint32_t u = 0; u < L->nuse; u++) {
+                const cm_use *U = &m->uses[L->use0 + u];
+                if (U->edge == enext) {
+                    cm_ac_enc_bit(e, &c.is_new, 1);
+                    cm_ac_enc_bit(e, &c.rev_new, U->rev);
+                    enext++;
+                } else {
+                    if (U->edge > enext)
+                        fail_msg("edge %u used before edge %u: not expressible in the format", U->edge, enext);
+                    cm_ac_enc_bit(e, &c.is_new, 0);
+                    cm_ac_enc_uint(e, &c.back, enext - 1 - U->edge);
+                    cm_ac_enc_bit(e, &c.rev_old, U->rev);
+                }
+            }
+        }
+    }
+}
+
+static void put_colours(const cm_model *m, cm_ac_enc *e)
+{
+    cm_colr_ctx c;
+    cm_colr_ctx_init(&c);
+    cm_ac_enc_uint(e, &c.count, m->npalette);
+    for (uint32_t i = 1; i <= m->npalette; i++)
+        cm_ac_enc_direct(e, m->palette[i], 24);
+    for (uint32_t f = 0; f < m->nfaces && m->npalette; f++)
+        cm_ac_enc_uint(e, &c.index, m->faces[f].color);
+}
+
+typedef void (*section_writer)(const cm_model *m, cm_ac_enc *e);
+
+/**
+ * Write model m as a .cmz file of major version `major` (minor 0) with the need table `need`
+ * (CM_LIMIT_COUNT entries; NULL: all 0, which every build accepts) and every CRC computed.
+ * Returns the malloc'd file; *len its length.
+ */
+static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, size_t *len)
+{
+    static const section_writer writers[CM_SEC_COUNT] = {put_vertices, put_edges, put_surfaces, put_faces,
+                                                         put_colours};
+    uint8_t *sec[CM_SEC_COUNT];
+    size_t seclen[CM_SEC_COUNT];
+    const size_t H = CM_FMT_FIXED_HEADER + 4u * CM_LIMIT_COUNT + CM_FMT_SECTION_ENTRY * CM_SEC_COUNT + 4u;
+    size_t total = H + 4u;
+    for (int s = 0; s < CM_SEC_COUNT; s++) {
+        sec[s] = malloc(SECTION_CAP);
+        assert_non_null(sec[s]);
+        cm_ac_enc e;
+        cm_ac_enc_init(&e, sec[s], SECTION_CAP);
+        writers[s](m, &e);
+        seclen[s] = cm_ac_enc_finish(&e);
+        assert_true(seclen[s] > 0); /* 0: the buffer overflowed */
+        total += seclen[s];
+    }
+    uint8_t *b = calloc(1, total);
+    assert_non_null(b);
+    int qe = ilogb(m->q);
+    if (!(ldexp(1.0, qe) == m->q))
+        fail_msg("grid step %.17g is not a power of 2", m->q);
+    b[0] = CM_FMT_MAGIC0;
+    b[1] = CM_FMT_MAGIC1;
+    b[2] = CM_FMT_MAGIC2;
+    b[3] = CM_FMT_MAGIC3;
+    b[4] = (uint8_t)major;
+    b[5] = 0;
+    cm_put_u16(b + 6, (uint16_t)(m->npalette ? 1 : 0));
+    cm_put_u32(b + 8, (uint32_t)H);
+    cm_put_u32(b + 12, (uint32_t)total);
+    b[16] = CM_LIMIT_COUNT;
+    b[17] = CM_SEC_COUNT;
+    b[18] = (uint8_t)(int8_t)qe;
+    for (int k = 0; k < 3; k++)
+        cm_put_f64(b + 20 + 8 * k, m->origin[k]);
+    cm_put_f64(b + 44, m->tess_tol);
+    cm_put_f64(b + 52, m->rel_tol);
+    for (int i = 0; i < CM_LIMIT_COUNT; i++)
+        cm_put_u32(b + CM_FMT_FIXED_HEADER + 4 * i, need ? need[i] : 0);
+    size_t off = H;
+    for (int s = 0; s < CM_SEC_COUNT; s++) {
+        uint8_t *ent = b + CM_FMT_FIXED_HEADER + 4 * CM_LIMIT_COUNT + CM_FMT_SECTION_ENTRY * s;
+        ent[0] = (uint8_t)(s + 1);
+        cm_put_u32(ent + 4, (uint32_t)off);
+        cm_put_u32(ent + 8, (uint32_t)seclen[s]);
+        cm_put_u32(ent + 12, cm_crc32(sec[s], seclen[s]));
+        memcpy(b + off, sec[s], seclen[s]);
+        off += seclen[s];
+        free(sec[s]);
+    }
+    cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
+    cm_put_u32(b + total - 4, cm_crc32(b, total - 4));
+    *len = total;
+    return b;
+}
+
+/* ---- models ---- */
+
+/* the split half cylinder of spec T5 encoded with GREGORY on: two layout-0 faces, format 2 */
+static const encode_result *split_cylinder(void)
+{
+    static encode_result r;
+    if (r.bytes)
+        return &r;
+    igw w;
+    igw_init(&w);
+    igw_split_half_cylinder_144(&w, 10.0, 20.0);
+    size_t len = 0;
+    char *text = igw_text(&w, &len);
+    igw_free(&w);
+    cm_status st;
+    cm_status_init(&st);
+    loaded_model lm;
+    assert_ok(model_load_data("split-cylinder", text, len, &lm, NULL, NULL, &st));
+    free(text);
+    encode_opts o;
+    encode_opts_default(&o);
+    o.rel_tol = 0.01;
+    o.rel_set = 1;
+    o.gregory = 1;
+    assert_ok(encode_model(&lm, &o, &r, &st));
+    model_free(&lm);
+    assert_int_equal(r.faces_gregory, 2);
+    assert_int_equal(r.bytes[4], 2);
+    return &r;
+}
+
+static cm_err decode_bytes(cm_decoder *d, const uint8_t *b, size_t n, cm_status *st)
+{
+    cm_status_init(st);
+    cm_dec_init(d);
+    cm_err e = cm_dec_feed(d, b, n, st);
+    return e != CM_OK ? e : cm_dec_finish(d, st);
+}
+
+/* src->model := the split cylinder as the terminal decodes it */
+static void load_split_cylinder(void)
+{
+    const encode_result *r = split_cylinder();
+    cm_status st;
+    assert_ok(decode_bytes(src, r->bytes, r->len, &st));
+    assert_int_equal(src->model.nfaces, 2);
+    for (int f = 0; f < 2; f++) {
+        assert_int_equal(src->model.faces[f].method, CM_METHOD_GREGORY);
+        assert_int_equal(src->model.faces[f].layout, CM_GREG_LAYOUT_QUAD);
+        assert_int_equal(src->model.loops[src->model.faces[f].loop0].nuse, 4);
+    }
+}
+
+/* a vertex of a hand-built model, moved to the grid */
+static uint32_t add_vertex(cm_model *m, double x, double y)
+{
+    cm_vec3 p = cm_v3(m->q * (double)llround(x / m->q), m->q * (double)llround(y / m->q), 0.0);
+    m->verts[m->nverts] = p;
+    return m->nverts++;
+}
+
+static void add_line(cm_model *m, uint32_t v0, uint32_t v1)
+{
+    cm_edge *E = &m->edges[m->nedges++];
+    memset(E, 0, sizeof *E);
+    E->v0 = (int32_t)v0;
+    E->v1 = (int32_t)v1;
+    E->kind = CM_EDGE_LINE;
+    E->p = 1;
+    E->nctrl = 2;
+}
+
+/* a loop of face 0 through the vertices v0 .. v0+n-1, closed, each side a new line edge */
+static void add_loop(cm_model *m, uint32_t v0, int n)
+{
+    uint32_t e0 = m->nedges;
+    for (int k = 0; k < n; k++)
+        add_line(m, v0 + (uint32_t)k, v0 + (uint32_t)((k + 1) % n));
+    cm_loop *L = &m->loops[m->nloops++];
+    L->use0 = m->nuses;
+    L->nuse = (uint16_t)n;
+    for (int k = 0; k < n; k++) {
+        m->uses[m->nuses].edge = e0 + (uint32_t)k;
+        m->uses[m->nuses++].rev = 0;
+    }
+    m->faces[0].nloops++;
+}
+
+/*
+ * src->model := one planar face whose outer loop is a regular polygon of `sides` line edges (radius
+ * 10 mm, counter-clockwise) and, with `hole`, a clockwise triangle inside it, with the given record.
+ * The checksum is 0: the decoder does not rebuild, so these models test the reading only.
+ */
+static void polygon_face(int sides, int hole, int method, int layout, int corner)
+{
+    cm_model *m = &src->model;
+    m->origin[0] = m->origin[1] = m->origin[2] = 0.0;
+    m->q = 1.0 / 1024.0;
+    m->tess_tol = 0.01;
+    m->rel_tol = 0.01;
+    m->nverts = m->nedges = m->nfaces = m->nloops = m->nuses = m->nsurfs = m->nctrl = m->nknots = 0;
+    m->npalette = 0;
+    cm_face *F = &m->faces[m->nfaces++];
+    memset(F, 0, sizeof *F);
+    F->method = (uint8_t)method;
+    F->layout = (uint8_t)layout;
+    F->corner = (uint8_t)corner;
+    F->loop0 = 0;
+    uint32_t first = m->nverts;
+    for (int k = 0; k < sides; k++)
+        add_vertex(m, 10.0 * cos(2 * M_PI * k / sides), 10.0 * sin(2 * M_PI * k / sides));
+    add_loop(m, first, sides);
+    if (hole) {
+        first = m->nverts;
+        for (int k = 0; k < 3; k++) /* clockwise: the face stays on the left */
+            add_vertex(m, 2.0 * cos(-2 * M_PI * k / 3), 2.0 * sin(-2 * M_PI * k / 3));
+        add_loop(m, first, 3);
+    }
+}
+
+/* ---- checks ---- */
+
+/* the status as the terminal prints it must contain `cause` */
+static void assert_says(const cm_status *st, const char *cause)
+{
+    char text[512];
+    cm_format_status(text, sizeof text, st);
+    if (!strstr(text, cause))
+        fail_msg("status \"%s\" does not say \"%s\"", text, cause);
+}
+
+/* src->model written as format `major` must decode (a control: only the field under test is wrong) */
+static void assert_decodes(int major)
+{
+    size_t len;
+    uint8_t *b = write_cmz(&src->model, major, NULL, &len);
+    cm_status st;
+    cm_err e = decode_bytes(dec, b, len, &st);
+    free(b);
+    if (e != CM_OK) {
+        char text[512];
+        fail_msg("control model refused: %s", cm_format_status(text, sizeof text, &st));
+    }
+}
+
+/*
+ * src->model written as format `major` (valid CRCs): the header must be accepted, and decoding the
+ * body must fail in the FACE section with `code`, the status naming `cause`.
+ */
+static void assert_face_refused(int major, cm_err code, const char *cause, cm_status *st)
+{
+    size_t len;
+    uint8_t *b = write_cmz(&src->model, major, NULL, &len);
+    cm_status_init(st);
+    cm_dec_init(dec);
+    assert_ok(cm_dec_feed(dec, b, len, st));
+    assert_true(cm_dec_header_ok(dec));
+    assert_int_equal(dec->version_major, major);
+    assert_err(cm_dec_finish(dec, st), code);
+    free(b);
+    assert_int_equal(st->code, code);
+    const cm_dec_section *face = &dec->sec[CM_SEC_FACE - 1];
+    if (!(st->offset >= face->off && st->offset <= face->off + face->len))
+        fail_msg("error at byte %u, outside FACE (bytes %u..%u)", st->offset, face->off, face->off + face->len);
+    assert_says(st, cause);
+}
+
+/* ---- tests ---- */
+
+/* the writer of these tests says what the encoder says: its output is the encoder's, byte for byte */
+static void test_writer_reproduces_encoder(void **state)
+{
+    (void)state;
+    const encode_result *r = split_cylinder();
+    load_split_cylinder();
+    size_t len;
+    uint8_t *b = write_cmz(&src->model, src->version_major, src->need, &len);
+    assert_int_equal(len, r->len);
+    assert_memory_equal(b, r->bytes, len);
+    free(b);
+}
+
+/* FORMAT.md: "A GREGORY method in a 1.x file is CM_E_UNSUPPORTED": a real 1.0 file, CRCs valid */
+static void test_gregory_in_format_1_unsupported(void **state)
+{
+    (void)state;
+    load_split_cylinder();
+    cm_status st;
+    assert_face_refused(1, CM_E_UNSUPPORTED, "GREGORY face in a format 1 file", &st);
+    assert_says(&st, "CM_E_UNSUPPORTED");
+    /* the same faces as PLANE are what a 1.0 file may say, and it loads */
+    for (int f = 0; f < 2; f++)
+        src->model.faces[f].method = CM_METHOD_PLANE;
+    assert_decodes(1);
+}
+
+/* a record field beyond what the format defines: CM_E_RANGE, as soon as the record is read */
+static void test_gregory_record_out_of_range(void **state)
+{
+    (void)state;
+    cm_status st;
+    /* layout 3 does not exist (0 quad, 1 N-split, 2 degenerate quad) */
+    load_split_cylinder();
+    src->model.faces[1].layout = 3;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY layout", &st);
+    /* layout 2's collapsed vertex is an index in a loop of at most MAX_SIDES edges */
+    load_split_cylinder();
+    src->model.faces[0].layout = CM_GREG_LAYOUT_DEGEN;
+    src->model.faces[0].corner = CM_MAX_SIDES;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY corner", &st);
+    src->model.faces[0].corner = 255;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY corner", &st);
+    /* layouts 0 and 1 have no collapsed vertex: their corner is 0 */
+    load_split_cylinder();
+    src->model.faces[0].corner = 1;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY corner", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 2);
+    assert_face_refused(2, CM_E_RANGE, "GREGORY corner", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_decodes(2);
+}
+
+/* GREGORY faces are one loop whose side count fits the layout, else CM_E_FORMAT */
+static void test_gregory_loop_malformed(void **state)
+{
+    (void)state;
+    cm_status st;
+    /* holes: a square with a triangular hole is a valid PLANE face, not a GREGORY one */
+    polygon_face(4, 1, CM_METHOD_PLANE, 0, 0);
+    assert_decodes(2);
+    polygon_face(4, 1, CM_METHOD_GREGORY, CM_GREG_LAYOUT_QUAD, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY face with holes", &st);
+    polygon_face(5, 1, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY face with holes", &st);
+    /* layout 0 is one quad: 4 sides */
+    polygon_face(4, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_QUAD, 0);
+    assert_decodes(2);
+    polygon_face(3, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_QUAD, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY sides do not fit the layout", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_QUAD, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY sides do not fit the layout", &st);
+    /* layout 2 is a quad collapsed at one of 3 vertices */
+    polygon_face(3, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_DEGEN, 2);
+    assert_decodes(2);
+    polygon_face(4, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_DEGEN, 2);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY sides do not fit the layout", &st);
+    /* ... and its corner, in range for the record (< MAX_SIDES), must be one of those 3
+       (FORMAT.md: "layout 2: exactly 3, corner < 3, else CM_E_FORMAT") */
+    polygon_face(3, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_DEGEN, 3);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY corner beyond the loop", &st);
+    /* every layout needs 3 sides at least: a loop of two lines is refused, whatever the build */
+    polygon_face(2, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY face with fewer than 3 sides", &st);
+    polygon_face(3, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_decodes(2);
+}
+
+/* an N-split face with more sides than this build's MAX_SIDES is valid input, too large: CM_E_LIMIT */
+static void test_gregory_sides_over_limit(void **state)
+{
+    (void)state;
+    cm_status st;
+    char want[160];
+    polygon_face(CM_MAX_SIDES, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_decodes(2);
+    /* a header that does not declare the need (0): the FACE section's own check refuses the face */
+    polygon_face(CM_MAX_SIDES + 1, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_LIMIT, "GREGORY sides", &st);
+    assert_int_equal(st.limit, CM_LIMIT_MAX_SIDES);
+    assert_int_equal(st.need, CM_MAX_SIDES + 1);
+    assert_int_equal(st.have, CM_MAX_SIDES);
+    snprintf(want, sizeof want, "needs MAX_SIDES=%u, this build (profile %s) has %u", CM_MAX_SIDES + 1,
+             cm_profile_name, CM_MAX_SIDES);
+    assert_says(&st, want);
+    /* a header that declares it, as the encoder writes: refused at the header, before the body */
+    uint32_t need[CM_LIMIT_COUNT] = {0};
+    need[CM_LIMIT_MAX_SIDES] = CM_MAX_SIDES + 1;
+    size_t len;
+    uint8_t *b = write_cmz(&src->model, 2, need, &len);
+    cm_status_init(&st);
+    cm_dec_init(dec);
+    assert_err(cm_dec_feed(dec, b, len, &st), CM_E_LIMIT);
+    free(b);
+    assert_false(cm_dec_header_ok(dec));
+    assert_int_equal(st.limit, CM_LIMIT_MAX_SIDES);
+    assert_int_equal(st.offset, CM_FMT_FIXED_HEADER + 4 * CM_LIMIT_MAX_SIDES);
+    assert_says(&st, want);
+}
+
+/* a checksum changed in the file (CRCs valid): the file loads, the face's rebuild refuses it */
+static void test_gregory_checksum_in_file(void **state)
+{
+    (void)state;
+    load_split_cylinder();
+    src->model.faces[1].checksum ^= 0x80000000u; /* the high half: the second 16-bit word */
+    size_t len;
+    uint8_t *b = write_cmz(&src->model, 2, src->need, &len);
+    cm_status st;
+    assert_ok(decode_bytes(dec, b, len, &st));
+    free(b);
+    cm_rebuilt rb;
+    assert_ok(cm_rebuild_face(&dec->model, 0, &rb, &rbws, &st));
+    cm_status_init(&st);
+    assert_err(cm_rebuild_face(&dec->model, 1, &rb, &rbws, &st), CM_E_CHECKSUM);
+    assert_int_equal(st.code, CM_E_CHECKSUM);
+    assert_says(&st, "GREGORY face rebuilt differently from the encoder");
+}
+
+static int alloc_decoders(void **state)
+{
+    (void)state;
+    src = calloc(1, sizeof *src);
+    dec = calloc(1, sizeof *dec);
+    return src && dec ? 0 : -1;
+}
+
+static int free_decoders(void **state)
+{
+    (void)state;
+    free(src);
+    free(dec);
+    return 0;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_writer_reproduces_encoder),
+        cmocka_unit_test(test_gregory_in_format_1_unsupported),
+        cmocka_unit_test(test_gregory_record_out_of_range),
+        cmocka_unit_test(test_gregory_loop_malformed),
+        cmocka_unit_test(test_gregory_sides_over_limit),
+        cmocka_unit_test(test_gregory_checksum_in_file),
+    };
+    return cmocka_run_group_tests_name("gregory_errors", tests, alloc_decoders, free_decoders);
+}
