@@ -193,10 +193,14 @@ $(MESH_CHECK): $(call bdir,host)/tests/tools/mesh_check.o $(call bdir,host)/test
 
 # the workstation tool, always built with the host profile
 CMZ := $(call bdir,host)/cmz
-$(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(PROFILE_TABLES) $(call bdir,host)/libcmhost.a \
+# the link and the board's devices (platform/ back ends, cmz-terminal, cmz send, VM tests): one
+# fragment per concern
+include $(sort $(wildcard mk/*.mk))
+# (mk/terminal.mk adds the link protocol and the transports for `cmz send`)
+$(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(PROFILE_TABLES) $(CMZ_EXTRA_OBJS) $(call bdir,host)/libcmhost.a \
 		$(call bdir,host)/platform/cm_decode_file.o $(call bdir,host)/libcmdecoder.a
 	$(call say,LD      ,$@)
-	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(CMZ_EXTRA_LIBS) -lm
 
 .PRECIOUS: $(BUILD_ROOT)/%.o
 
@@ -253,7 +257,12 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
 		"gate:corpus-roundtrip:$(MAKE) --no-print-directory -s check-corpus-roundtrip" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
-		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross"
+		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
+		"gate:serial:$(MAKE) --no-print-directory -s check-serial" \
+		"gate:link:$(MAKE) --no-print-directory -s check-link" \
+		"gate:link-aarch64:$(MAKE) --no-print-directory -s check-link-aarch64" \
+		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
+		"gate:hw:$(MAKE) --no-print-directory -s check-hw"
 
 # layer (a) of the no-heap gate: the decoder/kernel archive may only call allowlisted libc/libm symbols
 check-noheap: $(B)/libcmdecoder.a
@@ -353,13 +362,18 @@ check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 	$(Q)tests/tools/check_cross.sh $(BUILD_ROOT) $(call bdir,host)/tests/unit/kernel_vectors $(CROSS_TARGETS)
 
 # ---- Debian packages ----
-# Host tools, tests, cross toolchains and the foreign-architecture libraries the cross tests link.
+# Host tools, tests, cross toolchains and the foreign-architecture libraries the cross tests link;
+# libusb and libgpiod (1.6) for the terminal, also for arm64; the test VM of check-hw (qemu, the
+# Debian kernel's headers for gpio-sim, busybox for the initramfs).  armhf builds the terminal
+# without USB and GPIO (no :armhf libusb/libgpiod here: Multi-Arch versions, hw-testing NOTES 10).
 DEPS_ARCHS := arm64 armhf
 DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzzer-14-dev \
 	libtinygltf-dev nlohmann-json3-dev \
 	libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev \
 	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf libc6-dev-arm64-cross libc6-dev-armhf-cross qemu-user \
-	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf
+	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf \
+	libusb-1.0-0-dev libgpiod-dev libusb-1.0-0-dev:arm64 libgpiod-dev:arm64 \
+	qemu-system-x86 busybox-static cpio kmod xz-utils linux-headers-amd64 usbutils gpiod
 deps:
 	$(Q)DEPS_ARCHS="$(DEPS_ARCHS)" tests/tools/deps.sh $(DEPS_PKGS)
 

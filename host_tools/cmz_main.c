@@ -24,6 +24,7 @@
 #include "model_load.h"
 #include "encode/verify.h"
 #include "profiles.h"
+#include "send/send_cmd.h"
 
 #define CMZ_VERSION "0.1.0"
 
@@ -65,6 +66,12 @@ static void usage(FILE *f)
             "      Rebuild every face and tessellate it (chordal tolerance --tess in mm,\n"
             "      default the file's recommendation) into binary glTF (metres, +Y up),\n"
             "      binary STL or OBJ (millimetres), chosen by the extension.\n"
+            "  send MODEL.cmz|MODEL.igs --serial DEV[:BAUD] | --gadget FFSDIR | --usb VID:PID\n"
+            "       [--stay] [--no-wait] [--chunk N] [--timeout S]\n"
+            "      Send the model to a cmz-terminal, checked against (an IGES model: encoded\n"
+            "      for) the limits the terminal announces; resumes after a cable pull; a\n"
+            "      progress bar on a TTY.  --stay: send again whenever the terminal's request\n"
+            "      button is pressed.  Exit status 3: link failure.  (cmz send --help)\n"
             "  sample MODEL.igs -o POINTS.xyz [--per-face N]\n"
             "      Write N points (default 20) lying on every trimmed face, inside its outer\n"
             "      loop and outside its holes, one 'x y z face_id' line each (millimetres,\n"
@@ -897,8 +904,8 @@ int main(int argc, char **argv)
         cm_report_limits(stdout);
         return EXIT_OK;
     }
-    /* `cmz COMMAND --help` (anywhere among its arguments) is the same text */
-    for (int i = 2; i < argc; i++)
+    /* `cmz COMMAND --help` (anywhere among its arguments) is the same text; send has its own */
+    for (int i = 2; i < argc && strcmp(cmd, "send") != 0; i++)
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             usage(stdout);
             return EXIT_OK;
@@ -913,6 +920,8 @@ int main(int argc, char **argv)
         return cmd_decode(argc - 2, argv + 2);
     if (strcmp(cmd, "eval") == 0)
         return cmd_eval(argc - 2, argv + 2);
+    if (strcmp(cmd, "send") == 0)
+        return cmz_cmd_send(argc - 2, argv + 2);
     fprintf(stderr, "%s: unknown command '%s' (cmz --help lists them)\n", prog, cmd);
     return EXIT_USAGE;
 }

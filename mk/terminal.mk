@@ -1,0 +1,79 @@
+# mk/terminal.mk - the link protocol, cmz-terminal and the transports in `cmz` (send).
+#
+#   make                      also builds $(B)/cmz-terminal for PROFILE (terminal by default)
+#   make CROSS_COMPILE=aarch64-linux-gnu-   the same for the board (needs make deps)
+#   make check-link           link protocol unit tests, and cmz send -> cmz-terminal over ptys
+#                             through a fault-injecting relay (tests/link/)
+#
+# USB needs libusb-1.0 >= 1.0.26 (Debian 12) for this machine's architecture (the :arm64 package
+# for the aarch64 build); without it the programs build without --usb and say so when asked.
+
+LINK_USB := $(shell $(PKG_CONFIG) --atleast-version=1.0.26 libusb-1.0 2>/dev/null && echo 1)
+ifeq ($(LINK_USB),1)
+LINK_USB_CFLAGS := -DCM_HAVE_LIBUSB $(shell $(PKG_CONFIG) --cflags libusb-1.0)
+LINK_USB_LIBS := $(shell $(PKG_CONFIG) --libs libusb-1.0)
+endif
+# the GPIO back end (mk/hw.mk picks libgpiod 1.6 when present)
+GPIO_SRC ?= platform/cm_gpio_none.c
+GPIO_CFLAGS ?=
+GPIO_LIBS ?=
+
+# the protocol and the transports every build has
+LINK_COMMON_SRC := platform/cm_link.c platform/cm_transport_fd.c platform/cm_transport_serial.c
+LINK_TERM_SRC := $(LINK_COMMON_SRC) platform/cm_link_term.c $(if $(LINK_USB),platform/cm_transport_usb.c)
+LINK_HOST_SRC := $(LINK_COMMON_SRC) $(if $(LINK_USB),platform/cm_transport_usb.c platform/cm_transport_ffs.c)
+
+# the USB and GPIO objects, and whoever asks for them, see the libraries' headers
+$(foreach p,$(PROFILES),$(call bdir,$(p))/platform/cmz_terminal_main.o $(call bdir,$(p))/platform/cm_transport_usb.o \
+	$(call bdir,$(p))/platform/cm_transport_ffs.o $(call bdir,$(p))/host_tools/send/send_cmd.o): \
+	CPPFLAGS += $(LINK_USB_CFLAGS)
+
+# cmz-terminal: the board's daemon (no heap on the decode path: linked with the abort wrappers)
+define TERMINAL_RULES
+$(call bdir,$(1))/cmz-terminal: $(call bdir,$(1))/platform/cmz_terminal_main.o \
+		$(patsubst %.c,$(call bdir,$(1))/%.o,$(LINK_TERM_SRC) $(GPIO_SRC)) \
+		$(call bdir,$(1))/platform/cm_decode_file.o $(call bdir,$(1))/platform/cm_report.o \
+		$(call bdir,$(1))/tests/unit/noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(LINK_USB_LIBS) $$(GPIO_LIBS) -lm
+endef
+$(foreach p,$(PROFILES),$(eval $(call TERMINAL_RULES,$(p))))
+
+CMZ_EXTRA_OBJS += $(patsubst %.c,$(call bdir,host)/%.o,$(LINK_HOST_SRC))
+CMZ_EXTRA_LIBS += $(LINK_USB_LIBS)
+all: $(B)/cmz-terminal
+
+# ---- tests ----
+LINK_TEST_BIN := $(call bdir,terminal)/tests/link/test_link
+$(LINK_TEST_BIN): $(call bdir,terminal)/tests/link/test_link.o \
+		$(patsubst %.c,$(call bdir,terminal)/%.o,$(LINK_COMMON_SRC) platform/cm_link_term.c \
+			platform/fake/cm_transport_fault.c platform/fake/cm_transport_mem.c host_tools/send/link_send.c) \
+		$(call bdir,terminal)/platform/cm_report.o $(call bdir,terminal)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
+
+.PHONY: check-link
+check-link: $(LINK_TEST_BIN) $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,tiny)/cmz-terminal \
+		$(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode
+	$(Q)tests/tools/sum_suites.sh "$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf" \
+		"TINY_TERMINAL=$(call bdir,tiny)/cmz-terminal tests/link/check_link_pty.sh $(CMZ) \
+		$(call bdir,terminal)/cmz-terminal $(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode 50"
+
+# the end-to-end test in the VM (tests/hw/vm-terminal.sh: USB gadget -> libusb, gpio-sim lines)
+HW_MODELS := $(BUILD_ROOT)/hw-models
+HW_TEST_DEPS += $(CMZ) $(call bdir,terminal)/cmz-terminal $(HW_MODELS)/as1_pe_203.cmz $(HW_MODELS)/geo_example.cmz
+HW_TEST_ENV += HW_CMZ=$(CMZ) HW_TERMINAL=$(call bdir,terminal)/cmz-terminal HW_MODELS=$(HW_MODELS)
+$(HW_MODELS)/%.cmz: tests/data/%.igs $(CMZ)
+	@mkdir -p $(@D)
+	$(Q)$(CMZ) encode -q $< -o $@ > /dev/null
+
+# the board's build under qemu-user: the link unit tests and the pty transfers with the aarch64
+# cmz-terminal (the workstation side stays this machine's cmz)
+A64 := CROSS_COMPILE=aarch64-linux-gnu- CC=aarch64-linux-gnu-gcc AR=aarch64-linux-gnu-ar PKG_CONFIG=aarch64-linux-gnu-pkg-config
+A64_B := $(BUILD_ROOT)/aarch64-linux-gnu-terminal
+.PHONY: check-link-aarch64
+check-link-aarch64: $(CMZ) $(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode
+	$(Q)$(MAKE) --no-print-directory -s $(A64) $(A64_B)/cmz-terminal $(A64_B)/tests/link/test_link
+	$(Q)tests/tools/sum_suites.sh "qemu-aarch64 $(A64_B)/tests/link/test_link tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf" \
+		"TERMINAL_EMU=qemu-aarch64 tests/link/check_link_pty.sh $(CMZ) $(A64_B)/cmz-terminal \
+		$(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode 10"

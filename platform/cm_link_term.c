@@ -1,0 +1,485 @@
+/* cm_link_term.c - the terminal's end of a transfer (see cm_link_term.h, docs/LINK.md). */
+#define _POSIX_C_SOURCE 200809L
+#include "cm_link_term.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
+#include "cm/cm_arith.h"
+#include "cm_report.h"
+
+#define META_MAGIC 0x504C4D43u /* "CMLP" */
+#define META_BYTES 24u
+/* An fsync costs 10-200 ms on an SD card (and on this VM's disk): done every second it stalls
+   the link, which a noisy line then pays in timeouts.  A power cut loses at most 5 s of transfer;
+   a stall, a hang-up or a clean stop syncs at once. */
+#define SYNC_EVERY_MS 5000
+#define SYNC_EVERY_BYTES (4u * 1024u * 1024u) /* time rules: an fsync per 256 KiB would throttle USB */
+
+static int join(char *out, const char *dir, const char *name)
+{
+    int n = snprintf(out, CM_TERM_PATH, "%s/%s", dir, name);
+    return n > 0 && n < CM_TERM_PATH ? 0 : -1;
+}
+
+/* snprintf into a message buffer, where cutting a long path short is fine */
+__attribute__((format(printf, 3, 4))) static void textf(char *out, size_t cap, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out, cap, fmt, ap);
+    va_end(ap);
+}
+
+static void set_why(cm_link_term *t, const char *what, const char *detail)
+{
+    textf(t->why, sizeof t->why, "%s%s%s", what, detail ? ": " : "", detail ? detail : "");
+}
+
+/* ---- the meta file: size, crc, synced prefix, chunk origin; CRC-protected, replaced atomically ---- */
+
+static int meta_write(cm_link_term *t)
+{
+    uint8_t b[META_BYTES];
+    cm_link_put32(b, META_MAGIC);
+    cm_link_put32(b + 4, t->offer.size);
+    cm_link_put32(b + 8, t->offer.crc);
+    cm_link_put32(b + 12, t->synced);
+    cm_link_put32(b + 16, (uint32_t)strlen(t->offer.name));
+    cm_link_put32(b + 20, cm_crc32(b, 20));
+    char tmp[CM_TERM_PATH];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp", t->meta_path) >= (int)sizeof tmp)
+        return -1;
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0)
+        return -1;
+    int ok = write(fd, b, sizeof b) == (ssize_t)sizeof b && fsync(fd) == 0;
+    ok = close(fd) == 0 && ok;
+    return ok && rename(tmp, t->meta_path) == 0 ? 0 : -1;
+}
+
+static int meta_read(cm_link_term *t, uint32_t *size, uint32_t *crc, uint32_t *synced)
+{
+    uint8_t b[META_BYTES];
+    int fd = open(t->meta_path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return -1;
+    ssize_t n = read(fd, b, sizeof b);
+    close(fd);
+    if (n != (ssize_t)sizeof b || cm_link_get32(b) != META_MAGIC || cm_link_get32(b + 20) != cm_crc32(b, 20))
+        return -1;
+    *size = cm_link_get32(b + 4);
+    *crc = cm_link_get32(b + 8);
+    *synced = cm_link_get32(b + 12);
+    return 0;
+}
+
+static void drop_transfer(cm_link_term *t)
+{
+    if (t->part_fd >= 0)
+        close(t->part_fd);
+    t->part_fd = -1;
+    unlink(t->part_path);
+    unlink(t->meta_path);
+    t->active = false;
+}
+
+/* make the synced prefix durable: data first, then the meta that vouches for it */
+static void sync_prefix(cm_link_term *t, bool force)
+{
+    int64_t now = cm_link_now_ms();
+    if (!force && t->prefix - t->synced < SYNC_EVERY_BYTES && now - t->last_sync_ms < SYNC_EVERY_MS)
+        return;
+    if (t->prefix == t->synced && !force)
+        return;
+    if (t->part_fd >= 0 && fdatasync(t->part_fd) == 0) {
+        uint32_t old = t->synced;
+        t->synced = t->prefix;
+        if (meta_write(t) != 0)
+            t->synced = old;
+    }
+    t->last_sync_ms = now;
+}
+
+/* feed [from, to) of the part file to the decoder; a refusal ends the transfer */
+static int feed(cm_link_term *t, uint32_t from, uint32_t to, cm_status *st)
+{
+    uint8_t buf[4096];
+    while (from < to) {
+        size_t n = to - from < sizeof buf ? to - from : sizeof buf;
+        ssize_t r = pread(t->part_fd, buf, n, (off_t)from);
+        if (r <= 0) {
+            cm_status_init(st);
+            (void)cm_fail(st, CM_E_IO, "read back of the incoming file");
+            return -1;
+        }
+        if (cm_dec_feed(t->dec, buf, (size_t)r, st) != CM_OK)
+            return -1;
+        from += (uint32_t)r;
+    }
+    return 0;
+}
+
+static void send_text(cm_link_term *t, uint8_t type, int seq, int stage, int code, const char *text)
+{
+    uint8_t p[CM_LINK_MAX_TEXT + 2];
+    size_t n = cm_link_text_pack(stage, code, text, p);
+    (void)cm_link_send(&t->link, type, seq, p, n, 1000);
+}
+
+/* damaged frames seen on this link: what the sender sizes its chunks by */
+static uint32_t damaged(const cm_link_term *t)
+{
+    return (uint32_t)(t->link.stats.bad_crc + t->link.stats.bad_header);
+}
+
+static void send_ack(cm_link_term *t, int seq)
+{
+    uint8_t p[16];
+    cm_link_put32(p, t->prefix);
+    cm_link_put32(p + 4, (uint32_t)t->held);
+    cm_link_put32(p + 8, (uint32_t)(t->held >> 32));
+    cm_link_put32(p + 12, damaged(t));
+    t->last_ack_ms = cm_link_now_ms();
+    t->damage_reported = damaged(t);
+    (void)cm_link_send(&t->link, CM_LINK_ACK, seq, p, sizeof p, 1000);
+}
+
+static void refuse(cm_link_term *t, int seq, int code, const char *text)
+{
+    set_why(t, "refused", text);
+    send_text(t, CM_LINK_REFUSE, seq, -1, code, text);
+}
+
+int cm_link_term_open(cm_link_term *t, cm_decoder *dec, const char *dir, const char *name)
+{
+    memset(t, 0, sizeof *t);
+    t->dec = dec;
+    t->part_fd = -1;
+    cm_link_hello_local(&t->hello, name);
+    struct stat s;
+    if (strlen(dir) >= sizeof t->dir || join(t->part_path, dir, ".incoming.part") || join(t->meta_path, dir, ".incoming.meta") ||
+        join(t->in_path, dir, ".incoming.cmz")) {
+        set_why(t, "output directory path too long", dir);
+        return -1;
+    }
+    if (stat(dir, &s) != 0 || !S_ISDIR(s.st_mode) || access(dir, W_OK) != 0) {
+        set_why(t, "output directory is not a writable directory", dir);
+        return -1;
+    }
+    strcpy(t->dir, dir);
+    /* a transfer left by an earlier run: keep it to resume from its synced prefix */
+    uint32_t size, crc, synced;
+    if (meta_read(t, &size, &crc, &synced) == 0) {
+        int fd = open(t->part_path, O_RDWR | O_CLOEXEC);
+        struct stat ps;
+        if (fd >= 0 && fstat(fd, &ps) == 0 && (uint64_t)ps.st_size >= synced && synced <= size) {
+            t->part_fd = fd;
+            t->active = true;
+            t->offer.size = size;
+            t->offer.crc = crc;
+            t->prefix = t->synced = t->origin = synced;
+            t->chunk = 0; /* set by the next OFFER */
+            cm_dec_init(t->dec);
+            cm_status st;
+            cm_status_init(&st);
+            if (feed(t, 0, synced, &st) != 0)
+                drop_transfer(t);
+        } else {
+            if (fd >= 0)
+                close(fd);
+            drop_transfer(t);
+        }
+    } else {
+        unlink(t->part_path);
+    }
+    return 0;
+}
+
+void cm_link_term_attach(cm_link_term *t, cm_transport *tr)
+{
+    cm_link_init(&t->link, tr);
+}
+
+void cm_link_term_close(cm_link_term *t)
+{
+    if (t->active)
+        sync_prefix(t, true);
+    if (t->part_fd >= 0)
+        close(t->part_fd);
+    t->part_fd = -1;
+}
+
+/* the part file of the transfer in progress is open (cm_link_term_close, at a hang-up, closed it) */
+static int ensure_part(cm_link_term *t)
+{
+    if (t->part_fd < 0)
+        t->part_fd = open(t->part_path, O_RDWR | O_CLOEXEC);
+    return t->part_fd >= 0 ? 0 : -1;
+}
+
+static int on_offer(cm_link_term *t, const cm_link_frame *f)
+{
+    cm_link_offer o;
+    if (!cm_link_offer_unpack(f, &o))
+        return CM_TERM_NONE;
+    char text[CM_LINK_MAX_TEXT + 1];
+    if (o.size == 0 || o.size > CM_MAX_FILE_BYTES) {
+        snprintf(text, sizeof text,
+                 "exceeds a compile-time limit of this build (CM_E_LIMIT): the model needs MAX_FILE_BYTES=%u, this "
+                 "build (profile %s) has %u",
+                 (unsigned)o.size, cm_profile_name, (unsigned)CM_MAX_FILE_BYTES);
+        refuse(t, f->seq, CM_E_LIMIT, text);
+        return CM_TERM_FAILED;
+    }
+    uint32_t chunk = o.chunk;
+    if (chunk == 0 || chunk > CM_LINK_MAX_PAYLOAD - 4)
+        chunk = CM_LINK_MAX_PAYLOAD - 4;
+    bool same = t->active && o.size == t->offer.size && o.crc == t->offer.crc;
+    int ev = CM_TERM_NONE;
+    if (!same) {
+        struct statvfs v;
+        if (statvfs(t->dir, &v) == 0 && (uint64_t)v.f_bavail * v.f_frsize < 2ull * o.size + 65536u) {
+            textf(text, sizeof text, "no space: %s has %llu bytes free, the model needs %u (twice, while it is replaced)",
+                     t->dir, (unsigned long long)v.f_bavail * v.f_frsize, (unsigned)o.size);
+            refuse(t, f->seq, CM_E_IO, text);
+            return CM_TERM_FAILED;
+        }
+        drop_transfer(t);
+        t->part_fd = open(t->part_path, O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        if (t->part_fd < 0) {
+            textf(text, sizeof text, "cannot create %s: %s", t->part_path, strerror(errno));
+            refuse(t, f->seq, CM_E_IO, text);
+            return CM_TERM_FAILED;
+        }
+        t->offer = o;
+        t->prefix = t->synced = 0;
+        t->active = true;
+        t->last_sync_ms = cm_link_now_ms();
+        cm_dec_init(t->dec);
+        /* no meta yet: the first sync writes it (before that there is nothing worth resuming) */
+        ev = CM_TERM_STARTED;
+    } else {
+        if (ensure_part(t) != 0) {
+            textf(text, sizeof text, "cannot reopen %s: %s", t->part_path, strerror(errno));
+            drop_transfer(t);
+            refuse(t, f->seq, CM_E_IO, text);
+            return CM_TERM_FAILED;
+        }
+        memcpy(t->offer.name, o.name, sizeof o.name);
+        if (t->chunk == 0)
+            ev = CM_TERM_STARTED; /* resumed after a restart */
+    }
+    /* (re)start the chunk grid at the contiguous prefix; chunks held beyond it are fetched again */
+    t->origin = t->prefix;
+    t->chunk = chunk;
+    t->held = 0;
+    t->idle_reported = false;
+    uint8_t p[12];
+    cm_link_put32(p, t->prefix);
+    cm_link_put32(p + 4, chunk);
+    cm_link_put32(p + 8, o.crc);
+    (void)cm_link_send(&t->link, CM_LINK_ACCEPT, f->seq, p, sizeof p, 1000);
+    return ev;
+}
+
+static int on_data(cm_link_term *t, const cm_link_frame *f)
+{
+    if (!t->active || t->chunk == 0 || f->len < 4 || ensure_part(t) != 0) {
+        if (t->active)
+            send_ack(t, f->seq);
+        return CM_TERM_NONE; /* no offer accepted yet: the sender will offer again */
+    }
+    uint32_t off = cm_link_get32(f->payload), n = f->len - 4u;
+    uint32_t size = t->offer.size;
+    if (off < t->prefix || off >= size) {
+        send_ack(t, f->seq); /* a duplicate: our ACK was lost */
+        return CM_TERM_NONE;
+    }
+    uint32_t rel = off - t->prefix;
+    if ((off - t->origin) % t->chunk != 0 || rel / t->chunk >= CM_LINK_WINDOW ||
+        n != (size - off < t->chunk ? size - off : t->chunk)) {
+        send_ack(t, f->seq); /* off the grid (an old offer's chunk size) or beyond the window */
+        return CM_TERM_NONE;
+    }
+    unsigned j = rel / t->chunk;
+    if (!(t->held >> j & 1u)) {
+        if (pwrite(t->part_fd, f->payload + 4, n, (off_t)off) != (ssize_t)n) {
+            char text[CM_LINK_MAX_TEXT + 1];
+            textf(text, sizeof text, "cannot write %s: %s", t->part_path, strerror(errno));
+            drop_transfer(t);
+            refuse(t, f->seq, CM_E_IO, text);
+            return CM_TERM_FAILED;
+        }
+        t->held |= (uint64_t)1 << j;
+    }
+    uint32_t old = t->prefix;
+    while (t->held & 1u) {
+        uint32_t len = size - t->prefix < t->chunk ? size - t->prefix : t->chunk;
+        t->prefix += len;
+        t->held >>= 1;
+    }
+    if (t->prefix != old) {
+        cm_status st;
+        cm_status_init(&st);
+        if (feed(t, old, t->prefix, &st) != 0) {
+            char text[CM_LINK_MAX_TEXT + 1];
+            cm_format_status(text, sizeof text, &st);
+            int code = st.code;
+            drop_transfer(t);
+            refuse(t, f->seq, code, text);
+            return CM_TERM_FAILED;
+        }
+        sync_prefix(t, false);
+    }
+    send_ack(t, f->seq);
+    return CM_TERM_NONE;
+}
+
+static uint32_t file_crc(int fd, uint32_t size, bool *ok)
+{
+    uint8_t buf[4096];
+    uint32_t crc = 0, at = 0;
+    *ok = true;
+    while (at < size) {
+        size_t n = size - at < sizeof buf ? size - at : sizeof buf;
+        ssize_t r = pread(fd, buf, n, (off_t)at);
+        if (r <= 0) {
+            *ok = false;
+            return 0;
+        }
+        crc = cm_crc32_update(crc, buf, (size_t)r);
+        at += (uint32_t)r;
+    }
+    return crc;
+}
+
+static void remember(cm_link_term *t, int stage, int code, const char *text)
+{
+    t->have_last = true;
+    t->last_size = t->offer.size;
+    t->last_crc = t->offer.crc;
+    t->last_stage = stage;
+    t->last_code = code;
+    textf(t->last_text, sizeof t->last_text, "%s", text);
+}
+
+static int on_end(cm_link_term *t, const cm_link_frame *f)
+{
+    if (f->len != 8)
+        return CM_TERM_NONE;
+    uint32_t size = cm_link_get32(f->payload), crc = cm_link_get32(f->payload + 4);
+    if (!t->active || size != t->offer.size || crc != t->offer.crc) {
+        if (t->have_last && size == t->last_size && crc == t->last_crc)
+            send_text(t, CM_LINK_DONE, f->seq, t->last_stage, t->last_code, t->last_text);
+        else
+            send_text(t, CM_LINK_ABORT, f->seq, -1, CM_E_FORMAT, "no such transfer in progress: offer it again");
+        return CM_TERM_NONE;
+    }
+    if (t->prefix != size || ensure_part(t) != 0) {
+        send_ack(t, f->seq);
+        return CM_TERM_NONE;
+    }
+    bool ok;
+    uint32_t got = file_crc(t->part_fd, size, &ok);
+    char text[CM_LINK_MAX_TEXT + 1];
+    if (!ok || got != crc) {
+        snprintf(text, sizeof text, "file CRC %08x, the sender's %08x: received again from the start", (unsigned)got,
+                 (unsigned)crc);
+        remember(t, CM_LINK_STAGE_STORED, CM_E_CRC, text);
+        set_why(t, "CRC mismatch", text);
+        drop_transfer(t);
+        send_text(t, CM_LINK_DONE, f->seq, CM_LINK_STAGE_STORED, CM_E_CRC, text);
+        return CM_TERM_FAILED;
+    }
+    if (fsync(t->part_fd) != 0 || rename(t->part_path, t->in_path) != 0) {
+        textf(text, sizeof text, "cannot store %s: %s", t->in_path, strerror(errno));
+        remember(t, CM_LINK_STAGE_STORED, CM_E_IO, text);
+        set_why(t, "store failed", text);
+        drop_transfer(t);
+        send_text(t, CM_LINK_DONE, f->seq, CM_LINK_STAGE_STORED, CM_E_IO, text);
+        return CM_TERM_FAILED;
+    }
+    close(t->part_fd);
+    t->part_fd = -1;
+    unlink(t->meta_path);
+    t->active = false;
+    snprintf(text, sizeof text, "%u bytes stored, CRC %08x", (unsigned)size, (unsigned)crc);
+    remember(t, CM_LINK_STAGE_STORED, 0, text);
+    send_text(t, CM_LINK_DONE, f->seq, CM_LINK_STAGE_STORED, 0, text);
+    return CM_TERM_COMPLETE;
+}
+
+int cm_link_term_poll(cm_link_term *t, int timeout_ms)
+{
+    int64_t deadline = cm_link_now_ms() + timeout_ms;
+    for (;;) {
+        int64_t left = deadline - cm_link_now_ms();
+        if (left < 0)
+            left = 0;
+        cm_link_frame f;
+        int r = cm_link_recv(&t->link, &f, (int)left);
+        if (r < 0)
+            return r;
+        int64_t now = cm_link_now_ms();
+        /* frames arriving damaged: say so (at most every 20 ms), so that a sender whose chunks
+           never arrive whole learns it without waiting for timeouts */
+        if (t->active && t->chunk && damaged(t) != t->damage_reported && now - t->last_ack_ms >= 20)
+            send_ack(t, -1);
+        if (r == 0) {
+            if (t->active && t->chunk && !t->idle_reported && now - t->last_frame_ms > CM_TERM_IDLE_MS) {
+                t->idle_reported = true;
+                sync_prefix(t, true);
+                return CM_TERM_IDLE;
+            }
+            return CM_TERM_NONE;
+        }
+        t->last_frame_ms = now;
+        t->idle_reported = false;
+        int ev = CM_TERM_NONE;
+        switch (f.type) {
+        case CM_LINK_SYNC: {
+            uint8_t p[8 + 4 * CM_LIMIT_COUNT + CM_LINK_MAX_NAME];
+            size_t n = cm_link_hello_pack(&t->hello, p);
+            (void)cm_link_send(&t->link, CM_LINK_HELLO, f.seq, p, n, 1000);
+            break;
+        }
+        case CM_LINK_OFFER:
+            ev = on_offer(t, &f);
+            break;
+        case CM_LINK_DATA:
+            ev = on_data(t, &f);
+            break;
+        case CM_LINK_END:
+            ev = on_end(t, &f);
+            break;
+        case CM_LINK_ABORT:
+            if (t->active)
+                sync_prefix(t, true); /* the sender gave up: keep what we have for a resume */
+            break;
+        default:
+            break; /* frames for the other end, or from a newer protocol: ignored */
+        }
+        if (ev != CM_TERM_NONE)
+            return ev;
+        if (cm_link_now_ms() >= deadline)
+            return CM_TERM_NONE;
+    }
+}
+
+void cm_link_term_decoded(cm_link_term *t, int code, const char *text)
+{
+    remember(t, CM_LINK_STAGE_DECODED, code, text);
+    send_text(t, CM_LINK_DONE, -1, CM_LINK_STAGE_DECODED, code, text);
+}
+
+int cm_link_term_request(cm_link_term *t)
+{
+    return cm_link_send(&t->link, CM_LINK_REQUEST, -1, NULL, 0, 1000);
+}

@@ -1,0 +1,495 @@
+/*
+ * cmz-terminal - the shop-floor terminal's daemon: receives models over a
+ * serial line or USB, decodes them with the heap-free decoder into the
+ * directory the viewer watches, and shows what it is doing on GPIO lines.
+ *
+ *   cmz-terminal --serial DEV[:BAUD] | --usb VID:PID[:SERIAL] | --stdio
+ *                --out DIR [options]          (cmz-terminal --help)
+ *
+ * Data flow: link frames -> .incoming.part (resumable) -> CRC verified ->
+ * .incoming.cmz -> decoder (fed as the bytes arrived) -> model.glb written
+ * atomically -> model.cmz.  The previous model stays on screen until the
+ * new one is complete and decoded; a power cut at any point leaves either
+ * the old files or the new ones, never half of one.
+ *
+ * Exit status: 0 stopped by SIGTERM/SIGINT (or --once and the model
+ * decoded), 1 --once and the model was refused or failed to decode,
+ * 2 usage or configuration error, 3 the output directory or the device
+ * cannot be used, 4 a GPIO line cannot be used.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cm_decode_file.h"
+#include "cm_gpio.h"
+#include "cm_link_term.h"
+#include "cm_report.h"
+#include "cm_transport_fd.h"
+#include "cm_transport_serial.h"
+#ifdef CM_HAVE_LIBUSB
+#include "cm_transport_usb.h"
+#endif
+
+#define VERT_CAP (CM_MAX_TRIS + 2 * CM_MAX_FACES)
+#define PROG "cmz-terminal"
+
+/* everything big is static: the decode path never touches the heap */
+static cm_decoder decoder;
+static cm_tess_ws tess;
+static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
+static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
+static cm_mesh_face mfaces[CM_MAX_FACES];
+static cm_link_term term;
+static cm_serial serial;
+static cm_fdlink stdio_link;
+#ifdef CM_HAVE_LIBUSB
+static cm_usb usb;
+#endif
+static cm_gpio gpio;
+
+static volatile sig_atomic_t stop_signal;
+static int quiet;
+
+typedef struct config {
+    char serial[256], usb[128], out[CM_TERM_PATH], name[CM_LINK_MAX_NAME + 1];
+    char gpio_spec[CM_GPIO_NOUT + 1][128];
+    int use_stdio, stl, once, ready_pulse_ms;
+    double tess;
+} config;
+
+static void on_signal(int sig)
+{
+    stop_signal = sig;
+}
+
+/* one greppable line per event: "cmz-terminal: level=info event=stored name=x bytes=1234" */
+__attribute__((format(printf, 3, 4))) static void logline(const char *level, const char *event, const char *fmt, ...)
+{
+    if (quiet && strcmp(level, "info") == 0)
+        return;
+    char rest[600] = "";
+    if (fmt) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(rest, sizeof rest, fmt, ap);
+        va_end(ap);
+    }
+    fprintf(stderr, PROG ": level=%s event=%s%s%s\n", level, event, rest[0] ? " " : "", rest);
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: " PROG " (--serial DEV[:BAUD] | --usb VID:PID[:SERIAL] | --stdio) --out DIR [options]\n"
+            "       " PROG " --limits | --version | --help\n"
+            "\n"
+            "Receive curvemesh models from `cmz send`, decode each into DIR/model.glb (atomically) and\n"
+            "keep the last good one on screen.  Interrupted transfers resume where they stopped.\n"
+            "\n"
+            "link (one of):\n"
+            "  --serial DEV[:BAUD]    a serial line in raw mode, 8N1, default 115200 baud\n"
+            "  --usb VID:PID[:SERIAL] the workstation's USB gadget (hex ids), bulk endpoints via libusb\n"
+            "  --stdio                frames on stdin/stdout (tests, socat)\n"
+            "options:\n"
+            "  --out DIR              directory the viewer watches (model.glb, model.cmz)\n"
+            "  --stl                  also write DIR/model.stl\n"
+            "  --name NAME            terminal name announced to the sender (default: host name)\n"
+            "  --tess MM              chordal tolerance (default: the file's recommendation)\n"
+            "  --gpio-busy SPEC       output, active while receiving or decoding\n"
+            "  --gpio-ready SPEC      output, pulsed when a new model is on screen\n"
+            "  --gpio-error SPEC      output, active after a refused or failed model until the next good one\n"
+            "  --gpio-request SPEC    input (button), a rising edge asks the workstation to send again\n"
+            "  --ready-pulse-ms N     length of the ready pulse (default 500)\n"
+            "  --config FILE          read 'key = value' lines (the long options without --) first\n"
+            "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
+            "  -q                     only warnings and errors\n"
+            "GPIO SPEC: CHIP:LINE, CHIP a name (gpiochip0), path or label, LINE a name or offset;\n"
+            "           a leading '!' makes the line active-low.\n"
+            "\n"
+            "Log lines on stderr: '" PROG ": level=L event=E key=value...'.\n"
+            "exit status: 0 stopped by SIGTERM/SIGINT (or --once, decoded), 1 --once and the model\n"
+            "failed, 2 usage or configuration, 3 output directory or device unusable, 4 GPIO.\n");
+}
+
+static int set_opt(config *c, const char *key, const char *val, const char *where)
+{
+    static const char *const gpio_keys[CM_GPIO_NOUT + 1] = {"gpio-busy", "gpio-ready", "gpio-error", "gpio-request"};
+    for (int i = 0; i <= CM_GPIO_NOUT; i++)
+        if (strcmp(key, gpio_keys[i]) == 0) {
+            snprintf(c->gpio_spec[i], sizeof c->gpio_spec[i], "%s", val);
+            return 0;
+        }
+    if (strcmp(key, "serial") == 0)
+        snprintf(c->serial, sizeof c->serial, "%s", val);
+    else if (strcmp(key, "usb") == 0)
+        snprintf(c->usb, sizeof c->usb, "%s", val);
+    else if (strcmp(key, "out") == 0)
+        snprintf(c->out, sizeof c->out, "%s", val);
+    else if (strcmp(key, "name") == 0)
+        snprintf(c->name, sizeof c->name, "%s", val);
+    else if (strcmp(key, "ready-pulse-ms") == 0) {
+        char *end;
+        long v = strtol(val, &end, 10);
+        if (*end || v < 1 || v > 60000) {
+            fprintf(stderr, PROG ": %s: ready-pulse-ms wants 1..60000, not '%s'\n", where, val);
+            return -1;
+        }
+        c->ready_pulse_ms = (int)v;
+    } else if (strcmp(key, "tess") == 0) {
+        char *end;
+        c->tess = strtod(val, &end);
+        if (*end || !(c->tess > 0)) {
+            fprintf(stderr, PROG ": %s: tess wants a positive number of millimetres, not '%s'\n", where, val);
+            return -1;
+        }
+    } else if (strcmp(key, "stl") == 0 || strcmp(key, "stdio") == 0 || strcmp(key, "once") == 0) {
+        int on = strcmp(val, "1") == 0 || strcmp(val, "yes") == 0 || strcmp(val, "true") == 0;
+        if (!on && strcmp(val, "0") && strcmp(val, "no") && strcmp(val, "false")) {
+            fprintf(stderr, PROG ": %s: %s wants yes or no, not '%s'\n", where, key, val);
+            return -1;
+        }
+        int *flag = strcmp(key, "stl") == 0 ? &c->stl : strcmp(key, "stdio") == 0 ? &c->use_stdio : &c->once;
+        *flag = on;
+    } else {
+        fprintf(stderr, PROG ": %s: unknown setting '%s'\n", where, key);
+        return -1;
+    }
+    return 0;
+}
+
+/* the config file: '# comments', blank lines, 'key = value' */
+static int read_config(config *c, const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        fprintf(stderr, PROG ": cannot read config %s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    char line[512];
+    int n = 0, rc = 0;
+    while (fgets(line, sizeof line, f)) {
+        n++;
+        char *s = line;
+        while (*s == ' ' || *s == '\t')
+            s++;
+        size_t len = strlen(s);
+        while (len && (s[len - 1] == '\n' || s[len - 1] == '\r' || s[len - 1] == ' ' || s[len - 1] == '\t'))
+            s[--len] = '\0';
+        if (!*s || *s == '#')
+            continue;
+        char *eq = strchr(s, '=');
+        char where[600];
+        snprintf(where, sizeof where, "%s:%d", path, n);
+        if (!eq) {
+            fprintf(stderr, PROG ": %s: expected 'key = value'\n", where);
+            rc = -1;
+            break;
+        }
+        char *k_end = eq;
+        while (k_end > s && (k_end[-1] == ' ' || k_end[-1] == '\t'))
+            k_end--;
+        *k_end = '\0';
+        char *v = eq + 1;
+        while (*v == ' ' || *v == '\t')
+            v++;
+        if (set_opt(c, s, v, where) != 0) {
+            rc = -1;
+            break;
+        }
+    }
+    fclose(f);
+    return rc;
+}
+
+static int parse_args(config *c, int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) /* the config file first, so the command line wins */
+        if (strcmp(argv[i], "--config") == 0) {
+            if (i + 1 >= argc || read_config(c, argv[i + 1]) != 0)
+                return -1;
+        }
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--config") == 0) {
+            i++;
+        } else if (strcmp(a, "-q") == 0) {
+            quiet = 1;
+        } else if (strcmp(a, "--stl") == 0 || strcmp(a, "--stdio") == 0 || strcmp(a, "--once") == 0) {
+            if (set_opt(c, a + 2, "yes", "command line") != 0)
+                return -1;
+        } else if (strncmp(a, "--", 2) == 0 && i + 1 < argc) {
+            if (set_opt(c, a + 2, argv[++i], "command line") != 0)
+                return -1;
+        } else {
+            fprintf(stderr, PROG ": unexpected argument '%s'\n", a);
+            return -1;
+        }
+    }
+    int links = (c->serial[0] != 0) + (c->usb[0] != 0) + (c->use_stdio != 0);
+    if (links != 1 || !c->out[0]) {
+        fprintf(stderr, PROG ": %s\n", links != 1 ? "give exactly one of --serial, --usb, --stdio" : "--out DIR is required");
+        return -1;
+    }
+    return 0;
+}
+
+static cm_transport *open_link(const config *c, int *fatal)
+{
+    *fatal = 0;
+    if (c->use_stdio) {
+        if (cm_fd_open(&stdio_link, 0, 1, "stdio") != 0) {
+            *fatal = 1;
+            logline("error", "link", "link=stdio why=\"%s\"", stdio_link.t.err);
+            return NULL;
+        }
+        return &stdio_link.t;
+    }
+    if (c->serial[0]) {
+        char dev[256];
+        unsigned baud;
+        if (cm_serial_parse(c->serial, dev, sizeof dev, &baud) != 0) {
+            *fatal = 1;
+            logline("error", "config", "why=\"bad --serial '%s'\"", c->serial);
+            return NULL;
+        }
+        if (cm_serial_open(&serial, dev, baud) != 0)
+            return NULL;
+        return &serial.t;
+    }
+#ifdef CM_HAVE_LIBUSB
+    uint16_t vid, pid;
+    char sn[64];
+    if (cm_usb_parse(c->usb, &vid, &pid, sn, sizeof sn) != 0) {
+        *fatal = 1;
+        logline("error", "config", "why=\"bad --usb '%s'\"", c->usb);
+        return NULL;
+    }
+    if (cm_usb_open(&usb, vid, pid, sn[0] ? sn : NULL) != 0)
+        return NULL;
+    return &usb.t;
+#else
+    *fatal = 1;
+    logline("error", "config", "why=\"this build has no USB support (libusb-1.0 was not found at build time)\"");
+    return NULL;
+#endif
+}
+
+static const char *open_error(const config *c)
+{
+    if (c->serial[0])
+        return serial.t.err;
+#ifdef CM_HAVE_LIBUSB
+    if (c->usb[0])
+        return usb.t.err;
+#endif
+    return stdio_link.t.err;
+}
+
+/* snprintf into a message buffer, where cutting a long path short is fine */
+__attribute__((format(printf, 3, 4))) static void textf(char *out, size_t cap, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out, cap, fmt, ap);
+    va_end(ap);
+}
+
+static void nap_ms(int ms)
+{
+    struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
+    nanosleep(&ts, NULL);
+}
+
+/* decode .incoming.cmz (already fed to the decoder) into the viewer's files; 0 ok */
+static int decode_into_place(const config *c, char *text, size_t cap)
+{
+    static cm_mesh mesh;
+    mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
+    cm_status st;
+    cm_status_init(&st);
+    cm_decode_summary sum;
+    uint64_t bytes = 0;
+    char glb[CM_TERM_PATH + 16], stl[CM_TERM_PATH + 16], cmz[CM_TERM_PATH + 16], bad[CM_TERM_PATH + 16];
+    snprintf(glb, sizeof glb, "%s/model.glb", c->out);
+    snprintf(stl, sizeof stl, "%s/model.stl", c->out);
+    snprintf(cmz, sizeof cmz, "%s/model.cmz", c->out);
+    snprintf(bad, sizeof bad, "%s/rejected.cmz", c->out);
+    int64_t t0 = cm_link_now_ms();
+    if (cm_dec_finish(&decoder, &st) != CM_OK || cm_decode_mesh(&decoder, c->tess, &mesh, &tess, &sum, &st) != CM_OK ||
+        (c->stl && cm_write_mesh(&mesh, CM_OUT_STL, stl, &bytes, &st) != CM_OK) ||
+        cm_write_mesh(&mesh, CM_OUT_GLB, glb, &bytes, &st) != CM_OK) {
+        cm_format_status(text, cap, &st);
+        if (rename(term.in_path, bad) != 0)
+            unlink(term.in_path);
+        return st.code ? (int)st.code : 1;
+    }
+    if (rename(term.in_path, cmz) != 0) {
+        textf(text, cap, "decoded, but cannot move the model to %s: %s", cmz, strerror(errno));
+        return CM_E_IO;
+    }
+    /* short: on a noisy line a long DONE rarely arrives whole (the log line has the details) */
+    textf(text, cap, "%u faces, %u triangles", sum.faces, sum.triangles);
+    logline("info", "decode", "faces=%u plane=%u gregory=%u kept=%u triangles=%u glb_bytes=%llu ms=%lld", sum.faces,
+            sum.faces_plane, sum.faces_gregory, sum.faces_keep, sum.triangles, (unsigned long long)bytes,
+            (long long)(cm_link_now_ms() - t0));
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            usage(stdout);
+            return 0;
+        }
+        if (strcmp(argv[i], "--limits") == 0) {
+            cm_report_limits(stdout);
+            return 0;
+        }
+        if (strcmp(argv[i], "--version") == 0) {
+            printf(PROG " 0.1.0 (link protocol %d, format %d.%d, profile %s)\n", CM_LINK_PROTO, CM_FMT_VERSION_MAJOR,
+                   CM_FMT_VERSION_MINOR, cm_profile_name);
+            return 0;
+        }
+    }
+    static config c;
+    c.ready_pulse_ms = 500;
+    if (parse_args(&c, argc, argv) != 0) {
+        fprintf(stderr, "Try '" PROG " --help'.\n");
+        return 2;
+    }
+    if (!c.name[0] && gethostname(c.name, sizeof c.name - 1) != 0)
+        snprintf(c.name, sizeof c.name, "terminal");
+
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal; /* no SA_RESTART: a blocking poll returns and the loop sees the flag */
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+    sa.sa_handler = SIG_IGN;
+    sigaction(SIGPIPE, &sa, NULL);
+
+    cm_gpio_config gc = {{NULL, NULL, NULL}, NULL, PROG};
+    for (int i = 0; i < CM_GPIO_NOUT; i++)
+        gc.out[i] = c.gpio_spec[i][0] ? c.gpio_spec[i] : NULL;
+    gc.request = c.gpio_spec[CM_GPIO_NOUT][0] ? c.gpio_spec[CM_GPIO_NOUT] : NULL;
+    if (cm_gpio_open(&gpio, &gc) != 0) {
+        logline("error", "gpio", "why=\"%s\"", gpio.err);
+        return 4;
+    }
+    if (cm_link_term_open(&term, &decoder, c.out, c.name) != 0) {
+        logline("error", "output", "why=\"%s\"", term.why);
+        cm_gpio_close(&gpio);
+        return 3;
+    }
+    if (term.active)
+        logline("info", "resumable", "bytes=%u of=%u", (unsigned)term.prefix, (unsigned)term.offer.size);
+    logline("info", "start", "out=%s profile=%s max_file_bytes=%u", c.out, cm_profile_name, (unsigned)CM_MAX_FILE_BYTES);
+
+    int rc = 0, said_waiting = 0, busy = 0;
+    int64_t ready_off_at = 0, started_ms = 0;
+    cm_transport *link = NULL;
+    while (!stop_signal) {
+        if (ready_off_at && cm_link_now_ms() >= ready_off_at) {
+            cm_gpio_set(&gpio, CM_GPIO_READY, 0);
+            ready_off_at = 0;
+        }
+        int pressed = cm_gpio_request_pressed(&gpio);
+        if (!link) {
+            int fatal;
+            link = open_link(&c, &fatal);
+            if (!link) {
+                if (fatal) {
+                    rc = 3;
+                    break;
+                }
+                if (!said_waiting)
+                    logline("warn", "link-down", "why=\"%s\" retry=500ms", open_error(&c));
+                said_waiting = 1;
+                nap_ms(500);
+                continue;
+            }
+            said_waiting = 0;
+            cm_link_term_attach(&term, link);
+            logline("info", "link-up", "link=\"%s\"", link->name);
+        }
+        if (pressed > 0) {
+            logline("info", "request", "why=button");
+            (void)cm_link_term_request(&term);
+        }
+        int ev = cm_link_term_poll(&term, 200);
+        if (ev < 0) {
+            logline("warn", "link-down", "link=\"%s\" why=\"%s\"", link->name,
+                    ev == CM_T_HANGUP ? "hang-up" : link->err);
+            link->close(link);
+            link = NULL;
+            cm_link_term_close(&term);
+            if (busy)
+                cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
+            continue;
+        }
+        switch (ev) {
+        case CM_TERM_STARTED:
+            started_ms = cm_link_now_ms();
+            logline("info", "receiving", "name=\"%s\" bytes=%u from=%u chunk=%u", term.offer.name,
+                    (unsigned)term.offer.size, (unsigned)term.prefix, (unsigned)term.chunk);
+            cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
+            break;
+        case CM_TERM_IDLE:
+            logline("warn", "stalled", "name=\"%s\" bytes=%u of=%u", term.offer.name, (unsigned)term.prefix,
+                    (unsigned)term.offer.size);
+            cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
+            break;
+        case CM_TERM_FAILED:
+            logline("error", "refused", "name=\"%s\" why=\"%s\"", term.offer.name, term.why);
+            cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
+            cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
+            if (c.once) {
+                rc = 1;
+                stop_signal = -1;
+            }
+            break;
+        case CM_TERM_COMPLETE: {
+            cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
+            logline("info", "stored", "name=\"%s\" bytes=%u crc=%08x ms=%lld", term.offer.name,
+                    (unsigned)term.offer.size, (unsigned)term.offer.crc, (long long)(cm_link_now_ms() - started_ms));
+            char text[CM_LINK_MAX_TEXT + 1];
+            int code = decode_into_place(&c, text, sizeof text);
+            cm_link_term_decoded(&term, code, text);
+            cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
+            if (code == 0) {
+                logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
+                cm_gpio_set(&gpio, CM_GPIO_ERROR, 0);
+                cm_gpio_set(&gpio, CM_GPIO_READY, 1);
+                ready_off_at = cm_link_now_ms() + c.ready_pulse_ms;
+            } else {
+                logline("error", "decode-failed", "name=\"%s\" why=\"%s\"", term.offer.name, text);
+                cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
+            }
+            if (c.once) {
+                rc = code == 0 ? 0 : 1;
+                stop_signal = -1;
+            }
+            break;
+        }
+        default:
+            break;
+        }
+    }
+    if (stop_signal > 0)
+        logline("info", "stop", "signal=%d", (int)stop_signal);
+    if (ready_off_at)
+        nap_ms((int)(ready_off_at - cm_link_now_ms() > 0 ? ready_off_at - cm_link_now_ms() : 0));
+    cm_link_term_close(&term);
+    if (link)
+        link->close(link);
+    cm_gpio_close(&gpio);
+    return rc;
+}

@@ -1,0 +1,159 @@
+#!/usr/bin/env bash
+# check_link_pty.sh CMZ TERMINAL RELAY CMZ_DECODE [ITERATIONS]
+#
+# `cmz send` -> `cmz-terminal` over real ptys (the kernel's n_tty line
+# discipline at both ends) joined by tests/tools/pty_relay, a bad cable:
+#   1. ITERATIONS (50) transfers through 1 % dropped and 1 % corrupted bytes
+#      each way, alternating two models: every one arrives byte-identical
+#      (model.cmz) and decoded (model.glb identical to CMZ_DECODE's);
+#   2. a hang-up mid-transfer (the terminal's pty goes away and comes back):
+#      the transfer resumes from the offset the terminal had acknowledged;
+#   3. kill -9 of the terminal mid-transfer: the previous model stays intact,
+#      a restarted terminal resumes the transfer from its synced prefix;
+#   4. a model over the terminal's limits is refused on the workstation,
+#      naming the limit (the tiny profile's terminal, when built).
+# TERMINAL may be prefixed by an emulator through $TERMINAL_EMU (qemu-aarch64).
+set -u
+cmz=$1 term=$2 relay=$3 dec=$4 iters=${5:-50}
+emu=${TERMINAL_EMU:-}
+tmp=$(mktemp -d)
+pids=()
+cleanup() {
+    for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
+    wait 2>/dev/null
+    rm -rf "$tmp"
+}
+trap cleanup EXIT
+n=0 fail=0
+ok() { n=$((n + 1)); echo "ok $n - $*"; }
+nok() { n=$((n + 1)); fail=$((fail + 1)); echo "not ok $n - $*"; }
+
+# two small models, and what the terminal's decoder makes of them
+for m in tests/data/geo_example.igs tests/data/as1_pe_203.igs; do
+    b=$(basename "$m" .igs)
+    "$cmz" encode -q "$m" -o "$tmp/$b.cmz" > /dev/null || { nok "encode $m"; exit 1; }
+    "$dec" "$tmp/$b.cmz" -o "$tmp/$b.glb" > /dev/null || { nok "decode $m"; exit 1; }
+done
+models=(geo_example as1_pe_203)
+
+start_relay() { # start_relay NAME ARGS...: ptys at $tmp/NAME.a (workstation) and $tmp/NAME.b (terminal)
+    local name=$1
+    shift
+    "$relay" --link-a "$tmp/$name.a" --link-b "$tmp/$name.b" "$@" 2> "$tmp/$name.relay.log" &
+    relay_pid=$!
+    pids+=("$relay_pid")
+    for _ in $(seq 100); do [ -e "$tmp/$name.b" ] && [ -e "$tmp/$name.a" ] && return 0; sleep 0.05; done
+    return 1
+}
+start_term() { # start_term LINK OUTDIR [extra args]
+    local link=$1 out=$2
+    shift 2
+    mkdir -p "$out"
+    $emu "$term" --serial "$link" --out "$out" --name pty-test "$@" 2>> "$out.log" &
+    term_pid=$!
+    pids+=("$term_pid")
+}
+same() { cmp -s "$1" "$2"; }
+
+# ---- 1. a noisy line, ITERATIONS times ----
+start_relay noisy --drop 0.01 --flip 0.01 --seed 7 || { nok "pty relay did not start"; exit 1; }
+start_term "$tmp/noisy.b" "$tmp/out1"
+t0=$(date +%s.%N)
+for i in $(seq 1 "$iters"); do
+    m=${models[$((i % 2))]}
+    if ! out=$("$cmz" send "$tmp/$m.cmz" --serial "$tmp/noisy.a" --timeout 30 2>&1); then
+        nok "noisy transfer $i ($m): cmz send failed: $(tail -n 2 <<<"$out" | tr '\n' ' ')"
+    elif ! same "$tmp/out1/model.cmz" "$tmp/$m.cmz"; then
+        nok "noisy transfer $i ($m): model.cmz differs from the file sent"
+    elif ! same "$tmp/out1/model.glb" "$tmp/$m.glb"; then
+        nok "noisy transfer $i ($m): model.glb differs from cmz-decode's"
+    else
+        ok "noisy transfer $i ($m): identical and decoded; $(sed -n 's/.*delivered in \([0-9.]* s\) (\([^)]*\)).*/\1, \2/p' <<<"$out")"
+    fi
+done
+t1=$(date +%s.%N)
+echo "# $iters transfers in $(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }') s; relay: $(tail -n 1 "$tmp/noisy.relay.log")"
+kill "$term_pid" "$relay_pid" 2>/dev/null
+wait "$term_pid" 2>/dev/null
+rc=$?
+[ $rc -eq 0 ] && ok "terminal stops cleanly on SIGTERM (exit 0)" || nok "terminal exit status $rc after SIGTERM"
+grep -q 'level=info event=decoded' "$tmp/out1.log" && ok "terminal log has one-line 'event=decoded' records" ||
+    nok "terminal log lacks decoded events"
+
+# ---- 2. hang-up mid-transfer: the terminal's side of the cable goes away and comes back ----
+start_relay hup --hangup-after 9000 --reopen-ms 300 --baud 115200 || { nok "relay (hang-up) did not start"; exit 1; }
+start_term "$tmp/hup.b" "$tmp/out2"
+out=$("$cmz" send "$tmp/as1_pe_203.cmz" --serial "$tmp/hup.a" --timeout 30 2>&1)
+rc=$?
+# Resumed from what the terminal had acknowledged: either the sender reconnected and the terminal
+# accepted it mid-file ("resumed at N"), or the sender never lost it and only resent the chunks
+# that were not acknowledged; never a second start from byte 0.
+at=$(sed -n 's/.*resumed at \([0-9]*\).*/\1/p' <<<"$out" | tail -n 1)
+starts=$(grep -c 'event=receiving .* from=0 ' "$tmp/out2.log")
+if [ $rc -ne 0 ]; then
+    nok "hang-up: cmz send failed ($rc): $(tail -n 2 <<<"$out" | tr '\n' ' ')"
+elif ! same "$tmp/out2/model.cmz" "$tmp/as1_pe_203.cmz"; then
+    nok "hang-up: model.cmz differs"
+elif ! grep -q 'event=link-down' "$tmp/out2.log"; then
+    nok "hang-up: the terminal never saw the hang-up (relay: $(tail -n 1 "$tmp/hup.relay.log"))"
+elif [ "$starts" -ne 1 ] || { [ -n "$at" ] && [ "$at" -eq 0 ]; }; then
+    nok "hang-up: the transfer started again from byte 0 ($starts starts): $(tr '\n' ' ' <<<"$out")"
+else
+    ok "hang-up after ~9000 bytes: the terminal reopened its line and kept its prefix; ${at:+resumed at byte $at, }file identical and decoded ($(sed -n 's/.*(\([0-9]* chunks, [0-9]* sent again, [0-9]* reconnects\).*/\1/p' <<<"$out"))"
+fi
+kill "$term_pid" "$relay_pid" 2>/dev/null
+wait 2>/dev/null
+
+# ---- 3. kill -9 of the terminal mid-transfer ----
+start_relay k9 --baud 19200 || { nok "relay (kill) did not start"; exit 1; }
+start_term "$tmp/k9.b" "$tmp/out3"
+"$cmz" send "$tmp/geo_example.cmz" --serial "$tmp/k9.a" --timeout 30 > /dev/null 2>&1 ||
+    nok "kill -9: first model not delivered"
+"$cmz" send "$tmp/as1_pe_203.cmz" --serial "$tmp/k9.a" --timeout 60 > "$tmp/k9.send" 2>&1 &
+send_pid=$!
+for _ in $(seq 100); do [ -s "$tmp/out3/.incoming.part" ] && break; sleep 0.05; done
+sleep 1.5
+kill -9 "$term_pid"
+wait "$term_pid" 2>/dev/null
+if same "$tmp/out3/model.cmz" "$tmp/geo_example.cmz" && same "$tmp/out3/model.glb" "$tmp/geo_example.glb"; then
+    ok "kill -9 mid-transfer: the previous model.cmz and model.glb are intact"
+else
+    nok "kill -9 mid-transfer: the previous model was damaged"
+fi
+part=$(stat -c %s "$tmp/out3/.incoming.part" 2>/dev/null || echo 0)
+start_term "$tmp/k9.b" "$tmp/out3"
+wait "$send_pid"
+rc=$?
+resumed=$(sed -n 's/.*event=resumable bytes=\([0-9]*\).*/\1/p' "$tmp/out3.log" | tail -n 1)
+if [ $rc -ne 0 ]; then
+    nok "kill -9: the transfer did not complete after the restart: $(tail -n 2 "$tmp/k9.send" | tr '\n' ' ')"
+elif ! same "$tmp/out3/model.cmz" "$tmp/as1_pe_203.cmz" || ! same "$tmp/out3/model.glb" "$tmp/as1_pe_203.glb"; then
+    nok "kill -9: the new model differs after the resume"
+else
+    ok "kill -9 after $part bytes: restarted terminal resumed from byte ${resumed:-0}, new model identical and decoded"
+fi
+kill "$term_pid" "$relay_pid" 2>/dev/null
+wait 2>/dev/null
+
+# ---- 4. over the terminal's limits: refused on the workstation, naming the limit ----
+tiny=${TINY_TERMINAL:-}
+if [ -n "$tiny" ] && [ -x "$tiny" ]; then
+    start_relay lim || { nok "relay (limits) did not start"; exit 1; }
+    term_save=$term
+    term=$tiny
+    start_term "$tmp/lim.b" "$tmp/out4"
+    term=$term_save
+    out=$("$cmz" send "$tmp/as1_pe_203.cmz" --serial "$tmp/lim.a" --timeout 20 2>&1)
+    rc=$?
+    if [ $rc -eq 1 ] && grep -q 'needs MAX_[A-Z_]*=[0-9]*, terminal .* has [0-9]*' <<<"$out" && [ ! -e "$tmp/out4/model.cmz" ]; then
+        ok "over the limits of the tiny terminal: refused before sending ($(grep -o 'needs MAX_[A-Z_]*=[0-9]*, terminal .* has [0-9]*' <<<"$out"))"
+    else
+        nok "over the limits: rc $rc, $(tr '\n' ' ' <<<"$out")"
+    fi
+    kill "$term_pid" "$relay_pid" 2>/dev/null
+    wait 2>/dev/null
+else
+    echo "# SKIP: no tiny-profile terminal given (TINY_TERMINAL): limit refusal not tested here"
+fi
+echo "$((n - fail)) passed, $fail failed"
+[ $fail -eq 0 ]

@@ -1,0 +1,327 @@
+/*
+ * test_link.c - the link protocol without cables: frames and messages over
+ * memory, then whole transfers between a terminal (a child process running
+ * cm_link_term in a temporary directory) and link_send over a socketpair,
+ * through the fault decorator.  TAP output.
+ *
+ *   test_link SEED.cmzf     (a decode fuzz seed: one chunking byte, then a valid .cmz)
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "cm/cm_arith.h"
+#include "cm_link.h"
+#include "cm_link_term.h"
+#include "cm_transport_fd.h"
+#include "fake/cm_transport_fault.h"
+#include "fake/cm_transport_mem.h"
+#include "send/link_send.h"
+
+static int n_test, n_fail;
+__attribute__((format(printf, 2, 3))) static void tap(int ok, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    printf("%sok %d - ", ok ? "" : "not ", ++n_test);
+    vprintf(fmt, ap);
+    printf("\n");
+    va_end(ap);
+    fflush(stdout);
+    if (!ok)
+        n_fail++;
+}
+
+static uint8_t wire[1 << 20];
+static cm_link la, lb;
+
+/* ---- frames over memory ---- */
+
+/* the next frame, past the early returns that report a damaged one */
+static int recv_next(cm_link *l, cm_link_frame *f)
+{
+    int r = 0;
+    for (int i = 0; i < 10 && r == 0; i++)
+        r = cm_link_recv(l, f, 100);
+    return r;
+}
+static void test_frames(void)
+{
+    cm_memlink out;
+    cm_mem_open(&out, NULL, 0, wire, sizeof wire, CM_MEM_END_HANGUP);
+    cm_link_init(&la, &out.t);
+    uint8_t p[300];
+    for (int i = 0; i < 300; i++)
+        p[i] = (uint8_t)(i * 7);
+    int s1 = cm_link_send(&la, CM_LINK_DATA, -1, p, 300, 100);
+    int s2 = cm_link_send(&la, CM_LINK_END, 9, p, 8, 100);
+    size_t one = out.out_len;
+    /* garbage, a frame with a flipped payload byte, a frame with a bad length, then a good one */
+    uint8_t stream[4096];
+    size_t k = 0;
+    const char junk[] = "\xC5\x4Dnoise\xC5";
+    memcpy(stream + k, junk, sizeof junk - 1);
+    k += sizeof junk - 1;
+    memcpy(stream + k, wire, one);
+    stream[k + 20] ^= 0x10; /* payload damaged: CRC fails */
+    k += one;
+    memcpy(stream + k, wire, 12);
+    stream[k + 5] ^= 0x40; /* length damaged: the header check fails */
+    k += 12;
+    memcpy(stream + k, wire, one);
+    k += one;
+    cm_memlink in;
+    cm_mem_open(&in, stream, k, NULL, 0, CM_MEM_END_HANGUP);
+    in.read_chunk = 7; /* frames arrive in pieces */
+    cm_link_init(&lb, &in.t);
+    /* what survives: the first END, then the second DATA and END */
+    cm_link_frame f;
+    int r1 = recv_next(&lb, &f);
+    int good = r1 == 1 && f.type == CM_LINK_END && f.seq == 9;
+    int r2 = recv_next(&lb, &f);
+    good = good && r2 == 1 && f.type == CM_LINK_DATA && f.len == 300 && memcmp(f.payload, p, 300) == 0;
+    int r3 = recv_next(&lb, &f);
+    good = good && r3 == 1 && f.type == CM_LINK_END && f.seq == 9 && f.len == 8;
+    int r4 = recv_next(&lb, &f);
+    tap(s1 == 1 && s2 == 1 && good && r4 == CM_T_HANGUP && lb.stats.bad_crc >= 1 && lb.stats.bad_header >= 1,
+        "frames: resynchronised past garbage, a bad CRC and a bad length (bad_crc %llu, bad_header %llu, skipped %llu)",
+        (unsigned long long)lb.stats.bad_crc, (unsigned long long)lb.stats.bad_header,
+        (unsigned long long)lb.stats.skipped);
+}
+
+static void test_messages(void)
+{
+    cm_link_hello h, g;
+    cm_link_hello_local(&h, "bench-7");
+    uint8_t p[1024];
+    size_t n = cm_link_hello_pack(&h, p);
+    cm_link_frame f = {CM_LINK_HELLO, 0, (uint16_t)n, p};
+    int ok = cm_link_hello_unpack(&f, &g) && g.nlimits == CM_LIMIT_COUNT && strcmp(g.name, "bench-7") == 0 &&
+             g.limit[CM_LIMIT_MAX_FACES] == CM_MAX_FACES && g.fmt_major_max == h.fmt_major_max;
+    f.len = (uint16_t)(n - 1);
+    int short_rejected = !cm_link_hello_unpack(&f, &g);
+    tap(ok && short_rejected, "HELLO: limits, versions and name round-trip; a short payload is rejected");
+    cm_link_offer o = {123456, 0xdeadbeef, 512, "part 7.cmz"}, q;
+    n = cm_link_offer_pack(&o, p);
+    f = (cm_link_frame){CM_LINK_OFFER, 0, (uint16_t)n, p};
+    ok = cm_link_offer_unpack(&f, &q) && q.size == o.size && q.crc == o.crc && q.chunk == 512 &&
+         strcmp(q.name, o.name) == 0;
+    p[12] = 200; /* a name length beyond the payload */
+    tap(ok && !cm_link_offer_unpack(&f, &q), "OFFER round-trips; a lying name length is rejected");
+}
+
+/* ---- whole transfers: terminal in a child process ---- */
+
+static cm_decoder term_dec;
+static cm_link_term term;
+
+/* the child: serve until a model was received and checked, then exit 0 (or the failure code) */
+static int run_terminal(int fd, const char *dir, double noise, uint64_t seed, int exit_after_bytes)
+{
+    static cm_fdlink fl;
+    static cm_fault fault;
+    if (cm_fd_open(&fl, fd, fd, "socket") != 0)
+        return 90;
+    cm_fault_config fc = {noise, noise, 0, -1, 0, seed};
+    if (cm_fault_open(&fault, &fl.t, &fc) != 0)
+        return 91;
+    if (cm_link_term_open(&term, &term_dec, dir, "test-terminal") != 0)
+        return 92;
+    cm_link_term_attach(&term, &fault.t);
+    for (;;) {
+        int ev = cm_link_term_poll(&term, exit_after_bytes ? 0 : 200); /* 0: one frame per call */
+        if (ev < 0)
+            return 93;
+        if (exit_after_bytes && term.prefix >= (uint32_t)exit_after_bytes) {
+            cm_link_term_close(&term); /* a restart (SIGTERM, reboot): what it holds is synced */
+            _exit(0);
+        }
+        if (ev == CM_TERM_FAILED)
+            return 10;
+        if (ev == CM_TERM_COMPLETE) {
+            cm_status st;
+            cm_status_init(&st);
+            int code = cm_dec_finish(&term_dec, &st);
+            cm_link_term_decoded(&term, code, code ? "decode failed" : "decoded");
+            /* stay a moment to answer a repeated END */
+            for (int i = 0; i < 5; i++)
+                (void)cm_link_term_poll(&term, 100);
+            return code ? 11 : 0;
+        }
+    }
+}
+
+static int spawn_terminal(int *sv, const char *dir, double noise, uint64_t seed, int exit_after_bytes)
+{
+    if (socketpair(AF_UNIX, SOCK_STREAM, 0, sv) != 0)
+        return -1;
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(sv[0]);
+        _exit(run_terminal(sv[1], dir, noise, seed, exit_after_bytes));
+    }
+    close(sv[1]);
+    return (int)pid;
+}
+
+static int wait_child(int pid)
+{
+    int status = 0;
+    if (waitpid(pid, &status, 0) != pid)
+        return -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
+}
+
+static int file_equals(const char *path, const uint8_t *data, size_t n)
+{
+    static uint8_t buf[1 << 20];
+    int fd = open(path, O_RDONLY);
+    if (fd < 0)
+        return 0;
+    ssize_t got = read(fd, buf, sizeof buf);
+    close(fd);
+    return got == (ssize_t)n && memcmp(buf, data, n) == 0;
+}
+
+static void log_stderr(void *ctx, const char *line)
+{
+    (void)ctx;
+    fprintf(stderr, "# %lld %s\n", (long long)cm_link_now_ms() % 100000, line);
+}
+
+static void quiet_opts(link_send_opts *o)
+{
+    link_send_defaults(o);
+    o->connect_timeout_ms = 5000;
+    if (getenv("TEST_LINK_VERBOSE"))
+        o->log = log_stderr;
+}
+
+static void test_transfer(const uint8_t *data, uint32_t size, const char *dir, double noise, const char *what)
+{
+    int sv[2];
+    int pid = spawn_terminal(sv, dir, noise, 11, 0);
+    static cm_fdlink fl;
+    static cm_fault fault;
+    cm_fd_open(&fl, sv[0], sv[0], "socket");
+    cm_fault_config fc = {noise, noise, 0, -1, 0, 5};
+    cm_fault_open(&fault, &fl.t, &fc);
+    static cm_link l;
+    cm_link_init(&l, &fault.t);
+    link_send_opts o;
+    quiet_opts(&o);
+    link_send_result r;
+    int rc = link_send_file(&l, data, size, "seed.cmz", &o, &r);
+    close(sv[0]);
+    int crc = wait_child(pid);
+    char path[600];
+    snprintf(path, sizeof path, "%s/.incoming.cmz", dir);
+    tap(rc == 0 && crc == 0 && r.stage == CM_LINK_STAGE_DECODED && file_equals(path, data, size),
+        "transfer %s: %u bytes, sender %d, terminal %d, %llu chunks (%llu again), chunk changes %u, %u reconnects%s%s",
+        what, (unsigned)size, rc, crc, (unsigned long long)r.chunks_sent, (unsigned long long)r.chunks_resent,
+        r.chunk_changes, r.reconnects, rc ? ": " : "", rc ? r.text : "");
+    unlink(path);
+}
+
+static void test_refused_in_stream(const uint8_t *data, uint32_t size, const char *dir)
+{
+    /* the header says the model needs one face more than this build has; CRC fixed up */
+    static uint8_t bad[1 << 20];
+    memcpy(bad, data, size);
+    uint32_t h = cm_link_get32(bad + 8);
+    cm_link_put32(bad + 60 + 4 * CM_LIMIT_MAX_FACES, CM_MAX_FACES + 1u);
+    cm_link_put32(bad + h - 4, cm_crc32(bad, h - 4));
+    int sv[2];
+    int pid = spawn_terminal(sv, dir, 0, 1, 0);
+    static cm_fdlink fl;
+    cm_fd_open(&fl, sv[0], sv[0], "socket");
+    static cm_link l;
+    cm_link_init(&l, &fl.t);
+    link_send_opts o;
+    quiet_opts(&o);
+    link_send_result r;
+    int rc = link_send_file(&l, bad, size, "too-big.cmz", &o, &r);
+    close(sv[0]);
+    int crc = wait_child(pid);
+    struct stat s;
+    char path[600];
+    snprintf(path, sizeof path, "%s/.incoming.part", dir);
+    tap(rc == 1 && crc == 10 && strstr(r.text, "MAX_FACES") && r.code == CM_E_LIMIT && stat(path, &s) != 0,
+        "a model over the terminal's MAX_FACES is refused once its header is in, naming the limit: %s", r.text);
+}
+
+static void test_resume(const uint8_t *data, uint32_t size, const char *dir)
+{
+    /* the terminal restarts after a third of the file; the new one resumes from its synced prefix */
+    int sv[2];
+    int pid = spawn_terminal(sv, dir, 0, 1, (int)(size / 3));
+    static cm_fdlink fl;
+    cm_fd_open(&fl, sv[0], sv[0], "socket");
+    static cm_link l;
+    cm_link_init(&l, &fl.t);
+    link_send_opts o;
+    quiet_opts(&o);
+    o.connect_timeout_ms = 1500;
+    o.chunk = 64;
+    link_send_result r;
+    int rc1 = link_send_file(&l, data, size, "seed.cmz", &o, &r);
+    close(sv[0]);
+    int c1 = wait_child(pid);
+    pid = spawn_terminal(sv, dir, 0, 1, 0);
+    cm_fd_open(&fl, sv[0], sv[0], "socket");
+    cm_link_init(&l, &fl.t);
+    int rc2 = link_send_file(&l, data, size, "seed.cmz", &o, &r);
+    close(sv[0]);
+    int c2 = wait_child(pid);
+    char path[600];
+    snprintf(path, sizeof path, "%s/.incoming.cmz", dir);
+    tap(rc1 == -1 && c1 == 0 && rc2 == 0 && c2 == 0 && r.resumes == 1 && r.resume_offset > 0 &&
+            file_equals(path, data, size),
+        "a terminal restarted after %u bytes: the next one resumes at byte %u, file identical", (unsigned)(size / 3),
+        (unsigned)r.resume_offset);
+    unlink(path);
+}
+
+int main(int argc, char **argv)
+{
+    signal(SIGPIPE, SIG_IGN);
+    if (argc != 2) {
+        fprintf(stderr, "usage: test_link SEED.cmzf\n");
+        return 2;
+    }
+    static uint8_t seed[1 << 20];
+    int fd = open(argv[1], O_RDONLY);
+    ssize_t n = fd >= 0 ? read(fd, seed, sizeof seed) : -1;
+    if (fd >= 0)
+        close(fd);
+    if (n < 65 || seed[1] != 0x89 || seed[2] != 'C') {
+        fprintf(stderr, "test_link: %s is not a decode seed (chunking byte + .cmz)\n", argv[1]);
+        return 2;
+    }
+    const uint8_t *data = seed + 1;
+    uint32_t size = (uint32_t)(n - 1);
+    char dir[] = "/tmp/cm-test-link-XXXXXX";
+    if (!mkdtemp(dir))
+        return 2;
+    test_frames();
+    test_messages();
+    test_transfer(data, size, dir, 0, "on a clean line");
+    test_transfer(data, size, dir, 0.01, "through 1 % dropped and 1 % corrupted bytes each way");
+    test_refused_in_stream(data, size, dir);
+    test_resume(data, size, dir);
+    char cmd[700];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "test_link: could not remove %s\n", dir);
+    printf("%d passed, %d failed\n", n_test - n_fail, n_fail);
+    return n_fail ? 1 : 0;
+}
