@@ -260,6 +260,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
 		"gate:serial:$(MAKE) --no-print-directory -s check-serial" \
 		"gate:link:$(MAKE) --no-print-directory -s check-link" \
+		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
 		"gate:link-aarch64:$(MAKE) --no-print-directory -s check-link-aarch64" \
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
 		"gate:hw:$(MAKE) --no-print-directory -s check-hw"

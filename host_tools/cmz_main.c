@@ -62,10 +62,11 @@ static void usage(FILE *f)
             "      Rebuild every face of MODEL.cmz with the terminal's code and measure it\n"
             "      against MODEL.igs (spec §12 grid and boundary, §13 G1 across tangent edges);\n"
             "      prints the summary per method, exit status 1 if a face is out of tolerance.\n"
-            "  decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n"
+            "  decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM] [--face-map FACES.tsv]\n"
             "      Rebuild every face and tessellate it (chordal tolerance --tess in mm,\n"
             "      default the file's recommendation) into binary glTF (metres, +Y up),\n"
-            "      binary STL or OBJ (millimetres), chosen by the extension.\n"
+            "      binary STL or OBJ (millimetres), chosen by the extension.  --face-map:\n"
+            "      each face's number and triangle count, in the output's triangle order.\n"
             "  send MODEL.cmz|MODEL.igs --serial DEV[:BAUD] | --gadget FFSDIR | --usb VID:PID\n"
             "       [--stay] [--no-wait] [--chunk N] [--timeout S]\n"
             "      Send the model to a cmz-terminal, checked against (an IGES model: encoded\n"
@@ -649,14 +650,36 @@ static int cmd_encode(int argc, char **argv)
 static cm_decoder decoder;   /* large: static storage, as on the terminal */
 static cm_tess_ws tess_ws;
 
+/* --face-map: one line per decoded face, in the order of the output's triangles: the face's
+   number in the model and its triangle count (lets a test attribute each triangle to its face) */
+static int write_face_map(const char *path, const cm_mesh *mesh)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "%s: %s: %s\n", prog, path, strerror(errno));
+        return EXIT_IO;
+    }
+    fprintf(f, "face\ttriangles\n");
+    for (uint32_t k = 0; k < mesh->nfaces; k++)
+        fprintf(f, "%u\t%u\n", mesh->faces[k].source_face, mesh->faces[k].nindex / 3u);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "%s: %s: %s\n", prog, path, strerror(errno));
+        return EXIT_IO;
+    }
+    return EXIT_OK;
+}
+
 static int cmd_decode(int argc, char **argv)
 {
-    const char *path = NULL, *out = NULL;
+    const char *path = NULL, *out = NULL, *face_map = NULL;
     double tol = 0;
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "-o") == 0 && v) {
             out = v;
+            i++;
+        } else if (strcmp(a, "--face-map") == 0 && v) {
+            face_map = v;
             i++;
         } else if (strcmp(a, "--tess") == 0 && v) {
             if (parse_real(a, v, 1e-9, 1e9, &tol))
@@ -705,6 +728,8 @@ static int cmd_decode(int argc, char **argv)
                cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
         cm_report_status(stderr, prog, path, &st);
         rc = st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+    } else if (face_map && (rc = write_face_map(face_map, &mesh)) != EXIT_OK) {
+        /* reported */
     } else if (!quiet) {
         printf("%s -> %s: %u faces (%u plane, %u gregory, %u kept), %u triangles, %u vertices, chordal tolerance "
                "%.3g mm, %llu bytes\n",

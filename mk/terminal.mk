@@ -77,3 +77,31 @@ check-link-aarch64: $(CMZ) $(call bdir,host)/tests/tools/pty_relay $(call bdir,t
 	$(Q)tests/tools/sum_suites.sh "qemu-aarch64 $(A64_B)/tests/link/test_link tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf" \
 		"TERMINAL_EMU=qemu-aarch64 tests/link/check_link_pty.sh $(CMZ) $(A64_B)/cmz-terminal \
 		$(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode 10"
+
+# the link's fuzz target (tests/fuzz/fuzz_link.c): replayed under ASan/UBSan in check over seeds that
+# test_link writes (a whole transfer: clean, noisy, cut); make fuzz-link FUZZ_SECONDS=600 runs libFuzzer
+LINK_FUZZ_OBJS = $(patsubst %.c,$(1)/%.o,platform/cm_link.c platform/cm_link_term.c platform/cm_report.c \
+	platform/fake/cm_transport_mem.c tests/fuzz/fuzz_link.c)
+LINK_SAN_B = $(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal
+# (an explicit rule: it must win over the generic replay_% rule, which links the host library)
+$(call bdir,terminal)/tests/fuzz/replay_link: $(call LINK_FUZZ_OBJS,$(call bdir,terminal)) \
+		$(call bdir,terminal)/tests/fuzz/replay_main.o $(call bdir,terminal)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
+.PHONY: check-fuzz-link-replay fuzz-link
+check-fuzz-link-replay: $(LINK_TEST_BIN)
+	$(Q)mkdir -p $(BUILD_ROOT)/link-seeds
+	$(Q)$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf --write-seeds $(BUILD_ROOT)/link-seeds
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" $(LINK_SAN_B)/tests/fuzz/replay_link
+	$(Q)ASAN_OPTIONS=detect_leaks=1 $(LINK_SAN_B)/tests/fuzz/replay_link $(BUILD_ROOT)/link-seeds
+fuzz-link: $(LINK_TEST_BIN)
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz/corpus_link
+	$(Q)$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf --write-seeds $(BUILD_ROOT)/fuzz/corpus_link
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all" \
+		$(call LINK_FUZZ_OBJS,$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal) $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_link \
+		$(call LINK_FUZZ_OBJS,$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal) $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
+	$(BUILD_ROOT)/fuzz/fuzz_link -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=30 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_link

@@ -10,7 +10,9 @@
 #      the transfer resumes from the offset the terminal had acknowledged;
 #   3. kill -9 of the terminal mid-transfer: the previous model stays intact,
 #      a restarted terminal resumes the transfer from its synced prefix;
-#   4. a model over the terminal's limits is refused on the workstation,
+#   4. `cmz send MODEL.igs` encodes for the limits the terminal announced,
+#      through a line that inserts garbage bytes;
+#   5. a model over the terminal's limits is refused on the workstation,
 #      naming the limit (the tiny profile's terminal, when built).
 # TERMINAL may be prefixed by an emulator through $TERMINAL_EMU (qemu-aarch64).
 set -u
@@ -135,7 +137,21 @@ fi
 kill "$term_pid" "$relay_pid" 2>/dev/null
 wait 2>/dev/null
 
-# ---- 4. over the terminal's limits: refused on the workstation, naming the limit ----
+# ---- 4. an IGES model, encoded for the terminal's announced limits, over a line inserting garbage ----
+start_relay ins --insert 0.01 --drop 0.005 --seed 11 || { nok "relay (garbage) did not start"; exit 1; }
+start_term "$tmp/ins.b" "$tmp/out5"
+out=$("$cmz" send tests/data/as1_pe_203.igs --serial "$tmp/ins.a" --timeout 30 2>&1)
+rc=$?
+if [ $rc -eq 0 ] && same "$tmp/out5/model.cmz" "$tmp/as1_pe_203.cmz" && same "$tmp/out5/model.glb" "$tmp/as1_pe_203.glb" &&
+    grep -q "encoded for 'pty-test'" <<<"$out"; then
+    ok "cmz send MODEL.igs: encoded for the terminal's limits, sent through 1 % inserted garbage, identical and decoded"
+else
+    nok "cmz send MODEL.igs: rc $rc, $(tail -n 3 <<<"$out" | tr '\n' ' ')"
+fi
+kill "$term_pid" "$relay_pid" 2>/dev/null
+wait 2>/dev/null
+
+# ---- 5. over the terminal's limits: refused on the workstation, naming the limit ----
 tiny=${TINY_TERMINAL:-}
 if [ -n "$tiny" ] && [ -x "$tiny" ]; then
     start_relay lim || { nok "relay (limits) did not start"; exit 1; }

@@ -201,7 +201,7 @@ static void log_stderr(void *ctx, const char *line)
 static void quiet_opts(link_send_opts *o)
 {
     link_send_defaults(o);
-    o->connect_timeout_ms = 5000;
+    o->connect_timeout_ms = 15000; /* a loaded CI machine under qemu is slow */
     if (getenv("TEST_LINK_VERBOSE"))
         o->log = log_stderr;
 }
@@ -291,11 +291,54 @@ static void test_resume(const uint8_t *data, uint32_t size, const char *dir)
     unlink(path);
 }
 
+/* --write-seeds: what a terminal's cable delivers for a whole transfer of data (SYNC, OFFER, DATA
+   in 256-byte chunks, END), clean, with 1 % noise, and cut in the middle: seeds for fuzz_link */
+static int write_seeds(const uint8_t *data, uint32_t size, const char *dir)
+{
+    static uint8_t buf[1 << 20], noisy[1 << 20];
+    cm_memlink m;
+    cm_mem_open(&m, NULL, 0, buf + 1, sizeof buf - 1, CM_MEM_END_HANGUP);
+    cm_link_init(&la, &m.t);
+    uint8_t p[CM_LINK_MAX_PAYLOAD];
+    p[0] = CM_LINK_PROTO;
+    (void)cm_link_send(&la, CM_LINK_SYNC, -1, p, 1, 100);
+    cm_link_offer o = {size, cm_crc32(data, size), 256, "seed.cmz"};
+    (void)cm_link_send(&la, CM_LINK_OFFER, -1, p, cm_link_offer_pack(&o, p), 100);
+    for (uint32_t off = 0; off < size; off += 256) {
+        uint32_t n = size - off < 256 ? size - off : 256;
+        cm_link_put32(p, off);
+        memcpy(p + 4, data + off, n);
+        (void)cm_link_send(&la, CM_LINK_DATA, -1, p, n + 4, 100);
+    }
+    cm_link_put32(p, size);
+    cm_link_put32(p + 4, o.crc);
+    (void)cm_link_send(&la, CM_LINK_END, -1, p, 8, 100);
+    buf[0] = 63; /* read in 64-byte pieces */
+    size_t len = m.out_len + 1;
+    cm_fault_noise z;
+    cm_fault_noise_init(&z, 0.01, 0.01, 0.005, 3);
+    size_t used = 0;
+    noisy[0] = 16;
+    size_t nl = 1 + cm_fault_noise_apply(&z, buf + 1, len - 1, &used, noisy + 1, sizeof noisy - 1);
+    struct { const char *name; const uint8_t *b; size_t n; } seeds[] = {
+        {"transfer_clean.link", buf, len}, {"transfer_noisy.link", noisy, nl}, {"transfer_cut.link", buf, len / 2}};
+    for (size_t i = 0; i < sizeof seeds / sizeof seeds[0]; i++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/%s", dir, seeds[i].name);
+        FILE *f = fopen(path, "wb");
+        if (!f || fwrite(seeds[i].b, 1, seeds[i].n, f) != seeds[i].n || fclose(f) != 0) {
+            fprintf(stderr, "test_link: cannot write %s\n", path);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     signal(SIGPIPE, SIG_IGN);
-    if (argc != 2) {
-        fprintf(stderr, "usage: test_link SEED.cmzf\n");
+    if (argc != 2 && !(argc == 4 && strcmp(argv[2], "--write-seeds") == 0)) {
+        fprintf(stderr, "usage: test_link SEED.cmzf [--write-seeds DIR]\n");
         return 2;
     }
     static uint8_t seed[1 << 20];
@@ -309,6 +352,8 @@ int main(int argc, char **argv)
     }
     const uint8_t *data = seed + 1;
     uint32_t size = (uint32_t)(n - 1);
+    if (argc == 4)
+        return write_seeds(data, size, argv[3]);
     char dir[] = "/tmp/cm-test-link-XXXXXX";
     if (!mkdtemp(dir))
         return 2;

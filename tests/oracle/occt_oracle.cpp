@@ -1953,10 +1953,12 @@ int cmd_mesh_dev(const Args& a) {
     const size_t nf = static_cast<size_t>(m.faces.Extent());
     std::vector<double> face_a(nf, 0.0), face_b(nf, 0.0);
     std::vector<Box3> face_box(nf);
+    std::vector<double> dq(q.size(), std::nan(""));  // each measured point's distance
     for (size_t k : qa) {
         const V3& p = q[k];
         FaceDistance::Result r = fd.distance(p);
         double d = r.dist;
+        dq[k] = d;
         if (!std::isfinite(d)) unresolved++;
         if (r.face >= 1 && static_cast<size_t>(r.face) <= nf && std::isfinite(d))
             face_a[static_cast<size_t>(r.face - 1)] = std::max(face_a[static_cast<size_t>(r.face - 1)], d);
@@ -1988,6 +1990,49 @@ int cmd_mesh_dev(const Args& a) {
         worst_b.add(d, s);
     }
     double t_b = sw3.seconds();
+    if (a.opt.count("--mesh-faces")) {
+        // per face of the MESH (`cmz decode --face-map`: its triangle counts in STL order): the box
+        // of its triangles and its worst point (vertices and centroids), i.e. each mesh point
+        // judged against the face it was rebuilt for, not the nearest true face
+        const std::string& in = a.opt.at("--mesh-faces");
+        const std::string out = a.opt.count("--mesh-faces-out") ? a.opt.at("--mesh-faces-out") : in + ".dev";
+        FILE* f = fopen(in.c_str(), "r");
+        if (!f) throw InputError(strf("cannot read '%s': %s", in.c_str(), strerror(errno)));
+        std::vector<std::pair<long, long>> mf;  // (face number, triangles)
+        char line[256];
+        while (fgets(line, sizeof line, f)) {
+            long id, n;
+            if (sscanf(line, "%ld %ld", &id, &n) == 2 && n >= 0) mf.emplace_back(id, n);
+        }
+        fclose(f);
+        long long total = 0;
+        for (const auto& e : mf) total += e.second;
+        if (total != static_cast<long long>(mesh.tris().size()))
+            throw InputError(strf("'%s' lists %lld triangles, the mesh has %zu", in.c_str(), total, mesh.tris().size()));
+        FILE* o = fopen(out.c_str(), "w");
+        if (!o) throw InputError(strf("cannot write '%s': %s", out.c_str(), strerror(errno)));
+        fprintf(o, "mesh_face\tbox_diag\tmesh_to_model_max\n");
+        const auto vbegin = q.begin(), vend = q.begin() + static_cast<long>(nverts);
+        auto dist_of = [&](const V3& v) {
+            auto it = std::lower_bound(vbegin, vend, v, lt);
+            return it != vend && eq(*it, v) ? dq[static_cast<size_t>(it - q.begin())] : std::nan("");
+        };
+        size_t t = 0;
+        for (const auto& e : mf) {
+            Box3 b;
+            double worst = 0;
+            for (long k = 0; k < e.second; k++, t++) {
+                const Tri& tr = mesh.tris()[t];
+                b.add(tr.a);
+                b.add(tr.b);
+                b.add(tr.c);
+                for (double d : {dist_of(tr.a), dist_of(tr.b), dist_of(tr.c), dq[nverts + t]})
+                    if (std::isfinite(d)) worst = std::max(worst, d);
+            }
+            fprintf(o, "%ld\t%.10g\t%.10g\n", e.first, e.second ? b.diag() : 0.0, worst);
+        }
+        if (fclose(o) != 0) throw InputError(strf("cannot write '%s': %s", out.c_str(), strerror(errno)));
+    }
     if (a.opt.count("--per-face-out")) {
         // the box of every sample (BRepMesh nodes and the UV centroids), a tight inner
         // box of the face; the loose containing box where a face has no sample
@@ -2198,6 +2243,8 @@ const char* kUsage =
     "                                               each way, default all)\n"
     "                    [--per-face-out F.tsv]     per OCCT face: box diagonal, worst\n"
     "                                               mesh point nearest it, worst sample of it\n"
+    "                    [--mesh-faces F.tsv [--mesh-faces-out O.tsv]]  per face of the mesh\n"
+    "                                               (cmz decode --face-map): its box, its worst point\n"
     "  sample   MODEL.igs OUT.xyz [--per-face N]    N points (default 20) inside every face\n"
     "Every command also takes --curves file|3d: trim curves as the IGES file prefers\n"
     "(default) or rebuilt from the 3D curves.\n"
@@ -2239,7 +2286,8 @@ int run(int argc, char** argv) {
     };
     if (cmd == "info") return cmd_info(args({"--sew-rel"}));
     if (cmd == "points") return cmd_points(args({"--tol-rel", "--out"}));
-    if (cmd == "mesh-dev") return cmd_mesh_dev(args({"--defl-rel", "--max-points", "--per-face-out"}));
+    if (cmd == "mesh-dev")
+        return cmd_mesh_dev(args({"--defl-rel", "--max-points", "--per-face-out", "--mesh-faces", "--mesh-faces-out"}));
     if (cmd == "sample") return cmd_sample(args({"--per-face"}));
     if (cmd == "write-stl") return cmd_write_stl(args({"--defl-rel"}));
     throw UsageError(strf("unknown command '%s'", cmd.c_str()));
