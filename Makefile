@@ -403,6 +403,17 @@ bench:
 	$(Q)DEPS_ARCHS= tests/tools/deps.sh $(DEMO_PKGS) time bc valgrind
 	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode
 	$(Q)host_tools/scripts/bench.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(BUILD_ROOT)/bench $(BENCH_MODELS)
+	$(Q)$(MAKE) --no-print-directory -s bench-link
+
+# the link's speed: cmz send -> cmz-terminal over ptys, unpaced, paced at 115200 baud, and noisy
+.PHONY: bench-link
+BENCH_LINK_MODELS ?= tests/data/as1_pe_203.igs tests/data/geo_example.igs
+bench-link: $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,host)/tests/tools/pty_relay
+	$(Q)mkdir -p $(BUILD_ROOT)/bench
+	$(Q)for m in $(BENCH_LINK_MODELS); do $(CMZ) encode -q $$m -o $(BUILD_ROOT)/bench/link-$$(basename $${m%.*}).cmz \
+		> /dev/null || exit 1; done
+	$(Q)host_tools/scripts/bench_link.sh $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,host)/tests/tools/pty_relay \
+		$(BUILD_ROOT)/bench $(patsubst %,$(BUILD_ROOT)/bench/link-%.cmz,$(basename $(notdir $(BENCH_LINK_MODELS))))
 
 # ---- install / clean ----
 .PHONY: install clean

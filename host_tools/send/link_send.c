@@ -172,6 +172,7 @@ typedef struct window {
     int64_t srtt8, rttvar4;
     int rto;
     int min_rtt; /* the fastest round trip seen: control frames wait for this, not for a data queue */
+    int64_t line_free_at; /* paced line: when what we wrote will have left the wire */
     /* chunk-size adaptation: chunks newly held, and frames the terminal reports damaged, since
        the last decision (timeouts do not count: a terminal busy in fsync is not a noisy line) */
     unsigned epoch_ok, epoch_lost;
@@ -497,10 +498,23 @@ int link_send_file(cm_link *l, const uint8_t *data, uint32_t size, const char *n
                         next_due = w.sent_at[j] + due_ms;
                     continue;
                 }
+                /* A paced line (a real UART) carries baud/10 bytes a second whatever we write: more
+                   than ~20 ms ahead only waits in the tty queue, where a timer cannot tell it from a
+                   lost frame.  So keep the queue short, and time each chunk from when it will have
+                   left the wire. */
+                if (o->baud && w.line_free_at > cm_link_now_ms() + 20) {
+                    if (w.line_free_at - 20 < next_due)
+                        next_due = w.line_free_at - 20;
+                    break;
+                }
                 int s = send_chunk(l, data, &w, j);
                 if (s < 0) {
                     lost = s;
                     break;
+                }
+                if (o->baud) {
+                    int64_t t = cm_link_now_ms();
+                    w.line_free_at = (w.line_free_at > t ? w.line_free_at : t) + line_ms(o, chunk_len(&w, w.base + j) + 16u);
                 }
                 /* take the replies that are already in between sends: over USB the terminal's
                    ACK waits until our side reads, and it stops reading our DATA meanwhile */
@@ -515,7 +529,7 @@ int link_send_file(cm_link *l, const uint8_t *data, uint32_t size, const char *n
                     lost = g;
                     break;
                 }
-                w.sent_at[j] = cm_link_now_ms();
+                w.sent_at[j] = o->baud && w.line_free_at > cm_link_now_ms() ? w.line_free_at : cm_link_now_ms();
                 w.sent_no[j] = ++w.counter;
                 if (w.sends[j] < 255)
                     w.sends[j]++;
