@@ -259,6 +259,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
 		"gate:serial:$(MAKE) --no-print-directory -s check-serial" \
+		"gate:serial-aarch64:$(MAKE) --no-print-directory -s check-serial-aarch64" \
 		"gate:link:$(MAKE) --no-print-directory -s check-link" \
 		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
 		"gate:link-aarch64:$(MAKE) --no-print-directory -s check-link-aarch64" \
