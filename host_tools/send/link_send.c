@@ -614,6 +614,8 @@ int link_send_file(cm_link *l, const uint8_t *data, uint32_t size, const char *n
         debugf("stored");
         if (!o->wait_decoded)
             return 0;
+        if (r->stage >= CM_LINK_STAGE_DECODED) /* the stored DONE was lost, the decoded one came */
+            return r->code == 0 ? 0 : 1;
         d = wait_done(l, size, crc, CM_LINK_STAGE_DECODED, o->decode_timeout_ms, control_wait(&w, o) + 20, o, r,
                       &ack_prefix);
         if (d != 0)
