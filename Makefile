@@ -258,13 +258,18 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:corpus-roundtrip:$(MAKE) --no-print-directory -s check-corpus-roundtrip" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
-		"gate:serial:$(MAKE) --no-print-directory -s check-serial" \
-		"gate:serial-aarch64:$(MAKE) --no-print-directory -s check-serial-aarch64" \
-		"gate:link:$(MAKE) --no-print-directory -s check-link" \
-		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
-		"gate:link-aarch64:$(MAKE) --no-print-directory -s check-link-aarch64" \
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
-		"gate:hw:$(MAKE) --no-print-directory -s check-hw"
+		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
+		"gate:hw-and-links:$(MAKE) --no-print-directory -s check-hw-and-links"
+
+# the VM computes, the pty transfers mostly wait (paced like a serial line): run the two side by side
+.PHONY: check-hw-and-links
+check-hw-and-links: $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,tiny)/cmz-terminal $(call bdir,terminal)/cmz-decode
+	$(Q)$(MAKE) --no-print-directory -s serial-tests $(LINK_TEST_BIN) $(GPIO_PROBE) $(GPIO_PROBE_NOGPIO) $(HW_TEST_DEPS)
+	$(Q)tests/tools/sum_suites.sh --parallel "$(MAKE) --no-print-directory -s check-hw" \
+		"tests/tools/sum_suites.sh '$(MAKE) --no-print-directory -s check-link' \
+			'$(MAKE) --no-print-directory -s check-serial' '$(MAKE) --no-print-directory -s check-link-aarch64' \
+			'$(MAKE) --no-print-directory -s check-serial-aarch64'"
 
 # layer (a) of the no-heap gate: the decoder/kernel archive may only call allowlisted libc/libm symbols
 check-noheap: $(B)/libcmdecoder.a
