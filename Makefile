@@ -266,10 +266,10 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 .PHONY: check-hw-and-links
 check-hw-and-links: $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,tiny)/cmz-terminal $(call bdir,terminal)/cmz-decode
 	$(Q)$(MAKE) --no-print-directory -s serial-tests $(LINK_TEST_BIN) $(GPIO_PROBE) $(GPIO_PROBE_NOGPIO) $(HW_TEST_DEPS)
-	$(Q)tests/tools/sum_suites.sh --parallel "$(MAKE) --no-print-directory -s check-hw" \
+	$(Q)tests/tools/sum_suites.sh --parallel \
+		"tests/tools/sum_suites.sh '$(MAKE) --no-print-directory -s check-hw' '$(MAKE) --no-print-directory -s check-serial'" \
 		"tests/tools/sum_suites.sh '$(MAKE) --no-print-directory -s check-link' \
-			'$(MAKE) --no-print-directory -s check-serial' '$(MAKE) --no-print-directory -s check-link-aarch64' \
-			'$(MAKE) --no-print-directory -s check-serial-aarch64'"
+			'$(MAKE) --no-print-directory -s check-link-aarch64' '$(MAKE) --no-print-directory -s check-serial-aarch64'"
 
 # layer (a) of the no-heap gate: the decoder/kernel archive may only call allowlisted libc/libm symbols
 check-noheap: $(B)/libcmdecoder.a
