@@ -30,6 +30,7 @@ void cm_status_init(cm_status *st)
     st->code = CM_OK;
     st->offset = CM_NO_OFFSET;
     st->limit = CM_NO_LIMIT;
+    st->face = CM_NO_FACE_INDEX;
     st->need = 0;
     st->have = 0;
     st->sys_errno = 0;
@@ -82,4 +83,14 @@ cm_err cm_fail_nospace(cm_status *st, uint64_t need, uint64_t have, const char *
         st->where = where;
     }
     return CM_E_NOSPACE;
+}
+
+void cm_status_at_face(cm_status *st, uint32_t face, uint32_t offset)
+{
+    if (st == NULL || st->code == CM_OK)
+        return;
+    if (st->face == CM_NO_FACE_INDEX)
+        st->face = face;
+    if (st->offset == CM_NO_OFFSET)
+        st->offset = offset;
 }

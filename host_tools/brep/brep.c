@@ -47,7 +47,7 @@ static int grow(void **arr, int *cap, int n, size_t size)
 cm_err brep_add_surf(brep_model *m, hsurf *s, int *index, cm_status *st)
 {
     if (grow((void **)&m->surfs, &m->capsurfs, m->nsurfs, sizeof *m->surfs))
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     m->surfs[m->nsurfs] = *s;
     memset(s, 0, sizeof *s);
     *index = m->nsurfs++;
@@ -57,7 +57,7 @@ cm_err brep_add_surf(brep_model *m, hsurf *s, int *index, cm_status *st)
 cm_err brep_add_seg(brep_model *m, hcurve *c, cm_status *st)
 {
     if (grow((void **)&m->segs, &m->capsegs, m->nsegs, sizeof *m->segs))
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     m->segs[m->nsegs++] = *c;
     memset(c, 0, sizeof *c);
     return CM_OK;
@@ -66,7 +66,7 @@ cm_err brep_add_seg(brep_model *m, hcurve *c, cm_status *st)
 cm_err brep_add_loop(brep_model *m, int first_seg, int nseg, cm_status *st)
 {
     if (grow((void **)&m->loops, &m->caploops, m->nloops, sizeof *m->loops))
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     m->loops[m->nloops].first = first_seg;
     m->loops[m->nloops].n = nseg;
     m->nloops++;
@@ -76,7 +76,7 @@ cm_err brep_add_loop(brep_model *m, int first_seg, int nseg, cm_status *st)
 cm_err brep_add_face(brep_model *m, const brep_face *f, cm_status *st)
 {
     if (grow((void **)&m->faces, &m->capfaces, m->nfaces, sizeof *m->faces))
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     m->faces[m->nfaces++] = *f;
     return CM_OK;
 }
@@ -91,4 +91,77 @@ void brep_truncate(brep_model *m, int nsurfs, int nfaces, int nloops, int nsegs)
         m->nfaces = nfaces;
     if (m->nloops > nloops)
         m->nloops = nloops;
+}
+
+cm_err brep_remove_faces(brep_model *m, const unsigned char *drop, cm_status *st)
+{
+    /* what the kept faces use; everything else is freed, the rest moved down in order */
+    unsigned char *usurf = calloc((size_t)m->nsurfs + 1, 1), *uloop = calloc((size_t)m->nloops + 1, 1),
+                  *useg = calloc((size_t)m->nsegs + 1, 1);
+    int *nsurf = malloc(((size_t)m->nsurfs + 1) * sizeof *nsurf), *nloop = malloc(((size_t)m->nloops + 1) * sizeof *nloop),
+        *nseg = malloc(((size_t)m->nsegs + 1) * sizeof *nseg);
+    cm_err e = CM_OK;
+    if (!usurf || !uloop || !useg || !nsurf || !nloop || !nseg) {
+        e = cm_fail(st, CM_E_NOMEM, "out of memory");
+        goto done;
+    }
+    for (int f = 0; f < m->nfaces; f++) {
+        if (drop[f])
+            continue;
+        const brep_face *F = &m->faces[f];
+        usurf[F->surf] = 1;
+        for (int l = F->first_loop; l < F->first_loop + F->nloops; l++) {
+            uloop[l] = 1;
+            for (int i = 0; i < m->loops[l].n; i++)
+                useg[m->loops[l].first + i] = 1;
+        }
+    }
+    int k = 0;
+    for (int i = 0; i < m->nsurfs; i++) {
+        nsurf[i] = k;
+        if (usurf[i])
+            m->surfs[k++] = m->surfs[i];
+        else
+            hsurf_free(&m->surfs[i]);
+    }
+    m->nsurfs = k;
+    k = 0;
+    for (int i = 0; i < m->nsegs; i++) {
+        nseg[i] = k;
+        if (useg[i])
+            m->segs[k++] = m->segs[i];
+        else
+            hcurve_free(&m->segs[i]);
+    }
+    nseg[m->nsegs] = k;
+    m->nsegs = k;
+    k = 0;
+    for (int i = 0; i < m->nloops; i++) {
+        nloop[i] = k;
+        if (uloop[i]) {
+            m->loops[k] = m->loops[i];
+            m->loops[k].first = nseg[m->loops[i].first];
+            k++;
+        }
+    }
+    nloop[m->nloops] = k;
+    m->nloops = k;
+    k = 0;
+    for (int f = 0; f < m->nfaces; f++) {
+        if (drop[f])
+            continue;
+        m->faces[k] = m->faces[f];
+        m->faces[k].surf = nsurf[m->faces[f].surf];
+        m->faces[k].first_loop = nloop[m->faces[f].first_loop];
+        k++;
+    }
+    m->nfaces = k;
+done:
+    free(usurf);
+    free(uloop);
+    free(useg);
+    free(nsurf);
+    free(nloop);
+    free(nseg);
+    return e;
 }

@@ -76,6 +76,13 @@ CM_NODISCARD cm_err brep_add_face(brep_model *m, const brep_face *f, cm_status *
 /** Roll the model back to the given counts (drops a half-built face). */
 void brep_truncate(brep_model *m, int nsurfs, int nfaces, int nloops, int nsegs);
 
+/**
+ * Remove the faces with drop[f] != 0 (drop has m->nfaces entries) with their surfaces, loops and
+ * segments, keeping the order of the rest; m->box is left to the caller.  CM_E_NOMEM (model
+ * unchanged) if the bookkeeping cannot be allocated.
+ */
+CM_NODISCARD cm_err brep_remove_faces(brep_model *m, const unsigned char *drop, cm_status *st);
+
 /** Counts per kind of IGES input, for `cmz info`. */
 typedef struct brep_import_stats {
     int faces_144, faces_143, faces_510, faces_untrimmed;

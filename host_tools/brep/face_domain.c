@@ -93,7 +93,7 @@ static cm_err project_loop(const brep_model *m, const brep_loop *l, face_domain 
     cm_vec3 *pts = malloc((size_t)n * sizeof *pts);
     cm_vec2 *uv = malloc((size_t)(2 * n) * sizeof *uv);
     int *src = malloc((size_t)(2 * n) * sizeof *src);
-    cm_err e = (!pts || !uv || !src) ? cm_fail(st, CM_E_IO, "out of memory") : CM_OK;
+    cm_err e = (!pts || !uv || !src) ? cm_fail(st, CM_E_NOMEM, "out of memory") : CM_OK;
     int k = 0;
     for (int s = 0; s < l->n && e == CM_OK; s++) {
         const hcurve *c = &m->segs[l->first + s];
@@ -112,7 +112,7 @@ static cm_err project_loop(const brep_model *m, const brep_loop *l, face_domain 
         e = cm_loop_uv(&fd->ps, pts, n, accept, uv, src, 2 * n, &nout, wu, wv, &fd->max_gap, &param_ws, st);
     for (int i = 0; i < nout && e == CM_OK; i++)
         if (push_pt(fd, uv[i], pts[src[i]]))
-            e = cm_fail(st, CM_E_IO, "out of memory");
+            e = cm_fail(st, CM_E_NOMEM, "out of memory");
     free(pts);
     free(uv);
     free(src);
@@ -132,7 +132,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
     if (!fd->loops || !wu || !wv) {
         free(wu);
         free(wv);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     /* accept a continuation step if it lands within a small fraction of the face's size */
     hbox fb = hbox_empty();
@@ -184,7 +184,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
             if (!pa || (b >= 0 && !pb)) {
                 free(pa);
                 free(pb);
-                e = cm_fail(st, CM_E_IO, "out of memory");
+                e = cm_fail(st, CM_E_NOMEM, "out of memory");
             } else {
                 int na = fd->loops[a].n, nb = b >= 0 ? fd->loops[b].n : 0;
                 double ya = 0, yb = 0;
@@ -266,7 +266,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                 free(pa);
                 free(pb);
                 if (bad) {
-                    e = cm_fail(st, CM_E_IO, "out of memory");
+                    e = cm_fail(st, CM_E_NOMEM, "out of memory");
                 } else {
                     /* replace the winding loops by the joined polygon as loop 0 */
                     fd_loop J;
@@ -275,7 +275,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                     for (int i = 0; i < np && e == CM_OK; i++) {
                         cm_vec2 q = along_u ? poly[i] : cm_v2(poly[i].y, poly[i].x);
                         if (push_pt(fd, q, cm_v3(nan(""), nan(""), nan(""))))
-                            e = cm_fail(st, CM_E_IO, "out of memory");
+                            e = cm_fail(st, CM_E_NOMEM, "out of memory");
                     }
                     free(poly);
                     J.n = np;
@@ -287,7 +287,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                     int k = 1;
                     fd_loop *nl = calloc((size_t)fd->nloops + 1, sizeof *nl);
                     if (!nl) {
-                        e = cm_fail(st, CM_E_IO, "out of memory");
+                        e = cm_fail(st, CM_E_NOMEM, "out of memory");
                     } else {
                         nl[0] = J;
                         for (int l = 0; l < fd->nloops; l++)

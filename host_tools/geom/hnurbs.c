@@ -14,7 +14,7 @@
  * CM_E_KNOTS, CM_E_DEGENERATE, ...); the result is built in a temporary and
  * moved into `out` at the end, after `out`'s previous contents are freed, so
  * `out` may even alias an input.  On error `out` is left empty.  Allocation
- * failure is CM_E_IO.
+ * failure is CM_E_NOMEM.
  */
 #include "geom/hnurbs.h"
 
@@ -37,6 +37,8 @@
 static _Thread_local int fail_countdown = -1;
 
 void hnurbs_fail_alloc_after(int n) { fail_countdown = n < 0 ? -1 : n; }
+
+int hnurbs_fail_alloc_pending(void) { return fail_countdown >= 0; }
 
 /* Zeroed array of `count` elements, or NULL (exhausted, overflow, or the injected failure). */
 static void *hn_calloc(size_t count, size_t size)
@@ -79,7 +81,7 @@ cm_err hcurve_alloc(hcurve *c, int p, int n, int rational, cm_status *st)
         c->w = hn_calloc((size_t)n, sizeof *c->w);
     if (!c->knots || !c->ctrl || (rational && !c->w)) {
         hcurve_free(c);
-        return cm_fail(st, CM_E_IO, __func__);
+        return cm_fail(st, CM_E_NOMEM, __func__);
     }
     for (int i = 0; rational && i < n; i++)
         c->w[i] = 1.0;
@@ -108,7 +110,7 @@ cm_err hsurf_alloc(hsurf *s, int p, int q, int nu, int nv, int rational, cm_stat
         s->w = hn_calloc(total, sizeof *s->w);
     if (!s->U || !s->V || !s->ctrl || (rational && !s->w)) {
         hsurf_free(s);
-        return cm_fail(st, CM_E_IO, __func__);
+        return cm_fail(st, CM_E_NOMEM, __func__);
     }
     for (size_t i = 0; rational && i < total; i++)
         s->w[i] = 1.0;
@@ -351,7 +353,7 @@ static cm_err hw_alloc(hwork *h, int p, int n, cm_status *st, const char *where)
     h->P = hn_calloc((size_t)n, sizeof *h->P);
     if (!h->U || !h->P) {
         hw_free(h);
-        return cm_fail(st, CM_E_IO, where);
+        return cm_fail(st, CM_E_NOMEM, where);
     }
     h->p = p;
     h->n = n;
@@ -620,7 +622,7 @@ static cm_err hw_elevate(hwork *h, int new_p, cm_status *st, const char *where)
     int ninner = h->n - p - 1; /* interior knots of a clamped vector: U[p+1 .. n-1] */
     double *X = hn_calloc((size_t)(ninner > 0 ? ninner : 1) * (size_t)p, sizeof *X);
     if (!X)
-        return cm_fail(st, CM_E_IO, where);
+        return cm_fail(st, CM_E_NOMEM, where);
     int nx = 0;
     for (int i = p + 1; i < h->n;) {
         int s = 1;
@@ -695,7 +697,7 @@ static cm_err knot_union(const hwork *a, const hwork *b, double **Xa, int *na, d
         free(*Xa);
         free(*Xb);
         *Xa = *Xb = NULL;
-        return cm_fail(st, CM_E_IO, where);
+        return cm_fail(st, CM_E_NOMEM, where);
     }
     /* interior knots only: a->U[pa+1 .. na-1], b->U[pb+1 .. nb-1] */
     int i = a->p + 1, j = b->p + 1;

@@ -18,7 +18,7 @@
  * empty struct (or one that may be freed first: they call *_free on `out`
  * before writing).  *_free releases everything and leaves an empty struct.
  * Errors: CM_E_ARG for invalid arguments (e.g. zero radius, angles out of
- * range), CM_E_DEGENERATE for degenerate geometry, CM_E_IO on allocation
+ * range), CM_E_DEGENERATE for degenerate geometry, CM_E_NOMEM on allocation
  * failure (reported as "out of memory" by the callers), CM_E_KNOTS for bad
  * knot vectors.  Errors are also recorded in `st` (may be NULL).  On error a
  * builder leaves `out` empty.
@@ -204,9 +204,11 @@ int hsurf_closed_v(const hsurf *s, double tol);
 /**
  * Fault injection for the tests: after `n` more successful allocations by
  * this module (in the calling thread) the next one fails, once, so the
- * function that asked returns CM_E_IO; n < 0 disarms.
+ * function that asked returns CM_E_NOMEM; n < 0 disarms.
  */
 void hnurbs_fail_alloc_after(int n);
+/** 1 while an armed failure has not happened yet (the work done made fewer allocations). */
+int hnurbs_fail_alloc_pending(void);
 
 /* ---- affine helpers ---- */
 haffine haffine_identity(void);

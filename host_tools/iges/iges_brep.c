@@ -10,6 +10,7 @@
  * 402 groups or 406 properties, which annotate but do not own.
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -20,6 +21,9 @@
 
 #define MAX_INSTANCE_DEPTH 16
 
+/* a saturating count of faces: more than any budget, still far from overflowing a sum of two */
+#define FACE_COUNT_CAP (1LL << 60)
+
 typedef struct importer {
     iges_file *f;
     brep_model *m;
@@ -27,6 +31,15 @@ typedef struct importer {
     cm_status *st;
     unsigned char *ref;   /* per entity index: structurally referenced */
     int instance;         /* current 408 instance counter (0 = top level) */
+    long long *nfaces_of; /* per entity index: faces it places when imported (memo; -1 = not counted) */
+    long long faces_tried; /* faces attempted so far (placed or skipped) */
+    const iges_entity *face; /* the face being imported, and the curve pieces of its loops so far */
+    int face_pieces;
+    hbox *fbox;           /* per face (index into m->faces): box of its boundary */
+    int *ford;            /* per face: its ordinal among the faces attempted (for messages) */
+    int capf;
+    int first_fail_line;  /* the first skipped face's warning, for the error when none is left */
+    char first_fail[400];
 } importer;
 
 static int ent_index(const iges_file *f, const iges_entity *e)
@@ -34,6 +47,11 @@ static int ent_index(const iges_file *f, const iges_entity *e)
     return (int)(e - f->ents);
 }
 
+/*
+ * Every loop below runs over parameters that exist: counts come from iges_count_or0 (clamped to
+ * the entity's parameter count) and indices are compared with nparams before they are formed, so
+ * a count of 2147483647 costs nothing and overflows nothing.
+ */
 static void mark_ref(importer *im, const iges_entity *e, int i)
 {
     if (i < 0 || i >= e->nparams || e->params[i].kind != IGES_P_NUM)
@@ -56,10 +74,12 @@ static void mark_references(importer *im)
             continue;
         int n = e->nparams;
         switch (e->type) {
-        case 102: /* N, DE... */
-            for (int i = 1; i < n && i <= iges_int_or(e, 0, 0); i++)
+        case 102: { /* N, DE... */
+            int cnt = iges_count_or0(e, 0);
+            for (int i = 1; i < n && i <= cnt; i++)
                 mark_ref(im, e, i);
             break;
+        }
         case 118:
             mark_ref(im, e, 0);
             mark_ref(im, e, 1);
@@ -73,13 +93,15 @@ static void mark_references(importer *im)
             break;
         case 141: { /* TYPE PREF SPTR N (CRV SENSE K PS...)... */
             mark_ref(im, e, 2);
-            int pos = 4;
-            for (int c = 0; c < iges_int_or(e, 3, 0) && pos + 2 < n; c++) {
+            int pos = 4, cnt = iges_count_or0(e, 3);
+            for (int c = 0; c < cnt && pos + 2 < n; c++) {
                 mark_ref(im, e, pos);
-                int kk = iges_int_or(e, pos + 2, 0);
-                for (int j = 0; j < kk; j++)
+                int kk = iges_count_or0(e, pos + 2);
+                for (int j = 0; j < kk && pos + 3 + j < n; j++)
                     mark_ref(im, e, pos + 3 + j);
-                pos += 3 + (kk > 0 ? kk : 0);
+                if (kk > n - pos - 3)
+                    break;
+                pos += 3 + kk;
             }
             break;
         }
@@ -88,65 +110,80 @@ static void mark_references(importer *im)
             mark_ref(im, e, 2);
             mark_ref(im, e, 3);
             break;
-        case 143:
+        case 143: {
             mark_ref(im, e, 1);
-            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+            int cnt = iges_count_or0(e, 2);
+            for (int i = 0; i < cnt && i < n - 3; i++)
                 mark_ref(im, e, 3 + i);
             break;
-        case 144:
+        }
+        case 144: {
             mark_ref(im, e, 0);
             mark_ref(im, e, 3);
-            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+            int cnt = iges_count_or0(e, 2);
+            for (int i = 0; i < cnt && i < n - 4; i++)
                 mark_ref(im, e, 4 + i);
             break;
-        case 186:
+        }
+        case 186: {
             mark_ref(im, e, 0);
-            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+            int cnt = iges_count_or0(e, 2);
+            for (int i = 0; i < cnt && 3 + 2L * i < n; i++)
                 mark_ref(im, e, 3 + 2 * i);
             break;
+        }
         case 190: case 192: case 194: case 196: case 198:
-            for (int i = 0; i < n && i < 5; i++)
-                if (e->params[i].kind == IGES_P_NUM && e->params[i].num == floor(e->params[i].num) &&
-                    e->params[i].num > 0) {
-                    const iges_entity *t = iges_by_de(f, (int)e->params[i].num);
-                    if (t && (t->type == 116 || t->type == 123))
-                        im->ref[ent_index(f, t)] = 1;
-                }
+            for (int i = 0; i < n && i < 5; i++) {
+                int de = e->params[i].kind == IGES_P_NUM ? iges_to_int(e->params[i].num, 1, 99999999, 0) : 0;
+                const iges_entity *t = iges_by_de(f, de);
+                if (t && (t->type == 116 || t->type == 123))
+                    im->ref[ent_index(f, t)] = 1;
+            }
             break;
-        case 308:
-            for (int i = 0; i < iges_int_or(e, 2, 0); i++)
+        case 308: {
+            int cnt = iges_count_or0(e, 2);
+            for (int i = 0; i < cnt && i < n - 3; i++)
                 mark_ref(im, e, 3 + i);
             break;
+        }
         case 408:
             mark_ref(im, e, 0);
             break;
-        case 504:
-            for (int i = 0; i < iges_int_or(e, 0, 0); i++) {
+        case 504: {
+            int cnt = iges_count_or0(e, 0);
+            for (int i = 0; i < cnt && 1 + 5L * i < n; i++) {
                 mark_ref(im, e, 1 + 5 * i);
                 mark_ref(im, e, 2 + 5 * i);
                 mark_ref(im, e, 4 + 5 * i);
             }
             break;
+        }
         case 508: {
-            int pos = 1;
-            for (int c = 0; c < iges_int_or(e, 0, 0) && pos + 4 < n; c++) {
+            int pos = 1, cnt = iges_count_or0(e, 0);
+            for (int c = 0; c < cnt && pos + 4 < n; c++) {
                 mark_ref(im, e, pos + 1);
-                int kk = iges_int_or(e, pos + 4, 0);
-                for (int j = 0; j < kk; j++)
+                int kk = iges_count_or0(e, pos + 4);
+                for (int j = 0; j < kk && pos + 6 + 2L * j < n; j++)
                     mark_ref(im, e, pos + 6 + 2 * j);
-                pos += 5 + 2 * (kk > 0 ? kk : 0);
+                if (kk > (n - pos - 5) / 2)
+                    break;
+                pos += 5 + 2 * kk;
             }
             break;
         }
-        case 510:
+        case 510: {
             mark_ref(im, e, 0);
-            for (int i = 0; i < iges_int_or(e, 1, 0); i++)
+            int cnt = iges_count_or0(e, 1);
+            for (int i = 0; i < cnt && i < n - 3; i++)
                 mark_ref(im, e, 3 + i);
             break;
-        case 514:
-            for (int i = 0; i < iges_int_or(e, 0, 0); i++)
+        }
+        case 514: {
+            int cnt = iges_count_or0(e, 0);
+            for (int i = 0; i < cnt && 1 + 2L * i < n; i++)
                 mark_ref(im, e, 1 + 2 * i);
             break;
+        }
         default:
             break;
         }
@@ -182,15 +219,33 @@ static int face_color(importer *im, const iges_entity *e, uint32_t *rgb)
 
 /* ---- faces ---- */
 
-/* skip a face: warn with the reason already in f->err and forget the error */
+/* warn that face number `ordinal` (entity e) is skipped, why; the first such warning is kept for
+ * the error when no face is left.  model_load.c recognises the "face N (TYPE, DE d) skipped: " form. */
+static void warn_skipped(importer *im, const iges_entity *e, int ordinal, const char *why)
+{
+    iges_warn(im->f, e->pd_line, "face %d (%s, DE %d) skipped: %s", ordinal, iges_type_name(e->type), e->de, why);
+    if (im->first_fail[0] == 0) {
+        snprintf(im->first_fail, sizeof im->first_fail, "face %d (%s, DE %d): %s", ordinal, iges_type_name(e->type),
+                 e->de, why);
+        im->first_fail_line = e->pd_line;
+    }
+    im->m->faces_failed++;
+}
+
+/* skip a face: warn with the reason already in f->err (every failure path names its entity; the
+ * status is the fallback) and forget the error */
 static void face_failed(importer *im, const iges_entity *e, int nsurfs, int nfaces, int nloops, int nsegs)
 {
     brep_truncate(im->m, nsurfs, nfaces, nloops, nsegs);
-    iges_warn(im->f, e->pd_line, "face %d (%s, DE %d) skipped: %s", im->m->nfaces + im->m->faces_failed + 1,
-              iges_type_name(e->type), e->de, im->f->err[0] ? im->f->err : "unknown reason");
+    char why[512];
+    if (im->f->err[0])
+        snprintf(why, sizeof why, "%s", im->f->err);
+    else
+        snprintf(why, sizeof why, "line %d: %s (%s)", e->pd_line,
+                 cm_strerror(im->st ? im->st->code : CM_E_IGES), im->st && im->st->where ? im->st->where : "?");
+    warn_skipped(im, e, im->m->nfaces + im->m->faces_failed + 1, why);
     im->f->err[0] = 0;
     im->f->err_line = 0;
-    im->m->faces_failed++;
     if (im->st)
         cm_status_init(im->st);
 }
@@ -390,6 +445,22 @@ static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const h
     }
     if (face.nloops == 0)
         return iges_entity_error(im->f, fe, "no usable boundary"), cm_fail(im->st, CM_E_IGES, "face");
+    /* per-face box and ordinal, for the far-away check at the end (index = the face's) */
+    if (m->nfaces >= im->capf) {
+        int cap = im->capf ? 2 * im->capf : 256;
+        hbox *nb = realloc(im->fbox, (size_t)cap * sizeof *nb);
+        if (nb)
+            im->fbox = nb;
+        int *no = realloc(im->ford, (size_t)cap * sizeof *no);
+        if (no)
+            im->ford = no;
+        if (!nb || !no)
+            return iges_nomem(im->f, fe->pd_line, "importing face DE %d", fe->de),
+                   cm_fail(im->st, CM_E_NOMEM, "out of memory");
+        im->capf = cap;
+    }
+    im->fbox[m->nfaces] = box;
+    im->ford[m->nfaces] = m->nfaces + m->faces_failed + 1;
     if (!box.empty) {
         hbox_add(&m->box, box.lo);
         hbox_add(&m->box, box.hi);
@@ -397,9 +468,38 @@ static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const h
     return brep_add_face(m, &face, im->st);
 }
 
+/*
+ * Budgets of one face (chaining a loop is quadratic in its pieces, and each piece built costs):
+ * room for `n` more pieces in a loop that holds `have`, and for `built` more pieces built for the
+ * face (a B-rep edge builds its whole curve to use one piece); else an error naming the face.
+ * `n` or `built` < 0: the count could not be allocated.
+ */
+static cm_err piece_room(importer *im, int have, int n, int built)
+{
+    if (n < 0 || built < 0)
+        return iges_nomem(im->f, im->face->pd_line, "counting the curve pieces of face DE %d", im->face->de),
+               cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    if (n > IGES_MAX_CURVE_PIECES || built > IGES_MAX_CURVE_PIECES)
+        return CM_OK; /* one curve past its own budget: iges_curve refuses it, naming the curve */
+    if ((long long)have + n > IGES_MAX_CURVE_PIECES)
+        return iges_entity_error(im->f, im->face, "a loop has more than %d curve pieces (limit %d per loop)",
+                                 IGES_MAX_CURVE_PIECES, IGES_MAX_CURVE_PIECES),
+               cm_fail(im->st, CM_E_LIMIT, "loop pieces");
+    if ((long long)im->face_pieces + built > IGES_MAX_FACE_PIECES)
+        return iges_entity_error(im->f, im->face, "its loops have more than %d curve pieces (limit %d per face)",
+                                 IGES_MAX_FACE_PIECES, IGES_MAX_FACE_PIECES),
+               cm_fail(im->st, CM_E_LIMIT, "face pieces");
+    im->face_pieces += built;
+    return CM_OK;
+}
+
 /* model-space curves of one boundary entity into a list; reversed when `reverse` */
 static cm_err boundary_curves(importer *im, int de, const haffine *map, int reverse, hcurve_list *out)
 {
+    int n = iges_curve_pieces(im->f, de);
+    cm_err room = piece_room(im, out->n, n, n);
+    if (room != CM_OK)
+        return room;
     hcurve_list tmp = {0};
     cm_err e = iges_curve(im->f, de, map, &tmp, im->st);
     if (e == CM_OK && reverse) {
@@ -432,7 +532,7 @@ static cm_err face_144(importer *im, const iges_entity *e, const haffine *parent
     int nl = 1 + n2;
     hcurve_list *loops = calloc((size_t)nl, sizeof *loops);
     if (!loops)
-        return cm_fail(im->st, CM_E_IO, "out of memory");
+        return cm_fail(im->st, CM_E_NOMEM, "out of memory");
     cm_err err = CM_OK;
     if (n1 != 0) {
         if (iges_ptr(f, e, 3, 0, &pto))
@@ -470,7 +570,7 @@ static cm_err face_143(importer *im, const iges_entity *e, const haffine *parent
                cm_fail(im->st, CM_E_IGES, "143");
     hcurve_list *loops = calloc((size_t)n, sizeof *loops);
     if (!loops)
-        return cm_fail(im->st, CM_E_IO, "out of memory");
+        return cm_fail(im->st, CM_E_NOMEM, "out of memory");
     cm_err err = CM_OK;
     for (int b = 0; b < n && err == CM_OK; b++) {
         int bde;
@@ -489,9 +589,13 @@ static cm_err face_143(importer *im, const iges_entity *e, const haffine *parent
         int pos = 4;
         for (int c = 0; c < nc && err == CM_OK; c++) {
             int crv, sense, kk;
-            if (iges_ptr(f, bd, pos, 0, &crv) || iges_int(f, bd, pos + 1, &sense) || iges_int(f, bd, pos + 2, &kk) ||
-                kk < 0) {
+            if (iges_ptr(f, bd, pos, 0, &crv) || iges_int(f, bd, pos + 1, &sense) || iges_int(f, bd, pos + 2, &kk)) {
                 err = cm_fail(im->st, CM_E_IGES, "141");
+                break;
+            }
+            if (kk < 0 || kk > bd->nparams - pos - 3) { /* before pos + 3 + kk can overflow */
+                err = iges_entity_error(f, bd, "curve %d: %d parameter-space curves do not fit its %d parameters",
+                                        c + 1, kk, bd->nparams);
                 break;
             }
             err = boundary_curves(im, crv, &bmap, sense == 2, &loops[b]);
@@ -520,7 +624,7 @@ static int vertex_502(importer *im, const iges_entity *host, int de, int idx, co
         return -1;
     }
     int n = iges_int_or(v, 0, 0);
-    if (idx < 1 || idx > n || 1 + 3 * n > v->nparams) {
+    if (idx < 1 || idx > n || n > (v->nparams - 1) / 3) { /* not 1 + 3 * n > nparams: n may be 2147483647 */
         iges_entity_error(im->f, host, "vertex %d of list DE %d does not exist", idx, de);
         return -1;
     }
@@ -539,8 +643,10 @@ static int vertex_502(importer *im, const iges_entity *host, int de, int idx, co
 /*
  * Edge `ndx` of a 504 edge list: its curve cut between its two vertices
  * (the curve may extend beyond them), oriented start -> terminate vertex.
+ * `have`: the curves already in its loop (for the loop's budget).
  */
-static cm_err edge_504(importer *im, const iges_entity *loop, int list_de, int ndx, const haffine *map, hcurve *out)
+static cm_err edge_504(importer *im, const iges_entity *loop, int list_de, int ndx, const haffine *map, int have,
+                       hcurve *out)
 {
     iges_file *f = im->f;
     const iges_entity *el = iges_by_de(f, list_de);
@@ -550,7 +656,7 @@ static cm_err edge_504(importer *im, const iges_entity *loop, int list_de, int n
                cm_fail(im->st, CM_E_IGES, "504");
     em = haffine_compose(map, &em);
     int n = iges_int_or(el, 0, 0);
-    if (ndx < 1 || ndx > n || 1 + 5 * n > el->nparams)
+    if (ndx < 1 || ndx > n || n > (el->nparams - 1) / 5) /* not 1 + 5 * n > nparams: no overflow */
         return iges_entity_error(f, loop, "edge %d of list DE %d does not exist", ndx, list_de),
                cm_fail(im->st, CM_E_IGES, "504");
     int o = 1 + 5 * (ndx - 1), crv, svp, sv, tvp, tv;
@@ -560,6 +666,9 @@ static cm_err edge_504(importer *im, const iges_entity *loop, int list_de, int n
     cm_vec3 A, B;
     if (vertex_502(im, el, svp, sv, &em, &A) || vertex_502(im, el, tvp, tv, &em, &B))
         return cm_fail(im->st, CM_E_IGES, "504");
+    cm_err room = piece_room(im, have, 1, iges_curve_pieces(f, crv)); /* one piece of it goes into the loop */
+    if (room != CM_OK)
+        return room;
     hcurve_list pieces = {0};
     hcurve whole = {0};
     cm_err e = iges_curve(f, crv, &em, &pieces, im->st);
@@ -636,7 +745,7 @@ static cm_err face_510(importer *im, const iges_entity *e, const haffine *parent
                                  "from the geometry", e->de);
     hcurve_list *loops = calloc((size_t)n, sizeof *loops);
     if (!loops)
-        return cm_fail(im->st, CM_E_IO, "out of memory");
+        return cm_fail(im->st, CM_E_NOMEM, "out of memory");
     cm_err err = CM_OK;
     for (int l = 0; l < n && err == CM_OK; l++) {
         int lde;
@@ -656,8 +765,13 @@ static cm_err face_510(importer *im, const iges_entity *e, const haffine *parent
         for (int k = 0; k < ne && err == CM_OK; k++) {
             int type, list, ndx, ok_flag, kk;
             if (iges_int(f, lp, pos, &type) || iges_int(f, lp, pos + 2, &ndx) || iges_int(f, lp, pos + 3, &ok_flag) ||
-                iges_int(f, lp, pos + 4, &kk) || kk < 0) {
+                iges_int(f, lp, pos + 4, &kk)) {
                 err = cm_fail(im->st, CM_E_IGES, "508");
+                break;
+            }
+            if (kk < 0 || kk > (lp->nparams - pos - 5) / 2) { /* before pos + 5 + 2 * kk can overflow */
+                err = iges_entity_error(f, lp, "edge %d: %d parameter-space curves do not fit its %d parameters",
+                                        k + 1, kk, lp->nparams);
                 break;
             }
             list = iges_int_or(lp, pos + 1, 0);
@@ -665,7 +779,7 @@ static cm_err face_510(importer *im, const iges_entity *e, const haffine *parent
             if (type == 1)
                 continue; /* a vertex in a loop: no curve */
             hcurve c = {0};
-            err = edge_504(im, lp, list, ndx, &lmap, &c);
+            err = edge_504(im, lp, list, ndx, &lmap, loops[l].n, &c);
             if (err == CM_OK) {
                 if (ok_flag == 0)
                     hcurve_reverse(&c);
@@ -691,6 +805,16 @@ static cm_err import_face(importer *im, const iges_entity *e, const haffine *par
     brep_model *m = im->m;
     int ns = m->nsurfs, nf = m->nfaces, nl = m->nloops, nsg = m->nsegs;
     cm_err err;
+    im->face = e;
+    im->face_pieces = 0;
+    /* the count made before the import (count_faces) already refused a model over the budget;
+     * this keeps the bound true whatever path placed the face */
+    if (++im->faces_tried > IGES_MAX_PLACED_FACES) {
+        im->f->over_budget = 1;
+        return iges_entity_error(im->f, e, "the model places more than %d faces (limit %d per model)",
+                                 IGES_MAX_PLACED_FACES, IGES_MAX_PLACED_FACES),
+               cm_fail(im->st, CM_E_LIMIT, "placed faces");
+    }
     switch (e->type) {
     case 144: err = face_144(im, e, parent); break;
     case 143: err = face_143(im, e, parent); break;
@@ -703,8 +827,8 @@ static cm_err import_face(importer *im, const iges_entity *e, const haffine *par
     }
     }
     if (err != CM_OK) {
-        if (err == CM_E_IO)
-            return err; /* out of memory: nothing sensible to continue with */
+        if (err == CM_E_NOMEM || im->f->over_budget)
+            return err; /* out of memory, or a model-wide budget: nothing sensible to continue with */
         face_failed(im, e, ns, nf, nl, nsg);
         return CM_OK;
     }
@@ -717,8 +841,11 @@ static cm_err shell_514(importer *im, const iges_entity *e, const haffine *paren
     iges_file *f = im->f;
     haffine map;
     int n;
-    if (iges_entity_xform(f, e, &map) || iges_int(f, e, 0, &n) || n < 0 || 1 + 2 * n > e->nparams)
-        return iges_entity_error(f, e, "malformed shell"), cm_fail(im->st, CM_E_IGES, "514");
+    if (iges_entity_xform(f, e, &map) || iges_int(f, e, 0, &n))
+        return cm_fail(im->st, CM_E_IGES, "514");
+    if (n < 0 || n > (e->nparams - 1) / 2) /* not 1 + 2 * n > nparams: n may be 2147483647 */
+        return iges_entity_error(f, e, "%d faces do not fit its %d parameters", n, e->nparams),
+               cm_fail(im->st, CM_E_IGES, "514");
     map = haffine_compose(parent, &map);
     int shell = im->m->nshells++;
     for (int i = 0; i < n; i++) {
@@ -747,8 +874,11 @@ static cm_err solid_186(importer *im, const iges_entity *e, const haffine *paren
     iges_file *f = im->f;
     haffine map;
     int shell, nv;
-    if (iges_entity_xform(f, e, &map) || iges_ptr(f, e, 0, 0, &shell) || iges_int(f, e, 2, &nv) || nv < 0)
-        return iges_entity_error(f, e, "malformed solid"), cm_fail(im->st, CM_E_IGES, "186");
+    if (iges_entity_xform(f, e, &map) || iges_ptr(f, e, 0, 0, &shell) || iges_int(f, e, 2, &nv))
+        return cm_fail(im->st, CM_E_IGES, "186");
+    if (nv < 0 || nv > (e->nparams - 3) / 2)
+        return iges_entity_error(f, e, "%d void shells do not fit its %d parameters", nv, e->nparams),
+               cm_fail(im->st, CM_E_IGES, "186");
     map = haffine_compose(parent, &map);
     int sof = iges_int_or(e, 1, 1);
     const iges_entity *s = iges_by_de(f, shell);
@@ -798,7 +928,7 @@ static cm_err instance_408(importer *im, const iges_entity *e, const haffine *pa
     m = haffine_compose(&m, &defmap);
     m = haffine_compose(parent, &m);
     int n = iges_int_or(d, 2, 0);
-    if (n < 0 || 3 + n > d->nparams)
+    if (n < 0 || n > d->nparams - 3) /* not 3 + n > nparams: n may be 2147483647 */
         return iges_entity_error(f, d, "%d members do not fit its %d parameters", n, d->nparams),
                cm_fail(im->st, CM_E_IGES, "308");
     /* faces remember the outermost placement: a part may be assembled from nested
@@ -824,6 +954,111 @@ static cm_err instance_408(importer *im, const iges_entity *e, const haffine *pa
     return err;
 }
 
+static int makes_face(const iges_entity *e)
+{
+    switch (e->type) {
+    case 144: case 143: case 510:
+        return 1;
+    default: /* bounded surface kinds only: planes etc. need a trim */
+        return iges_is_surface(e->type) && e->type != 108 && e->type != 190 && e->type != 192 && e->type != 194;
+    }
+}
+
+static long long add_sat(long long a, long long b)
+{
+    return a + b > FACE_COUNT_CAP ? FACE_COUNT_CAP : a + b;
+}
+
+/*
+ * Faces entity e places when import_entity imports it, subfigures expanded (saturating at
+ * FACE_COUNT_CAP), memoised per entity: a DAG of 308/408 nested 15 levels deep, 8 instances per
+ * level, is counted in a few hundred steps instead of expanded into 8^15 instances.  Structures
+ * the import refuses (cycles, nesting deeper than MAX_INSTANCE_DEPTH) count as far as they go.
+ */
+static long long count_faces(importer *im, const iges_entity *e, int depth)
+{
+    if (!e || e->bad || depth > MAX_INSTANCE_DEPTH + 1)
+        return 0;
+    if (makes_face(e))
+        return 1;
+    long long *memo = &im->nfaces_of[ent_index(im->f, e)];
+    if (*memo >= 0)
+        return *memo;
+    iges_file *f = im->f;
+    long long n = 0;
+    switch (e->type) {
+    case 186: { /* its shell, then its void shells */
+        int nv = iges_count_or0(e, 2);
+        n = count_faces(im, iges_by_de(f, iges_int_or(e, 0, 0)), depth + 1);
+        for (int i = 0; i < nv && 3 + 2L * i < e->nparams; i++)
+            n = add_sat(n, count_faces(im, iges_by_de(f, iges_int_or(e, 3 + 2 * i, 0)), depth + 1));
+        break;
+    }
+    case 514: { /* its faces */
+        int nf = iges_count_or0(e, 0);
+        for (int i = 0; i < nf && 1 + 2L * i < e->nparams; i++) {
+            const iges_entity *fe = iges_by_de(f, iges_int_or(e, 1 + 2 * i, 0));
+            n += fe && fe->type == 510;
+        }
+        break;
+    }
+    case 408: { /* the members of its definition */
+        const iges_entity *d = iges_by_de(f, iges_int_or(e, 0, 0));
+        if (!d || d->type != 308 || d->bad)
+            break;
+        *memo = 0; /* a cycle counts 0 here; the import reports it */
+        int nm = iges_count_or0(d, 2);
+        for (int i = 0; i < nm && 3 + i < d->nparams; i++)
+            n = add_sat(n, count_faces(im, iges_by_de(f, iges_int_or(d, 3 + i, 0)), depth + 1));
+        break;
+    }
+    default:
+        break;
+    }
+    *memo = n;
+    return n;
+}
+
+/*
+ * The budget of placed faces, checked before anything is built: the faces every top-level entity
+ * places, summed.  Past IGES_MAX_PLACED_FACES the import is refused, naming the entity at which
+ * the sum went over (for a subfigure instance, with what its definition expands to).
+ */
+static cm_err check_face_budget(importer *im)
+{
+    iges_file *f = im->f;
+    im->nfaces_of = malloc((size_t)(f->nents > 0 ? f->nents : 1) * sizeof *im->nfaces_of);
+    if (!im->nfaces_of)
+        return iges_nomem(f, f->nents > 0 ? f->ents[0].line : 0, "counting the faces of %d entities", f->nents),
+               cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    for (int k = 0; k < f->nents; k++)
+        im->nfaces_of[k] = -1;
+    long long total = 0;
+    for (int k = 0; k < f->nents; k++) {
+        if (im->ref[k])
+            continue; /* imported through its owner */
+        const iges_entity *e = &f->ents[k];
+        long long n = count_faces(im, e, 0);
+        total = add_sat(total, n);
+        if (total <= IGES_MAX_PLACED_FACES)
+            continue;
+        f->over_budget = 1;
+        if (e->type == 408) {
+            int d = iges_int_or(e, 0, 0);
+            return iges_entity_error(f, e,
+                                     "subfigure instances expand to more than %d faces (limit %d per model): "
+                                     "this instance of definition DE %d places %s%lld faces",
+                                     IGES_MAX_PLACED_FACES, IGES_MAX_PLACED_FACES, d,
+                                     n >= FACE_COUNT_CAP ? "more than " : "", n),
+                   cm_fail(im->st, CM_E_LIMIT, "subfigure instances");
+        }
+        return iges_entity_error(f, e, "the model places more than %d faces (limit %d per model)",
+                                 IGES_MAX_PLACED_FACES, IGES_MAX_PLACED_FACES),
+               cm_fail(im->st, CM_E_LIMIT, "placed faces");
+    }
+    return CM_OK;
+}
+
 /* faces of one entity, if it makes any; everything else is left for `cmz info` to count */
 static cm_err import_entity(importer *im, const iges_entity *e, const haffine *parent, int depth)
 {
@@ -839,10 +1074,98 @@ static cm_err import_entity(importer *im, const iges_entity *e, const haffine *p
     case 408:
         return instance_408(im, e, parent, depth);
     default:
-        if (iges_is_surface(e->type) && e->type != 108 && e->type != 190 && e->type != 192 && e->type != 194)
-            return import_face(im, e, parent, -1, 0); /* bounded surface kinds only: planes etc. need a trim */
+        if (makes_face(e))
+            return import_face(im, e, parent, -1, 0);
         return CM_OK;
     }
+}
+
+/* median of n values (sorted in place; the lower one of the middle two) */
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y ? 1 : 0;
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return v[(n - 1) / 2];
+}
+
+/*
+ * Drop faces lying absurdly far from the rest of the model: farther (max-norm, whole box) from the
+ * median of the face centres than 10^6 times the median face's such distance.  One corrupted
+ * matrix entry or coordinate (still below IGES_MAX_COORD_MM) would otherwise make the model's
+ * diagonal, and with it every relative tolerance, meaningless: the real faces' vertices would all
+ * merge.  Needs three faces to tell which ones are the outliers.  Each is warned, naming its DE.
+ */
+#define FAR_FACTOR 1e6
+static cm_err drop_far_faces(importer *im)
+{
+    brep_model *m = im->m;
+    int n = m->nfaces;
+    if (n < 3)
+        return CM_OK;
+    double *v = malloc((size_t)n * sizeof *v), *dist = malloc((size_t)n * sizeof *dist);
+    unsigned char *drop = calloc((size_t)n, 1);
+    if (!v || !dist || !drop) {
+        free(v);
+        free(dist);
+        free(drop);
+        return iges_nomem(im->f, 0, "checking the extent of %d faces", n), cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    }
+    double c[3];
+    for (int k = 0; k < 3; k++) {
+        for (int i = 0; i < n; i++) {
+            const hbox *b = &im->fbox[i];
+            double lo = k == 0 ? b->lo.x : k == 1 ? b->lo.y : b->lo.z, hi = k == 0 ? b->hi.x : k == 1 ? b->hi.y : b->hi.z;
+            v[i] = b->empty ? 0.0 : 0.5 * (lo + hi);
+        }
+        c[k] = median(v, n);
+    }
+    for (int i = 0; i < n; i++) {
+        const hbox *b = &im->fbox[i];
+        double d = 0;
+        if (!b->empty)
+            d = fmax(fmax(fmax(fabs(b->lo.x - c[0]), fabs(b->hi.x - c[0])), fmax(fabs(b->lo.y - c[1]), fabs(b->hi.y - c[1]))),
+                     fmax(fabs(b->lo.z - c[2]), fabs(b->hi.z - c[2])));
+        dist[i] = v[i] = d;
+    }
+    double typical = median(v, n), limit = FAR_FACTOR * typical;
+    int ndrop = 0;
+    for (int i = 0; i < n && typical > 0; i++)
+        if (dist[i] > limit) {
+            const brep_face *F = &m->faces[i];
+            const iges_entity *e = iges_by_de(im->f, F->src_de);
+            char why[400];
+            snprintf(why, sizeof why,
+                     "line %d: its geometry lies %g mm from the middle of the model, more than %g times the typical "
+                     "face's %g mm (a corrupted coordinate, scale or transformation?)",
+                     e ? e->pd_line : 0, dist[i], FAR_FACTOR, typical);
+            if (e)
+                warn_skipped(im, e, im->ford[i], why);
+            drop[i] = 1;
+            ndrop++;
+        }
+    cm_err err = CM_OK;
+    if (ndrop > 0) {
+        err = brep_remove_faces(m, drop, im->st);
+        if (err == CM_OK) {
+            m->box = hbox_empty();
+            for (int i = 0; i < n; i++)
+                if (!drop[i] && !im->fbox[i].empty) {
+                    hbox_add(&m->box, im->fbox[i].lo);
+                    hbox_add(&m->box, im->fbox[i].hi);
+                }
+        } else {
+            iges_nomem(im->f, 0, "removing %d far-away faces", ndrop);
+        }
+    }
+    free(v);
+    free(dist);
+    free(drop);
+    return err;
 }
 
 cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_status *st)
@@ -859,30 +1182,43 @@ cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_st
     im.st = st;
     im.ref = calloc((size_t)(f->nents ? f->nents : 1), 1);
     if (!im.ref)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return iges_nomem(f, 0, "importing %d entities", f->nents), cm_fail(st, CM_E_NOMEM, "out of memory");
     mark_references(&im);
+    cm_err err = check_face_budget(&im);
     haffine to_mm = haffine_identity();
     for (int i = 0; i < 3; i++)
         to_mm.R[i][i] = f->to_mm;
-    cm_err err = CM_OK;
-    for (int k = 0; k < f->nents && err == CM_OK; k++) {
+    int k = 0;
+    for (; k < f->nents && err == CM_OK; k++) {
         const iges_entity *e = &f->ents[k];
         if (im.ref[k])
             continue; /* owned by another entity: imported through it */
         err = import_entity(&im, e, &to_mm, 0);
     }
+    if (err == CM_OK)
+        err = drop_far_faces(&im);
+    if (err == CM_E_NOMEM && k > 0 && k <= f->nents) /* say where the import was (the input is not to blame) */
+        iges_nomem(f, f->ents[k - 1].pd_line, "importing entity %d, DE %d", f->ents[k - 1].type, f->ents[k - 1].de);
+    else if (err != CM_OK && f->err[0] == 0 && k > 0 && k <= f->nents)
+        iges_entity_error(f, &f->ents[k - 1], "import failed: %s (%s)", cm_strerror(err),
+                          st && st->where ? st->where : "?");
     free(im.ref);
+    free(im.nfaces_of);
+    free(im.fbox);
+    free(im.ford);
     if (err != CM_OK)
         return err;
-    for (int k = 0; k < f->nents; k++) {
-        int t = f->ents[k].type;
-        stats->face_entities += (t == 144 || t == 143 || t == 510) && f->ents[k].used;
+    for (int i = 0; i < f->nents; i++) {
+        int t = f->ents[i].type;
+        stats->face_entities += (t == 144 || t == 143 || t == 510) && f->ents[i].used;
     }
     if (m->nfaces == 0) {
         if (m->faces_failed)
-            iges_error(f, 0, "none of the file's %d faces could be read (see the warnings)", m->faces_failed);
+            iges_error(f, im.first_fail_line, "none of the file's %d faces could be read; the first, %s",
+                       m->faces_failed, im.first_fail);
         else
-            iges_error(f, 0, "the file holds no faces (no trimmed, bounded or B-rep surfaces)");
+            iges_error(f, f->nents > 0 ? f->ents[0].line : 0,
+                       "the file's %d entities hold no faces (no trimmed, bounded or B-rep surfaces)", f->nents);
         return cm_fail(st, CM_E_IGES, "iges_to_brep");
     }
     return CM_OK;

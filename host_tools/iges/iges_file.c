@@ -30,21 +30,37 @@ static const char sec_letters[] = "SGDPT";
 
 /* ---- errors and warnings ---- */
 
+__attribute__((format(printf, 3, 0))) static void set_error(iges_file *f, int line_no, const char *fmt, va_list ap)
+{
+    if (f->err[0] != 0)
+        return; /* the first (innermost) error wins */
+    char msg[400];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    if (line_no > 0)
+        snprintf(f->err, sizeof f->err, "line %d: %s", line_no, msg);
+    else
+        snprintf(f->err, sizeof f->err, "%s", msg);
+    f->err_line = line_no;
+}
+
 cm_err iges_error(iges_file *f, int line_no, const char *fmt, ...)
 {
-    if (f->err[0] == 0) {
-        char msg[400];
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, sizeof msg, fmt, ap);
-        va_end(ap);
-        if (line_no > 0)
-            snprintf(f->err, sizeof f->err, "line %d: %s", line_no, msg);
-        else
-            snprintf(f->err, sizeof f->err, "%s", msg);
-        f->err_line = line_no;
-    }
+    va_list ap;
+    va_start(ap, fmt);
+    set_error(f, line_no, fmt, ap);
+    va_end(ap);
     return CM_E_IGES;
+}
+
+cm_err iges_nomem(iges_file *f, int line_no, const char *fmt, ...)
+{
+    char what[300];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    iges_error(f, line_no, "out of memory (%s)", what);
+    return CM_E_NOMEM;
 }
 
 void iges_warn(iges_file *f, int line_no, const char *fmt, ...)
@@ -277,7 +293,7 @@ static cm_err split_lines(reader *r, const char *data, size_t len)
     int cap = 1024;
     r->lines = malloc((size_t)cap * sizeof *r->lines);
     if (!r->lines)
-        return iges_error(f, 0, "out of memory");
+        return iges_nomem(f, 1, "splitting the file into lines");
     size_t i = 0;
     int no = 0;
     while (i < len) {
@@ -295,10 +311,12 @@ static cm_err split_lines(reader *r, const char *data, size_t len)
         if (e - s > 4096)
             return iges_error(f, no, "line of %zu bytes: not a fixed-format ASCII IGES file (binary?)", e - s);
         if (r->nlines == cap) {
+            if (cap > 0x3fffffff)
+                return iges_error(f, no, "more than %d lines: not an IGES file this tool can read", cap);
             cap *= 2;
             line *q = realloc(r->lines, (size_t)cap * sizeof *q);
             if (!q)
-                return iges_error(f, 0, "out of memory");
+                return iges_nomem(f, no, "splitting the file into lines");
             r->lines = q;
         }
         r->lines[r->nlines].s = data + s;
@@ -307,7 +325,7 @@ static cm_err split_lines(reader *r, const char *data, size_t len)
         r->nlines++;
     }
     if (r->nlines == 0)
-        return iges_error(f, 0, "empty file");
+        return iges_error(f, no > 0 ? no : 1, "empty file: no IGES line (%zu bytes)", len);
     return CM_OK;
 }
 
@@ -317,7 +335,7 @@ static cm_err find_sections(reader *r)
     for (int k = 0; k < 5; k++) {
         r->sec[k] = malloc((size_t)r->nlines * sizeof(int));
         if (!r->sec[k])
-            return iges_error(f, 0, "out of memory");
+            return iges_nomem(f, 1, "indexing the file's %d lines", r->nlines);
     }
     int last = 0;
     for (int i = 0; i < r->nlines; i++) {
@@ -344,12 +362,15 @@ static cm_err find_sections(reader *r)
         last = k;
         r->sec[k][r->nsec[k]++] = i;
     }
+    /* a missing section is reported at the line where it should have started */
     if (r->nsec[SEC_G] == 0)
-        return iges_error(f, 0, "no Global section (no line with G in column 73)");
+        return iges_error(f, r->lines[r->nsec[SEC_S] < r->nlines ? r->nsec[SEC_S] : r->nlines - 1].no,
+                          "no Global section (no line with G in column 73)");
     if (r->nsec[SEC_D] == 0)
-        return iges_error(f, 0, "no Directory Entry section: the file holds no entities");
+        return iges_error(f, r->lines[r->sec[SEC_G][r->nsec[SEC_G] - 1]].no + 1,
+                          "no Directory Entry section: the file holds no entities");
     if (r->nsec[SEC_P] == 0)
-        return iges_error(f, 0, "no Parameter Data section");
+        return iges_error(f, r->lines[r->sec[SEC_D][r->nsec[SEC_D] - 1]].no + 1, "no Parameter Data section");
     if (r->nsec[SEC_D] % 2 != 0)
         return iges_error(f, r->lines[r->sec[SEC_D][r->nsec[SEC_D] - 1]].no,
                           "odd number of Directory lines (%d): the file is truncated or corrupted", r->nsec[SEC_D]);
@@ -359,7 +380,8 @@ static cm_err find_sections(reader *r)
     f->nlines_p = r->nsec[SEC_P];
     /* Terminate: counts are a checksum of completeness, mismatches are warned */
     if (r->nsec[SEC_T] == 0) {
-        iges_warn(f, 0, "no Terminate section: the file may be truncated (the data read is complete)");
+        iges_warn(f, r->lines[r->nlines - 1].no,
+                  "no Terminate section after this last line: the file may be truncated (the data read is complete)");
     } else {
         const line *t = &r->lines[r->sec[SEC_T][0]];
         int ok = 1;
@@ -401,7 +423,7 @@ static char *dup_str(const plist *pl, int i)
     return strdup("");
 }
 
-static double units_to_mm(iges_file *f)
+static double units_to_mm(iges_file *f, int line_no)
 {
     static const double factor[12] = {0, 25.4, 1.0, 0, 304.8, 1609344.0, 1000.0, 1e6, 0.0254, 0.001, 10.0, 2.54e-5};
     int u = f->g.units_flag;
@@ -417,7 +439,7 @@ static double units_to_mm(iges_file *f)
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (strcmp(n, names[i].name) == 0)
             return names[i].mm;
-    iges_warn(f, 0, "unknown units (flag %d, name '%s'); assuming millimetres", u, n);
+    iges_warn(f, line_no, "Global section: unknown units (flag %d, name '%s'); assuming millimetres", u, n);
     return 1.0;
 }
 
@@ -425,14 +447,14 @@ static cm_err parse_global(reader *r)
 {
     iges_file *f = r->f;
     int n = r->nsec[SEC_G];
+    int line0 = r->lines[r->sec[SEC_G][0]].no;
     char *t = malloc((size_t)n * 72 + 1);
     if (!t)
-        return iges_error(f, 0, "out of memory");
+        return iges_nomem(f, line0, "reading the Global section");
     for (int j = 0; j < n; j++)
         memcpy(t + j * 72, r->lines[r->sec[SEC_G][j]].s, 72);
-    int len = n * 72;
+    int len = n * 72; /* n <= nlines, and a file of at most 2 GiB has fewer than 2^31 / 72 lines of 73 bytes */
     t[len] = 0;
-    int line0 = r->lines[r->sec[SEC_G][0]].no;
     /* the first two fields define the delimiters themselves */
     char pd = ',', rd = ';';
     int pos = 0;
@@ -471,11 +493,14 @@ static cm_err parse_global(reader *r)
     f->g.rdelim = rd;
     plist pl = {0};
     char why[200];
-    if (pos < len && tokenize(t + pos, len - pos, pd, rd, &pl, why, sizeof why) < 0) {
-        /* a broken Global section loses metadata, not geometry: warn and go on with defaults */
-        iges_warn(f, line0, "Global section: %s; using defaults for the rest", why);
-    }
+    int rc = pos < len ? tokenize(t + pos, len - pos, pd, rd, &pl, why, sizeof why) : 0;
     free(t);
+    if (rc == -2) {
+        plist_free(&pl);
+        return iges_nomem(f, line0, "reading the Global section");
+    }
+    if (rc < 0) /* a broken Global section loses metadata, not geometry: warn and go on with defaults */
+        iges_warn(f, line0, "Global section: %s; using defaults for the rest", why);
     /* pl[0] is Global parameter 3 */
 #define G(i) ((i) - 3)
     f->g.sender_id = dup_str(&pl, G(3));
@@ -484,28 +509,30 @@ static cm_err parse_global(reader *r)
     f->g.preprocessor = dup_str(&pl, G(6));
     f->g.receiver_id = dup_str(&pl, G(12));
     f->g.model_scale = (G(13) < pl.n && pl.p[G(13)].kind == IGES_P_NUM) ? pl.p[G(13)].num : 1.0;
-    f->g.units_flag = (G(14) < pl.n && pl.p[G(14)].kind == IGES_P_NUM) ? (int)pl.p[G(14)].num : 1;
+    f->g.units_flag = (G(14) < pl.n && pl.p[G(14)].kind == IGES_P_NUM) ? iges_to_int(pl.p[G(14)].num, -99, 99, 0) : 1;
     f->g.units_name = dup_str(&pl, G(15));
     f->g.date = dup_str(&pl, G(18));
     f->g.resolution = (G(19) < pl.n && pl.p[G(19)].kind == IGES_P_NUM) ? pl.p[G(19)].num : 0.0;
     f->g.max_coord = (G(20) < pl.n && pl.p[G(20)].kind == IGES_P_NUM) ? pl.p[G(20)].num : 0.0;
     f->g.author = dup_str(&pl, G(21));
     f->g.organization = dup_str(&pl, G(22));
-    f->g.version = (G(23) < pl.n && pl.p[G(23)].kind == IGES_P_NUM) ? (int)pl.p[G(23)].num : 0;
-    f->g.drafting = (G(24) < pl.n && pl.p[G(24)].kind == IGES_P_NUM) ? (int)pl.p[G(24)].num : 0;
+    f->g.version = (G(23) < pl.n && pl.p[G(23)].kind == IGES_P_NUM) ? iges_to_int(pl.p[G(23)].num, -999, 999, 0) : 0;
+    f->g.drafting = (G(24) < pl.n && pl.p[G(24)].kind == IGES_P_NUM) ? iges_to_int(pl.p[G(24)].num, -999, 999, 0) : 0;
     f->g.model_date = dup_str(&pl, G(25));
 #undef G
     plist_free(&pl);
     if (!f->g.sender_id || !f->g.file_name || !f->g.system_id || !f->g.preprocessor || !f->g.receiver_id ||
         !f->g.units_name || !f->g.date || !f->g.author || !f->g.organization || !f->g.model_date)
-        return iges_error(f, 0, "out of memory");
-    if (!(f->g.model_scale > 0.0)) {
-        iges_warn(f, line0, "model space scale %g is not positive; using 1", f->g.model_scale);
+        return iges_nomem(f, line0, "reading the Global section");
+    /* a scale far from 1 would send every coordinate to 0 or past the range of doubles */
+    if (!(f->g.model_scale >= 1e-9 && f->g.model_scale <= 1e9)) {
+        iges_warn(f, line0, "Global section: model space scale %g is not a positive number in [1e-9, 1e9]; using 1",
+                  f->g.model_scale);
         f->g.model_scale = 1.0;
     }
     if (!(f->g.resolution >= 0.0))
         f->g.resolution = 0.0;
-    f->to_mm = units_to_mm(f) / f->g.model_scale;
+    f->to_mm = units_to_mm(f, line0) / f->g.model_scale;
     return CM_OK;
 }
 
@@ -516,7 +543,7 @@ static cm_err parse_directory(reader *r)
     f->ents = calloc((size_t)n, sizeof *f->ents);
     f->de_map = malloc((size_t)n * sizeof(int));
     if (!f->ents || !f->de_map)
-        return iges_error(f, 0, "out of memory");
+        return iges_nomem(f, r->lines[r->sec[SEC_D][0]].no, "reading %d Directory entries", n);
     f->de_map_n = n;
     for (int i = 0; i < n; i++)
         f->de_map[i] = -1;
@@ -596,7 +623,7 @@ static cm_err parse_parameters(reader *r)
             char *q = realloc(buf, need);
             if (!q) {
                 free(buf);
-                return iges_error(f, 0, "out of memory");
+                return iges_nomem(f, e->pd_line, "reading the %d parameter lines of DE %d", e->pd_count, e->de);
             }
             buf = q;
             cap = need;
@@ -611,6 +638,7 @@ static cm_err parse_parameters(reader *r)
                 warned_backptr = 1;
             }
         }
+        /* no overflow: a file of at most 2 GiB has fewer than 2^31 / 73 lines, times 64 columns */
         int len = e->pd_count * 64;
         buf[len] = 0;
         plist pl = {0};
@@ -619,9 +647,10 @@ static cm_err parse_parameters(reader *r)
         if (rc == -2) {
             plist_free(&pl);
             free(buf);
-            return iges_error(f, e->pd_line, "out of memory");
+            return iges_nomem(f, e->pd_line, "reading the parameters of DE %d", e->de);
         }
-        if (rc < 0 || pl.n == 0 || pl.p[0].kind != IGES_P_NUM || (int)pl.p[0].num != e->type) {
+        /* compared as doubles: the number may be anything (5e13), which an int cannot hold */
+        if (rc < 0 || pl.n == 0 || pl.p[0].kind != IGES_P_NUM || pl.p[0].num != (double)e->type) {
             if (rc == 0)
                 snprintf(why, sizeof why, "parameter data does not start with the entity type %d", e->type);
             iges_warn(f, e->pd_line, "entity %d (DE %d) skipped: %s", e->type, e->de, why);
@@ -662,10 +691,11 @@ cm_err iges_read(const char *path, iges_file *f, cm_status *st)
     f->path = strdup(path);
     FILE *fp = fopen(path, "rb");
     if (!fp) {
-        snprintf(f->err, sizeof f->err, "cannot open: %s", strerror(errno));
+        int err = errno;
+        snprintf(f->err, sizeof f->err, "cannot open: %s", strerror(err));
         cm_err e = cm_fail(st, CM_E_IO, "iges_read");
         if (st)
-            st->sys_errno = errno;
+            st->sys_errno = err;
         return e;
     }
     char *data = NULL;
@@ -677,8 +707,8 @@ cm_err iges_read(const char *path, iges_file *f, cm_status *st)
             if (!q) {
                 free(data);
                 fclose(fp);
-                snprintf(f->err, sizeof f->err, "out of memory reading the file");
-                return cm_fail(st, CM_E_IO, "iges_read");
+                snprintf(f->err, sizeof f->err, "out of memory reading the file (%zu bytes read)", len);
+                return cm_fail(st, CM_E_NOMEM, "iges_read");
             }
             data = q;
         }
@@ -714,6 +744,7 @@ void iges_free(iges_file *f)
     }
     free(f->ents);
     free(f->de_map);
+    free(f->curve_pieces);
     for (int i = 0; i < f->nwarn; i++)
         free(f->warn[i].msg);
     free(f->warn);
@@ -750,12 +781,27 @@ double iges_num_or(const iges_entity *e, int i, double dflt)
     return e->params[i].num;
 }
 
+int iges_to_int(double v, int lo, int hi, int dflt)
+{
+    if (!(v >= (double)lo && v <= (double)hi) || v != floor(v))
+        return dflt;
+    return (int)v;
+}
+
 int iges_int_or(const iges_entity *e, int i, int dflt)
 {
     double v = iges_num_or(e, i, (double)dflt);
     if (!(v >= -2147483647.0 && v <= 2147483647.0))
         return dflt;
     return (int)v;
+}
+
+int iges_count_or0(const iges_entity *e, int i)
+{
+    double v = iges_num_or(e, i, 0.0);
+    if (!(v > 0.0))
+        return 0;
+    return v >= (double)e->nparams ? e->nparams : (int)v;
 }
 
 int iges_num(iges_file *f, const iges_entity *e, int i, double *out)

@@ -86,6 +86,10 @@ typedef struct iges_file {
     int nwarn, capwarn;
     char err[512];       /* message of the error that stopped iges_read, "" otherwise */
     int err_line;
+    /* import budgets (iges_geom.c): what the entity graph may expand to */
+    int *curve_pieces;   /* per entity index: curve pieces it flattens into (memo; 0 = not counted yet) */
+    long long pieces_made; /* curve pieces built so far for the whole model */
+    int over_budget;     /* a model-wide import budget was exceeded: the import stops (f->err says which) */
 } iges_file;
 
 /**
@@ -107,6 +111,12 @@ const iges_entity *iges_by_de(const iges_file *f, int de);
 /** Record a file-level error "line N: ..." into f->err unless one is there; returns CM_E_IGES. */
 cm_err iges_error(iges_file *f, int line, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
+/**
+ * An allocation failed: record "line N: out of memory (...)" into f->err unless one is there
+ * and return CM_E_NOMEM (never CM_E_IGES: the input is not to blame).  `line` 0 if none.
+ */
+cm_err iges_nomem(iges_file *f, int line, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
 /** Add a warning (printf-style); `line` 0 if none. */
 void iges_warn(iges_file *f, int line, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
@@ -119,6 +129,14 @@ void iges_warn(iges_file *f, int line, const char *fmt, ...) __attribute__((form
  */
 double iges_num_or(const iges_entity *e, int i, double dflt);
 int iges_int_or(const iges_entity *e, int i, int dflt);
+/**
+ * A count read from parameter i for a loop over the parameters that follow it: the integer there,
+ * clamped to [0, e->nparams] (missing, negative, fractional or absurd values give 0 or the clamp),
+ * so `for (k = 0; k < count; k++)` never runs past the parameters nor overflows an index.
+ */
+int iges_count_or0(const iges_entity *e, int i);
+/** v as an int when it is an integer in [lo, hi], else dflt (no undefined conversion). */
+int iges_to_int(double v, int lo, int hi, int dflt);
 int iges_num(iges_file *f, const iges_entity *e, int i, double *out);
 int iges_int(iges_file *f, const iges_entity *e, int i, int *out);
 /** A pointer parameter: a DE number that must name an entity (0 allowed if allow_null). */

@@ -2,6 +2,7 @@
 #include "iges_geom.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,6 +15,32 @@
 static void mark_used(iges_file *f, const iges_entity *e)
 {
     f->ents[e - f->ents].used = 1;
+}
+
+/* ---- sanity of coordinates ---- */
+
+int iges_coords_sane(const cm_vec3 *p, long n, double *worst)
+{
+    for (long i = 0; i < n; i++) {
+        const double c[3] = {p[i].x, p[i].y, p[i].z};
+        for (int k = 0; k < 3; k++)
+            if (!(fabs(c[k]) <= IGES_MAX_COORD_MM)) {
+                if (worst)
+                    *worst = c[k];
+                return 0;
+            }
+    }
+    return 1;
+}
+
+/* " (its transformation DE 5)" when e has one, for messages about geometry sent far away */
+static const char *xform_note(const iges_entity *e, char *buf, size_t cap)
+{
+    if (e->xform != 0)
+        snprintf(buf, cap, " (its transformation: DE %d)", e->xform < 0 ? -e->xform : e->xform);
+    else
+        snprintf(buf, cap, " (the transformations of the entities placing it)");
+    return buf;
 }
 
 /* ---- lists and boxes ---- */
@@ -32,7 +59,7 @@ cm_err hcurve_list_push(hcurve_list *l, hcurve *c, cm_status *st)
         int cap = l->cap ? 2 * l->cap : 8;
         hcurve *q = realloc(l->c, (size_t)cap * sizeof *q);
         if (!q)
-            return cm_fail(st, CM_E_IO, "out of memory");
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
         l->c = q;
         l->cap = cap;
     }
@@ -139,9 +166,20 @@ int iges_is_curve(int type)
 
 static cm_err curve_rec(iges_file *f, int de, const haffine *parent, hcurve_list *out, int depth, cm_status *st);
 
-static cm_err push_mapped(hcurve *c, const haffine *m, hcurve_list *out, cm_status *st)
+/* map a finished piece of entity e into model space and append it; geometry sent beyond
+ * IGES_MAX_COORD_MM (or to infinity) by the transformations is refused, naming e */
+static cm_err push_mapped(iges_file *f, const iges_entity *e_src, hcurve *c, const haffine *m, hcurve_list *out,
+                          cm_status *st)
 {
     hcurve_transform(c, m);
+    double worst = 0;
+    if (!iges_coords_sane(c->ctrl, c->n, &worst)) {
+        char note[96];
+        hcurve_free(c);
+        return iges_entity_error(f, e_src, "in model space its control points reach %g mm, beyond +-%g mm%s",
+                                 worst, IGES_MAX_COORD_MM, xform_note(e_src, note, sizeof note)),
+               cm_fail(st, CM_E_RANGE, "curve coordinates");
+    }
     cm_err e = hcurve_list_push(out, c, st);
     if (e != CM_OK)
         hcurve_free(c);
@@ -169,8 +207,8 @@ static cm_err arc_100(iges_file *f, const iges_entity *e, const haffine *m, hcur
     hcurve h = {0};
     cm_err err = hcurve_ellipse_arc(c, cm_v3(1, 0, 0), cm_v3(0, 1, 0), r, r, a0, a1, &h, st);
     if (err != CM_OK)
-        return iges_entity_error(f, e, "cannot build the arc"), err;
-    return push_mapped(&h, m, out, st);
+        return err; /* curve_rec names the entity (or reports out of memory as such) */
+    return push_mapped(f, e, &h, m, out, st);
 }
 
 /* conic gradient at (x,y) for A x^2 + B xy + C y^2 + D x + E y + F */
@@ -248,8 +286,8 @@ static cm_err conic_104(iges_file *f, const iges_entity *e, const haffine *m, hc
         err = hcurve_conic_span(cm_v3(x1, y1, zt), cm_v3(px, py, zt), cm_v3(x2, y2, zt), w1, &h, st);
     }
     if (err != CM_OK)
-        return iges_entity_error(f, e, "cannot build the conic"), err;
-    return push_mapped(&h, m, out, st);
+        return err; /* curve_rec names the entity (or reports out of memory as such) */
+    return push_mapped(f, e, &h, m, out, st);
 }
 
 static cm_err copious_106(iges_file *f, const iges_entity *e, const haffine *m, hcurve_list *out, cm_status *st)
@@ -268,7 +306,7 @@ static cm_err copious_106(iges_file *f, const iges_entity *e, const haffine *m, 
     int closed = e->form == 63;
     cm_vec3 *p = malloc((size_t)(n + 1) * sizeof *p);
     if (!p)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     double zt = ip == 1 ? iges_num_or(e, 2, 0.0) : 0.0;
     int k = 0;
     for (int i = 0; i < n; i++) {
@@ -294,8 +332,8 @@ static cm_err copious_106(iges_file *f, const iges_entity *e, const haffine *m, 
     cm_err err = hcurve_polyline(p, k, &h, st);
     free(p);
     if (err != CM_OK)
-        return err;
-    return push_mapped(&h, m, out, st);
+        return err; /* curve_rec names the entity */
+    return push_mapped(f, e, &h, m, out, st);
 }
 
 static cm_err line_110(iges_file *f, const iges_entity *e, const haffine *m, hcurve_list *out, cm_status *st)
@@ -310,8 +348,8 @@ static cm_err line_110(iges_file *f, const iges_entity *e, const haffine *m, hcu
     hcurve h = {0};
     cm_err err = hcurve_line(a, b, &h, st);
     if (err != CM_OK)
-        return err;
-    return push_mapped(&h, m, out, st);
+        return err; /* curve_rec names the entity */
+    return push_mapped(f, e, &h, m, out, st);
 }
 
 static cm_err spline_112(iges_file *f, const iges_entity *e, const haffine *m, hcurve_list *out, cm_status *st)
@@ -327,7 +365,7 @@ static cm_err spline_112(iges_file *f, const iges_entity *e, const haffine *m, h
     if (!T || !coef) {
         free(T);
         free(coef);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     for (int i = 0; i <= n; i++)
         T[i] = iges_num_or(e, 4 + i, (double)NAN);
@@ -347,9 +385,11 @@ static cm_err spline_112(iges_file *f, const iges_entity *e, const haffine *m, h
     cm_err err = ok ? hcurve_from_cubic_segments(T, coef, n, &hc, st) : CM_E_IGES;
     free(T);
     free(coef);
+    if (err == CM_E_NOMEM)
+        return err;
     if (err != CM_OK)
         return iges_entity_error(f, e, "malformed breakpoints or coefficients"), cm_fail(st, CM_E_IGES, "spline");
-    return push_mapped(&hc, m, out, st);
+    return push_mapped(f, e, &hc, m, out, st);
 }
 
 /* 1 if all weights are equal: then the curve/surface is polynomial */
@@ -366,11 +406,12 @@ static cm_err bspline_126(iges_file *f, const iges_entity *e, const haffine *m, 
     int K, M;
     if (iges_int(f, e, 0, &K) || iges_int(f, e, 1, &M))
         return cm_fail(st, CM_E_IGES, "126");
-    int n = K + 1, p = M;
-    if (p < 1 || p > CM_MAX_DEGREE || n < p + 1 || n > 1000000)
-        return iges_entity_error(f, e, "degree %d with %d control points is not a valid curve (degree 1..%d)", p, n,
-                                 CM_MAX_DEGREE),
+    /* range-checked before any arithmetic: K = 2147483647 must not overflow K + 1 */
+    if (M < 1 || M > CM_MAX_DEGREE || K < M || K > 999999)
+        return iges_entity_error(f, e, "degree %d with upper index %d is not a valid curve (degree 1..%d, "
+                                       "index degree..999999)", M, K, CM_MAX_DEGREE),
                cm_fail(st, CM_E_IGES, "126");
+    int n = K + 1, p = M;
     int nk = n + p + 1;
     int o_knots = 6, o_w = o_knots + nk, o_p = o_w + n, o_v = o_p + 3 * n;
     if (o_v + 2 > e->nparams)
@@ -381,6 +422,7 @@ static cm_err bspline_126(iges_file *f, const iges_entity *e, const haffine *m, 
     cm_err err = hcurve_alloc(&h, p, n, 1, st);
     if (err != CM_OK)
         return err;
+    /* every number must be there (a missing one is NaN here, caught by cm_curve_check below) */
     for (int i = 0; i < nk; i++)
         h.knots[i] = iges_num_or(e, o_knots + i, (double)NAN);
     for (int i = 0; i < n; i++) {
@@ -410,11 +452,13 @@ static cm_err bspline_126(iges_file *f, const iges_entity *e, const haffine *m, 
         hcurve sub = {0};
         err = hcurve_subrange(&h, a, b, &sub, st);
         hcurve_free(&h);
+        if (err == CM_E_NOMEM)
+            return err;
         if (err != CM_OK)
             return iges_entity_error(f, e, "cannot restrict to [%g, %g]", v0, v1), err;
         h = sub;
     }
-    return push_mapped(&h, m, out, st);
+    return push_mapped(f, e, &h, m, out, st);
 }
 
 static cm_err composite_102(iges_file *f, const iges_entity *e, const haffine *m, hcurve_list *out, int depth,
@@ -423,7 +467,7 @@ static cm_err composite_102(iges_file *f, const iges_entity *e, const haffine *m
     int n;
     if (iges_int(f, e, 0, &n))
         return cm_fail(st, CM_E_IGES, "102");
-    if (n < 1 || n + 1 > e->nparams)
+    if (n < 1 || n > e->nparams - 1) /* not n + 1 > nparams: n may be 2147483647 */
         return iges_entity_error(f, e, "composite of %d curves has %d parameters", n, e->nparams),
                cm_fail(st, CM_E_IGES, "102");
     for (int i = 0; i < n; i++) {
@@ -443,7 +487,7 @@ static cm_err composite_102(iges_file *f, const iges_entity *e, const haffine *m
 static cm_err curve_rec(iges_file *f, int de, const haffine *parent, hcurve_list *out, int depth, cm_status *st)
 {
     const iges_entity *e = iges_by_de(f, de);
-    if (!e)
+    if (!e) /* callers pass pointers iges_ptr checked: not reached from a file */
         return iges_error(f, 0, "DE %d is not an entity of this file", de), cm_fail(st, CM_E_IGES, "curve");
     if (depth > MAX_NEST)
         return iges_entity_error(f, e, "curves nested deeper than %d (a cycle?)", MAX_NEST),
@@ -479,12 +523,97 @@ static cm_err curve_rec(iges_file *f, int de, const haffine *parent, hcurve_list
     }
     if (err == CM_OK)
         mark_used(f, e);
+    else if (err == CM_E_NOMEM)
+        iges_nomem(f, e->pd_line, "building entity %d, DE %d", e->type, e->de); /* not the entity's fault */
+    else if (f->err[0] == 0) /* a construction refused the numbers: still say which entity */
+        iges_entity_error(f, e, "cannot build the curve: %s", cm_strerror(err));
     return err;
+}
+
+/*
+ * Curve pieces entity `de` flattens into (composites through every level), saturating just past
+ * IGES_MAX_CURVE_PIECES; memoised per entity so a DAG is counted in time linear in its size.
+ * Malformed or cyclic structures count as 1 here: curve_rec reports them.
+ */
+static int count_pieces(iges_file *f, int de, int depth)
+{
+    const iges_entity *e = iges_by_de(f, de < 0 ? -de : de);
+    if (!e || depth > MAX_NEST || e->bad)
+        return 1;
+    int *memo = &f->curve_pieces[e - f->ents];
+    if (*memo > 0)
+        return *memo;
+    long long n = 1;
+    if (e->type == 102) {
+        n = 0;
+        int m = iges_count_or0(e, 0);
+        for (int i = 1; i <= m && i < e->nparams && n <= IGES_MAX_CURVE_PIECES; i++) {
+            int mde = iges_int_or(e, i, 0);
+            const iges_entity *c = iges_by_de(f, mde < 0 ? -mde : mde);
+            if (c && c->type != 116)
+                n += count_pieces(f, mde, depth + 1);
+        }
+    } else if (e->type == 142) {
+        int c = iges_int_or(e, 3, 0);
+        if (c != 0)
+            n = count_pieces(f, c, depth + 1);
+    }
+    if (n < 1)
+        n = 1;
+    if (n > IGES_MAX_CURVE_PIECES)
+        n = IGES_MAX_CURVE_PIECES + 1;
+    *memo = (int)n;
+    return *memo;
+}
+
+int iges_curve_pieces(iges_file *f, int de)
+{
+    if (!f->curve_pieces) {
+        f->curve_pieces = calloc((size_t)(f->nents > 0 ? f->nents : 1), sizeof *f->curve_pieces);
+        if (!f->curve_pieces)
+            return -1;
+    }
+    return count_pieces(f, de, 0);
 }
 
 cm_err iges_curve(iges_file *f, int de, const haffine *parent, hcurve_list *out, cm_status *st)
 {
-    return curve_rec(f, de, parent, out, 0, st);
+    const iges_entity *e = iges_by_de(f, de);
+    if (e) {
+        int n = iges_curve_pieces(f, de);
+        if (n < 0)
+            return iges_nomem(f, e->pd_line, "counting the pieces of curve DE %d", de),
+                   cm_fail(st, CM_E_NOMEM, "out of memory");
+        if (n > IGES_MAX_CURVE_PIECES) {
+            /* name the composite that explodes (a 142 only points to it) */
+            const iges_entity *c = e;
+            for (int k = 0; k < MAX_NEST && c->type == 142; k++) {
+                const iges_entity *m = iges_by_de(f, iges_int_or(c, 3, 0));
+                if (!m)
+                    break;
+                c = m;
+            }
+            char what[64] = "";
+            if (c != e)
+                snprintf(what, sizeof what, ", through its curve DE %d", c->de);
+            return iges_entity_error(f, e,
+                                     "expands to more than %d curve pieces (limit %d per curve)%s: composite "
+                                     "curves that list composites many times over",
+                                     IGES_MAX_CURVE_PIECES, IGES_MAX_CURVE_PIECES, what),
+                   cm_fail(st, CM_E_LIMIT, "curve pieces");
+        }
+        if (f->pieces_made + n > IGES_MAX_MODEL_PIECES) {
+            f->over_budget = 1;
+            return iges_entity_error(f, e,
+                                     "the model's curves expand to more than %lld pieces (limit %lld per model)",
+                                     IGES_MAX_MODEL_PIECES, IGES_MAX_MODEL_PIECES),
+                   cm_fail(st, CM_E_LIMIT, "model curve pieces");
+        }
+    }
+    int before = out->n;
+    cm_err err = curve_rec(f, de, parent, out, 0, st);
+    f->pieces_made += out->n - before;
+    return err;
 }
 
 /* ---- joining curve pieces (a composite generatrix or directrix) ---- */
@@ -509,7 +638,7 @@ static cm_err join_pieces(const hcurve_list *l, hcurve *out, cm_status *st)
     }
     hcurve *pc = calloc((size_t)l->n, sizeof *pc);
     if (!pc)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     cm_err e = CM_OK;
     for (int i = 0; i < l->n && e == CM_OK; i++) {
         hcurve tmp = {0};
@@ -564,7 +693,7 @@ static cm_err single_curve(iges_file *f, int de, const haffine *m, hcurve *out, 
     hcurve_list l = {0};
     cm_err e = iges_curve(f, de, m, &l, st);
     if (e == CM_OK && l.n == 0)
-        e = iges_error(f, 0, "curve DE %d has no geometry", de);
+        e = iges_entity_error(f, iges_by_de(f, de), "the curve has no geometry (only points)");
     if (e == CM_OK)
         e = join_pieces(&l, out, st);
     hcurve_list_free(&l);
@@ -686,12 +815,15 @@ static cm_err bspline_128(iges_file *f, const iges_entity *e, const haffine *m, 
     int K1, K2, M1, M2;
     if (iges_int(f, e, 0, &K1) || iges_int(f, e, 1, &K2) || iges_int(f, e, 2, &M1) || iges_int(f, e, 3, &M2))
         return cm_fail(st, CM_E_IGES, "128");
-    int nu = K1 + 1, nv = K2 + 1;
-    if (M1 < 1 || M2 < 1 || M1 > CM_MAX_DEGREE || M2 > CM_MAX_DEGREE || nu < M1 + 1 || nv < M2 + 1 || nu > 100000 ||
-        nv > 100000 || (long)nu * nv > 10000000)
-        return iges_entity_error(f, e, "degrees %d x %d with %d x %d control points is not a valid surface", M1, M2,
-                                 nu, nv),
+    /* range-checked before any arithmetic: K1 = 2147483647 must not overflow K1 + 1 */
+    if (M1 < 1 || M2 < 1 || M1 > CM_MAX_DEGREE || M2 > CM_MAX_DEGREE || K1 < M1 || K2 < M2 || K1 > 99999 ||
+        K2 > 99999 || (long)(K1 + 1) * (K2 + 1) > 10000000)
+        return iges_entity_error(f, e,
+                                 "degrees %d x %d with upper indices %d x %d is not a valid surface (degrees 1..%d, "
+                                 "at most 100000 points per direction, 10^7 in all)",
+                                 M1, M2, K1, K2, CM_MAX_DEGREE),
                cm_fail(st, CM_E_IGES, "128");
+    int nu = K1 + 1, nv = K2 + 1;
     int nku = nu + M1 + 1, nkv = nv + M2 + 1;
     long o_u = 9, o_v = o_u + nku, o_w = o_v + nkv, o_p = o_w + (long)nu * nv, o_d = o_p + 3L * nu * nv;
     if (o_d + 4 > e->nparams)
@@ -737,6 +869,8 @@ static cm_err bspline_128(iges_file *f, const iges_entity *e, const haffine *m, 
         hsurf sub = {0};
         err = hsurf_subrange(&s, fmax(du0, u0), fmin(du1, u1), fmax(dv0, v0), fmin(dv1, v1), &sub, st);
         hsurf_free(&s);
+        if (err == CM_E_NOMEM)
+            return err;
         if (err != CM_OK)
             return iges_entity_error(f, e, "cannot restrict to its declared parameter range"), err;
         s = sub;
@@ -749,7 +883,7 @@ static cm_err bspline_128(iges_file *f, const iges_entity *e, const haffine *m, 
 static cm_err surface_rec(iges_file *f, int de, const haffine *parent, const hbox *extent, hsurf *out, cm_status *st)
 {
     const iges_entity *e = iges_by_de(f, de);
-    if (!e)
+    if (!e) /* callers pass pointers iges_ptr checked: not reached from a file */
         return iges_error(f, 0, "DE %d is not an entity of this file", de), cm_fail(st, CM_E_IGES, "surface");
     if (e->bad)
         return iges_entity_error(f, e, "its parameter data could not be read"), cm_fail(st, CM_E_IGES, "surface");
@@ -911,10 +1045,21 @@ static cm_err surface_rec(iges_file *f, int de, const haffine *parent, const hbo
         return iges_entity_error(f, e, "entity type %d is not a supported surface", e->type),
                cm_fail(st, CM_E_UNSUPPORTED, "surface");
     }
-    if (err == CM_OK)
+    if (err == CM_OK) {
+        double worst = 0;
+        if (!iges_coords_sane(out->ctrl, (long)out->nu * out->nv, &worst)) {
+            char note[96];
+            hsurf_free(out);
+            return iges_entity_error(f, e, "in model space its control points reach %g mm, beyond +-%g mm%s", worst,
+                                     IGES_MAX_COORD_MM, xform_note(e, note, sizeof note)),
+                   cm_fail(st, CM_E_RANGE, "surface coordinates");
+        }
         mark_used(f, e);
-    else if (f->err[0] == 0)
+    } else if (err == CM_E_NOMEM) {
+        iges_nomem(f, e->pd_line, "building entity %d, DE %d", e->type, e->de); /* not the entity's fault */
+    } else if (f->err[0] == 0) {
         iges_entity_error(f, e, "cannot build the surface: %s", cm_strerror(err));
+    }
     return err;
 }
 

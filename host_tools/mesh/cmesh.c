@@ -14,13 +14,33 @@
 
 /* ---- a spatial hash of points ---- */
 
+/*
+ * Points in cubic cells of side `cell`, hashed by cell.  Its work is bounded whatever the numbers:
+ * non-finite points are left out (they are near nothing), cell indices are computed in double and
+ * saturated before any conversion to an integer, and a query visits only the cells of its box
+ * that overlap the box of the inserted points, and at most `cap` of them.
+ */
 typedef struct grid {
     double cell;
+    cm_vec3 lo, hi; /* box of the (finite) points inserted */
+    int empty;
     int *head;      /* hash bucket -> first point, -1 */
     int *next;      /* point -> next point in bucket */
     int64_t *key;   /* point -> its cell key */
     unsigned mask;
 } grid;
+
+#define CELL_SAT 1e15 /* |cell index| saturates here: exact in a double, far inside a long */
+
+static long cell_of(double x, double cell)
+{
+    double c = floor(x / cell);
+    if (!(c > -CELL_SAT)) /* NaN too */
+        return -(long)CELL_SAT;
+    if (c > CELL_SAT)
+        return (long)CELL_SAT;
+    return (long)c;
+}
 
 static int64_t cell_key(long x, long y, long z)
 {
@@ -36,7 +56,8 @@ static unsigned hash_key(int64_t k, unsigned mask)
 static int grid_init(grid *g, const cm_vec3 *p, int n, double cell)
 {
     memset(g, 0, sizeof *g);
-    g->cell = cell;
+    g->cell = cell > 0 && isfinite(cell) ? cell : 1.0;
+    g->empty = 1;
     unsigned sz = 1024;
     while (sz < 2u * (unsigned)n && sz < (1u << 30))
         sz <<= 1;
@@ -49,8 +70,18 @@ static int grid_init(grid *g, const cm_vec3 *p, int n, double cell)
     for (unsigned i = 0; i < sz; i++)
         g->head[i] = -1;
     for (int i = 0; i < n; i++) {
-        long x = (long)floor(p[i].x / cell), y = (long)floor(p[i].y / cell), z = (long)floor(p[i].z / cell);
-        g->key[i] = cell_key(x, y, z);
+        g->next[i] = -1;
+        g->key[i] = -1; /* no cell_key is negative: the top bit is never set */
+        if (!cm_finite3(p[i]))
+            continue;
+        if (g->empty) {
+            g->lo = g->hi = p[i];
+            g->empty = 0;
+        } else {
+            g->lo = cm_v3(fmin(g->lo.x, p[i].x), fmin(g->lo.y, p[i].y), fmin(g->lo.z, p[i].z));
+            g->hi = cm_v3(fmax(g->hi.x, p[i].x), fmax(g->hi.y, p[i].y), fmax(g->hi.z, p[i].z));
+        }
+        g->key[i] = cell_key(cell_of(p[i].x, g->cell), cell_of(p[i].y, g->cell), cell_of(p[i].z, g->cell));
         unsigned h = hash_key(g->key[i], g->mask);
         g->next[i] = g->head[h];
         g->head[h] = i;
@@ -69,10 +100,18 @@ static void grid_free(grid *g)
 typedef void (*grid_fn)(int i, void *ctx);
 static int grid_query(const grid *g, cm_vec3 lo, cm_vec3 hi, long cap, grid_fn fn, void *ctx)
 {
-    long x0 = (long)floor(lo.x / g->cell), x1 = (long)floor(hi.x / g->cell);
-    long y0 = (long)floor(lo.y / g->cell), y1 = (long)floor(hi.y / g->cell);
-    long z0 = (long)floor(lo.z / g->cell), z1 = (long)floor(hi.z / g->cell);
-    if ((x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1) > cap)
+    if (g->empty)
+        return 0;
+    /* only where points are (fmax/fmin also drop a NaN bound for the grid's own) */
+    lo = cm_v3(fmax(lo.x, g->lo.x), fmax(lo.y, g->lo.y), fmax(lo.z, g->lo.z));
+    hi = cm_v3(fmin(hi.x, g->hi.x), fmin(hi.y, g->hi.y), fmin(hi.z, g->hi.z));
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z))
+        return 0;
+    long x0 = cell_of(lo.x, g->cell), x1 = cell_of(hi.x, g->cell);
+    long y0 = cell_of(lo.y, g->cell), y1 = cell_of(hi.y, g->cell);
+    long z0 = cell_of(lo.z, g->cell), z1 = cell_of(hi.z, g->cell);
+    /* the product in double: three spans of up to 2e15 cells overflow any integer */
+    if ((double)(x1 - x0 + 1) * (double)(y1 - y0 + 1) * (double)(z1 - z0 + 1) > (double)cap)
         return -1;
     for (long x = x0; x <= x1; x++)
         for (long y = y0; y <= y1; y++)
@@ -221,6 +260,22 @@ static void split_candidate(int v, void *vctx)
 }
 
 
+typedef struct merge_ctx {
+    const cm_vec3 *ends;
+    const int *body;
+    int *par;
+    double tol;
+    int i;
+} merge_ctx;
+
+static void merge_candidate(int j, void *vctx)
+{
+    merge_ctx *x = vctx;
+    int i = x->i;
+    if (j > i && x->body[i] == x->body[j] && cm_dist(x->ends[i], x->ends[j]) <= x->tol)
+        uf_union(x->par, i, j);
+}
+
 /* sort piece indices by (min vertex, max vertex, index) */
 static const piece *sort_pieces;
 static int cmp_idx(const void *a, const void *b)
@@ -258,7 +313,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         free(ends);
         free(par);
         free(seg_loop);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     /* a body is one subfigure instance: edges pair only inside a body, so two placed parts
      * of an assembly that touch do not become one non-manifold solid.  Shells do not
@@ -268,7 +323,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         free(ends);
         free(par);
         free(seg_loop);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     for (int f = 0; f < m->nfaces; f++) {
         const brep_face *bf = &m->faces[f];
@@ -307,21 +362,18 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         free(ends);
         free(par);
         free(seg_loop);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
+    merge_ctx mc = {ends, body, par, tol, 0};
     for (int i = 0; i < 2 * ns; i++) {
+        if (!cm_finite3(ends[i]))
+            continue; /* near nothing: stays a vertex of its own (or its loop joint) */
         cm_vec3 lo = cm_sub(ends[i], cm_v3(tol, tol, tol)), hi = cm_add(ends[i], cm_v3(tol, tol, tol));
-        long x0 = (long)floor(lo.x / g.cell), x1 = (long)floor(hi.x / g.cell);
-        long y0 = (long)floor(lo.y / g.cell), y1 = (long)floor(hi.y / g.cell);
-        long z0 = (long)floor(lo.z / g.cell), z1 = (long)floor(hi.z / g.cell);
-        for (long x = x0; x <= x1; x++)
-            for (long y = y0; y <= y1; y++)
-                for (long z = z0; z <= z1; z++) {
-                    int64_t k = cell_key(x, y, z);
-                    for (int j = g.head[hash_key(k, g.mask)]; j >= 0; j = g.next[j])
-                        if (j > i && g.key[j] == k && body[i] == body[j] && cm_dist(ends[i], ends[j]) <= tol)
-                            uf_union(par, i, j);
-                }
+        mc.i = i;
+        /* +-tol in cells of side tol: 3 per axis, 27 cells (the cap is never reached) */
+        if (grid_query(&g, lo, hi, 64, merge_candidate, &mc) != 0)
+            for (int j = i + 1; j < 2 * ns; j++)
+                merge_candidate(j, &mc);
     }
     grid_free(&g);
     int *vid = malloc((size_t)(2 * ns + 1) * sizeof *vid);
@@ -336,7 +388,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         free(ends);
         free(par);
         free(seg_loop);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     for (int i = 0; i < 2 * ns; i++)
         vid[i] = -1;
@@ -366,7 +418,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         free(vid);
         free(ends);
         free(seg_loop);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     for (int f = 0; f < m->nfaces && err == CM_OK; f++) {
         const brep_face *bf = &m->faces[f];
@@ -411,6 +463,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
                 hcurve_domain(c, &t0, &t1);
                 double prev_t = t0;
                 int prev_v = x.va;
+                int first_piece = b.npc, first_order = order, splits = out->nsplits;
                 for (int k = 0; k <= x.nts && err == CM_OK; k++) {
                     double nt = k < x.nts ? ts[k] : t1;
                     int nv = k < x.nts ? tv[k] : x.vb;
@@ -422,6 +475,22 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
                         err = hcurve_copy(c, &p.c, st);
                     else
                         err = hcurve_subrange(c, prev_t, nt, &p.c, st);
+                    if (err != CM_OK && err != CM_E_NOMEM && x.nts > 0) {
+                        /* the cut was refused (a parameter the knot insertion cannot use): keep the
+                         * segment whole, as if no vertex lay on it, rather than lose the model */
+                        while (b.npc > first_piece)
+                            hcurve_free(&b.pc[--b.npc].c);
+                        order = first_order;
+                        out->nsplits = splits;
+                        if (st)
+                            cm_status_init(st);
+                        x.nts = 0;
+                        k = -1;
+                        prev_t = t0;
+                        prev_v = x.va;
+                        err = CM_OK;
+                        continue;
+                    }
                     if (err != CM_OK)
                         break;
                     p.va = prev_v;
@@ -432,7 +501,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
                     p.edge = -1;
                     if (push_piece(&b, &p)) {
                         hcurve_free(&p.c);
-                        err = cm_fail(st, CM_E_IO, "out of memory");
+                        err = cm_fail(st, CM_E_NOMEM, "out of memory");
                     }
                     if (k < x.nts)
                         out->nsplits++;
@@ -452,7 +521,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
     int *idx = malloc((size_t)(b.npc + 1) * sizeof *idx);
     out->edges = calloc((size_t)(b.npc + 1), sizeof *out->edges);
     if (err == CM_OK && (!idx || !out->edges))
-        err = cm_fail(st, CM_E_IO, "out of memory");
+        err = cm_fail(st, CM_E_NOMEM, "out of memory");
     if (err == CM_OK) {
         for (int i = 0; i < b.npc; i++)
             idx[i] = i;
@@ -513,7 +582,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         out->loops = malloc((size_t)(m->nloops + 1) * sizeof *out->loops);
         out->faces = malloc((size_t)(m->nfaces + 1) * sizeof *out->faces);
         if (!out->uses || !out->corners || !out->loops || !out->faces)
-            err = cm_fail(st, CM_E_IO, "out of memory");
+            err = cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     if (err == CM_OK) {
         int k = 0;

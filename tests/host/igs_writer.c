@@ -443,3 +443,71 @@ void igw_split_half_cylinder_144(igw *w, double r, double h)
         igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, 4)));
     }
 }
+
+/* ---- building blocks for hostile inputs ---- */
+
+int igw_square_144(igw *w, double a, double z, int subord)
+{
+    v3 p00 = {0, 0, z}, p10 = {a, 0, z}, p11 = {a, a, z}, p01 = {0, a, z};
+    int s = bilinear_128(w, p00, p10, p01, p11);
+    int de = igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, rect_loop(w, p00, p10, p11, p01)));
+    igw_set(w, de, subord, 0, 0);
+    return de;
+}
+
+int igw_transform_124(igw *w, const double m[12])
+{
+    char buf[1024];
+    int k = 0;
+    for (int i = 0; i < 12; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, "%s%.17g", i ? "," : "", m[i]);
+    int de = igw_add(w, 124, 0, "%s", buf);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+/* a list "n,de,de,..." of `fan` copies of `de` after `head` */
+static void repeat_list(char *buf, size_t cap, const char *head, int fan, const int *des)
+{
+    int k = snprintf(buf, cap, "%s%d", head, fan);
+    for (int i = 0; i < fan && (size_t)k < cap; i++)
+        k += snprintf(buf + k, cap - (size_t)k, ",%d", des[i]);
+}
+
+int igw_subfigure_dag(igw *w, int levels, int fan)
+{
+    int face = igw_square_144(w, 10.0, 0.0, 1);
+    int def = igw_add(w, 308, 0, "0,3HL00,1,%d", face);
+    igw_set(w, def, 1, 0, 0);
+    int *inst = malloc((size_t)(fan > 0 ? fan : 1) * sizeof *inst);
+    char buf[4096], head[32];
+    for (int k = 1; k <= levels; k++) {
+        for (int i = 0; i < fan; i++) {
+            /* each instance moved along x so the placed squares do not coincide */
+            inst[i] = igw_add(w, 408, 0, "%d,%.17g,0,0,1", def, 20.0 * i);
+            igw_set(w, inst[i], 1, 0, 0);
+        }
+        snprintf(head, sizeof head, "0,3HL%02d,", k % 100);
+        repeat_list(buf, sizeof buf, head, fan, inst);
+        def = igw_add(w, 308, 0, "%s", buf);
+        igw_set(w, def, 1, 0, 0);
+    }
+    free(inst);
+    return igw_add(w, 408, 0, "%d,0,0,0,1", def);
+}
+
+int igw_composite_dag_144(igw *w, int levels, int fan)
+{
+    v3 p00 = {0, 0, 0}, p10 = {10, 0, 0}, p11 = {10, 10, 0}, p01 = {0, 10, 0};
+    int s = bilinear_128(w, p00, p10, p01, p11);
+    int c = circle_100(w, 5, 5, 0, 1);
+    int *m = malloc((size_t)(fan > 0 ? fan : 1) * sizeof *m);
+    for (int k = 1; k <= levels; k++) {
+        for (int i = 0; i < fan; i++)
+            m[i] = c;
+        c = composite(w, m, fan);
+    }
+    free(m);
+    return igw_add(w, 144, 0, "%d,1,1,%d,%d", s, on_surface(w, s, rect_loop(w, p00, p10, p11, p01)),
+                   on_surface(w, s, c));
+}

@@ -61,4 +61,28 @@ void igw_split_half_cylinder_144(igw *w, double r, double h);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 
+/* ---- building blocks for hostile inputs (tests/host/test_import_hostile.c) ---- */
+
+/** A planar square [0,a]^2 at height z as a 144 (bilinear 128, composite of 4 lines); returns the
+ *  144's DE.  `subord` 1 makes it a member of something (a subfigure) rather than a top-level face. */
+int igw_square_144(igw *w, double a, double z, int subord);
+
+/** A 124 transformation x -> R x + t with m = {R11, R12, R13, T1, R21, ..., T3} (the file's order);
+ *  returns its DE. */
+int igw_transform_124(igw *w, const double m[12]);
+
+/**
+ * An acyclic subfigure DAG: definition 0 holds one square face; definition k (1..levels) holds
+ * `fan` 408 instances of definition k-1; one top-level 408 places the last definition, so the
+ * model places fan^levels faces.  Returns the DE of the top-level instance.
+ */
+int igw_subfigure_dag(igw *w, int levels, int fan);
+
+/**
+ * A trimmed square whose hole is a composite-curve DAG: composite 0 is a full circle (100),
+ * composite k (1..levels) lists composite k-1 `fan` times, so the hole flattens into fan^levels
+ * pieces.  Returns the DE of the 144.
+ */
+int igw_composite_dag_144(igw *w, int levels, int fan);
+
 #endif /* IGS_WRITER_H */

@@ -248,7 +248,7 @@ static void test_alloc_copy_free(void **state)
     assert_true(s.U == NULL && s.nu == 0);
 }
 
-/* Every allocation of every builder may fail: CM_E_IO, `out` empty, nothing leaked (run under ASan),
+/* Every allocation of every builder may fail: CM_E_NOMEM, `out` empty, nothing leaked (run under ASan),
  * and make_compatible leaves its inputs untouched. */
 enum { OP_ARC, OP_CUBIC, OP_SUBRANGE, OP_ELEVATE, OP_COMPAT, OP_RULED, OP_REVOLVE, OP_SPHERE, OP_CONE, OP_ISO,
        OP_EXTRUDE, OP_COPY, OP_COUNT };
@@ -327,20 +327,20 @@ static void test_alloc_failure_injection(void **state)
             hsurf_free(&so);
             if (e == CM_OK)
                 break;
-            assert_int_equal(e, CM_E_IO);
+            assert_int_equal(e, CM_E_NOMEM);
             failures++;
         }
         assert_true(failures >= 1); /* every op allocates */
         assert_true(failures < 200);
     }
-    /* the status records CM_E_IO */
+    /* the status records CM_E_NOMEM */
     cm_status st;
     cm_status_init(&st);
     hcurve c = {0};
     hnurbs_fail_alloc_after(0);
-    assert_err(hcurve_elevate(&poly, 4, &c, &st), CM_E_IO);
+    assert_err(hcurve_elevate(&poly, 4, &c, &st), CM_E_NOMEM);
     hnurbs_fail_alloc_after(-1);
-    assert_int_equal(st.code, CM_E_IO);
+    assert_int_equal(st.code, CM_E_NOMEM);
     assert_null(c.knots);
     hcurve_free(&rat);
     hcurve_free(&poly);

@@ -38,7 +38,8 @@
     X(E_USB, "USB error")                                                         \
     X(E_SERIAL, "serial line error")                                              \
     X(E_GPIO, "GPIO error")                                                       \
-    X(E_PROTOCOL, "link protocol error")
+    X(E_PROTOCOL, "link protocol error")                                         \
+    X(E_NOMEM, "out of memory")
 
 #define CM_ERR_ENUM_(id, text) CM_##id,
 typedef enum cm_err { CM_ERRORS(CM_ERR_ENUM_) CM_ERR_COUNT } cm_err;
@@ -57,6 +58,7 @@ const char *cm_strerror(cm_err e);
 
 #define CM_NO_OFFSET UINT32_MAX /* status.offset when no byte position applies */
 #define CM_NO_LIMIT 0xFFFFu     /* status.limit when no limit is involved */
+#define CM_NO_FACE_INDEX UINT32_MAX /* status.face when the failure concerns no one face */
 
 /*
  * Caller-owned detail of a failure.  The first (innermost) failure wins:
@@ -68,6 +70,7 @@ typedef struct cm_status {
     cm_err code;       /* CM_OK until the first failure */
     uint32_t offset;   /* byte offset in the input, or CM_NO_OFFSET */
     uint16_t limit;    /* cm_limit_id for CM_E_LIMIT, else CM_NO_LIMIT */
+    uint32_t face;     /* the face (index in the file's FACE order) it concerns, or CM_NO_FACE_INDEX */
     uint64_t need;     /* CM_E_LIMIT / CM_E_NOSPACE: what the input needs */
     uint64_t have;     /* ... and what this build or buffer has */
     int sys_errno;     /* errno of a failed system call, or 0 */
@@ -88,5 +91,12 @@ cm_err cm_fail_limit(cm_status *st, unsigned limit, uint64_t need, uint64_t have
 
 /** Record CM_E_NOSPACE: a caller buffer of `have` elements, `need` required. */
 cm_err cm_fail_nospace(cm_status *st, uint64_t need, uint64_t have, const char *where);
+
+/**
+ * Name the face a failure just recorded in `st` concerns, and where its data is in the input:
+ * sets st->face (if not set yet) and, when the failure has no byte offset yet, st->offset =
+ * `offset` (the face's record).  Nothing happens when st is NULL or holds no failure.
+ */
+void cm_status_at_face(cm_status *st, uint32_t face, uint32_t offset);
 
 #endif /* CM_ERROR_H */
