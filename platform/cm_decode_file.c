@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -70,6 +71,16 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
     return e;
 }
 
+/* a face's output must be finite (the writers refuse the whole mesh otherwise, naming no face) */
+static cm_err check_face_finite(const cm_mesh *mesh, const cm_mesh_mark *from, cm_status *st)
+{
+    for (uint32_t i = from->nverts; i < mesh->nverts; i++)
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(mesh->pos[i][k]) || !isfinite(mesh->nrm[i][k]))
+                return cm_fail(st, CM_E_NONFINITE, "tessellation: a vertex beyond float range");
+    return CM_OK;
+}
+
 cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_ws *ws, cm_decode_summary *sum,
                       cm_status *st)
 {
@@ -79,11 +90,26 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
     sum->tess_tol = tol > 0 ? tol : m->tess_tol;
     for (uint32_t f = 0; f < m->nfaces; f++) {
         cm_tess_info info;
-        cm_err e = cm_tessellate_face(m, f, sum->tess_tol, mesh, ws, &info, st);
+        cm_status fst;
+        cm_status_init(&fst);
+        cm_mesh_mark mark = cm_mesh_save(mesh);
+        cm_err e = cm_tessellate_face(m, f, sum->tess_tol, mesh, ws, &info, &fst);
+        if (e == CM_OK && (e = check_face_finite(mesh, &mark, &fst)) != CM_OK)
+            cm_status_at_face(&fst, f, m->faces[f].rec_off);
         if (e != CM_OK) {
-            if (st && st->where == NULL)
-                st->where = "tessellation";
-            return e;
+            if (fst.where == NULL)
+                fst.where = "tessellation";
+            cm_mesh_rollback(mesh, &mark); /* nothing of the failed face stays in the mesh */
+            if (e == CM_E_LIMIT || e == CM_E_NOMEM || e == CM_E_IO) {
+                if (st && st->code == CM_OK)
+                    *st = fst;
+                return e;
+            }
+            /* this face only: say why, go on */
+            if (sum->faces_left_out < CM_DECODE_LEFT_OUT_LIST)
+                sum->left_out[sum->faces_left_out] = fst;
+            sum->faces_left_out++;
+            continue;
         }
         if (info.max_gap > sum->max_gap)
             sum->max_gap = info.max_gap;
@@ -94,6 +120,13 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
     sum->faces = m->nfaces;
     sum->triangles = mesh->nindex / 3;
     sum->vertices = mesh->nverts;
+    if (sum->faces_left_out > 0 && mesh->nindex == 0) {
+        /* nothing to show (every face left out, or the rest without a triangle): the model fails,
+           with its first face's reason and place (the writer would only say "empty mesh") */
+        if (st && st->code == CM_OK)
+            *st = sum->left_out[0];
+        return sum->left_out[0].code;
+    }
     return CM_OK;
 }
 

@@ -15,9 +15,14 @@
 #include "cm/cm_out.h"
 #include "cm/cm_tessellate.h"
 
+/** Faces left out whose reasons a summary keeps (the count goes on beyond). */
+#define CM_DECODE_LEFT_OUT_LIST 8
+
 typedef struct cm_decode_summary {
-    uint32_t faces, triangles, vertices;
-    uint32_t faces_plane, faces_gregory, faces_keep;
+    uint32_t faces, triangles, vertices;       /* faces: of the model; triangles, vertices: of the mesh */
+    uint32_t faces_plane, faces_gregory, faces_keep; /* faces in the mesh, by method */
+    uint32_t faces_left_out;                   /* faces whose tessellation failed: not in the mesh */
+    cm_status left_out[CM_DECODE_LEFT_OUT_LIST]; /* why, for the first of them: code, face, byte offset */
     double tess_tol;
     uint64_t out_bytes;
     double max_gap;
@@ -35,6 +40,16 @@ CM_NODISCARD cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_stat
 /**
  * Tessellate every face of dec's model into mesh (tol <= 0: the file's
  * recommended chordal tolerance).
+ *
+ * One bad face never sinks a model: a face whose tessellation fails is left
+ * out (the mesh is rolled back to where it was before that face), counted
+ * in sum->faces_left_out, and the first CM_DECODE_LEFT_OUT_LIST of them are
+ * kept in sum->left_out (each status names the face, its record's byte
+ * offset and the cause) for the caller to report as warnings.  Only these
+ * end the decode: CM_E_LIMIT (the mesh is full, or the face exceeds this
+ * build), CM_E_NOMEM and CM_E_IO, with the face named in the status; and a
+ * model with faces left out and no triangle left fails with its first left-
+ * out face's error (there is nothing to show).
  */
 CM_NODISCARD cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_ws *ws,
                                    cm_decode_summary *sum, cm_status *st);

@@ -47,6 +47,8 @@ char *cm_format_status(char *buf, size_t cap, const cm_status *st)
     if (cap == 0)
         return buf;
     buf[0] = 0;
+    if (st->face != CM_NO_FACE_INDEX)
+        APPEND("face %lu, ", (unsigned long)st->face);
     if (st->offset != CM_NO_OFFSET)
         APPEND("byte %lu: ", (unsigned long)st->offset);
     APPEND("%s (%s)", cm_strerror(st->code), cm_err_name(st->code));

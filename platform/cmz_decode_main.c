@@ -8,6 +8,9 @@
  * buffer is static and sized by fixedcfg; the decode path never touches
  * the heap.  A model larger than this build's limits is refused before
  * its body is read, naming the limit.  The output appears atomically.
+ * Errors name the place in the input: the byte offset and, for a face's
+ * error, the face.  A face that cannot be tessellated is left out, with a
+ * warning naming it; the summary line then ends ", N faces left out".
  *
  * Exit status: 0 success, 1 the file is malformed or exceeds a limit,
  * 2 usage, 3 I/O error.
@@ -27,6 +30,14 @@ static cm_tess_ws tess;
 static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
 static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
 static cm_mesh_face faces[CM_MAX_FACES];
+
+/* "PROG: IN: [face F, ]byte N: text (CODE) [in where]": the place in the input first (cm_format_status) */
+static void report(FILE *f, const char *level, const char *in, const cm_status *st)
+{
+    char text[512];
+    cm_format_status(text, sizeof text, st);
+    fprintf(f, "cmz-decode: %s%s: %s\n", level, in, text);
+}
 
 static void usage(FILE *f)
 {
@@ -86,12 +97,24 @@ int main(int argc, char **argv)
     cm_status_init(&st);
     cm_decode_summary sum;
     uint64_t bytes = 0;
-    if (cm_decode_read(in, &decoder, &st) != CM_OK || cm_decode_mesh(&decoder, tol, &mesh, &tess, &sum, &st) != CM_OK ||
-        cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
-        cm_report_status(stderr, "cmz-decode", in, &st);
+    if (cm_decode_read(in, &decoder, &st) != CM_OK || cm_decode_mesh(&decoder, tol, &mesh, &tess, &sum, &st) != CM_OK) {
+        report(stderr, "", in, &st);
         return st.code == CM_E_IO ? 3 : 1;
     }
-    printf("%s -> %s: %u faces, %u triangles, %llu bytes\n", in, out, sum.faces, sum.triangles,
+    /* faces left out: one warning each (the first CM_DECODE_LEFT_OUT_LIST), the count in the summary */
+    for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++)
+        report(stderr, "warning: ", in, &sum.left_out[i]);
+    if (sum.faces_left_out > CM_DECODE_LEFT_OUT_LIST)
+        fprintf(stderr, "cmz-decode: warning: %s: %lu more faces left out\n", in,
+                (unsigned long)(sum.faces_left_out - CM_DECODE_LEFT_OUT_LIST));
+    if (cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
+        report(stderr, "", in, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
+    printf("%s -> %s: %u faces, %u triangles, %llu bytes", in, out, sum.faces, sum.triangles,
            (unsigned long long)bytes);
+    if (sum.faces_left_out > 0)
+        printf(", %lu faces left out", (unsigned long)sum.faces_left_out);
+    printf("\n");
     return 0;
 }

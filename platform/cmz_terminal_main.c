@@ -334,11 +334,20 @@ static int decode_into_place(const config *c, char *text, size_t cap)
         textf(text, cap, "decoded, but cannot move the model to %s: %s", cmz, strerror(errno));
         return CM_E_IO;
     }
+    /* one bad face never sinks a model: the others are shown, and each one left out is logged */
+    for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++) {
+        char why[256];
+        cm_format_status(why, sizeof why, &sum.left_out[i]);
+        logline("warn", "decode", "face left out: %s", why);
+    }
     /* short: on a noisy line a long DONE rarely arrives whole (the log line has the details) */
-    textf(text, cap, "%u faces, %u triangles", sum.faces, sum.triangles);
-    logline("info", "decode", "faces=%u plane=%u gregory=%u kept=%u triangles=%u glb_bytes=%llu ms=%lld", sum.faces,
-            sum.faces_plane, sum.faces_gregory, sum.faces_keep, sum.triangles, (unsigned long long)bytes,
-            (long long)(cm_link_now_ms() - t0));
+    if (sum.faces_left_out)
+        textf(text, cap, "%u faces, %u triangles, %u left out", sum.faces, sum.triangles, sum.faces_left_out);
+    else
+        textf(text, cap, "%u faces, %u triangles", sum.faces, sum.triangles);
+    logline("info", "decode", "faces=%u plane=%u gregory=%u kept=%u left_out=%u triangles=%u glb_bytes=%llu ms=%lld",
+            sum.faces, sum.faces_plane, sum.faces_gregory, sum.faces_keep, sum.faces_left_out, sum.triangles,
+            (unsigned long long)bytes, (long long)(cm_link_now_ms() - t0));
     return 0;
 }
 

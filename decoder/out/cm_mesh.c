@@ -1,4 +1,4 @@
-/* cm_mesh.c - the decoded triangle mesh: clearing and bounds. */
+/* cm_mesh.c - the decoded triangle mesh: clearing, rolling back a failed face, bounds. */
 #include "cm/cm_mesh.h"
 
 #include <stddef.h>
@@ -10,6 +10,23 @@ void cm_mesh_clear(cm_mesh *m)
     m->nverts = 0;
     m->nindex = 0;
     m->nfaces = 0;
+}
+
+cm_mesh_mark cm_mesh_save(const cm_mesh *m)
+{
+    cm_mesh_mark k = {m->nverts, m->nindex, m->nfaces};
+    return k;
+}
+
+void cm_mesh_rollback(cm_mesh *m, const cm_mesh_mark *mark)
+{
+    /* only ever back: a mark from another mesh, or a later one, leaves nothing beyond the fill */
+    if (mark->nverts < m->nverts)
+        m->nverts = mark->nverts;
+    if (mark->nindex < m->nindex)
+        m->nindex = mark->nindex;
+    if (mark->nfaces < m->nfaces)
+        m->nfaces = mark->nfaces;
 }
 
 /*

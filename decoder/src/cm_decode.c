@@ -51,6 +51,27 @@ static cm_err fail(cm_decoder *d, cm_status *st, cm_err e, uint32_t offset, cons
 
 /* ---- header ---- */
 
+/* |origin| at most 2^100 mm: every grid point origin + q k (|k| <= 2^40, q <= 2^20) stays below
+   2^101, far inside the range of the float positions the writers emit (2^128) */
+#define ORIGIN_MAX 0x1p100
+
+static cm_err header_limit(cm_decoder *d, cm_status *st, unsigned id, uint64_t need, uint64_t have, uint32_t at,
+                           const char *where)
+{
+    int open = st && st->code == CM_OK;
+    d->state = CM_DEC_FAILED;
+    cm_fail_limit(st, id, need, have, where);
+    if (open)
+        st->offset = at;
+    return CM_E_LIMIT;
+}
+
+/*
+ * The whole header is in (d->header_len bytes, a length feed_header checked).  Every field is
+ * checked before anything uses it: counts before they size or index anything (the section table
+ * has room for CM_SEC_COUNT entries: a file declaring another number of sections is refused here,
+ * before the table is read), lengths and offsets before any byte is addressed through them.
+ */
 static cm_err check_header(cm_decoder *d, cm_status *st)
 {
     const uint8_t *b = d->buf;
@@ -60,73 +81,89 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     d->flags = cm_get_u16(b + 6);
     d->file_len = cm_get_u32(b + 12);
     d->nlimits = b[16];
-    d->nsec = b[17];
+    uint32_t nsec = b[17];
+    d->nsec = 0;
+    /* H must be exactly the fixed fields, the two tables and the CRC (nlimits, nsec <= 255: no
+       overflow); then the CRC, which covers every field below */
     uint32_t table = CM_FMT_FIXED_HEADER + 4u * d->nlimits;
-    if (H != table + CM_FMT_SECTION_ENTRY * d->nsec + 4u)
-        return fail(d, st, CM_E_FORMAT, 8, "header length");
+    if (H != table + CM_FMT_SECTION_ENTRY * nsec + 4u)
+        return fail(d, st, CM_E_FORMAT, 8, "header length does not fit its need and section counts");
     uint32_t crc = cm_get_u32(b + H - 4);
     if (crc_differs(cm_crc32(b, H - 4), crc))
         return fail(d, st, CM_E_CRC, H - 4, "header CRC");
-    if (d->file_len < H + 4u || d->file_len > (uint32_t)CM_MAX_FILE_BYTES) {
-        if (d->file_len > (uint32_t)CM_MAX_FILE_BYTES) {
-            d->state = CM_DEC_FAILED;
-            cm_fail_limit(st, CM_LIMIT_MAX_FILE_BYTES, d->file_len, CM_MAX_FILE_BYTES, "file length");
-            if (st)
-                st->offset = 12;
-            return CM_E_LIMIT;
-        }
-        return fail(d, st, CM_E_FORMAT, 12, "file length");
-    }
+    if (nsec != CM_SEC_COUNT)
+        return fail(d, st, CM_E_FORMAT, 17, "section count (a .cmz has 5 sections)");
+    d->nsec = nsec;
+    if (d->file_len > (uint32_t)CM_MAX_FILE_BYTES)
+        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->file_len, CM_MAX_FILE_BYTES, 12, "file length");
+    if (d->file_len < H + 4u)
+        return fail(d, st, CM_E_FORMAT, 12, "file length shorter than its header and trailer");
     /* the model's needs against this build: refused here, before the body */
     for (uint32_t i = 0; i < d->nlimits; i++) {
-        uint32_t need = cm_get_u32(b + CM_FMT_FIXED_HEADER + 4 * i);
+        uint32_t at = CM_FMT_FIXED_HEADER + 4 * i;
+        uint32_t need = cm_get_u32(b + at);
         if (i < (uint32_t)CM_LIMIT_COUNT) {
             d->need[i] = need;
-            if (need > cm_limit_table[i].value) {
-                d->state = CM_DEC_FAILED;
-                cm_fail_limit(st, i, need, cm_limit_table[i].value, "header needs");
-                if (st)
-                    st->offset = CM_FMT_FIXED_HEADER + 4 * i;
-                return CM_E_LIMIT;
-            }
+            if (need > cm_limit_table[i].value)
+                return header_limit(d, st, i, need, cm_limit_table[i].value, at, "header needs");
         } else if (need != 0) {
             /* a limit this build does not know about, and the model needs it */
-            return fail(d, st, CM_E_VERSION, CM_FMT_FIXED_HEADER + 4 * i, "unknown limit");
+            return fail(d, st, CM_E_VERSION, at, "unknown limit");
         }
     }
     for (uint32_t i = d->nlimits; i < (uint32_t)CM_LIMIT_COUNT; i++)
         d->need[i] = 0;
+    /* the grid and the tolerances */
+    int qe = (int8_t)b[18];
+    if (qe < -60 || qe > 20)
+        return fail(d, st, CM_E_RANGE, 18, "quantisation exponent (grid step 2^e mm, e in -60..20)");
+    for (int k = 0; k < 3; k++) {
+        double o = cm_get_f64(b + 20 + 8 * k);
+        if (!isfinite(o))
+            return fail(d, st, CM_E_NONFINITE, 20u + 8u * (uint32_t)k, "grid origin");
+        if (!(fabs(o) <= ORIGIN_MAX))
+            return fail(d, st, CM_E_RANGE, 20u + 8u * (uint32_t)k, "grid origin (|origin| <= 2^100 mm)");
+        d->model.origin[k] = o;
+    }
+    double q = 1.0;
+    for (int i = 0; i < (qe < 0 ? -qe : qe); i++)
+        q = qe < 0 ? q * 0.5 : q * 2.0;
+    d->model.q = q;
+    d->model.tess_tol = cm_get_f64(b + 44);
+    if (!isfinite(d->model.tess_tol))
+        return fail(d, st, CM_E_NONFINITE, 44, "chordal tolerance");
+    if (!(d->model.tess_tol > 0))
+        return fail(d, st, CM_E_RANGE, 44, "chordal tolerance (must be > 0)");
+    d->model.rel_tol = cm_get_f64(b + 52);
+    if (!isfinite(d->model.rel_tol))
+        return fail(d, st, CM_E_NONFINITE, 52, "rebuild tolerance");
+    if (!(d->model.rel_tol >= 0))
+        return fail(d, st, CM_E_RANGE, 52, "rebuild tolerance (must be >= 0)");
+    d->model.need_tess_points = d->need[CM_LIMIT_MAX_TESS_POINTS];
+    d->model.need_edge_samples = d->need[CM_LIMIT_MAX_EDGE_SAMPLES];
+    /* the section table: tags 1..5 in order, each once, back to back after the header, filling the
+       file up to its trailer (offsets and lengths checked before cm_dec_finish addresses bytes) */
     uint32_t prev_end = H;
-    for (uint32_t s = 0; s < d->nsec; s++) {
-        const uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * s;
+    for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+        uint32_t at = table + CM_FMT_SECTION_ENTRY * s;
+        const uint8_t *e = b + at;
         cm_dec_section *sec = &d->sec[s];
         sec->tag = e[0];
         sec->off = cm_get_u32(e + 4);
         sec->len = cm_get_u32(e + 8);
         sec->crc = cm_get_u32(e + 12);
-        uint32_t at = table + CM_FMT_SECTION_ENTRY * s;
-        /* sections in tag order 1..5, each once, back to back after the header */
-        if (sec->tag != s + 1 || e[1] || e[2] || e[3])
-            return fail(d, st, CM_E_FORMAT, at, "section table");
-        if (sec->off != prev_end || sec->len > d->file_len - 4u - sec->off)
-            return fail(d, st, CM_E_FORMAT, at + 4, "section bounds");
+        if (sec->tag != s + 1)
+            return fail(d, st, CM_E_FORMAT, at, "section table: tags must be 1..5 in order");
+        if (e[1] || e[2] || e[3])
+            return fail(d, st, CM_E_FORMAT, at + 1, "section table: reserved bytes must be 0");
+        if (sec->off != prev_end)
+            return fail(d, st, CM_E_FORMAT, at + 4, "section offset: sections follow the header back to back");
+        if (sec->len > d->file_len - 4u - sec->off)
+            return fail(d, st, CM_E_FORMAT, at + 8, "section length: beyond the end of the file");
         prev_end = sec->off + sec->len;
     }
     if (prev_end != d->file_len - 4u)
         return fail(d, st, CM_E_FORMAT, 12, "sections do not fill the file");
-    double q = 1.0;
-    int qe = (int8_t)b[18];
-    for (int i = 0; i < (qe < 0 ? -qe : qe); i++)
-        q = qe < 0 ? q * 0.5 : q * 2.0;
-    d->model.q = q;
-    for (int k = 0; k < 3; k++)
-        d->model.origin[k] = cm_get_f64(b + 20 + 8 * k);
-    d->model.tess_tol = cm_get_f64(b + 44);
-    d->model.rel_tol = cm_get_f64(b + 52);
-    if (qe < -60 || qe > 20 || !isfinite(d->model.origin[0]) || !isfinite(d->model.origin[1]) ||
-        !isfinite(d->model.origin[2]) || !(d->model.tess_tol > 0) || !isfinite(d->model.tess_tol) ||
-        !(d->model.rel_tol >= 0) || !isfinite(d->model.rel_tol))
-        return fail(d, st, CM_E_NONFINITE, 18, "quantisation");
     d->state = CM_DEC_BODY;
     return CM_OK;
 }
@@ -141,20 +178,15 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
     for (uint32_t i = 0; i < d->len && i < 4; i++)
         if (d->buf[i] != magic[i])
             return fail(d, st, CM_E_MAGIC, i, "magic");
-    if (d->len >= 6 && (d->buf[4] < CM_FMT_VERSION_MIN_MAJOR || d->buf[4] > CM_FMT_VERSION_MAJOR))
+    if (d->len >= 5 && (d->buf[4] < CM_FMT_VERSION_MIN_MAJOR || d->buf[4] > CM_FMT_VERSION_MAJOR))
         return fail(d, st, CM_E_VERSION, 4, "version");
     if (d->len < 12)
         return CM_OK;
     d->header_len = cm_get_u32(d->buf + 8);
     if (d->header_len < CM_FMT_FIXED_HEADER + 4u || d->header_len > CM_FMT_MAX_HEADER)
         return fail(d, st, CM_E_FORMAT, 8, "header length");
-    if (d->header_len > (uint32_t)CM_MAX_FILE_BYTES) {
-        d->state = CM_DEC_FAILED;
-        cm_fail_limit(st, CM_LIMIT_MAX_FILE_BYTES, d->header_len, CM_MAX_FILE_BYTES, "header length");
-        if (st)
-            st->offset = 8;
-        return CM_E_LIMIT;
-    }
+    if (d->header_len > (uint32_t)CM_MAX_FILE_BYTES)
+        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->header_len, CM_MAX_FILE_BYTES, 8, "header length");
     if (d->len < d->header_len)
         return CM_OK;
     return check_header(d, st);
@@ -192,30 +224,53 @@ cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
 typedef struct reader {
     cm_ac_dec ac;
     uint32_t base; /* file offset of the section */
+    uint32_t face; /* the face whose record (FACE) or colour (COLR) is being read, or CM_NO_FACE_INDEX */
     cm_decoder *d;
     cm_status *st;
 } reader;
 
+/* where the reader is in the file: the range coder's read position (it reads a few bytes ahead of
+   the bits it has decoded, so a field's own bytes are at or shortly before this offset) */
 static uint32_t pos(const reader *r)
 {
     return r->base + (uint32_t)r->ac.pos;
 }
 
+/* a failure at the reader's position, naming the face being read if any */
+static cm_err rfail_at(reader *r, cm_err e, uint32_t at, const char *where)
+{
+    int open = r->st && r->st->code == CM_OK;
+    cm_err code = fail(r->d, r->st, r->ac.overrun ? CM_E_TRUNCATED : e, at, where);
+    if (open && r->face != CM_NO_FACE_INDEX)
+        r->st->face = r->face;
+    return code;
+}
+
 static cm_err rfail(reader *r, cm_err e, const char *where)
 {
-    return fail(r->d, r->st, r->ac.overrun ? CM_E_TRUNCATED : e, pos(r), where);
+    return rfail_at(r, e, pos(r), where);
+}
+
+static cm_err rlimit_at(reader *r, unsigned id, uint64_t need, uint64_t have, uint32_t at, const char *where)
+{
+    int open = r->st && r->st->code == CM_OK;
+    r->d->state = CM_DEC_FAILED;
+    cm_fail_limit(r->st, id, need, have, where);
+    if (open) {
+        r->st->offset = at;
+        if (r->face != CM_NO_FACE_INDEX)
+            r->st->face = r->face;
+    }
+    return CM_E_LIMIT;
 }
 
 static cm_err rlimit(reader *r, unsigned id, uint64_t need, uint64_t have, const char *where)
 {
-    r->d->state = CM_DEC_FAILED;
-    cm_fail_limit(r->st, id, need, have, where);
-    if (r->st)
-        r->st->offset = pos(r);
-    return CM_E_LIMIT;
+    return rlimit_at(r, id, need, have, pos(r), where);
 }
 
-/* a count field: at most `cap` (else CM_E_LIMIT naming `id`) and at most what the header promised */
+/* a count field: at most `cap`, the build's limit (else CM_E_LIMIT naming `id`), checked before the
+   count sizes or indexes anything (the header's declared needs are not compared: 0 means undeclared) */
 static cm_err read_count(reader *r, cm_ac_int *m, unsigned id, uint64_t cap, uint32_t *out, const char *where)
 {
     uint64_t v = cm_ac_dec_uint(&r->ac, m);
@@ -490,6 +545,8 @@ static cm_err sec_face(reader *r)
     m->nloops = m->nuses = 0;
     for (uint32_t f = 0; f < m->nfaces; f++) {
         cm_face *F = &m->faces[f];
+        r->face = f;
+        F->rec_off = pos(r);
         uint64_t meth = cm_ac_dec_uint(&r->ac, &ctx.method);
         if (r->ac.overrun)
             return rfail(r, CM_E_TRUNCATED, "face method");
@@ -572,28 +629,27 @@ static cm_err sec_face(reader *r)
                     return rfail(r, CM_E_FORMAT, "loop not closed");
             }
         }
+        /* GREGORY needs one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3
+           (reported at the face's record) */
+        if (F->method == CM_METHOD_GREGORY) {
+            uint32_t n = m->loops[F->loop0].nuse;
+            if (F->nloops != 1)
+                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY face with holes");
+            if (n < 3)
+                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY face with fewer than 3 sides");
+            if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3))
+                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY sides do not fit the layout");
+            if (F->layout == 2 && F->corner >= n)
+                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY corner beyond the loop");
+            if (n > CM_MAX_SIDES)
+                return rlimit_at(r, CM_LIMIT_MAX_SIDES, n, CM_MAX_SIDES, F->rec_off, "GREGORY sides");
+        }
     }
+    r->face = CM_NO_FACE_INDEX;
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, "faces");
     if (enext != m->nedges || snext != m->nsurfs)
         return rfail(r, CM_E_FORMAT, "unused edges or surfaces");
-    /* GREGORY needs one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3 */
-    for (uint32_t f = 0; f < m->nfaces; f++) {
-        const cm_face *F = &m->faces[f];
-        uint32_t n = m->loops[F->loop0].nuse;
-        if (F->method != CM_METHOD_GREGORY)
-            continue;
-        if (F->nloops != 1)
-            return rfail(r, CM_E_FORMAT, "GREGORY face with holes");
-        if (n < 3)
-            return rfail(r, CM_E_FORMAT, "GREGORY face with fewer than 3 sides");
-        if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3))
-            return rfail(r, CM_E_FORMAT, "GREGORY sides do not fit the layout");
-        if (F->layout == 2 && F->corner >= n)
-            return rfail(r, CM_E_FORMAT, "GREGORY corner beyond the loop");
-        if (n > CM_MAX_SIDES)
-            return rlimit(r, CM_LIMIT_MAX_SIDES, n, CM_MAX_SIDES, "GREGORY sides");
-    }
     cm_model_adjacency(m);
     return CM_OK;
 }
@@ -615,11 +671,13 @@ static cm_err sec_colr(reader *r)
     if (m->npalette == 0)
         return r->ac.overrun ? rfail(r, CM_E_TRUNCATED, "palette") : CM_OK;
     for (uint32_t f = 0; f < m->nfaces; f++) {
+        r->face = f;
         uint64_t c = cm_ac_dec_uint(&r->ac, &ctx.index);
         if (c > m->npalette)
             return rfail(r, CM_E_RANGE, "face colour");
         m->faces[f].color = (uint8_t)c;
     }
+    r->face = CM_NO_FACE_INDEX;
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, "face colours");
     return CM_OK;
@@ -639,13 +697,17 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
     cm_model *m = &d->model;
     m->nverts = m->nedges = m->nfaces = m->nloops = m->nuses = m->nsurfs = m->nctrl = m->nknots = 0;
     m->npalette = 0;
-    for (uint32_t s = 0; s < d->nsec; s++) {
+    /* check_header accepted exactly CM_SEC_COUNT sections, each within the file */
+    if (d->nsec != CM_SEC_COUNT)
+        return fail(d, st, CM_E_FORMAT, 17, "section count (a .cmz has 5 sections)");
+    for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
         const cm_dec_section *sec = &d->sec[s];
         if (crc_differs(cm_crc32(d->buf + sec->off, sec->len), sec->crc))
             return fail(d, st, CM_E_CRC, sec->off, "section CRC");
         reader r;
         cm_ac_dec_init(&r.ac, d->buf + sec->off, sec->len);
         r.base = sec->off;
+        r.face = CM_NO_FACE_INDEX;
         r.d = d;
         r.st = st;
         cm_err e;
@@ -660,8 +722,6 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         if (e != CM_OK)
             return e;
     }
-    if (d->nsec != CM_SEC_COUNT)
-        return fail(d, st, CM_E_FORMAT, 17, "section count");
     d->state = CM_DEC_DONE;
     return CM_OK;
 }

@@ -7,10 +7,59 @@
 
 #define MAX_DOUBLINGS 12
 
+/*
+ * The work the tessellation does on one face is bounded by what the file's header declares, not
+ * only by this build's limits (which on the workstation are large enough for any model, so one
+ * damaged face could otherwise take minutes: a triangulation of 65536 points, sixteen times over).
+ * The encoder measured the needs with this code at the file's tolerance: MAX_TESS_POINTS is the
+ * most points any face used, MAX_EDGE_SAMPLES the most samples of any edge.  A face of a valid file
+ * never reaches twice that (room for a newer decoder that refines a little more), so its output is
+ * the same with or without the bound; a damaged face stops there.  A finer tolerance than the
+ * file's (r times finer) scales the bound by 4 r^2: the points grow about as r, but refinement
+ * doubles them in steps (a Gregory face of as1_pe_203 goes from 500 to 5420 points at r = 3); a
+ * need of 0 (not declared) leaves the build's limit.
+ */
+static int declared_cap(uint32_t need, int slack, int limit, const cm_model *m, double tol)
+{
+    if (need == 0)
+        return limit;
+    double r = tol > 0 && m->tess_tol > tol ? m->tess_tol / tol : 1.0;
+    double scale = r > 1.0 ? 4.0 * r * r : 1.0;
+    double cap = (2.0 * (double)need + (double)slack) * scale;
+    return cap < (double)limit ? (int)cap : limit;
+}
+
+int cm_tess_point_cap(const cm_model *m, double tol)
+{
+    return declared_cap(m->need_tess_points, 256, CM_MAX_TESS_POINTS, m, tol);
+}
+
+int cm_tess_edge_sample_cap(const cm_model *m, double tol)
+{
+    return declared_cap(m->need_edge_samples, 16, CM_MAX_EDGE_SAMPLES, m, tol);
+}
+
+/* a face needs more points than `cap` (its budget, ws->point_cap, or an array's size): beyond this
+   build's limit, or (a smaller budget) beyond what the header declares, which a valid file never is */
+static cm_err over_budget(int cap, uint64_t need, cm_status *st, const char *where)
+{
+    if (cap >= CM_MAX_TESS_POINTS)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, need, CM_MAX_TESS_POINTS, where);
+    if (st && st->code == CM_OK) {
+        st->need = need;
+        st->have = (uint64_t)cap;
+    }
+    return cm_fail(st, CM_E_RANGE, "tessellation: the face needs more points than the header declares "
+                                   "(MAX_TESS_POINTS)");
+}
+
 cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int cap, int *n_out, cm_status *st)
 {
     const cm_edge *E = &m->edges[e];
     int maxn = cap - 1 < CM_MAX_EDGE_SAMPLES - 1 ? cap - 1 : CM_MAX_EDGE_SAMPLES - 1;
+    int declared = cm_tess_edge_sample_cap(m, tol) - 1;
+    if (maxn > declared)
+        maxn = declared;
     if (maxn < 1)
         return cm_fail_nospace(st, 2, (uint64_t)cap, __func__);
     /* an edge of an N-split GREGORY face needs its midpoint (t = 1/2) as a sample: both faces of the
@@ -101,8 +150,11 @@ __attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const
                 return e;
             if (n + 1 > info->max_edge_samples)
                 info->max_edge_samples = n + 1;
-            if (k + n > CM_MAX_TESS_POINTS)
-                return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)(k + n), CM_MAX_TESS_POINTS, __func__);
+            /* bpts holds CM_MAX_TESS_POINTS; a PLANE or KEEP face triangulates all of them at once,
+               a GREGORY face a part per patch (tess_patch holds each patch to the budget) */
+            int cap = F->method == CM_METHOD_GREGORY ? CM_MAX_TESS_POINTS : ws->point_cap;
+            if (k + n > cap)
+                return over_budget(cap, (uint64_t)(k + n), st, __func__);
             if (l == 0 && u < CM_MAX_LOOP_EDGES) {
                 ws->use_first[u] = k;
                 ws->use_n[u] = n;
@@ -133,7 +185,7 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
     for (uint32_t l = 0; l < F->nloops; l++) {
         int first = ws->loop_bstart[l], count = ws->loop_bstart[l + 1] - first, nout;
         ws->loop_start[l] = k;
-        cm_err e = cm_loop_uv(ps, ws->bpts + first, count, accept, ws->uv + k, ws->src + k, CM_MAX_TESS_POINTS - k,
+        cm_err e = cm_loop_uv(ps, ws->bpts + first, count, accept, ws->uv + k, ws->src + k, ws->point_cap - k,
                               &nout, &ws->wind_u[l], &ws->wind_v[l], &info->max_gap, &ws->pw, st);
         if (e != CM_OK)
             return e;
@@ -193,7 +245,7 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
     if (hi < 0 && w_lo < 0) /* a lone loop running -x bounds the band below it */
         cap_coord = along_u ? ps->v0 : ps->u0;
     int nj, hi_start = 0;
-    cm_err e = cm_join_winding(plo, nlo, hi >= 0 ? phi : NULL, nhi, period, cap_coord, ws->tmp, CM_MAX_TESS_POINTS,
+    cm_err e = cm_join_winding(plo, nlo, hi >= 0 ? phi : NULL, nhi, period, cap_coord, ws->tmp, ws->point_cap,
                                &nj, &hi_start, st);
     if (e != CM_OK)
         return e;
@@ -216,8 +268,8 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
         if ((int)l == a || (int)l == b)
             continue;
         int len = ws->loop_start[l + 1] - ws->loop_start[l];
-        if (out + len > CM_MAX_TESS_POINTS)
-            return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)(out + len), CM_MAX_TESS_POINTS, __func__);
+        if (out + len > ws->point_cap)
+            return over_budget(ws->point_cap, (uint64_t)(out + len), st, __func__);
         for (int i = 0; i < len; i++) {
             ws->tmp[out + i] = ws->uv[ws->loop_start[l] + i];
             ws->src2[out + i] = ws->src[ws->loop_start[l] + i];
@@ -350,7 +402,7 @@ static cm_err refine_worst(const chart *c, cm_tess_ws *ws, const cm_vec2 *uv, co
             at_p = p;
         }
     }
-    if (at < 0 || *npts >= CM_MAX_TESS_POINTS)
+    if (at < 0 || *npts >= ws->point_cap)
         return CM_OK;
     int k = (*npts)++;
     ws->uv[k] = uv[at];
@@ -411,7 +463,7 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
             if ((e = point_xyz(c, ws, nxyz, st)) != CM_OK)
                 return e;
         int before = npts;
-        for (int t = 0; t < ntris && npts < CM_MAX_TESS_POINTS; t++) {
+        for (int t = 0; t < ntris && npts < ws->point_cap; t++) {
             const int *tc = ws->tris[t];
             /* inside: the centre, and halfway from it to each corner */
             cm_vec2 tuv[4];
@@ -428,7 +480,7 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
             }
             if ((e = refine_worst(c, ws, tuv, txyz, 4, tol, su, sv, &npts, st)) != CM_OK)
                 return e;
-            for (int k = 0; k < 3 && npts < CM_MAX_TESS_POINTS; k++) {
+            for (int k = 0; k < 3 && npts < ws->point_cap; k++) {
                 int i = tc[k], j = tc[(k + 1) % 3];
                 if (j < i) /* each inner side once, from the triangle that has it as i -> j, i < j */
                     continue;
@@ -583,8 +635,8 @@ static int cubic_segments(const cm_cubic *c, double tol, int maxn)
 /* append boundary point (u,v) whose 3D point is bpts[src] */
 static cm_err add_bnd(cm_tess_ws *ws, int *k, double u, double v, int src, cm_status *st)
 {
-    if (*k >= CM_MAX_TESS_POINTS)
-        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)*k + 1, CM_MAX_TESS_POINTS, __func__);
+    if (*k >= ws->point_cap)
+        return over_budget(ws->point_cap, (uint64_t)*k + 1, st, __func__);
     ws->uv[*k] = cm_v2(u, v);
     ws->src[*k] = src;
     (*k)++;
@@ -632,10 +684,18 @@ static cm_err tess_patch(const cm_gregory *g, cm_tess_ws *ws, int npts, int side
         nu = (int)ceil((double)nu * shrink);
         nv = (int)ceil((double)nv * shrink);
     }
+    /* a grid that does not fit the face's budget at all (never so for a valid file) is shrunk the
+       same way, to half the room the budget leaves */
+    room = (double)(ws->point_cap - npts) * 0.5;
+    if ((double)nu * (double)nv > 2.0 * room && room >= 1) {
+        double shrink = sqrt(room / ((double)nu * (double)nv));
+        nu = (int)ceil((double)nu * shrink);
+        nv = (int)ceil((double)nv * shrink);
+    }
     int interior = 0;
     if (nu > 1 || nv > 1)
-        for (int i = 0; i < nu && npts < CM_MAX_TESS_POINTS; i++)
-            for (int j = 0; j < nv && npts < CM_MAX_TESS_POINTS; j++) {
+        for (int i = 0; i < nu && npts < ws->point_cap; i++)
+            for (int j = 0; j < nv && npts < ws->point_cap; j++) {
                 ws->uv[npts] = cm_v2((i + 0.5) / nu, (j + 0.5) / nv);
                 ws->src[npts++] = -1;
                 interior++;
@@ -726,15 +786,11 @@ static cm_err tess_gregory(const cm_model *m, uint32_t f, const cm_greg_surface 
     return e;
 }
 
-cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
-                          cm_tess_info *info, cm_status *st)
+static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
+                              cm_tess_info *info, cm_status *st)
 {
     const cm_face *F = &m->faces[f];
-    cm_tess_info local;
-    if (!info)
-        info = &local;
-    info->points = info->triangles = info->max_edge_samples = 0;
-    info->max_gap = 0;
+    ws->point_cap = cm_tess_point_cap(m, tol);
     if (F->nloops > CM_MAX_LOOPS)
         return cm_fail_limit(st, CM_LIMIT_MAX_LOOPS, F->nloops, CM_MAX_LOOPS, __func__);
     cm_rebuilt rb;
@@ -838,12 +894,20 @@ cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *me
             nu_f *= shrink;
             nv_f *= shrink;
         }
+        /* a grid that does not fit the face's budget at all (never so for a valid file) is shrunk
+           the same way, to half the room the budget leaves */
+        room = (double)(ws->point_cap - npts) * 0.5;
+        if (ceil(nu_f) * ceil(nv_f) > 2.0 * room && room >= 1) {
+            double shrink = sqrt(room / (nu_f * nv_f));
+            nu_f *= shrink;
+            nv_f *= shrink;
+        }
         int nu_i = (int)ceil(nu_f), nv_i = (int)ceil(nv_f);
         grid_nu = nu_i;
         grid_nv = nv_i;
         if (nu_i > 1 || nv_i > 1)
-            for (int i = 0; i < nu_i && npts < CM_MAX_TESS_POINTS; i++)
-                for (int j = 0; j < nv_i && npts < CM_MAX_TESS_POINTS; j++) {
+            for (int i = 0; i < nu_i && npts < ws->point_cap; i++)
+                for (int j = 0; j < nv_i && npts < ws->point_cap; j++) {
                     ws->uv[npts] = cm_v2(umin + (umax - umin) * (i + 0.5) / nu_i, vmin + (vmax - vmin) * (j + 0.5) / nv_i);
                     ws->src[npts++] = -1;
                     interior++;
@@ -872,4 +936,21 @@ cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *me
     info->triangles = emitted;
     end_face(mesh, mf);
     return CM_OK;
+}
+
+cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
+                          cm_tess_info *info, cm_status *st)
+{
+    cm_tess_info local;
+    if (!info)
+        info = &local;
+    info->points = info->triangles = info->max_edge_samples = 0;
+    info->max_gap = 0;
+    int open = st != NULL && st->code == CM_OK;
+    cm_err e = tessellate_face(m, f, tol, mesh, ws, info, st);
+    /* whatever failed (the rebuild, a kernel, the mesh's room) failed for this face: the status
+       names it and, as its place in the input, the face's record */
+    if (e != CM_OK && open)
+        cm_status_at_face(st, f, m->faces[f].rec_off);
+    return e;
 }

@@ -2,13 +2,18 @@
  * fuzz_decode - libFuzzer target for the terminal's whole decode path:
  * .cmz bytes fed in chunks -> header and limit checks -> section decoding
  * -> surface rebuild -> tessellation -> GLB serialisation in memory.
- * Any input must end in CM_OK or a clear error (a code and a reason),
- * never a crash, a hang or an out-of-bounds access.  The first input byte
+ * Any input must end in CM_OK or a clear error (a code, a reason and the
+ * byte offset where it was found; for a face's error, the face), never a
+ * crash, a hang or an out-of-bounds access.  A face that fails is left out
+ * (the mesh rolled back), as cm_decode_mesh does.  The first input byte
  * picks the chunk size, so the fuzzer also exercises feeds that split the
  * header, a varint or a section anywhere, as a serial link does.
  *
- * Built with clang -fsanitize=fuzzer,address,undefined (make fuzz-decode);
- * replayed without libFuzzer by replay_main.c in make check.
+ * Built with clang -fsanitize=fuzzer,address,undefined (make fuzz-decode),
+ * without CRC checks (FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION); replayed
+ * without libFuzzer by replay_main.c in make check.  fuzz_decode_crc.c
+ * runs the same checks on the product build (CRCs checked), its mutator
+ * keeping the CRCs valid.
  */
 #include <stddef.h>
 #include <stdint.h>
@@ -29,10 +34,19 @@ static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
 static cm_mesh_face faces[CM_MAX_FACES];
 static cm_out writer;
 
-/* a failure must always say why */
+/* a failure of the file must always say why and where: the code, a reason and the byte offset (the
+   decoder's misuse, CM_E_ARG, has no place in the input) */
 static void check_reason(cm_err e, const cm_status *st)
 {
-    if (e != CM_OK && (st->code != e || st->where == NULL))
+    if (e != CM_OK && (st->code != e || st->where == NULL || (e != CM_E_ARG && st->offset == CM_NO_OFFSET)))
+        __builtin_trap();
+}
+
+/* ... and a failure of face f names the face, and a place inside the file */
+static void check_face_reason(cm_err e, const cm_status *st, uint32_t f, uint32_t file_len)
+{
+    check_reason(e, st);
+    if (e != CM_OK && (st->face != f || st->offset >= file_len))
         __builtin_trap();
 }
 
@@ -60,17 +74,25 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     /* a model the decoder accepted must tessellate or fail cleanly, face by face; the first
        FUZZ_FACES faces only, so that one input stays well under a second under the sanitizers
-       (every face goes through the same code: the fuzzer reaches the others by mutation) */
+       (every face goes through the same code: the fuzzer reaches the others by mutation).  A face
+       that fails is left out, as cm_decode_mesh (platform/cm_decode_file.c) does */
     cm_mesh mesh = {pos, nrm, idx, faces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
     cm_mesh_clear(&mesh);
     for (uint32_t f = 0; f < dec.model.nfaces && f < FUZZ_FACES; f++) {
         cm_tess_info info;
         cm_status_init(&st);
+        cm_mesh_mark mark = cm_mesh_save(&mesh);
         e = cm_tessellate_face(&dec.model, f, dec.model.tess_tol, &mesh, &tess, &info, &st);
-        if (e != CM_OK && st.code != e)
-            __builtin_trap();
+        check_face_reason(e, &st, f, dec.file_len);
         if (e == CM_E_LIMIT)
             break; /* the mesh is full: the terminal stops here too */
+        if (e != CM_OK) {
+            cm_mesh_rollback(&mesh, &mark);
+            if (mesh.nverts != mark.nverts || mesh.nindex != mark.nindex || mesh.nfaces != mark.nfaces)
+                __builtin_trap();
+        } else if (info.points > cm_tess_point_cap(&dec.model, dec.model.tess_tol)) {
+            __builtin_trap(); /* the face's work stayed within what the header declares */
+        }
     }
     /* every index the tessellator wrote points at a vertex it wrote */
     for (uint32_t i = 0; i < mesh.nindex; i++)

@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # make_decode_seeds.sh CMZ - rewrite tests/fuzz/corpus_decode from the IGES seeds (see README.md)
+# (the *_chunk*.cmzf seeds only; found_* and crc_* are fuzzers' finds: after a format change, refind
+# them with make fuzz-decode / make fuzz-decode-crc)
 set -euo pipefail
 cmz=${1:?usage: make_decode_seeds.sh path/to/cmz}
 here=$(cd "$(dirname "$0")" && pwd)

@@ -16,7 +16,16 @@
  * limit, the need and this build's value in the status.  After CM_OK every
  * count is within its limit, every index is valid, every number is finite
  * and every loop is closed.  Errors carry the byte offset where they were
- * detected.
+ * detected, and an error about one face (its record, its colour) the face
+ * (st->face).
+ *
+ * Every header field is checked before anything uses it: the section count
+ * (exactly CM_SEC_COUNT: the table below has room for no more) and the need
+ * count against the header's length before the table is read, the header
+ * CRC, the file length, the needs, the grid exponent, origin and tolerances,
+ * and each section's tag, offset and length before cm_dec_finish addresses a
+ * byte through them.  The body's counts are checked against their limits
+ * before they index or size anything.
  */
 #ifndef CM_DECODE_H
 #define CM_DECODE_H
@@ -48,7 +57,7 @@ typedef struct cm_decoder {
     uint16_t flags;
     uint32_t nlimits;
     uint32_t need[CM_LIMIT_COUNT];     /* the model's needs, by limit id */
-    uint32_t nsec;
+    uint32_t nsec;                     /* CM_SEC_COUNT once the header is accepted (0 before) */
     cm_dec_section sec[CM_SEC_COUNT];
     int64_t vq[CM_MAX_VERTICES][3];    /* vertices on the integer grid (predictors) */
     int64_t sq[CM_MAX_SURF_CTRL][3];   /* one kept surface's net on the grid (predictor) */
@@ -61,8 +70,8 @@ void cm_dec_init(cm_decoder *d);
 
 /**
  * Append n bytes (n may be 0).  As soon as the header is complete it is
- * checked: magic, version, lengths, section table, header CRC and every
- * need against this build's limits.
+ * checked: magic, version, lengths, section and need counts, header CRC,
+ * every need against this build's limits, grid, tolerances, section table.
  * @return CM_OK, or CM_E_MAGIC / CM_E_VERSION / CM_E_FORMAT / CM_E_CRC /
  *         CM_E_LIMIT (header refused) / CM_E_RANGE (more bytes than the file)
  */

@@ -87,6 +87,8 @@ typedef struct cm_face {
     uint8_t layout, corner; /* GREGORY record (spec 15.2): layout 0/1/2 and layout 2's vertex j */
     uint32_t surf;        /* KEEP: index of its kept surface */
     uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */
+    uint32_t rec_off;     /* byte offset in the file where the face's record starts (the range
+                             coder's read position then): errors about the face name it */
 } cm_face;
 
 #define CM_NO_FACE (-1)   /* edge_face: no face on that side */
@@ -97,6 +99,10 @@ typedef struct cm_model {
     double origin[3], q;  /* quantisation grid: p = origin + q * integer */
     double tess_tol;      /* chordal tolerance recommended by the encoder (mm) */
     double rel_tol;       /* the encoder's rebuild tolerance (fraction of a face's size) */
+    /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
+       face (MAX_TESS_POINTS) and samples of one edge (MAX_EDGE_SAMPLES).  The tessellation's work
+       on a face is bounded by these (cm_tessellate.h), not only by the build's limits */
+    uint32_t need_tess_points, need_edge_samples;
     uint32_t nverts, nedges, nfaces, nloops, nuses, nsurfs, nctrl, nknots, npalette;
     cm_vec3 verts[CM_MAX_VERTICES];
     cm_edge edges[CM_MAX_EDGES];

@@ -39,6 +39,17 @@ typedef struct cm_mesh {
 /** Set the mesh empty (keeps the caller's arrays and capacities). */
 void cm_mesh_clear(cm_mesh *m);
 
+/** How far a mesh is filled: taken before a face is added, it lets a failed face be removed. */
+typedef struct cm_mesh_mark {
+    uint32_t nverts, nindex, nfaces;
+} cm_mesh_mark;
+
+/** The mesh's current fill. */
+cm_mesh_mark cm_mesh_save(const cm_mesh *m);
+
+/** Back to a fill taken by cm_mesh_save (everything appended since is dropped). */
+void cm_mesh_rollback(cm_mesh *m, const cm_mesh_mark *mark);
+
 /** Bounds of all positions (lo/hi untouched when the mesh is empty; returns 0 then, else 1). */
 int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3]);
 

@@ -38,6 +38,8 @@ typedef struct cm_tess_ws {
     int tris[CM_MAX_TESS_TRIS][3];
     uint32_t vmap[CM_MAX_TESS_POINTS];     /* triangulation point -> mesh vertex (or UINT32_MAX) */
     double ts[CM_MAX_EDGE_SAMPLES];
+    int point_cap;                         /* the face's budget of points (cm_tess_point_cap), set by
+                                              cm_tessellate_face */
 } cm_tess_ws;
 
 /** Statistics of one face's tessellation (for the encoder's needs and for tests). */
@@ -49,11 +51,28 @@ typedef struct cm_tess_info {
 } cm_tess_info;
 
 /**
+ * The work on one face is bounded by what the file's header declares (the
+ * encoder measured it with this code at the file's tolerance), not only by
+ * this build's limits: at most cm_tess_point_cap() points per face (per
+ * patch of a GREGORY face) and cm_tess_edge_sample_cap() samples per edge.
+ * Both are twice the declared need plus a margin (times 4 r^2 when `tol`
+ * is r times finer than the file's), at most the build's limit (the limit
+ * itself when the need is 0, i.e. not declared).  A valid file never comes
+ * near them, so its output does not depend on them; a damaged face stops
+ * there: its refinement ends, or it fails with CM_E_RANGE (CM_E_LIMIT when
+ * the cap is the build's limit).
+ */
+int cm_tess_point_cap(const cm_model *m, double tol);
+int cm_tess_edge_sample_cap(const cm_model *m, double tol);
+
+/**
  * Parameters t in [0,1] sampling edge e so that every chord is within
  * `tol` of the curve (uniform in t, doubled until it holds).
  * @param[out] ts  n + 1 values, ts[0] = 0, ts[n] = 1 (cap entries available)
- * @return CM_E_LIMIT when more than CM_MAX_EDGE_SAMPLES would be needed
- *         (then the densest allowed sampling is returned, with the error)
+ * At most min(cap, CM_MAX_EDGE_SAMPLES, cm_tess_edge_sample_cap(m, tol))
+ * values: where the chords would need more, the densest allowed sampling is
+ * returned (the same for every face that uses the edge).
+ * @return CM_OK, or the curve's evaluation errors
  */
 CM_NODISCARD cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int cap, int *n,
                                    cm_status *st);
@@ -62,8 +81,14 @@ CM_NODISCARD cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, do
  * Rebuild face f and append its triangles to `mesh` (one cm_mesh_face).
  * @param tol  chordal tolerance in mm (the file's tess_tol, or the viewer's)
  * @return CM_E_LIMIT when the face needs more than CM_MAX_TESS_POINTS or
- *         the mesh more than its capacity (CM_MAX_TRIS); errors of the
- *         rebuild, the projection or the triangulation otherwise
+ *         the mesh more than its capacity (CM_MAX_TRIS); CM_E_RANGE when it
+ *         needs more points than the header declares (cm_tess_point_cap);
+ *         errors of the rebuild, the projection or the triangulation
+ *         otherwise.  On failure the status names the face (st->face = f)
+ *         and, unless a more precise one is known, its record's byte offset
+ *         (st->offset = faces[f].rec_off).  The mesh may then hold part of
+ *         the face's vertices and indices (no face record): cm_mesh_rollback()
+ *         removes them.
  */
 CM_NODISCARD cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
                                        cm_tess_info *info, cm_status *st);
