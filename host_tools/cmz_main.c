@@ -46,7 +46,7 @@ static void usage(FILE *f)
             "      edges (shared / free / seam / non-manifold), G1 edges, solids, bounding box,\n"
             "      tolerances and warnings.  --json prints the same as one JSON object.\n"
             "  encode MODEL.igs -o MODEL.cmz [--tol REL] [--tol-abs MM] [--quant REL] [--tess REL]\n"
-            "         [--no-gregory] [--profile NAME] [--report FACES.tsv]\n"
+            "         [--no-gregory] [--profile NAME] [--report FACES.tsv] [--strict]\n"
             "      Compress the model: each face's surface is deleted and rebuilt from its\n"
             "      boundary curves - a PLANE, else Gregory patches (3 to 8 sides) - when the\n"
             "      rebuilt surface, measured by the decoder's own code, stays within the\n"
@@ -58,6 +58,9 @@ static void usage(FILE *f)
             "      --no-gregory: planes only.  --profile refuses, with the reason, a file the\n"
             "      named board profile (terminal, host, tiny) cannot load.  Prints one\n"
             "      summary line; --report writes a row per face (method, errors, G1, why kept).\n"
+            "      A face that cannot be sent (it cannot be imported, or its surface does not\n"
+            "      tessellate even kept) is left out with a warning naming its entity, and the\n"
+            "      summary counts it; --strict makes that an error (exit status 1).\n"
             "  eval MODEL.igs MODEL.cmz [--tol REL] [--tol-abs MM] [--report FACES.tsv]\n"
             "      Rebuild every face of MODEL.cmz with the terminal's code and measure it\n"
             "      against MODEL.igs (spec §12 grid and boundary, §13 G1 across tangent edges);\n"
@@ -100,6 +103,12 @@ static void progress(const char *stage, int done, int total, void *ctx)
         fprintf(stderr, "\r\033[K");
 }
 
+/* the exit status of a failure: out of memory, I/O, else the input */
+static int exit_for(cm_err code)
+{
+    return code == CM_E_NOMEM ? EXIT_NOMEM : code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+}
+
 /* report a load failure and return the exit code */
 static int load_failed(const char *path, const loaded_model *lm, const cm_status *st)
 {
@@ -107,9 +116,7 @@ static int load_failed(const char *path, const loaded_model *lm, const cm_status
         fprintf(stderr, "%s: %s:%s%s\n", prog, path, lm->iges.err_line ? "" : " ", lm->iges.err);
     else
         cm_report_status(stderr, prog, path, st);
-    if (st->code == CM_E_IO)
-        return strstr(lm->iges.err, "memory") ? EXIT_NOMEM : EXIT_IO;
-    return EXIT_INPUT;
+    return exit_for(st->code);
 }
 
 /* ---- JSON helpers (strings from files may hold any byte: escaped as Latin-1) ---- */
@@ -561,6 +568,8 @@ static int cmd_encode(int argc, char **argv)
             i++;
         } else if (strcmp(a, "--no-gregory") == 0) {
             o.gregory = 0;
+        } else if (strcmp(a, "--strict") == 0) {
+            o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {
             if (parse_real(a, v, 1e-12, 1e-2, &o.quant_rel))
                 return EXIT_USAGE;
@@ -595,14 +604,30 @@ static int cmd_encode(int argc, char **argv)
     }
     encode_result r;
     cm_status_init(&st);
+    if (o.strict && lm.nleft_out > 0) {
+        const iges_warning *w = &lm.iges.warn[lm.left_out[0]];
+        fprintf(stderr, "%s: %s: %s%.0d%s%s (--strict: nothing written)\n", prog, path, w->line ? "line " : "",
+                w->line, w->line ? ": " : "", w->msg);
+        model_free(&lm);
+        return EXIT_INPUT;
+    }
     cm_err e = encode_model(&lm, &o, &r, &st);
     int rc = EXIT_OK;
-    if (e == CM_E_LIMIT && r.refusal[0]) {
+    /* every face left out, by the import or the encoder, is named */
+    for (int i = 0; i < lm.nleft_out; i++) {
+        const iges_warning *w = &lm.iges.warn[lm.left_out[i]];
+        fprintf(stderr, "%s: %s: warning: %s%.0d%s%s\n", prog, path, w->line ? "line " : "", w->line,
+                w->line ? ": " : "", w->msg);
+    }
+    if (r.refusal[0] && e != CM_E_LIMIT) {
+        fprintf(stderr, "%s: %s: %s (nothing written)\n", prog, path, r.refusal);
+        rc = EXIT_INPUT;
+    } else if (e == CM_E_LIMIT && r.refusal[0]) {
         fprintf(stderr, "%s: %s: refused: %s (nothing written)\n", prog, path, r.refusal);
         rc = EXIT_INPUT;
     } else if (e != CM_OK) {
         cm_report_status(stderr, prog, path, &st);
-        rc = st.code == CM_E_IO ? EXIT_NOMEM : EXIT_INPUT;
+        rc = exit_for(st.code);
     }
     if (rc == EXIT_OK)
         rc = write_atomic(out, r.bytes, r.len);
@@ -614,11 +639,12 @@ static int cmd_encode(int argc, char **argv)
         } else {
             fprintf(f, "face\tde\tentity\tsurface\tmethod\tbbox_mm\tplane_dev_mm\tmax_err_mm\tratio\tsurf_ctrl"
                        "\tlayout\tavg_err_mm\tg1_worst_deg\tgregory_ratio\twhy_kept\n");
-            for (int i = 0; i < lm.brep.nfaces; i++) {
+            for (int i = 0; i < lm.mesh.nfaces; i++) {
                 const face_report *fr = &r.faces[i];
+                const brep_face *bf = &lm.brep.faces[lm.mesh.faces[i].brep_face];
                 double c = fr->g1_cos > 1.0 ? 1.0 : fr->g1_cos;
                 fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\t%d\t%.6g\t%.4g\t%.6g\t%s\n", i,
-                        lm.brep.faces[i].src_de, lm.brep.faces[i].src_type, lm.brep.faces[i].surf_type,
+                        bf->src_de, bf->src_type, bf->surf_type,
                         method_name(fr->method), fr->bbox, fr->plane_dev, fr->rebuild_max, fr->ratio, fr->surf_ctrl,
                         fr->layout, fr->rebuild_avg, acos(c) * 57.29577951308232, fr->greg_ratio,
                         fr->method == CM_METHOD_KEEP && fr->why ? fr->why : "-");
@@ -635,12 +661,13 @@ static int cmd_encode(int argc, char **argv)
             isize = ftell(in);
             fclose(in);
         }
-        printf("%s -> %s: %d faces (%d plane, %d gregory, %d kept), %d edges (%d lines), %zu bytes, %.1fx smaller "
-               "than the IGES (%ld bytes)%s\n",
-               path, out, lm.brep.nfaces, r.faces_plane, r.faces_gregory, r.faces_keep, r.edges_line + r.edges_curve,
-               r.edges_line,
-               r.len, r.len ? (double)isize / (double)r.len : 0.0, isize,
-               r.faces_flipped ? "" : "");
+        char left[64] = "";
+        if (lm.nleft_out > 0)
+            snprintf(left, sizeof left, ", %d left out (see warnings)", lm.nleft_out);
+        printf("%s -> %s: %d faces (%d plane, %d gregory, %d kept%s), %d edges (%d lines), %zu bytes, %.1fx smaller "
+               "than the IGES (%ld bytes)\n",
+               path, out, lm.mesh.nfaces, r.faces_plane, r.faces_gregory, r.faces_keep, left,
+               r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0, isize);
     }
     encode_result_free(&r);
     model_free(&lm);
@@ -698,7 +725,7 @@ static int cmd_decode(int argc, char **argv)
     cm_status_init(&st);
     if (cm_decode_read(path, &decoder, &st) != CM_OK) {
         cm_report_status(stderr, prog, path, &st);
-        return st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+        return exit_for(st.code);
     }
     /* the mesh sized by what the file says it needs (the workstation may use the heap) */
     uint64_t tris = decoder.need[CM_LIMIT_MAX_TRIS];
@@ -711,30 +738,61 @@ static int cmd_decode(int argc, char **argv)
         tris = CM_MAX_TRIS;
     cm_mesh mesh;
     memset(&mesh, 0, sizeof mesh);
-    mesh.cap_verts = (uint32_t)(3 * tris);
-    mesh.cap_index = (uint32_t)(3 * tris);
-    mesh.cap_faces = decoder.model.nfaces ? decoder.model.nfaces : 1;
-    mesh.pos = malloc((size_t)mesh.cap_verts * sizeof *mesh.pos);
-    mesh.nrm = malloc((size_t)mesh.cap_verts * sizeof *mesh.nrm);
-    mesh.idx = malloc((size_t)mesh.cap_index * sizeof *mesh.idx);
-    mesh.faces = malloc((size_t)mesh.cap_faces * sizeof *mesh.faces);
     int rc = EXIT_OK;
     cm_decode_summary sum;
     uint64_t bytes = 0;
-    if (!mesh.pos || !mesh.nrm || !mesh.idx || !mesh.faces) {
+    cm_err e;
+    /* a damaged file may declare less than it makes: the workstation grows the mesh (the terminal's
+       is its build's limit) */
+    for (;;) {
+        mesh.cap_verts = (uint32_t)(3 * tris);
+        mesh.cap_index = (uint32_t)(3 * tris);
+        mesh.cap_faces = decoder.model.nfaces ? decoder.model.nfaces : 1;
+        free(mesh.pos);
+        free(mesh.nrm);
+        free(mesh.idx);
+        free(mesh.faces);
+        mesh.pos = malloc((size_t)mesh.cap_verts * sizeof *mesh.pos);
+        mesh.nrm = malloc((size_t)mesh.cap_verts * sizeof *mesh.nrm);
+        mesh.idx = malloc((size_t)mesh.cap_index * sizeof *mesh.idx);
+        mesh.faces = malloc((size_t)mesh.cap_faces * sizeof *mesh.faces);
+        if (!mesh.pos || !mesh.nrm || !mesh.idx || !mesh.faces) {
+            e = CM_E_NOMEM;
+            break;
+        }
+        cm_status_init(&st);
+        e = cm_decode_mesh(&decoder, tol, &mesh, &tess_ws, &sum, &st);
+        if (e != CM_E_LIMIT || st.limit != CM_LIMIT_MAX_TRIS || tris >= CM_MAX_TRIS)
+            break;
+        tris = 4 * tris > CM_MAX_TRIS ? CM_MAX_TRIS : 4 * tris;
+    }
+    if (e == CM_E_NOMEM && st.code == CM_OK) {
         fprintf(stderr, "%s: out of memory for %llu triangles\n", prog, (unsigned long long)tris);
         rc = EXIT_NOMEM;
-    } else if (cm_decode_mesh(&decoder, tol, &mesh, &tess_ws, &sum, &st) != CM_OK ||
-               cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
+    } else if (e != CM_OK || cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
         cm_report_status(stderr, prog, path, &st);
-        rc = st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
-    } else if (face_map && (rc = write_face_map(face_map, &mesh)) != EXIT_OK) {
-        /* reported */
-    } else if (!quiet) {
-        printf("%s -> %s: %u faces (%u plane, %u gregory, %u kept), %u triangles, %u vertices, chordal tolerance "
-               "%.3g mm, %llu bytes\n",
-               path, out, sum.faces, sum.faces_plane, sum.faces_gregory, sum.faces_keep, sum.triangles, sum.vertices, sum.tess_tol,
-               (unsigned long long)bytes);
+        rc = exit_for(st.code);
+    } else {
+        /* one bad face never sinks a model: each one left out is named */
+        for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++) {
+            char why[512];
+            cm_format_status(why, sizeof why, &sum.left_out[i]);
+            fprintf(stderr, "%s: %s: warning: face left out: %s\n", prog, path, why);
+        }
+        if (sum.faces_left_out > CM_DECODE_LEFT_OUT_LIST)
+            fprintf(stderr, "%s: %s: warning: %lu more faces left out\n", prog, path,
+                    (unsigned long)(sum.faces_left_out - CM_DECODE_LEFT_OUT_LIST));
+        if (face_map && (rc = write_face_map(face_map, &mesh)) != EXIT_OK) {
+            /* reported */
+        } else if (!quiet) {
+            char left[64] = "";
+            if (sum.faces_left_out)
+                snprintf(left, sizeof left, ", %lu left out", (unsigned long)sum.faces_left_out);
+            printf("%s -> %s: %u faces (%u plane, %u gregory, %u kept%s), %u triangles, %u vertices, chordal "
+                   "tolerance %.3g mm, %llu bytes\n",
+                   path, out, sum.faces, sum.faces_plane, sum.faces_gregory, sum.faces_keep, left, sum.triangles,
+                   sum.vertices, sum.tess_tol, (unsigned long long)bytes);
+        }
     }
     free(mesh.pos);
     free(mesh.nrm);
@@ -746,6 +804,51 @@ static int cmd_decode(int argc, char **argv)
 static cm_rebuild_ws eval_ws;
 
 /* `cmz eval`: re-measure a finished file against its model with the terminal's rebuild */
+/*
+ * The file has fewer faces than the IGES model: the encoder left some out (see encode_model).  It is
+ * deterministic, so encoding a second copy with the file's own settings tells which; those are left
+ * out of lm too (lm itself keeps the orientation its face domains were built with).
+ */
+static cm_err match_left_out(const char *path, const cm_model *m, loaded_model *lm, int *left_out, cm_status *st)
+{
+    loaded_model again;
+    cm_err e = model_load(path, &again, NULL, NULL, st);
+    encode_opts o;
+    encode_opts_default(&o);
+    double diag = brep_diag(&again.brep);
+    if (m->rel_tol > 0)
+        o.rel_tol = m->rel_tol;
+    if (diag > 0) {
+        o.tess_rel = m->tess_tol / diag;
+        o.quant_rel = m->q / diag * (1.0 + 1e-9); /* the same power of two */
+    }
+    encode_result r;
+    memset(&r, 0, sizeof r);
+    if (e == CM_OK)
+        e = encode_model(&again, &o, &r, st);
+    if (e == CM_E_LIMIT)
+        e = CM_OK;
+    encode_result_free(&r);
+    /* again's faces are lm's in the same order, less those left out */
+    int *out = malloc(((size_t)lm->brep.nfaces + 1) * sizeof *out), nout = 0;
+    if (e == CM_OK && !out)
+        e = cm_fail(st, CM_E_NOMEM, "out of memory");
+    for (int b = 0, i = 0; e == CM_OK && b < lm->brep.nfaces; b++) {
+        const brep_face *A = &lm->brep.faces[b], *B = i < again.brep.nfaces ? &again.brep.faces[i] : NULL;
+        if (B && A->src_de == B->src_de && A->instance == B->instance && A->surf_type == B->surf_type)
+            i++;
+        else
+            out[nout++] = b;
+    }
+    for (int k = nout - 1; e == CM_OK && k >= 0; k--) {
+        e = model_leave_out_face(lm, out[k], "as the encoder did", st);
+        ++*left_out;
+    }
+    free(out);
+    model_free(&again);
+    return e;
+}
+
 static int cmd_eval(int argc, char **argv)
 {
     const char *paths[2] = {NULL, NULL}, *report = NULL;
@@ -783,7 +886,7 @@ static int cmd_eval(int argc, char **argv)
     cm_status_init(&st);
     if (cm_decode_read(paths[1], &decoder, &st) != CM_OK) {
         cm_report_status(stderr, prog, paths[1], &st);
-        return st.code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
+        return exit_for(st.code);
     }
     loaded_model lm;
     cm_err e = model_load(paths[0], &lm, progress, NULL, &st);
@@ -795,9 +898,15 @@ static int cmd_eval(int argc, char **argv)
     const cm_model *m = &decoder.model;
     if (!rel_set)
         rel = m->rel_tol > 0 ? m->rel_tol : 0.01;
-    if ((int)m->nfaces != lm.brep.nfaces) {
+    int left_out = 0;
+    if ((int)m->nfaces < lm.mesh.nfaces && (e = match_left_out(paths[0], m, &lm, &left_out, &st)) != CM_OK) {
+        cm_report_status(stderr, prog, paths[0], &st);
+        model_free(&lm);
+        return exit_for(st.code);
+    }
+    if ((int)m->nfaces != lm.mesh.nfaces) {
         fprintf(stderr, "%s eval: %s has %u faces, %s %d: not the same model\n", prog, paths[1], m->nfaces, paths[0],
-                lm.brep.nfaces);
+                lm.mesh.nfaces);
         model_free(&lm);
         return EXIT_INPUT;
     }
@@ -892,6 +1001,8 @@ static int cmd_eval(int argc, char **argv)
                count[CM_METHOD_GREGORY], 100 * worst_ratio[CM_METHOD_GREGORY],
                count[CM_METHOD_GREGORY] ? 100 * sum_ratio[CM_METHOD_GREGORY] / count[CM_METHOD_GREGORY] : 0.0,
                count[CM_METHOD_KEEP]);
+        if (left_out)
+            printf("%d faces left out by the encoder (as cmz encode warned)\n", left_out);
         printf("G1: %d tangent edges next to rebuilt faces, worst %.3g deg%s\n", g1_edges,
                acos(g1_worst > 1 ? 1 : g1_worst) * 57.29577951308232, g1_fail ? "" : " (all within 1 deg)");
         if (fails || g1_fail) {

@@ -13,6 +13,17 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* remember the newest warning as one about a face left out of the model */
+static cm_err note_left_out(loaded_model *lm)
+{
+    int *p = realloc(lm->left_out, (size_t)(lm->nleft_out + 1) * sizeof *p);
+    if (!p)
+        return CM_E_NOMEM;
+    lm->left_out = p;
+    lm->left_out[lm->nleft_out++] = lm->iges.nwarn - 1;
+    return CM_OK;
+}
+
 /* everything after the IGES file is in lm->iges */
 static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm_status *st)
 {
@@ -22,11 +33,20 @@ static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm
     lm->seconds_brep = now() - t;
     if (e != CM_OK)
         return e;
+    /* the import's own skipped faces (iges_brep.c face_failed: "face N (TYPE, DE d) skipped: ...") */
+    for (int w = 0, n = lm->iges.nwarn; w < n; w++)
+        if (strncmp(lm->iges.warn[w].msg, "face ", 5) == 0 && strstr(lm->iges.warn[w].msg, ") skipped: ")) {
+            int *p = realloc(lm->left_out, (size_t)(lm->nleft_out + 1) * sizeof *p);
+            if (!p)
+                return cm_fail(st, CM_E_NOMEM, "out of memory");
+            lm->left_out = p;
+            lm->left_out[lm->nleft_out++] = w;
+        }
     t = now();
     brep_model *m = &lm->brep;
     lm->fds = calloc((size_t)m->nfaces, sizeof *lm->fds);
     if (!lm->fds)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     double tol = brep_tolerance(m);
     for (int f = 0; f < m->nfaces; f++) {
         if (progress)
@@ -34,11 +54,13 @@ static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm
         cm_status fst;
         cm_status_init(&fst);
         if (face_domain_build(m, f, tol, &lm->fds[f], &fst) != CM_OK) {
-            if (fst.code == CM_E_IO)
-                return cm_fail(st, CM_E_IO, "out of memory");
-            iges_warn(&lm->iges, 0, "face %d (DE %d): no parameter domain: %s", f, m->faces[f].src_de,
+            if (fst.code == CM_E_NOMEM)
+                return cm_fail(st, CM_E_NOMEM, "out of memory");
+            iges_warn(&lm->iges, 0, "face %d (DE %d): left out: no parameter domain: %s", f, m->faces[f].src_de,
                       cm_strerror(fst.code));
             face_domain_free(&lm->fds[f]);
+            if (note_left_out(lm) != CM_OK)
+                return cm_fail(st, CM_E_NOMEM, "out of memory");
             lm->domains_failed++;
             continue;
         }
@@ -81,8 +103,39 @@ cm_err model_load_data(const char *name, const char *data, size_t len, loaded_mo
     return load_rest(lm, progress, ctx, st);
 }
 
+cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status *st)
+{
+    brep_model *m = &lm->brep;
+    if (bf < 0 || bf >= m->nfaces)
+        return cm_fail(st, CM_E_ARG, __func__);
+    unsigned char *drop = calloc((size_t)m->nfaces + 1, 1);
+    if (!drop)
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    drop[bf] = 1;
+    iges_warn(&lm->iges, 0, "face of entity %d (DE %d): left out: %s", m->faces[bf].src_type, m->faces[bf].src_de, why);
+    cm_err e = note_left_out(lm) == CM_OK ? CM_OK : cm_fail(st, CM_E_NOMEM, "out of memory");
+    if (e == CM_OK)
+        e = brep_remove_faces(m, drop, st);
+    free(drop);
+    if (e != CM_OK)
+        return e;
+    /* the face domains follow their faces down; the box is what remains */
+    face_domain_free(&lm->fds[bf]);
+    memmove(&lm->fds[bf], &lm->fds[bf + 1], (size_t)(m->nfaces - bf) * sizeof *lm->fds);
+    memset(&lm->fds[m->nfaces], 0, sizeof lm->fds[m->nfaces]);
+    for (int f = bf; f < m->nfaces; f++)
+        if (lm->fds[f].uv)
+            lm->fds[f].face = f;
+    m->box = hbox_empty();
+    for (int s = 0; s < m->nsegs; s++)
+        hbox_add_curve(&m->box, &m->segs[s]);
+    cmesh_free(&lm->mesh);
+    return cmesh_build(m, lm->fds, &lm->mesh, st);
+}
+
 void model_free(loaded_model *lm)
 {
+    free(lm->left_out);
     cmesh_free(&lm->mesh);
     if (lm->fds)
         for (int f = 0; f < lm->brep.nfaces; f++)

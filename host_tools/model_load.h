@@ -21,6 +21,8 @@ typedef struct loaded_model {
     int outer_reordered; /* faces whose outer loop was not listed first */
     int seam_joined;     /* faces bounded by loops winding around a closed surface */
     double max_gap;      /* largest boundary-to-surface distance seen */
+    int *left_out;       /* indices into iges.warn: one warning per face left out of the model */
+    int nleft_out;       /* (import, parameter domain or encoder: each names the face's entity) */
     cmesh mesh;
     double seconds_read, seconds_brep, seconds_domains, seconds_mesh;
 } loaded_model;
@@ -38,6 +40,14 @@ CM_NODISCARD cm_err model_load(const char *path, loaded_model *lm, model_progres
 /** The same from an IGES file already in memory (`name` is used in messages; the fuzzer uses this). */
 CM_NODISCARD cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm,
                                     model_progress progress, void *ctx, cm_status *st);
+
+/**
+ * Leave B-rep face bf out of the model: warned ("face of entity 144 (DE d): left out: why"),
+ * counted in lm->left_out, removed from the B-rep (later faces move down by one) and the curve
+ * mesh built again without it.  The B-rep's face orientations must be
+ * the ones the face domains were built with (the encoder undoes its own turns first).
+ */
+CM_NODISCARD cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status *st);
 
 void model_free(loaded_model *lm);
 

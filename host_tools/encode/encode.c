@@ -18,6 +18,9 @@
 
 #define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
 #define KNOT_ONE (1ll << CM_FMT_KNOT_BITS)
+/* what the decoder accepts (cm_decode.c: COORD_MAX, WEIGHT_MAX): a value beyond cannot be sent */
+#define GRID_MAX (1ll << 40)
+#define WEIGHT_MAX (1ll << 48)
 
 void encode_opts_default(encode_opts *o)
 {
@@ -27,6 +30,7 @@ void encode_opts_default(encode_opts *o)
     o->target = NULL;
     o->target_name = NULL;
     o->gregory = 1;
+    o->strict = 0;
     o->abs_tol = 0;
     o->rel_set = 0;
     o->progress = NULL;
@@ -79,7 +83,19 @@ typedef struct tx {
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
     int npalette;
     int *color;         /* per face palette index */
+    const unsigned char *keep_only; /* per B-rep face: KEEP, a rebuilt surface did not tessellate */
+    const char **fault; /* per face: why it cannot be sent (NULL: it can); see encode_model */
+    int nfaults;
 } tx;
+
+/* face f cannot be sent as it is; the first reason stays */
+static void face_fault(tx *t, int f, const char *why)
+{
+    if (!t->fault[f]) {
+        t->fault[f] = why;
+        t->nfaults++;
+    }
+}
 
 /* drop the transmitted edges and vertices (build_edges makes them again) */
 static void tx_free_edges(tx *t)
@@ -114,15 +130,31 @@ static void tx_free(tx *t)
     free(t->corner);
     free(t->checksum);
     free(t->color);
+    free(t->fault);
     memset(t, 0, sizeof *t);
 }
 
 
-static void quantise(const tx *t, cm_vec3 p, int64_t out[3])
+/* p on the grid; 0 when it is not finite or beyond what the decoder accepts (out is then 0) */
+static int quantise(const tx *t, cm_vec3 p, int64_t out[3])
 {
-    out[0] = llround((p.x - t->origin[0]) / t->q);
-    out[1] = llround((p.y - t->origin[1]) / t->q);
-    out[2] = llround((p.z - t->origin[2]) / t->q);
+    double c[3] = {(p.x - t->origin[0]) / t->q, (p.y - t->origin[1]) / t->q, (p.z - t->origin[2]) / t->q};
+    int ok = 1;
+    for (int k = 0; k < 3; k++) {
+        ok &= fabs(c[k]) <= (double)GRID_MAX; /* false for NaN too */
+        out[k] = fabs(c[k]) <= (double)GRID_MAX ? llround(c[k]) : 0;
+    }
+    return ok;
+}
+
+/* a weight relative to the first on the format's grid; 0 when it cannot be sent */
+static int64_t quantise_weight(double w, double w0)
+{
+    double r = (double)WEIGHT_ONE * w / w0;
+    if (!(r > 0 && r <= (double)WEIGHT_MAX))
+        return 0;
+    int64_t q = llround(r);
+    return q < 1 ? 1 : q;
 }
 
 /* ---- orientation: every part's faces agree on shared edges (they run both ways) ---- */
@@ -141,7 +173,7 @@ static void flip_face(loaded_model *lm, int f)
         for (int i = 0; i < cl->n; i++)
             cm->uses[cl->first + i].rev ^= 1;
     }
-    lm->brep.faces[f].flip ^= 1;
+    lm->brep.faces[cf->brep_face].flip ^= 1;
 }
 
 static int orient_parts(loaded_model *lm)
@@ -271,7 +303,7 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
     t->edges = calloc((size_t)cm->nedges + 1, sizeof *t->edges);
     t->vq = malloc((size_t)(cm->nverts + 1) * sizeof *t->vq);
     if (!t->edge_tx || !t->vert_tx || !t->edges || !t->vq)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     for (int e = 0; e < cm->nedges; e++)
         t->edge_tx[e] = -1;
     for (int v = 0; v < cm->nverts; v++)
@@ -279,7 +311,7 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
     /* edges in the order the faces first use them; vertices as the edges first touch them */
     int *order = malloc((size_t)(cm->nedges + 1) * sizeof(int));
     if (!order)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     /* the same walk as sec_face (faces, their loops, the loops' uses): the cmesh
        use array need not be in that order (a hole's loop may be stored later) */
     for (int f = 0; f < t->nfaces; f++) {
@@ -295,15 +327,28 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
             }
         }
     }
+    /* an edge that cannot be sent (its curve or an end off the grid) takes its faces out: why[e] */
+    const char **why = calloc((size_t)cm->nedges + 1, sizeof *why);
+    unsigned char *off_grid = calloc((size_t)cm->nverts + 1, 1);
+    if (!why || !off_grid) {
+        free(why);
+        free(off_grid);
+        free(order);
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    }
     for (int i = 0; i < t->nedges; i++) {
         const cmesh_edge *E = &cm->edges[order[i]];
         int vs[2] = {E->v0, E->v1};
         for (int k = 0; k < 2; k++)
             if (t->vert_tx[vs[k]] < 0) {
-                quantise(t, cm->verts[vs[k]], t->vq[t->nverts]);
+                off_grid[vs[k]] = !quantise(t, cm->verts[vs[k]], t->vq[t->nverts]);
                 t->vert_tx[vs[k]] = t->nverts++;
             }
     }
+    for (int i = 0; i < t->nedges; i++)
+        if (off_grid[cm->edges[order[i]].v0] || off_grid[cm->edges[order[i]].v1])
+            why[order[i]] = "a vertex lies off the coordinate grid (not finite or too far from the model)";
+    free(off_grid);
     cm_err err = CM_OK;
     for (int i = 0; i < t->nedges && err == CM_OK; i++) {
         const cmesh_edge *E = &cm->edges[order[i]];
@@ -311,15 +356,24 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
         X->v0 = t->vert_tx[E->v0];
         X->v1 = t->vert_tx[E->v1];
         X->g1 = E->g1;
+        if (why[order[i]])
+            continue;
         hcurve c = {0};
-        if ((err = hcurve_clamp(&E->c, &c, st)) != CM_OK)
-            break;
+        cm_status cst;
+        cm_status_init(&cst);
+        if ((err = hcurve_clamp(&E->c, &c, &cst)) != CM_OK) {
+            if (err == CM_E_NOMEM)
+                break;
+            why[order[i]] = "an edge curve cannot be clamped to its ends";
+            err = CM_OK;
+            continue;
+        }
         hcurve_reparam(&c, 0.0, 1.0);
         {
             unsigned char *keep = malloc((size_t)c.n);
             if (!keep) {
                 hcurve_free(&c);
-                err = cm_fail(st, CM_E_IO, "out of memory");
+                err = cm_fail(st, CM_E_NOMEM, "out of memory");
                 break;
             }
             int nn = clean_knots(c.p, c.n, c.knots, keep), k = 0;
@@ -348,7 +402,7 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
         X->kq = malloc((size_t)(interior > 0 ? interior : 1) * sizeof *X->kq);
         if (!X->cq || !X->wq || !X->kq) {
             hcurve_free(&c);
-            err = cm_fail(st, CM_E_IO, "out of memory");
+            err = cm_fail(st, CM_E_NOMEM, "out of memory");
             break;
         }
         memcpy(X->cq[0], t->vq[X->v0], sizeof X->cq[0]);
@@ -359,12 +413,13 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
             X->wq[j] = WEIGHT_ONE;
         if (X->kind == CM_EDGE_CURVE) {
             for (int j = 1; j < n - 1; j++)
-                quantise(t, c.ctrl[j], X->cq[j]);
+                if (!quantise(t, c.ctrl[j], X->cq[j]))
+                    why[order[i]] = "an edge's control point lies off the coordinate grid";
             if (c.w)
                 for (int j = 0; j < n; j++) {
-                    X->wq[j] = llround((double)WEIGHT_ONE * c.w[j] / c.w[0]);
-                    if (X->wq[j] < 1)
-                        X->wq[j] = 1;
+                    X->wq[j] = quantise_weight(c.w[j], c.w[0]);
+                    if (X->wq[j] == 0)
+                        why[order[i]] = "an edge's weights cannot be sent (ratio out of range)";
                     if (X->wq[j] != WEIGHT_ONE)
                         X->rational = 1;
                 }
@@ -377,6 +432,16 @@ static cm_err build_edges(loaded_model *lm, tx *t, cm_status *st)
         }
         hcurve_free(&c);
     }
+    for (int f = 0; f < t->nfaces && err == CM_OK; f++) {
+        const cmesh_face *cf = &cm->faces[f];
+        for (int l = 0; l < cf->nloops; l++) {
+            const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+            for (int i = 0; i < cl->n; i++)
+                if (why[cm->uses[cl->first + i].edge])
+                    face_fault(t, f, why[cm->uses[cl->first + i].edge]);
+        }
+    }
+    free(why);
     free(order);
     return err;
 }
@@ -399,7 +464,7 @@ static cm_err build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_statu
         free(ku);
         free(kv);
         hsurf_free(&s);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     int nu = clean_knots(s.p, s.nu, s.U, ku), nv = clean_knots(s.q, s.nv, s.V, kv), kept = 0;
     for (int i = 0; i < s.nu; i++)
@@ -426,7 +491,7 @@ static cm_err build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_statu
     S->wq = malloc((size_t)total * sizeof *S->wq);
     if (!S->ku || !S->kv || !S->cq || !S->wq) {
         hsurf_free(&s);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     S->uniform_u = S->uniform_v = 1;
     for (int j = 1; j <= nku; j++) {
@@ -442,19 +507,20 @@ static cm_err build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_statu
             S->uniform_v = 0;
     }
     S->rational = 0;
-    for (long i = 0; i < total; i++) {
-        quantise(t, s.ctrl[i], S->cq[i]);
+    for (long i = 0; i < total && e == CM_OK; i++) {
+        if (!quantise(t, s.ctrl[i], S->cq[i]))
+            e = cm_fail(st, CM_E_RANGE, "a surface control point lies off the coordinate grid");
         S->wq[i] = WEIGHT_ONE;
         if (s.w) {
-            S->wq[i] = llround((double)WEIGHT_ONE * s.w[i] / s.w[0]);
-            if (S->wq[i] < 1)
-                S->wq[i] = 1;
+            S->wq[i] = quantise_weight(s.w[i], s.w[0]);
+            if (S->wq[i] == 0)
+                e = cm_fail(st, CM_E_RANGE, "the surface's weights cannot be sent (ratio out of range)");
             if (S->wq[i] != WEIGHT_ONE)
                 S->rational = 1;
         }
     }
     hsurf_free(&s);
-    return CM_OK;
+    return e;
 }
 
 /* ---- writing ---- */
@@ -634,7 +700,7 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
     for (int attempt = 0; attempt < 24; attempt++, cap *= 2) {
         uint8_t *buf = malloc(cap);
         if (!buf)
-            return cm_fail(st, CM_E_IO, "out of memory");
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
         cm_ac_enc e;
         cm_ac_enc_init(&e, buf, cap);
         fn(t, &e, lm);
@@ -668,7 +734,7 @@ static cm_err write_file(const tx *t, const loaded_model *lm, const encode_opts 
     r->section_bytes[0] = H;
     uint8_t *b = e == CM_OK ? calloc(1, total) : NULL;
     if (e == CM_OK && !b)
-        e = cm_fail(st, CM_E_IO, "out of memory");
+        e = cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK && total > 0x7fffffffu)
         e = cm_fail(st, CM_E_NOSPACE, "file larger than 2 GiB");
     if (e == CM_OK) {
@@ -726,6 +792,11 @@ static cm_err decode_back(const encode_result *r, cm_status *st)
     cm_err e = cm_dec_feed(&dec, r->bytes, r->len, st);
     if (e == CM_OK)
         e = cm_dec_finish(&dec, st);
+    if (e != CM_OK && st && e != CM_E_NOMEM) {
+        /* a byte of a file the user never sees names nothing: the fault is the encoder's */
+        st->offset = CM_NO_OFFSET;
+        st->where = "the encoder's check of its own file (an encoder bug: please report it with the model)";
+    }
     return e;
 }
 
@@ -906,7 +977,7 @@ static int try_gregory(const loaded_model *lm, int f, const encode_opts *o, face
 /* distance between the original surface and the kept one at a 21 x 21 grid of the same parameters */
 static void measure_keep(const loaded_model *lm, int f, face_report *rep)
 {
-    const hsurf *orig = &lm->brep.surfs[lm->brep.faces[f].surf];
+    const hsurf *orig = &lm->brep.surfs[lm->brep.faces[lm->mesh.faces[f].brep_face].surf];
     cm_surf kept;
     cm_model_surface(&dec.model, dec.model.faces[f].surf, &kept);
     cm_surf ov = hsurf_view(orig);
@@ -941,7 +1012,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
     int nf = t->nfaces;
     face_surface *fs = calloc((size_t)nf + 1, sizeof *fs);
     if (!fs)
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     for (int f = 0; f < nf; f++) {
         if (o->progress)
             o->progress("choosing methods", f + 1, nf, o->progress_ctx);
@@ -952,7 +1023,9 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         t->method[f] = CM_METHOD_KEEP;
         t->layout[f] = t->corner[f] = 0;
         t->checksum[f] = 0;
-        if (try_plane(lm, f, o, rep, fs))
+        if (t->keep_only[lm->mesh.faces[f].brep_face])
+            rep->why = "rebuilt surface did not tessellate";
+        else if (try_plane(lm, f, o, rep, fs))
             t->method[f] = CM_METHOD_PLANE;
         else if (o->gregory && try_gregory(lm, f, o, rep, fs, t))
             t->method[f] = CM_METHOD_GREGORY;
@@ -969,7 +1042,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         for (int f = 0; f < nf; f++)
             face_surface_free(&fs[f]);
         free(fs);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     memset(dirty, 1, (size_t)m->nedges + 1);
     for (int round = 0; round <= nf; round++) {
@@ -1066,7 +1139,19 @@ static cm_tess_ws tess_ws;
 static float face_pos[CM_MAX_TESS_POINTS][3], face_nrm[CM_MAX_TESS_POINTS][3];
 static uint32_t face_idx[3 * CM_MAX_TESS_TRIS];
 
-static cm_err tessellation_needs(uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st)
+/* why a face does not tessellate, for its warning */
+static const char *tess_fault(cm_err e)
+{
+    switch (e) {
+    case CM_E_DEGENERATE: return "its boundary cannot be triangulated (loops cross, or are degenerate)";
+    case CM_E_LIMIT: return "its tessellation exceeds a limit of every profile";
+    case CM_E_NONFINITE: return "its surface gives non-finite points";
+    default: return "it cannot be tessellated";
+    }
+}
+
+/* a face that does not tessellate is a fault of that face (see encode_model), not of the model */
+static cm_err tessellation_needs(tx *t, uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st)
 {
     const cm_model *m = &dec.model;
     cm_mesh_face mf;
@@ -1077,14 +1162,23 @@ static cm_err tessellation_needs(uint32_t *need, double *face_volume, const enco
             o->progress("tessellating", (int)f + 1, (int)m->nfaces, o->progress_ctx);
         cm_tess_info info;
         cm_mesh_clear(&mesh);
-        cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess_ws, &info, st);
-        if (e != CM_OK)
+        cm_status fst;
+        cm_status_init(&fst);
+        cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess_ws, &info, &fst);
+        if (e == CM_E_NOMEM) {
+            *st = fst;
             return e;
+        }
+        face_volume[f] = 0;
+        if (e != CM_OK) {
+            face_fault(t, (int)f, tess_fault(e));
+            continue;
+        }
         tris += (uint64_t)info.triangles;
         /* the face's share of its part's signed volume (divergence theorem, relative to the origin) */
         double vol = 0;
-        for (uint32_t t = 0; t < mesh.nindex; t += 3) {
-            const float *a = face_pos[face_idx[t]], *b = face_pos[face_idx[t + 1]], *c = face_pos[face_idx[t + 2]];
+        for (uint32_t i = 0; i < mesh.nindex; i += 3) {
+            const float *a = face_pos[face_idx[i]], *b = face_pos[face_idx[i + 1]], *c = face_pos[face_idx[i + 2]];
             cm_vec3 A = cm_v3f(a), B = cm_v3f(b), C = cm_v3f(c);
             vol += cm_dot(A, cm_cross(B, C)) / 6.0;
         }
@@ -1174,20 +1268,31 @@ static void compute_needs(const encode_result *r, uint32_t *need)
 #undef NEED
 }
 
-cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm_status *st)
+/*
+ * One try at the whole file.  Faces that cannot be sent as they are come back in fault[] (per curve
+ * mesh face, *nfaults of them) with CM_OK and no file; anything else that fails is the model's.
+ */
+static cm_err encode_pass(loaded_model *lm, const encode_opts *o, const unsigned char *keep_only, const char **fault,
+                          int *nfaults, encode_result *r, cm_status *st)
 {
     memset(r, 0, sizeof *r);
+    *nfaults = 0;
     tx t;
     memset(&t, 0, sizeof t);
+    t.keep_only = keep_only;
     cm_err e = CM_OK;
     double diag = brep_diag(&lm->brep);
     if (!(diag > 0))
         return cm_fail(st, CM_E_DEGENERATE, "empty model");
+    if (!isfinite(diag) || !isfinite(log2(o->quant_rel * diag)))
+        return cm_fail(st, CM_E_NONFINITE, "the model's extent is not finite");
     r->faces_flipped = orient_parts(lm);
     /* the grid: the largest power of two not above quant_rel * diagonal */
     t.q_exp = (int)floor(log2(o->quant_rel * diag));
     if (t.q_exp < -60)
         t.q_exp = -60;
+    if (t.q_exp > 20) /* the decoder's bound (cm_decode.c, check_header): a grid step over 1 km */
+        return cm_fail(st, CM_E_RANGE, "the model is too large for the format's coordinate grid");
     t.q = ldexp(1.0, t.q_exp);
     r->q = t.q;
     t.origin[0] = lm->brep.box.lo.x;
@@ -1200,10 +1305,11 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     t.checksum = calloc((size_t)t.nfaces + 1, sizeof(uint32_t));
     t.color = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.surfs = calloc((size_t)t.nfaces + 1, sizeof *t.surfs);
+    t.fault = calloc((size_t)t.nfaces + 1, sizeof *t.fault);
     r->faces = calloc((size_t)t.nfaces + 1, sizeof *r->faces);
-    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.color || !t.surfs || !r->faces) {
+    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.color || !t.surfs || !t.fault || !r->faces) {
         tx_free(&t);
-        return cm_fail(st, CM_E_IO, "out of memory");
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     if ((e = build_edges(lm, &t, st)) != CM_OK) {
         tx_free(&t);
@@ -1211,8 +1317,16 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     }
     for (int f = 0; f < t.nfaces && e == CM_OK; f++) {
         t.method[f] = CM_METHOD_KEEP;
-        e = build_surface(&t, &lm->brep.surfs[lm->brep.faces[f].surf], &t.surfs[f], st);
-        const brep_face *bf = &lm->brep.faces[f];
+        const brep_face *bf = &lm->brep.faces[lm->mesh.faces[f].brep_face];
+        cm_status fst;
+        cm_status_init(&fst);
+        e = build_surface(&t, &lm->brep.surfs[bf->surf], &t.surfs[f], &fst);
+        if (e == CM_E_NOMEM)
+            *st = fst;
+        else if (e != CM_OK) {
+            face_fault(&t, f, fst.where ? fst.where : cm_strerror(e));
+            e = CM_OK;
+        }
         if (bf->has_color) {
             int k = 1;
             while (k <= t.npalette && t.palette[k] != bf->rgb)
@@ -1224,7 +1338,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     }
     /* pass 1: everything kept, decoded back to have exactly the transmitted edges; the methods;
        pass 2: the final methods, decoded again, needs taken from what the terminal will see */
-    if (e == CM_OK)
+    if (e == CM_OK && t.nfaults == 0)
         e = choose_and_write(lm, &t, o, r, st);
     if (e == CM_OK) {
         for (int i = 0; i < t.nedges; i++) {
@@ -1234,13 +1348,13 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     }
     double *fvol = calloc((size_t)t.nfaces + 1, sizeof(double));
     if (e == CM_OK && !fvol)
-        e = cm_fail(st, CM_E_IO, "out of memory");
-    if (e == CM_OK) {
+        e = cm_fail(st, CM_E_NOMEM, "out of memory");
+    if (e == CM_OK && t.nfaults == 0) {
         compute_needs(r, r->need);
-        e = tessellation_needs(r->need, fvol, o, st);
+        e = tessellation_needs(&t, r->need, fvol, o, st);
     }
     /* closed parts face outwards: a part whose volume comes out negative is turned inside out */
-    if (e == CM_OK && outward_parts(lm, fvol, r) > 0) {
+    if (e == CM_OK && t.nfaults == 0 && outward_parts(lm, fvol, r) > 0) {
         /* turned faces walk their loops the other way: edges and vertices are numbered by
            first use in that walk, so number them again */
         tx_free_edges(&t);
@@ -1250,10 +1364,19 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             e = choose_and_write(lm, &t, o, r, st);
         if (e == CM_OK) {
             compute_needs(r, r->need);
-            e = tessellation_needs(r->need, fvol, o, st);
+            e = tessellation_needs(&t, r->need, fvol, o, st);
         }
     }
     free(fvol);
+    if (e == CM_OK && t.nfaults > 0) {
+        /* faces that cannot be sent: encode_model settles them and calls again */
+        for (int f = 0; f < t.nfaces; f++)
+            if (t.fault[f])
+                fault[f] = t.fault[f];
+        *nfaults = t.nfaults;
+        tx_free(&t);
+        return CM_OK;
+    }
     if (e == CM_OK) {
         e = write_file(&t, lm, o, r->need, r, st);
         r->need[CM_LIMIT_MAX_FILE_BYTES] = (uint32_t)r->len;
@@ -1273,4 +1396,99 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             }
     }
     return CM_OK;
+}
+
+/*
+ * One bad face never sinks a model.  A face that cannot be sent as it is (an edge or its surface off
+ * the grid, a surface that does not tessellate) is settled and the file made again: a rebuilt face
+ * that did not tessellate is tried once more as KEEP; a face that fails as KEEP is left out of the
+ * model with a warning naming its entity (o->strict: the model fails instead).  Every round settles
+ * at least one face for good, so the rounds end.
+ */
+cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm_status *st)
+{
+    int nb = lm->brep.nfaces;
+    unsigned char *keep_only = calloc((size_t)nb + 1, 1), *flip0 = malloc((size_t)nb + 1);
+    if (!keep_only || !flip0) {
+        free(keep_only);
+        free(flip0);
+        memset(r, 0, sizeof *r);
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    }
+    for (int b = 0; b < nb; b++)
+        flip0[b] = (unsigned char)lm->brep.faces[b].flip;
+    int left_out = 0;
+    cm_err e;
+    for (;;) {
+        int nf = lm->mesh.nfaces, nfaults = 0;
+        const char **fault = calloc((size_t)nf + 1, sizeof *fault);
+        if (!fault) {
+            e = cm_fail(st, CM_E_NOMEM, "out of memory");
+            break;
+        }
+        e = encode_pass(lm, o, keep_only, fault, &nfaults, r, st);
+        if (e != CM_OK || nfaults == 0) {
+            free(fault);
+            break;
+        }
+        /* settle the faulty faces: KEEP once more where a rebuilt surface failed, else leave out */
+        int *out = malloc((size_t)nfaults * sizeof *out), nout = 0, retried = 0;
+        if (!out) {
+            free(fault);
+            e = cm_fail(st, CM_E_NOMEM, "out of memory");
+            break;
+        }
+        for (int f = 0; f < nf; f++) {
+            if (!fault[f])
+                continue;
+            int b = lm->mesh.faces[f].brep_face;
+            if (r->faces && r->faces[f].method != CM_METHOD_KEEP && !keep_only[b]) {
+                keep_only[b] = 1;
+                retried++;
+            } else {
+                out[nout++] = f;
+            }
+        }
+        char refusal[sizeof r->refusal] = "";
+        if (nout > 0 && o->strict) {
+            const brep_face *F = &lm->brep.faces[lm->mesh.faces[out[0]].brep_face];
+            snprintf(refusal, sizeof refusal, "face of entity %d (DE %d) cannot be sent: %s (--strict)", F->src_type,
+                     F->src_de, fault[out[0]]);
+            e = cm_fail(st, CM_E_DEGENERATE, "a face cannot be sent (--strict)");
+        }
+        if (e == CM_OK && nout > 0) {
+            /* back to the orientation the face domains were built with, then the curve mesh anew */
+            int *bad = malloc((size_t)nout * sizeof *bad);
+            char (*why)[160] = malloc((size_t)nout * sizeof *why);
+            if (!bad || !why)
+                e = cm_fail(st, CM_E_NOMEM, "out of memory");
+            for (int i = 0; e == CM_OK && i < nout; i++) {
+                bad[i] = lm->mesh.faces[out[i]].brep_face;
+                snprintf(why[i], sizeof why[i], "%s", fault[out[i]]);
+            }
+            for (int b = 0; e == CM_OK && b < nb; b++)
+                lm->brep.faces[b].flip = flip0[b];
+            /* from the last: a face left out moves the later ones down */
+            for (int i = nout - 1; e == CM_OK && i >= 0; i--) {
+                e = model_leave_out_face(lm, bad[i], why[i], st);
+                left_out++;
+            }
+            free(bad);
+            free(why);
+        }
+        free(out);
+        free(fault);
+        encode_result_free(r);
+        memcpy(r->refusal, refusal, sizeof refusal);
+        if (e != CM_OK)
+            break;
+        if (lm->mesh.nfaces == 0) {
+            e = cm_fail(st, CM_E_DEGENERATE, "no face of the model can be sent (see warnings)");
+            break;
+        }
+    }
+    r->faces_left_out = left_out;
+    free(keep_only);
+    free(flip0);
+    return e;
 }

@@ -31,6 +31,7 @@ typedef struct encode_opts {
     double abs_tol;              /* > 0: a face's tolerance in mm (with rel_tol too when rel_set) */
     int rel_set;                 /* rel_tol was asked for (with abs_tol the smaller one applies) */
     int gregory;                 /* try GREGORY (spec §6) on non-planar faces (default 1) */
+    int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;
 } encode_opts;
@@ -61,6 +62,7 @@ typedef struct encode_result {
     int faces_plane, faces_gregory, faces_keep;
     int edges_line, edges_curve;
     int faces_flipped; /* faces turned to make every part consistently oriented */
+    int faces_left_out; /* faces the encoder left out (model_leave_out_face: warned, in lm->left_out) */
     double q;          /* grid step (mm) */
     size_t section_bytes[6];
     face_report *faces; /* one per face (malloc'd) */
@@ -70,7 +72,8 @@ typedef struct encode_result {
 void encode_result_free(encode_result *r);
 
 /**
- * Encode lm.  The model's faces may be re-oriented in place.  On success
+ * Encode lm.  The model's faces may be re-oriented in place, and a face that cannot be sent is
+ * left out of lm (warned; see encode.c: encode_model).  On success
  * r->bytes holds the file; if opts->target is set and a need exceeds it,
  * returns CM_E_LIMIT with r->refusal explaining (the bytes are still
  * produced, so a caller may report sizes).

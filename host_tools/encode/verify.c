@@ -164,7 +164,7 @@ static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
 int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol, face_error *out)
 {
     memset(out, 0, sizeof *out);
-    const face_domain *fd = &lm->fds[f];
+    const face_domain *fd = &lm->fds[lm->mesh.faces[f].brep_face];
     if (!fd->uv || (rb->method == CM_METHOD_GREGORY && !rb->greg))
         return 0;
     /* a walk's local answer is a distance to a point of the surface, so never below the true one:
@@ -227,7 +227,7 @@ done:
 /* unit normal of face f's source surface near P, projected from the nearest boundary sample */
 static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n)
 {
-    const face_domain *D = &lm->fds[f];
+    const face_domain *D = &lm->fds[lm->mesh.faces[f].brep_face];
     if (!D->uv)
         return 0;
     int best = 0;
