@@ -260,6 +260,8 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
 		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
+		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
+		"gate:hostile-input:$(MAKE) --no-print-directory -s hostile HOSTILE_TRIES=2 HOSTILE_TAP=--tap" \
 		"gate:hw-and-links:$(MAKE) --no-print-directory -s check-hw-and-links"
 
 # the VM computes, the pty transfers mostly wait (paced like a serial line): run the two side by side
@@ -301,13 +303,48 @@ check-fuzz-replay:
 # the decode fuzz target (terminal profile, the board's limits) replayed under ASan/UBSan:
 # seeds (valid files of every method), named malformed inputs and regressions
 CLANG_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
-# (built as the fuzzer is, without CRC checks, so regressions found by fuzz-decode replay here)
+# (built as the fuzzer is, without CRC checks, so regressions found by fuzz-decode replay here),
+# then the same inputs through fuzz_decode_crc on the product build (CRCs and checksums checked)
 check-fuzz-decode-replay:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san-fuzz CM_NO_STACK_FLAGS=1 PROFILE=terminal \
 		CFLAGS="$(CLANG_SAN) -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION" LDFLAGS="-fsanitize=address,undefined" \
 		$(BUILD_ROOT)/clang-san-fuzz/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_decode
 	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san-fuzz/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_decode \
 		tests/fuzz/corpus_decode $(wildcard tests/fuzz/regressions_decode)
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
+		$(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_decode_crc
+	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_decode_crc \
+		tests/fuzz/corpus_decode $(wildcard tests/fuzz/regressions_decode)
+
+# the structure-aware decode fuzzer's replay: like replay_decode, no host code (the generic replay_%
+# rule would link libcmhost.a)
+define FUZZ_DECODE_CRC_RULES
+$(call bdir,$(1))/tests/fuzz/replay_decode_crc: $(call bdir,$(1))/tests/fuzz/fuzz_decode_crc.o \
+		$(call bdir,$(1))/tests/fuzz/replay_main.o $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
+endef
+$(foreach p,$(PROFILES),$(eval $(call FUZZ_DECODE_CRC_RULES,$(p))))
+
+# libFuzzer on the product build of the decoder (not part of check): make fuzz-decode-crc FUZZ_SECONDS=600
+# (CRCs and GREGORY checksums checked, as on the terminal; tests/fuzz/fuzz_decode_crc.c's mutator
+# lays the file out again and recomputes every CRC after each mutation, and makes the header hostile
+# on purpose now and then: section and need counts, table entries, lengths, grid, tolerances;
+# 60 s per input: up to 12 faces are tessellated under the instrumentation, a few seconds each on a
+# busy machine)
+.PHONY: fuzz-decode-crc
+fuzz-decode-crc:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz-crc CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all" \
+		$(BUILD_ROOT)/fuzz-crc/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode_crc.o \
+		$(BUILD_ROOT)/fuzz-crc/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz-crc/fuzz_decode_crc \
+		$(BUILD_ROOT)/fuzz-crc/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode_crc.o \
+		$(BUILD_ROOT)/fuzz-crc/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz-crc/corpus_decode && cp tests/fuzz/corpus_decode/* $(BUILD_ROOT)/fuzz-crc/corpus_decode/
+	$(BUILD_ROOT)/fuzz-crc/fuzz_decode_crc $(FUZZ_ARGS) -max_len=65536 -timeout=60 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz-crc/ $(BUILD_ROOT)/fuzz-crc/corpus_decode
 
 # libFuzzer on the decoder (not part of check): make fuzz-decode FUZZ_SECONDS=600
 # (built without CRC checks, in build/fuzz only, so that mutations reach the section decoders)
@@ -321,11 +358,14 @@ fuzz-decode:
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode.o \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
 	$(Q)mkdir -p $(BUILD_ROOT)/fuzz/corpus_decode && cp tests/fuzz/corpus_decode/* $(BUILD_ROOT)/fuzz/corpus_decode/
-	$(BUILD_ROOT)/fuzz/fuzz_decode -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=30 \
+	$(BUILD_ROOT)/fuzz/fuzz_decode $(FUZZ_ARGS) -max_len=65536 -timeout=30 \
 		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_decode
 
 # libFuzzer on the IGES import (not part of check): make fuzz-iges FUZZ_SECONDS=600
+# (max_len 4 MiB: the corpus models, up to 3.9 MB, are seeds whole, not cut at the default length)
 FUZZ_SECONDS ?= 60
+# what every fuzz-* target passes libFuzzer: a time budget, or e.g. FUZZ_ARGS="-runs=1000000"
+FUZZ_ARGS ?= -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1
 FUZZ_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
 .PHONY: fuzz-iges
 fuzz-iges:
@@ -337,7 +377,7 @@ fuzz-iges:
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_iges.o \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a -lm
 	$(Q)mkdir -p $(BUILD_ROOT)/fuzz/corpus_iges && cp tests/fuzz/corpus_iges/* $(BUILD_ROOT)/fuzz/corpus_iges/
-	$(BUILD_ROOT)/fuzz/fuzz_iges -max_total_time=$(FUZZ_SECONDS) -max_len=262144 -timeout=30 \
+	$(BUILD_ROOT)/fuzz/fuzz_iges $(FUZZ_ARGS) -max_len=4194304 -timeout=120 \
 		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_iges $(wildcard $(SHARED_MODELS)/iges)
 
 # the import against Open CASCADE on the shared corpus (skips without it)
@@ -428,3 +468,27 @@ install: $(B)/cm-limits
 
 clean:
 	rm -rf $(BUILD_ROOT)
+
+# ---- hostile input (issue 10): mutated IGES and .cmz files against cmz and the terminal's decoder ----
+MUTATE := $(call bdir,host)/tests/tools/mutate
+$(MUTATE): $(call bdir,host)/tests/tools/mutate.o $(call bdir,host)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
+# make hostile [HOSTILE_TRIES=N]: the table of README "Hostile input" (not part of check; check runs a
+# few tries).  cmz and the terminal's cmz-decode are built with ASan and UBSan, so that an access out of
+# bounds inside a struct or an undefined conversion counts as the crash it is.
+HOSTILE_TRIES ?= 40
+HOSTILE_SAN := $(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)
+.PHONY: hostile hostile-tools
+hostile-tools: $(MUTATE)
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
+		$(HOSTILE_SAN)-host/cmz $(HOSTILE_SAN)-terminal/cmz-decode
+hostile: hostile-tools
+	$(Q)ASAN_OPTIONS=detect_leaks=0 tests/tools/hostile_run.sh $(HOSTILE_SAN)-host/cmz $(HOSTILE_SAN)-terminal/cmz-decode \
+		$(MUTATE) $(BUILD_ROOT)/hostile $(HOSTILE_TRIES) $(HOSTILE_TAP)
+
+# one bad face never sinks a model, from the command line (encode, --strict, eval, decode)
+.PHONY: check-leave-out
+check-leave-out: $(CMZ) $(call bdir,host)/tests/host/test_leave_out
+	$(Q)tests/tools/check_leave_out.sh $(CMZ) $(call bdir,host)/tests/host/test_leave_out $(BUILD_ROOT)/leave-out

@@ -103,5 +103,5 @@ fuzz-link: $(LINK_TEST_BIN)
 		$(call LINK_FUZZ_OBJS,$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal) $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
 	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_link \
 		$(call LINK_FUZZ_OBJS,$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal) $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
-	$(BUILD_ROOT)/fuzz/fuzz_link -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=30 \
+	$(BUILD_ROOT)/fuzz/fuzz_link $(FUZZ_ARGS) -max_len=65536 -timeout=30 \
 		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_link
