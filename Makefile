@@ -168,6 +168,11 @@ $(call bdir,$(1))/tests/fuzz/replay_decode: $(call bdir,$(1))/tests/fuzz/fuzz_de
 		$(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
+# the triangulator's: no host code either
+$(call bdir,$(1))/tests/fuzz/replay_tess: $(call bdir,$(1))/tests/fuzz/fuzz_tess.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
+		$(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
 $(call bdir,$(1))/tests/fuzz/replay_%: $(call bdir,$(1))/tests/fuzz/fuzz_%.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
 		$(call bdir,$(1))/libcmhost.a $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
@@ -254,6 +259,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
 		"gate:iges-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
+		"gate:tess-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-tess-replay" \
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
 		"gate:corpus-roundtrip:$(MAKE) --no-print-directory -s check-corpus-roundtrip" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
@@ -345,6 +351,30 @@ fuzz-decode-crc:
 	$(Q)mkdir -p $(BUILD_ROOT)/fuzz-crc/corpus_decode && cp tests/fuzz/corpus_decode/* $(BUILD_ROOT)/fuzz-crc/corpus_decode/
 	$(BUILD_ROOT)/fuzz-crc/fuzz_decode_crc $(FUZZ_ARGS) -max_len=65536 -timeout=60 \
 		-artifact_prefix=$(BUILD_ROOT)/fuzz-crc/ $(BUILD_ROOT)/fuzz-crc/corpus_decode
+
+# the triangulator's fuzz target replayed under ASan/UBSan over its seeds (each case family, crashers
+# kept as regress_*, inputs the old triangulator refused as old_*), strict: a refusal of loops that do
+# not cross is a failure
+.PHONY: check-fuzz-tess-replay fuzz-tess
+check-fuzz-tess-replay:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
+		$(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_tess
+	$(Q)FUZZ_TESS_STRICT=1 $(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_tess tests/fuzz/corpus_tess
+
+# libFuzzer on the triangulator (not part of check): make fuzz-tess FUZZ_SECONDS=600 (its own build:
+# edge coverage of the library only, the harness uninstrumented, about 13x faster)
+fuzz-tess:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz-tess CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="-O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fsanitize-coverage=inline-8bit-counters,pc-table" \
+		$(BUILD_ROOT)/fuzz-tess/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
+	$(Q)clang -O1 -g -std=c11 -ffp-contract=off -fsanitize=address,undefined -fno-sanitize-recover=all $(CM_INC) \
+		-DCM_PROFILE='"profiles/terminal.h"' -c tests/fuzz/fuzz_tess.c -o $(BUILD_ROOT)/fuzz-tess/fuzz_tess.o
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz-tess/fuzz_tess $(BUILD_ROOT)/fuzz-tess/fuzz_tess.o \
+		$(BUILD_ROOT)/fuzz-tess/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz-tess/corpus && cp tests/fuzz/corpus_tess/* $(BUILD_ROOT)/fuzz-tess/corpus/
+	FUZZ_TESS_STRICT=1 $(BUILD_ROOT)/fuzz-tess/fuzz_tess $(FUZZ_ARGS) -max_len=2048 -timeout=10 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz-tess/ $(BUILD_ROOT)/fuzz-tess/corpus
 
 # libFuzzer on the decoder (not part of check): make fuzz-decode FUZZ_SECONDS=600
 # (built without CRC checks, in build/fuzz only, so that mutations reach the section decoders)

@@ -13,8 +13,9 @@
  *     with different rounding is seen exactly shared.
  *  3. Link each loop into a ring of nodes (node k = point k), drop a point
  *     that repeats its predecessor (a zero-length segment is nobody's side),
- *     refuse loops with fewer than 3 points or no area, reverse a loop given
- *     in the wrong orientation.
+ *     leave out holes with fewer than 3 points or no area (they take nothing
+ *     away), refuse such an outer loop, reverse a loop given in the wrong
+ *     orientation.
  *  4. Bridge the holes into the outer ring (Eberly's hole elimination, with
  *     the tie rules of mapbox/earcut): holes in order of increasing min x;
  *     from the hole's leftmost vertex M a ray to -x finds the nearest ring
@@ -42,11 +43,23 @@
  *     rounding), a relaxed test (only points strictly inside block) is
  *     tried, then the least-bad node: the largest sine of its turn among the
  *     unblocked ones; one that turns clearly the wrong way (sine < -SIN_TOL)
- *     means the loops cross: CM_E_DEGENERATE.  Adjacency is built while
+ *     means the loops cross, or touch in a way ear clipping cannot take
+ *     apart: the fallback (5b).  Adjacency is built while
  *     clipping: every ring edge remembers the triangle side across it.
  *     Every strict ear is counter-clockwise, and each cut changes the ring's
  *     winding number exactly where its triangle lies, so the triangles tile
  *     the region exactly.
+ *  5b. Fallback (cdt_region): where ear clipping fails, or leaves (after
+ *     the flips of step 6) a flat triangle that the input does not force,
+ *     the boundary points go into a Delaunay triangulation inside an
+ *     enclosing triangle, every boundary segment is forced in as a fixed
+ *     side (split at the vertices lying on it, which then get flat
+ *     triangles keeping the segment a side), and the triangles of positive
+ *     winding number are kept.  It needs no simple ring: loops through a
+ *     point twice, vertices on segments, holes sharing runs with the outer
+ *     loop, spikes and slits are ordinary there.  Inputs the ear clipping
+ *     triangulates without such a flat triangle never get here, so their
+ *     output is as before.
  *  6. Lawson flips over all non-fixed sides: a side is flipped when the
  *     opposite vertex is inside the circumcircle (certainly: the determinant
  *     beyond its rounding bound, evaluated from both triangles as a sliver's
@@ -87,6 +100,7 @@
 #define EPS_ON 1e-13    /* an interior point this close to a side is inserted on that side */
 #define EPS_AREA 1e-12  /* a loop with |2 area| <= EPS_AREA * extent^2 has no area */
 #define SIN_TOL 1e-8    /* a fallback ear may turn the wrong way by at most this sine */
+#define EPS_FLAT 1e-10  /* a triangle whose largest angle is this close (sine) to straight is flat */
 
 /* triangle flags */
 #define FIX(s) (1u << (s))    /* side s is fixed */
@@ -1225,6 +1239,10 @@ static int insert_point(tess_ctx *c, int q, int last, double r2, int stamp)
         t = scan(c, Q);
     if (t < 0 || near_used(c, t, Q, r2, stamp))
         return -2;
+    /* a flat triangle (forced by a vertex on a boundary segment) "contains" every point of its line:
+       q is on that boundary line, not in the region */
+    if (orient_sign(ws->p[ws->tri[t][0]], ws->p[ws->tri[t][1]], ws->p[ws->tri[t][2]]) <= 0)
+        return -2;
     int on = -1;
     double dmin = EPS_ON * EPS_ON;
     for (int i = 0; i < 3; i++) {
@@ -1245,6 +1263,602 @@ static int insert_point(tess_ctx *c, int q, int last, double r2, int stamp)
     if (cell >= 0)
         ws->cell[cell] = r;
     return r;
+}
+
+/* ---------------------------------------- fallback: constrained triangulation of the loops */
+
+/*
+ * When ear clipping cannot finish, or leaves a flat triangle that the input
+ * does not force, the region is triangulated again another way, one that
+ * needs no simple ring: the boundary points are inserted into a Delaunay
+ * triangulation inside an enclosing triangle (points at one position become
+ * one vertex), every boundary segment is then forced in as a fixed side
+ * (the sides it crosses are flipped away, Sloan's method; a vertex lying on
+ * the segment splits it there), and the triangles are kept whose winding
+ * number with respect to the loops (outer loop counter-clockwise, holes
+ * clockwise, as the ear clipping orients them) is positive: counted from
+ * the enclosing triangle, across each fixed side by the pieces of boundary
+ * segments along it.  Touching loops, vertices on other loops'
+ * segments, holes sharing a vertex or a run of segments with the outer
+ * loop, spikes, slits and repeated points need nothing special there; only
+ * segments that cross (loops crossing each other or themselves) cannot be
+ * forced in: CM_E_DEGENERATE.  A boundary segment a -> b split at vertices
+ * v1 .. vk on it gets the flat triangles (a, v(i+1), v(i)) and (a, b, vk),
+ * so that it is still a side of a triangle, as the ear clipping leaves it:
+ * those are the only flat triangles, and the input forces them.  Nothing of
+ * this runs for an input the ear clipping triangulates.
+ */
+#define SUPER_V CM_MAX_TESS_POINTS /* ids of the enclosing triangle's corners: SUPER_V .. SUPER_V + 2 */
+#define CDT_CROSS (-2)             /* a segment crosses a fixed side: the loops cross */
+#define CDT_FAIL (-3)              /* the predicates contradict each other (rounding) */
+#define TF_SEEN 64u                /* triangle flag: its winding number is known */
+#define TF_KEEP 128u               /* triangle flag: in the region */
+
+/* corner of triangle t at vertex v, or -1 */
+static int corner_of(const cm_tri_ws *ws, int t, int v)
+{
+    for (int i = 0; i < 3; i++)
+        if (ws->tri[t][i] == v)
+            return i;
+    return -1;
+}
+
+/*
+ * Loop [s, e) as make_ring sees it: its distinct points (a point repeating
+ * its predecessor, or the first, dropped) into kept[]; returns their count,
+ * *a2 twice the signed area (summed as make_ring sums it), *ext the larger
+ * extent.
+ */
+static int loop_shape(const cm_tri_ws *ws, int s, int e, int *kept, double *a2, double *ext)
+{
+    int cnt = 0;
+    for (int k = s; k < e; k++)
+        if (cnt == 0 || !same_pos(ws->p[k], ws->p[kept[cnt - 1]]))
+            kept[cnt++] = k;
+    while (cnt > 1 && same_pos(ws->p[kept[cnt - 1]], ws->p[kept[0]]))
+        cnt--;
+    cm_vec2 f = ws->p[kept[0]];
+    double sum = 0.0, xmin = f.x, xmax = f.x, ymin = f.y, ymax = f.y;
+    for (int g = 0; g < cnt; g++) {
+        cm_vec2 q = ws->p[kept[g]];
+        sum += cross3(f, q, ws->p[kept[g + 1 < cnt ? g + 1 : 0]]);
+        xmin = q.x < xmin ? q.x : xmin;
+        xmax = q.x > xmax ? q.x : xmax;
+        ymin = q.y < ymin ? q.y : ymin;
+        ymax = q.y > ymax ? q.y : ymax;
+    }
+    *a2 = sum;
+    *ext = xmax - xmin > ymax - ymin ? xmax - xmin : ymax - ymin;
+    return cnt;
+}
+
+/*
+ * Insert boundary point q into the Delaunay triangulation: returns the
+ * vertex standing for it (q, or a vertex already at its position), -1 on
+ * overflow, CDT_FAIL if it cannot be located.
+ */
+static int cdt_insert(tess_ctx *c, int q, int *last)
+{
+    cm_tri_ws *ws = c->ws;
+    cm_vec2 Q = ws->p[q];
+    int t = walk(c, *last, Q);
+    if (t < 0)
+        t = scan(c, Q);
+    if (t < 0)
+        return CDT_FAIL;
+    int on = -1;
+    double dmin = EPS_ON * EPS_ON;
+    for (int i = 0; i < 3; i++) {
+        int v = ws->tri[t][i];
+        if (same_pos(ws->p[v], Q))
+            return v;
+    }
+    if (orient_sign(ws->p[ws->tri[t][0]], ws->p[ws->tri[t][1]], ws->p[ws->tri[t][2]]) <= 0)
+        return CDT_FAIL; /* only rounding makes a flat triangle here */
+    for (int i = 0; i < 3; i++) {
+        cm_vec2 A = ws->p[ws->tri[t][i]], B = ws->p[ws->tri[t][n3(i)]];
+        double e, o = orient(A, B, Q, &e), l2 = dist2(A, B);
+        double d2 = l2 > 0.0 ? o * o / l2 : 0.0;
+        if (d2 <= dmin) {
+            dmin = d2;
+            on = i;
+        }
+    }
+    int r = on >= 0 ? split_side(c, t, on, q) : split_tri(c, t, q);
+    if (r == -2)
+        r = split_tri(c, t, q);
+    if (r < 0)
+        return -1;
+    run_flips(c);
+    *last = r;
+    return q;
+}
+
+/* set both sides of the edge at side s of t fixed */
+static void fix_edge(cm_tri_ws *ws, int t, int s)
+{
+    set_fixed(ws, t, s, 1);
+    int S = ws->adj[t][s];
+    if (S >= 0)
+        set_fixed(ws, S / 3, S % 3, 1);
+}
+
+/* flip side s of t (its quadrilateral strictly convex), as try_flip does but without asking */
+static void force_flip(cm_tri_ws *ws, int t, int s)
+{
+    int S = ws->adj[t][s], u = S / 3, j = S % 3, s1 = n3(s), s2 = p3(s), j1 = n3(j), j2 = p3(j);
+    int a = ws->tri[t][s], b = ws->tri[t][s1], cc = ws->tri[t][s2], d = ws->tri[u][j2];
+    int Xbc = ws->adj[t][s1], Xca = ws->adj[t][s2], Xad = ws->adj[u][j1], Xdb = ws->adj[u][j2];
+    unsigned fbc = ws->flag[t] & FIX(s1), fca = ws->flag[t] & FIX(s2);
+    unsigned fad = ws->flag[u] & FIX(j1), fdb = ws->flag[u] & FIX(j2);
+    /* t = (c, a, d), u = (d, b, c), as try_flip leaves them */
+    ws->tri[t][0] = cc;
+    ws->tri[t][1] = a;
+    ws->tri[t][2] = d;
+    ws->tri[u][0] = d;
+    ws->tri[u][1] = b;
+    ws->tri[u][2] = cc;
+    link_side(ws, t, 0, Xca, fca != 0);
+    link_side(ws, t, 1, Xad, fad != 0);
+    link_side(ws, u, 0, Xdb, fdb != 0);
+    link_side(ws, u, 1, Xbc, fbc != 0);
+    ws->adj[t][2] = 3 * u + 2;
+    ws->adj[u][2] = 3 * t + 2;
+    set_fixed(ws, t, 2, 0);
+    set_fixed(ws, u, 2, 0);
+}
+
+/* the side u -> w of a triangle at u (vt[u] a triangle there): 3 t + s, or -1 */
+static int find_side(const tess_ctx *c, const int *vt, int u, int w)
+{
+    const cm_tri_ws *ws = c->ws;
+    int t0 = vt[u], t = t0;
+    for (int g = 0; g <= c->ntri && t >= 0; g++) {
+        int i = corner_of(ws, t, u);
+        if (i < 0)
+            return -1;
+        if (ws->tri[t][n3(i)] == w)
+            return 3 * t + i;
+        int S = ws->adj[t][p3(i)];
+        t = S >= 0 ? S / 3 : -1;
+        if (t == t0)
+            break;
+    }
+    return -1;
+}
+
+/*
+ * Vertex p lies on the segment from a to b, strictly between: collinear to
+ * rounding, or within tol of it and of the whole boundary segment a0 -> b
+ * that a -> b is the rest of: tol is EPS_TOUCH (a vertex of a loop touching
+ * the segment, a run of segments overlapping another, both only to
+ * rounding), or with folds allowed half the fold tolerance (loops crossing
+ * by less: the segment is bent through p; its flat triangles, between
+ * points within tol of the segment, are folded by less than the tolerance).
+ */
+static int on_the_way(cm_vec2 a0, cm_vec2 a, cm_vec2 b, cm_vec2 p, double tol)
+{
+    double l2 = dist2(a, b), o = cross3(a, b, p), o0 = cross3(a0, b, p);
+    if (orient_sign(a, b, p) != 0 && !(o * o <= tol * tol * l2 && o0 * o0 <= tol * tol * dist2(a0, b)))
+        return 0;
+    double along = (p.x - a.x) * (b.x - a.x) + (p.y - a.y) * (b.y - a.y);
+    return along > 0.0 && dist2(a, p) < l2;
+}
+
+/*
+ * Force the segment a -> b (the rest of boundary segment a0 -> b) in, as far
+ * as its first vertex: returns the vertex reached (b, or a vertex lying on
+ * the segment), CDT_CROSS, CDT_FAIL.  The segment a -> reached is then a
+ * fixed side: the sides it crosses are flipped away (Sloan 1993), vt (a
+ * triangle at each boundary vertex) kept up to date.
+ */
+static int cdt_segment(tess_ctx *c, int a0, int a, int b, int *vt)
+{
+    cm_tri_ws *ws = c->ws;
+    cm_vec2 A0 = ws->p[a0], A = ws->p[a], B = ws->p[b];
+    double tol = 0.5 * c->fold > EPS_TOUCH ? 0.5 * c->fold : EPS_TOUCH;
+    int t = vt[a], i = t >= 0 && t < c->ntri ? corner_of(ws, t, a) : -1;
+    if (i < 0)
+        for (t = 0; t < c->ntri && (i = corner_of(ws, t, a)) < 0; t++) {
+        }
+    if (i < 0)
+        return CDT_FAIL;
+    /* an edge from a to b, else to the nearest vertex on the way (a whole turn round a, so that
+       next_piece finds the same), else the triangle at a that the segment leaves a through */
+    int t0 = t, bt = -1, bs = -1, bv = -1, wt = -1, wi = -1;
+    double bd = 0.0;
+    for (int g = 0; g <= c->ntri; g++) {
+        int x = ws->tri[t][n3(i)], y = ws->tri[t][p3(i)];
+        if (x == b) {
+            fix_edge(ws, t, i);
+            return b;
+        }
+        if (on_the_way(A0, A, B, ws->p[x], tol) && (bv < 0 || dist2(A, ws->p[x]) < bd)) {
+            bt = t;
+            bs = i;
+            bv = x;
+            bd = dist2(A, ws->p[x]);
+        }
+        if (wt < 0 && orient_sign(A, B, ws->p[x]) < 0 && orient_sign(A, B, ws->p[y]) > 0) {
+            wt = t;
+            wi = i;
+        }
+        int S = ws->adj[t][p3(i)];
+        if (S < 0)
+            return CDT_FAIL;
+        t = S / 3;
+        i = corner_of(ws, t, a);
+        if (i < 0)
+            return CDT_FAIL;
+        if (t == t0)
+            break;
+    }
+    if (bv >= 0) {
+        fix_edge(ws, bt, bs);
+        return bv;
+    }
+    if (wt < 0)
+        return CDT_FAIL;
+    t = wt;
+    i = wi;
+    /* walk along the segment to b or the first vertex on it: the sides it crosses, as vertex pairs
+       (right end, left end) in a ring buffer (ex, ey); none of them fixed */
+    int *ex = ws->znext, *ey = ws->zprev, cap = CM_TESS_MAX_NODES, nq = 0;
+    int s = n3(i), x = ws->tri[t][n3(i)], y = ws->tri[t][p3(i)], tgt = -1;
+    for (int g = 0; g <= c->ntri && tgt < 0; g++) {
+        if (ws->flag[t] & FIX(s))
+            return CDT_CROSS;
+        int S = ws->adj[t][s];
+        if (S < 0 || nq >= cap)
+            return CDT_FAIL;
+        ex[nq] = x;
+        ey[nq++] = y;
+        t = S / 3;
+        s = S % 3; /* side s of t: y -> x */
+        int d = ws->tri[t][p3(s)];
+        if (d == b) {
+            tgt = b;
+            break;
+        }
+        cm_vec2 D = ws->p[d];
+        int od = orient_sign(A, B, D);
+        if (on_the_way(A0, A, B, D, tol)) {
+            tgt = d;
+        } else if (od == 0) {
+            return CDT_FAIL;
+        } else if (od > 0) {
+            y = d;
+            s = n3(s); /* x -> d */
+        } else {
+            x = d;
+            s = p3(s); /* d -> y */
+        }
+    }
+    if (tgt < 0)
+        return CDT_FAIL;
+    /* Sloan's flips: take a crossing side from the ring; where its quadrilateral is strictly convex
+       flip it, and if the new side still crosses put that back; else put it back for later */
+    int head = 0, n = nq;
+    uint64_t budget = 16 + 8 * (uint64_t)nq * (uint64_t)nq;
+    for (uint64_t it = 0; n > 0; it++) {
+        if (it > budget)
+            return CDT_FAIL;
+        int u = ex[head], w = ey[head];
+        head = head + 1 < cap ? head + 1 : 0;
+        n--;
+        int S = u < SUPER_V ? find_side(c, vt, u, w) : -1; /* vt knows no corner of the enclosing one */
+        if (u >= SUPER_V && w < SUPER_V && (S = find_side(c, vt, w, u)) >= 0)
+            S = ws->adj[S / 3][S % 3]; /* its twin */
+        if (S < 0)
+            return CDT_FAIL;
+        int ts = S / 3, ss = S % 3, T2 = ws->adj[ts][ss];
+        if (T2 < 0 || (ws->flag[ts] & FIX(ss)))
+            return CDT_FAIL;
+        int cc = ws->tri[ts][p3(ss)], d = ws->tri[T2 / 3][p3(T2 % 3)];
+        cm_vec2 Pu = ws->p[u], Pw = ws->p[w], C = ws->p[cc], D = ws->p[d];
+        int slot = head + n < cap ? head + n : head + n - cap;
+        if (orient_sign(Pu, D, C) > 0 && orient_sign(D, Pw, C) > 0) {
+            force_flip(ws, ts, ss); /* ts = (cc, u, d), T2 / 3 = (d, w, cc) */
+            int t2 = T2 / 3;
+            if (u < SUPER_V)
+                vt[u] = ts;
+            if (cc < SUPER_V)
+                vt[cc] = ts;
+            if (d < SUPER_V)
+                vt[d] = ts;
+            if (w < SUPER_V)
+                vt[w] = t2;
+            int oc = orient_sign(A, B, C), odd = orient_sign(A, B, D);
+            if ((oc < 0 && odd > 0) || (oc > 0 && odd < 0)) { /* still across: right end first */
+                ex[slot] = oc < 0 ? cc : d;
+                ey[slot] = oc < 0 ? d : cc;
+                n++;
+            }
+        } else {
+            ex[slot] = u;
+            ey[slot] = w;
+            n++;
+        }
+    }
+    int S = find_side(c, vt, a, tgt);
+    if (S < 0)
+        return CDT_FAIL;
+    fix_edge(ws, S / 3, S % 3);
+    return tgt;
+}
+
+/*
+ * The fixed side from -> r that segment a -> b (forced in) continues along
+ * from vertex `from`: r = b, else the nearest vertex on the way (as
+ * cdt_segment chose it); *t, *j: the side (from -> r) of the triangle on its
+ * left.  0 if there is none (rounding).
+ */
+static int next_piece(const tess_ctx *c, int a, int from, int b, const int *vt, int *t, int *j)
+{
+    const cm_tri_ws *ws = c->ws;
+    cm_vec2 A0 = ws->p[a], A = ws->p[from], B = ws->p[b];
+    double tol = 0.5 * c->fold > EPS_TOUCH ? 0.5 * c->fold : EPS_TOUCH, best = 0.0;
+    int tt = vt[from], found = 0;
+    for (int g = 0; g <= c->ntri && tt >= 0; g++) {
+        int iu = corner_of(ws, tt, from);
+        if (iu < 0)
+            return 0;
+        int x = ws->tri[tt][n3(iu)];
+        if ((ws->flag[tt] & FIX(iu)) && x < SUPER_V) {
+            double d = dist2(A, ws->p[x]);
+            int ok = x == b ? 2 : on_the_way(A0, A, B, ws->p[x], tol);
+            if (ok == 2 || (ok && (!found || d < best))) {
+                *t = tt;
+                *j = iu;
+                best = d;
+                found = 1;
+                if (ok == 2)
+                    return 1;
+            }
+        }
+        int S = ws->adj[tt][p3(iu)];
+        tt = S >= 0 ? S / 3 : -1;
+        if (tt == vt[from])
+            break;
+    }
+    return found;
+}
+
+/*
+ * The fallback (see above): triangulate the region of the loops in ws->p
+ * (scaled, touching points snapped) into c's triangles, with adjacency and
+ * fixed sides as ear_clip leaves them.
+ */
+static cm_err cdt_region(tess_ctx *c, const int *loop_start, int nloops, int nb, cm_status *st)
+{
+    cm_tri_ws *ws = c->ws;
+    unsigned char *lsign = ws->nflag; /* per loop: 0 left out, 1 as given, 2 reversed */
+    int *rep = ws->node_pt, *vt = ws->cell;
+    c->ntri = 0;
+    c->sp = 0;
+    c->overflow = 0;
+    for (int l = 0; l < nloops; l++) {
+        double a2 = 0.0, ext = 0.0;
+        int cnt = loop_shape(ws, loop_start[l], loop_start[l + 1], ws->next, &a2, &ext);
+        int ok = cnt >= 3 && fabs(a2) > EPS_AREA * ext * ext;
+        if (!ok && l == 0)
+            return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: the outer loop has no area");
+        lsign[l] = (unsigned char)(!ok ? 0 : ((l == 0) == (a2 > 0.0) ? 1 : 2));
+    }
+    /* the enclosing triangle (the boundary's box is within 1 of its centre) and the boundary points */
+    double cx = 0.5 * (c->box[0] + c->box[2]), cy = 0.5 * (c->box[1] + c->box[3]);
+    ws->p[SUPER_V] = cm_v2(cx - 16.0, cy - 8.0);
+    ws->p[SUPER_V + 1] = cm_v2(cx + 16.0, cy - 8.0);
+    ws->p[SUPER_V + 2] = cm_v2(cx, cy + 16.0);
+    if (new_tri(c, SUPER_V, SUPER_V + 1, SUPER_V + 2) < 0)
+        return cm_fail(st, CM_E_RANGE, __func__);
+    int last = 0;
+    for (int l = 0; l < nloops; l++)
+        for (int i = loop_start[l]; lsign[l] && i < loop_start[l + 1]; i++) {
+            int r = cdt_insert(c, i, &last);
+            if (r < 0 || c->overflow)
+                return cm_fail(st, r == -1 || c->overflow ? CM_E_RANGE : CM_E_DEGENERATE, __func__);
+            rep[i] = r;
+        }
+    for (int i = 0; i < nb; i++)
+        vt[i] = -1;
+    for (int t = 0; t < c->ntri; t++)
+        for (int i = 0; i < 3; i++)
+            if (ws->tri[t][i] < SUPER_V)
+                vt[ws->tri[t][i]] = t;
+    /* the boundary segments, as fixed sides */
+    for (int t = 0; t < c->ntri; t++)
+        ws->flag[t] = (unsigned char)(ws->flag[t] & ~(TF_SEEN | TF_KEEP));
+    for (int l = 0; l < nloops; l++) {
+        int s = loop_start[l], e = loop_start[l + 1];
+        for (int i = s; lsign[l] && i < e; i++) {
+            int a = rep[i], b = rep[i + 1 < e ? i + 1 : s], from = a;
+            if (lsign[l] == 2) {
+                a = b;
+                b = from;
+                from = a;
+            }
+            for (int g = 0; from != b && g <= nb; g++) {
+                int r = cdt_segment(c, a, from, b, vt);
+                if (r < 0)
+                    return cm_fail(st, CM_E_DEGENERATE,
+                                   r == CDT_CROSS ? "cm_triangulate: loops cross" : "cm_triangulate: rounding");
+                from = r;
+            }
+            if (from != b)
+                return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: rounding");
+        }
+    }
+    /* each segment again, along its fixed pieces: the net count of pieces along each side (left
+       minus right; twins opposite) into ws->stack; a segment a -> b split at v1 .. vk gets the flat
+       triangles (a, v(i+1), v(i)), (a, b, vk), kept aside in next/prev/side */
+    int *cnt = ws->stack, nfan = 0;
+    for (int k = 0; k < 3 * c->ntri; k++)
+        cnt[k] = 0;
+    for (int l = 0; l < nloops; l++) {
+        int s = loop_start[l], e = loop_start[l + 1];
+        for (int i = s; lsign[l] && i < e; i++) {
+            int a = rep[i], b = rep[i + 1 < e ? i + 1 : s], from = a;
+            if (lsign[l] == 2) {
+                a = b;
+                b = from;
+                from = a;
+            }
+            for (int g = 0; from != b && g <= nb; g++) {
+                int t = -1, j = -1;
+                if (!next_piece(c, a, from, b, vt, &t, &j))
+                    return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: rounding");
+                int r = ws->tri[t][n3(j)];
+                cnt[3 * t + j]++;
+                if (ws->adj[t][j] >= 0)
+                    cnt[ws->adj[t][j]]--;
+                if (from != a) {
+                    if (nfan >= CM_TESS_MAX_NODES)
+                        return cm_fail(st, CM_E_RANGE, __func__);
+                    ws->next[nfan] = a;
+                    ws->prev[nfan] = r;
+                    ws->side[nfan++] = from;
+                }
+                from = r;
+            }
+            if (from != b)
+                return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: rounding");
+        }
+    }
+    /* the winding number of every triangle: 0 at the enclosing triangle's corners, stepping across
+       each side by its count; keep those of winding number >= 1 */
+    int *wn = ws->mark, *q = ws->znext, nq = 0;
+    for (int t = 0; t < c->ntri && nq == 0; t++)
+        if (ws->tri[t][0] >= SUPER_V || ws->tri[t][1] >= SUPER_V || ws->tri[t][2] >= SUPER_V) {
+            q[nq++] = t;
+            wn[t] = 0;
+            ws->flag[t] = (unsigned char)(ws->flag[t] | TF_SEEN);
+        }
+    for (int h = 0; h < nq; h++) {
+        int t = q[h];
+        for (int j = 0; j < 3; j++) {
+            int S = ws->adj[t][j];
+            if (S < 0)
+                continue;
+            int w = wn[t] - cnt[3 * t + j];
+            if (ws->flag[S / 3] & TF_SEEN) {
+                if (wn[S / 3] != w) /* the pieces do not close up: only rounding in forcing them in */
+                    return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: rounding");
+                continue;
+            }
+            wn[S / 3] = w;
+            ws->flag[S / 3] = (unsigned char)(ws->flag[S / 3] | TF_SEEN);
+            q[nq++] = S / 3;
+        }
+    }
+    for (int t = 0; t < c->ntri; t++) {
+        int inner = ws->tri[t][0] < SUPER_V && ws->tri[t][1] < SUPER_V && ws->tri[t][2] < SUPER_V;
+        if (inner && (ws->flag[t] & TF_SEEN) && wn[t] >= 1)
+            ws->flag[t] = (unsigned char)(ws->flag[t] | TF_KEEP);
+    }
+    /* compact the kept triangles (in order); sides towards the others become boundary */
+    int *map = ws->mark, nk = 0;
+    for (int t = 0; t < c->ntri; t++)
+        map[t] = (ws->flag[t] & TF_KEEP) ? nk++ : -1;
+    for (int t = 0; t < c->ntri; t++) {
+        int u = map[t];
+        if (u < 0)
+            continue;
+        unsigned f = 0;
+        int adj[3];
+        for (int j = 0; j < 3; j++) {
+            int S = ws->adj[t][j];
+            adj[j] = S >= 0 && map[S / 3] >= 0 ? 3 * map[S / 3] + S % 3 : -1;
+            if ((ws->flag[t] & FIX(j)) || adj[j] < 0)
+                f |= FIX(j);
+        }
+        for (int j = 0; j < 3; j++) {
+            ws->tri[u][j] = ws->tri[t][j];
+            ws->adj[u][j] = adj[j];
+        }
+        ws->flag[u] = (unsigned char)f;
+    }
+    if (nk == 0)
+        return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: no region inside the loops");
+    /* the flat triangles of split segments */
+    if (nk + nfan > CM_MAX_TESS_TRIS)
+        return cm_fail(st, CM_E_RANGE, __func__);
+    for (int f = 0; f < nfan; f++) {
+        int t = nk + f;
+        ws->tri[t][0] = ws->next[f];
+        ws->tri[t][1] = ws->prev[f];
+        ws->tri[t][2] = ws->side[f];
+        for (int j = 0; j < 3; j++)
+            ws->adj[t][j] = -1;
+        ws->flag[t] = (unsigned char)FIX_ALL;
+    }
+    c->ntri = nk + nfan;
+    /* what bending segments through vertices near them made: nothing folded beyond the tolerance
+       (with folds allowed) or beyond the touch distance */
+    double lim = c->fold > EPS_TOUCH ? c->fold : EPS_TOUCH;
+    for (int t = 0; t < c->ntri; t++) {
+        cm_vec2 A = ws->p[ws->tri[t][0]], B = ws->p[ws->tri[t][1]], C = ws->p[ws->tri[t][2]];
+        double l = dist2(A, B), m = dist2(B, C), n = dist2(C, A), a2 = cross3(A, B, C);
+        double longest = l > m ? (l > n ? l : n) : (m > n ? m : n);
+        if (a2 < 0.0 && a2 * a2 > lim * lim * longest && orient_sign(A, B, C) < 0)
+            return cm_fail(st, CM_E_DEGENERATE, "cm_triangulate: loops cross");
+        ws->mark[t] = 0;
+    }
+    return CM_OK;
+}
+
+/* p on the closed segment ab: within EPS_TOUCH of it (where loops touch), between its ends */
+static int on_segment(cm_vec2 a, cm_vec2 b, cm_vec2 p)
+{
+    double l2 = dist2(a, b), o = cross3(a, b, p);
+    if (!(o * o <= EPS_TOUCH * EPS_TOUCH * l2) && orient_sign(a, b, p) != 0)
+        return 0;
+    double along = (p.x - a.x) * (b.x - a.x) + (p.y - a.y) * (b.y - a.y);
+    return along >= 0.0 && along <= l2;
+}
+
+/*
+ * abc is flat: its largest angle within EPS_FLAT (sine) of a straight one.
+ * Points that were collinear before the caller rotated them into the
+ * parameter domain (a sampled straight edge, a grid line) are collinear to
+ * rounding only, further than orient's bound; this catches them, and not a
+ * sliver next to a short segment (its largest angle is far from straight).
+ */
+static int flat(cm_vec2 a, cm_vec2 b, cm_vec2 c)
+{
+    double lab = dist2(a, b), lbc = dist2(b, c), lca = dist2(c, a);
+    double s1 = lab, s2 = lca; /* the two sides at the largest angle (opposite the longest side) */
+    if (lab >= lbc && lab >= lca)
+        s1 = lbc;
+    else if (lca >= lbc)
+        s2 = lbc;
+    double a2 = cross3(a, b, c);
+    return a2 * a2 <= EPS_FLAT * EPS_FLAT * s1 * s2;
+}
+
+/*
+ * Is the ear clipping's result one to redo by the fallback: a flat triangle
+ * (orientation within its rounding bound) that the input does not force,
+ * i.e. whose corners do not all lie on one boundary segment (a vertex on a
+ * boundary segment forces a flat triangle for the segment to stay a side)?
+ */
+static int flat_unforced(const tess_ctx *c, const int *loop_start, int nloops)
+{
+    const cm_tri_ws *ws = c->ws;
+    for (int t = 0; t < c->ntri; t++) {
+        cm_vec2 A = ws->p[ws->tri[t][0]], B = ws->p[ws->tri[t][1]], C = ws->p[ws->tri[t][2]];
+        if (!flat(A, B, C))
+            continue;
+        int forced = 0;
+        for (int l = 0; l < nloops && !forced; l++)
+            for (int i = loop_start[l]; i < loop_start[l + 1] && !forced; i++) {
+                cm_vec2 U = ws->p[i], V = ws->p[i + 1 < loop_start[l + 1] ? i + 1 : loop_start[l]];
+                forced = !same_pos(U, V) && on_segment(U, V, A) && on_segment(U, V, B) && on_segment(U, V, C);
+            }
+        if (!forced)
+            return 1;
+    }
+    return 0;
 }
 
 /* ------------------------------------------------------------------ driver */
@@ -1368,11 +1982,11 @@ static cm_err build_ring(tess_ctx *c, const int *loop_start, int nloops, int *st
     int outer = make_ring(ws, 0, loop_start[1], 1);
     if (outer < 0)
         return cm_fail(st, CM_E_DEGENERATE, __func__);
-    int nh = nloops - 1, *hole = ws->stack;
+    int nh = 0, *hole = ws->stack;
     for (int l = 1; l < nloops; l++) {
         int h = make_ring(ws, loop_start[l], loop_start[l + 1], -1);
         if (h < 0)
-            return cm_fail(st, CM_E_DEGENERATE, __func__);
+            continue; /* a hole without area (collapsed by rounding) takes nothing away: left out */
         int k = h, left = h, cnt = loop_start[l + 1] - loop_start[l];
         for (int g = 0; g < cnt; g++, k = ws->next[k]) {
             cm_vec2 P = npos(ws, k), L = npos(ws, left);
@@ -1381,7 +1995,7 @@ static cm_err build_ring(tess_ctx *c, const int *loop_start, int nloops, int *st
             if (ws->next[k] == h)
                 break;
         }
-        hole[l - 1] = left;
+        hole[nh++] = left;
     }
     sort_nodes(ws, 0, hole, nh);
     int ring_len = 0, k = outer;
@@ -1448,16 +2062,32 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
     c.ws = ws;
     c.nn = nb;
     c.fold = fold_tol > 0.0 ? fold_tol * scale : 0.0;
+    /* ear clipping; where it cannot finish, or leaves a flat triangle the input does not force, the
+       fallback (cdt_region); its failure is the one reported */
     int start = 0, len = 0;
-    err = build_ring(&c, loop_start, nloops, &start, &len, st);
-    if (err != CM_OK)
+    cm_status first;
+    cm_status_init(&first);
+    err = build_ring(&c, loop_start, nloops, &start, &len, &first);
+    if (err == CM_OK)
+        err = ear_clip(&c, start, len, &first);
+    if (err == CM_OK && c.ntri > 0) {
+        flip_all(&c);
+        if (flat_unforced(&c, loop_start, nloops))
+            err = CM_E_DEGENERATE;
+    } else if (err == CM_OK) {
+        err = CM_E_DEGENERATE;
+    }
+    if (err == CM_E_DEGENERATE) {
+        cm_status_init(&first);
+        err = cdt_region(&c, loop_start, nloops, nb, &first);
+        if (err == CM_OK)
+            flip_all(&c);
+    }
+    if (err != CM_OK) {
+        if (st && st->code == CM_OK)
+            *st = first;
         return err;
-    err = ear_clip(&c, start, len, st);
-    if (err != CM_OK)
-        return err;
-    if (c.ntri == 0)
-        return cm_fail(st, CM_E_DEGENERATE, __func__);
-    flip_all(&c);
+    }
 
     if (npts > nb)
         build_grid(&c);

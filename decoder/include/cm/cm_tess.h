@@ -22,8 +22,8 @@
  * Delaunay except across boundary segments (Lawson flips), so triangles are
  * as well shaped as the points allow.
  *
- * Degenerate input, as sampled CAD boundaries produce it (tolerances are
- * relative to the boundary's larger extent):
+ * Degenerate input, as sampled CAD boundaries produce it once rounded to a
+ * grid (tolerances are relative to the boundary's larger extent):
  *   - a point that repeats its predecessor in a loop (within 1e-14, e.g. the
  *     first point repeated at the end) is dropped: it is in no triangle;
  *   - loops that touch at a point: points of different loops within 1e-10
@@ -33,11 +33,27 @@
  *     out with the other loop's index at its end;
  *   - collinear boundary points, slivers (aspect 1e-6 and beyond), points
  *     1e-13 apart: handled, every triangle has positive area;
+ *   - a loop through one point more than once (lobes touching there), a
+ *     vertex on another segment (of its loop or another, within 1e-10), a
+ *     hole sharing vertices or a run of segments with the outer loop or
+ *     another hole, spikes (a loop running out along a line and back),
+ *     slits: triangulated; the only flat triangles are those a vertex lying
+ *     on a boundary segment forces: all three corners on that segment, so
+ *     that the segment stays a side of a triangle;
+ *   - a hole without area (fewer than 3 distinct points, or all on a line)
+ *     or outside the outer loop takes nothing away: it is left out, its
+ *     points are in no triangle;
  *   - loops that overlap by rounding (up to ~1e-11): triangulated, but a
  *     triangle there may have a tiny negative area (|2 area| < 1e-8 of the
- *     product of two side lengths);
+ *     product of two side lengths); a part that the loops go round twice
+ *     (touching, not crossing) may come out covered twice;
  *   - a loop given in the wrong orientation is reversed (its segments then
  *     appear reversed in the triangles).
+ * The region is that of winding number >= 1 of the loops (the outer one
+ * counter-clockwise, the holes clockwise).  Ear clipping triangulates it;
+ * where that cannot finish or leaves a flat triangle the input does not
+ * force, a constrained Delaunay triangulation of the boundary points does
+ * (cm_tess.c).
  *
  * Contract: no allocation, no recursion, no I/O; every loop is bounded by
  * the point count; only + - * /, sqrt, floor and comparisons on doubles
@@ -59,7 +75,8 @@
  * between calls mean nothing.
  */
 typedef struct cm_tri_ws {
-    cm_vec2 p[CM_MAX_TESS_POINTS];          /* points, scaled by a power of two to an extent of ~1 */
+    cm_vec2 p[CM_MAX_TESS_POINTS + 3];      /* points, scaled by a power of two to an extent of ~1;
+                                               the last 3: an enclosing triangle (cm_tess.c fallback) */
     int tri[CM_MAX_TESS_TRIS][3];           /* triangle corners, counter-clockwise */
     int adj[CM_MAX_TESS_TRIS][3];           /* across side i (corner i -> i+1): 3*u + j for side j of
                                                triangle u, -1 if none */
@@ -94,9 +111,11 @@ typedef struct cm_tri_ws {
  * @param ws         workspace (its contents on entry do not matter)
  * @return CM_E_LIMIT if npts > CM_MAX_TESS_POINTS (the limit is named);
  *         CM_E_NOSPACE if cap is too small (st->need: the triangle count);
- *         CM_E_DEGENERATE if the boundary cannot be triangulated: a loop with
- *         fewer than 3 distinct points or no area, a hole outside the outer
- *         loop, loops that clearly cross themselves or each other;
+ *         CM_E_DEGENERATE if the boundary cannot be triangulated: an outer
+ *         loop with fewer than 3 distinct points or no area, loops that
+ *         cross themselves or each other (with cm_triangulate_folds: by
+ *         more than fold_tol), no region left (holes covering the outer
+ *         loop: loops in the wrong order); st->where says which;
  *         CM_E_NONFINITE if a coordinate is NaN or infinite;
  *         CM_E_ARG on NULL pointers, nloops < 1, npts < 0, cap < 0, min_dist
  *         negative or NaN, or inconsistent offsets
@@ -111,7 +130,10 @@ CM_NODISCARD cm_err cm_triangulate(const cm_vec2 *pts, int npts, const int *loop
  * The decoder passes a fraction of the chordal tolerance: two boundary runs
  * closer than that which cross (the sliver where a spring's coil is ground
  * flat) then give a triangle folded over by less than the tolerance instead
- * of a failed face.  fold_tol = 0 is cm_triangulate.
+ * of a failed face.  In the fallback, a boundary segment passing within
+ * fold_tol / 2 of a vertex is bent through it (a hole poking out of the
+ * outer loop by less, a thin finger whose sides cross); no triangle comes
+ * out folded by more than fold_tol.  fold_tol = 0 is cm_triangulate.
  */
 CM_NODISCARD cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start, int nloops,
                                          double min_dist, double fold_tol, int (*tris)[3], int cap, int *ntris,
