@@ -10,7 +10,15 @@ K=$(uname -r)
 power_off() { sync; echo o > /proc/sysrq-trigger; sleep 10; }
 opts=trans=virtio,version=9p2000.L,msize=262144
 
-for d in /tmp /run /var/tmp /dev/shm; do mkdir -p "$d"; mount -t tmpfs tmpfs "$d"; done
+# fresh tmpfs over the scratch directories, except one that holds the checkout or the run directory
+# (a clone under /tmp): a tmpfs there would hide the VM's modules (HW_VMB) and the run directory, and
+# the overlay root is writable anyway
+for d in /tmp /run /var/tmp /dev/shm; do
+    mkdir -p "$d"
+    case "$HW_VMB/" in "$d"/*) continue ;; esac
+    case "$HW_SHARE/" in "$d"/*) continue ;; esac
+    mount -t tmpfs tmpfs "$d"
+done
 mkdir -p /dev/pts
 mount -t devpts -o gid=5,mode=620,ptmxmode=666 devpts /dev/pts
 [ -e /dev/fd ] || ln -s /proc/self/fd /dev/fd
