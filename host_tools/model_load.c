@@ -13,14 +13,14 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* remember the newest warning as one about a face left out of the model */
-static cm_err note_left_out(loaded_model *lm)
+/* remember warning w as one about a face left out of the model */
+static cm_err note_left_out(loaded_model *lm, int w)
 {
     int *p = realloc(lm->left_out, (size_t)(lm->nleft_out + 1) * sizeof *p);
     if (!p)
         return CM_E_NOMEM;
     lm->left_out = p;
-    lm->left_out[lm->nleft_out++] = lm->iges.nwarn - 1;
+    lm->left_out[lm->nleft_out++] = w;
     return CM_OK;
 }
 
@@ -35,13 +35,9 @@ static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm
         return e;
     /* the import's own skipped faces (iges_brep.c face_failed: "face N (TYPE, DE d) skipped: ...") */
     for (int w = 0, n = lm->iges.nwarn; w < n; w++)
-        if (strncmp(lm->iges.warn[w].msg, "face ", 5) == 0 && strstr(lm->iges.warn[w].msg, ") skipped: ")) {
-            int *p = realloc(lm->left_out, (size_t)(lm->nleft_out + 1) * sizeof *p);
-            if (!p)
-                return cm_fail(st, CM_E_NOMEM, "out of memory");
-            lm->left_out = p;
-            lm->left_out[lm->nleft_out++] = w;
-        }
+        if (strncmp(lm->iges.warn[w].msg, "face ", 5) == 0 && strstr(lm->iges.warn[w].msg, ") skipped: ") &&
+            note_left_out(lm, w) != CM_OK)
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
     t = now();
     brep_model *m = &lm->brep;
     lm->fds = calloc((size_t)m->nfaces, sizeof *lm->fds);
@@ -59,7 +55,7 @@ static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm
             iges_warn(&lm->iges, 0, "face %d (DE %d): left out: no parameter domain: %s", f, m->faces[f].src_de,
                       cm_strerror(fst.code));
             face_domain_free(&lm->fds[f]);
-            if (note_left_out(lm) != CM_OK)
+            if (note_left_out(lm, lm->iges.nwarn - 1) != CM_OK)
                 return cm_fail(st, CM_E_NOMEM, "out of memory");
             lm->domains_failed++;
             continue;
@@ -113,7 +109,7 @@ cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     drop[bf] = 1;
     iges_warn(&lm->iges, 0, "face of entity %d (DE %d): left out: %s", m->faces[bf].src_type, m->faces[bf].src_de, why);
-    cm_err e = note_left_out(lm) == CM_OK ? CM_OK : cm_fail(st, CM_E_NOMEM, "out of memory");
+    cm_err e = note_left_out(lm, lm->iges.nwarn - 1) == CM_OK ? CM_OK : cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK)
         e = brep_remove_faces(m, drop, st);
     free(drop);

@@ -935,6 +935,31 @@ static void link_side(cm_tri_ws *ws, int t, int s, int S, unsigned fixed)
 }
 
 /* flip side s of t if the pair is not locally Delaunay; 1 if flipped */
+/* flip side s of t (its quadrilateral strictly convex): t = (c, a, d), u = (d, b, c); try_flip asks first */
+static void force_flip(cm_tri_ws *ws, int t, int s)
+{
+    int S = ws->adj[t][s], u = S / 3, j = S % 3, s1 = n3(s), s2 = p3(s), j1 = n3(j), j2 = p3(j);
+    int a = ws->tri[t][s], b = ws->tri[t][s1], cc = ws->tri[t][s2], d = ws->tri[u][j2];
+    int Xbc = ws->adj[t][s1], Xca = ws->adj[t][s2], Xad = ws->adj[u][j1], Xdb = ws->adj[u][j2];
+    unsigned fbc = ws->flag[t] & FIX(s1), fca = ws->flag[t] & FIX(s2);
+    unsigned fad = ws->flag[u] & FIX(j1), fdb = ws->flag[u] & FIX(j2);
+    /* t = (c, a, d), u = (d, b, c), as try_flip leaves them */
+    ws->tri[t][0] = cc;
+    ws->tri[t][1] = a;
+    ws->tri[t][2] = d;
+    ws->tri[u][0] = d;
+    ws->tri[u][1] = b;
+    ws->tri[u][2] = cc;
+    link_side(ws, t, 0, Xca, fca != 0);
+    link_side(ws, t, 1, Xad, fad != 0);
+    link_side(ws, u, 0, Xdb, fdb != 0);
+    link_side(ws, u, 1, Xbc, fbc != 0);
+    ws->adj[t][2] = 3 * u + 2;
+    ws->adj[u][2] = 3 * t + 2;
+    set_fixed(ws, t, 2, 0);
+    set_fixed(ws, u, 2, 0);
+}
+
 static int try_flip(tess_ctx *c, int t, int s)
 {
     cm_tri_ws *ws = c->ws;
@@ -955,24 +980,7 @@ static int try_flip(tess_ctx *c, int t, int s)
         if (!(ic1 > e1) && !(ic2 > e2))
             return 0;
     }
-    int Xbc = ws->adj[t][s1], Xca = ws->adj[t][s2], Xad = ws->adj[u][j1], Xdb = ws->adj[u][j2];
-    unsigned fbc = ws->flag[t] & FIX(s1), fca = ws->flag[t] & FIX(s2);
-    unsigned fad = ws->flag[u] & FIX(j1), fdb = ws->flag[u] & FIX(j2);
-    /* t = (c, a, d), u = (d, b, c) */
-    ws->tri[t][0] = cc;
-    ws->tri[t][1] = a;
-    ws->tri[t][2] = d;
-    ws->tri[u][0] = d;
-    ws->tri[u][1] = b;
-    ws->tri[u][2] = cc;
-    link_side(ws, t, 0, Xca, fca != 0);
-    link_side(ws, t, 1, Xad, fad != 0);
-    link_side(ws, u, 0, Xdb, fdb != 0);
-    link_side(ws, u, 1, Xbc, fbc != 0);
-    ws->adj[t][2] = 3 * u + 2;
-    ws->adj[u][2] = 3 * t + 2;
-    set_fixed(ws, t, 2, 0);
-    set_fixed(ws, u, 2, 0);
+    force_flip(ws, t, s); /* t = (c, a, d), u = (d, b, c) */
     push_side(c, t, 0);
     push_side(c, t, 1);
     push_side(c, u, 0);
@@ -1383,30 +1391,6 @@ static void fix_edge(cm_tri_ws *ws, int t, int s)
         set_fixed(ws, S / 3, S % 3, 1);
 }
 
-/* flip side s of t (its quadrilateral strictly convex), as try_flip does but without asking */
-static void force_flip(cm_tri_ws *ws, int t, int s)
-{
-    int S = ws->adj[t][s], u = S / 3, j = S % 3, s1 = n3(s), s2 = p3(s), j1 = n3(j), j2 = p3(j);
-    int a = ws->tri[t][s], b = ws->tri[t][s1], cc = ws->tri[t][s2], d = ws->tri[u][j2];
-    int Xbc = ws->adj[t][s1], Xca = ws->adj[t][s2], Xad = ws->adj[u][j1], Xdb = ws->adj[u][j2];
-    unsigned fbc = ws->flag[t] & FIX(s1), fca = ws->flag[t] & FIX(s2);
-    unsigned fad = ws->flag[u] & FIX(j1), fdb = ws->flag[u] & FIX(j2);
-    /* t = (c, a, d), u = (d, b, c), as try_flip leaves them */
-    ws->tri[t][0] = cc;
-    ws->tri[t][1] = a;
-    ws->tri[t][2] = d;
-    ws->tri[u][0] = d;
-    ws->tri[u][1] = b;
-    ws->tri[u][2] = cc;
-    link_side(ws, t, 0, Xca, fca != 0);
-    link_side(ws, t, 1, Xad, fad != 0);
-    link_side(ws, u, 0, Xdb, fdb != 0);
-    link_side(ws, u, 1, Xbc, fbc != 0);
-    ws->adj[t][2] = 3 * u + 2;
-    ws->adj[u][2] = 3 * t + 2;
-    set_fixed(ws, t, 2, 0);
-    set_fixed(ws, u, 2, 0);
-}
 
 /* the side u -> w of a triangle at u (vt[u] a triangle there): 3 t + s, or -1 */
 static int find_side(const tess_ctx *c, const int *vt, int u, int w)

@@ -7,9 +7,9 @@
 #include "cm/cm_bspline.h"
 #include "cm/cm_sections.h"
 
-#define COORD_MAX (1ll << 40)   /* integer grid coordinates beyond this are hostile */
+#define COORD_MAX CM_FMT_COORD_MAX
 #define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
-#define WEIGHT_MAX (1ll << 48)
+#define WEIGHT_MAX CM_FMT_WEIGHT_MAX
 #define KNOT_ONE (1ll << CM_FMT_KNOT_BITS)
 
 /*

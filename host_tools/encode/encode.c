@@ -18,9 +18,9 @@
 
 #define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
 #define KNOT_ONE (1ll << CM_FMT_KNOT_BITS)
-/* what the decoder accepts (cm_decode.c: COORD_MAX, WEIGHT_MAX): a value beyond cannot be sent */
-#define GRID_MAX (1ll << 40)
-#define WEIGHT_MAX (1ll << 48)
+/* what the decoder accepts: a value beyond cannot be sent */
+#define GRID_MAX CM_FMT_COORD_MAX
+#define WEIGHT_MAX CM_FMT_WEIGHT_MAX
 
 void encode_opts_default(encode_opts *o)
 {

@@ -30,6 +30,8 @@
 #define CM_FMT_MAX_HEADER 4096u   /* a header larger than this is malformed */
 #define CM_FMT_KNOT_BITS 30       /* knots quantised to 2^-30 of [0,1] */
 #define CM_FMT_WEIGHT_BITS 24     /* weights quantised to 2^-24 of the first weight */
+#define CM_FMT_COORD_MAX (1ll << 40)  /* |grid coordinate| beyond this is refused (hostile) */
+#define CM_FMT_WEIGHT_MAX (1ll << 48) /* quantised weight beyond this is refused */
 #define CM_FMT_MAX_PALETTE 255    /* colours (index 0 = none) */
 #define CM_FMT_SEG_PER_EDGE 10    /* boundary samples per edge use (spec 8.1 / 5A) */
 /** Boundary samples of a face: CM_FMT_SEG_PER_EDGE per edge use (spec 8.1), all loops. */
