@@ -20,5 +20,13 @@ out=$("$here/check_noheap.sh" "$nm" "$tmp/bad_heap.a" "$here/noheap_allow.txt")
 if [ $? -eq 0 ]; then echo "no-heap gate accepted malloc"; fail=1; fi
 grep -qx '  malloc' <<<"$out" || { echo "no-heap gate did not name malloc: $out"; fail=1; }
 grep -Eqx '  (printf|puts)' <<<"$out" || { echo "no-heap gate did not name stdio: $out"; fail=1; }
-[ $fail -eq 0 ] && echo "gate self-test: recursion, 20 kB frame, malloc and stdio are all rejected"
+# the runner: a test failing two suites deep, above 60 lines of other output, is still named in the
+# final "failures:" list (a full gate once ended "1532 passed, 1 failed" naming only the gate)
+printf '%s\n' 'echo "ok 1 - fine"' 'echo "not ok 2 - the deeply nested test"' \
+    'for i in $(seq 60); do echo "# other output $i"; done' 'echo "1 passed, 1 failed"' 'exit 1' > "$tmp/inner.sh"
+out=$("$here/run_suites.sh" "gate:outer:$here/sum_suites.sh --parallel \"$here/sum_suites.sh 'bash $tmp/inner.sh'\"")
+if [ $? -eq 0 ]; then echo "runner passed a failing nested test"; fail=1; fi
+sed -n '/^failures:/,$p' <<<"$out" | grep -q 'gate outer: 2 - the deeply nested test' ||
+    { echo "runner did not name the nested failing test: $out"; fail=1; }
+[ $fail -eq 0 ] && echo "gate self-test: recursion, 20 kB frame, malloc and stdio are all rejected; a nested failure is named"
 exit $fail

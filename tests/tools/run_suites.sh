@@ -66,6 +66,14 @@ for s in "$@"; do
                 fail=$((fail + 1))
             fi
             failed_names+=("gate $name")
+            # name every failing test inside the gate, however deep its suites nest and however
+            # long its output: the last lines alone often show only a summary (issue 11)
+            nested=$(grep -E '^not ok ' <<<"$out" | grep -vE '^not ok [0-9]* *# SKIP')
+            if [ -n "$nested" ]; then
+                while read -r l; do failed_names+=("  gate $name: ${l#not ok }"); done <<<"$nested"
+                echo "$nested" | sed 's/^/  /'
+                echo "  ..."
+            fi
             echo "$out" | tail -n 40
             echo "  gate $name: FAILED"
         fi
