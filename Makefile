@@ -270,6 +270,33 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:hostile-input:$(MAKE) --no-print-directory -s hostile HOSTILE_TRIES=2 HOSTILE_TAP=--tap" \
 		"gate:hw-and-links:$(MAKE) --no-print-directory -s check-hw-and-links"
 
+# `make test`: the fast tier for the inner loop (under 2 minutes warm on 2 cores): unit tests of
+# every profile, the workstation tests, the no-heap and stack gates (x86-64), the fuzz regression
+# replays without the shared corpus, and a round trip of the bundled models.  `make check` stays
+# the full gate (CI); nothing here is skipped there.
+.PHONY: test check-fuzz-replay-fast check-bundled-roundtrip
+test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,terminal)/libcmdecoder.a $(STACK_CHECK)
+	$(Q)tests/tools/run_suites.sh \
+		"unit-host:$(call bdir,host)/tests/unit" \
+		"unit-terminal:$(call bdir,terminal)/tests/unit" \
+		"unit-tiny:$(call bdir,tiny)/tests/unit" \
+		"host:$(call bdir,host)/tests/host" \
+		"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
+		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
+		"gate:fuzz-replays:$(MAKE) --no-print-directory -s check-fuzz-replay-fast" \
+		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip"
+
+# every fuzz target's seeds and regressions replayed under the sanitizers, the shared corpus left
+# to check-fuzz-replay (2.5 minutes of 2-4 MB models under ASan)
+check-fuzz-replay-fast:
+	$(Q)$(MAKE) --no-print-directory -s check-fuzz-replay FUZZ_REPLAY_SHARED=
+	$(Q)$(MAKE) --no-print-directory -s check-fuzz-decode-replay
+	$(Q)$(MAKE) --no-print-directory -s check-fuzz-tess-replay
+	$(Q)$(MAKE) --no-print-directory -s check-fuzz-link-replay
+
+check-bundled-roundtrip: $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK)
+	$(Q)tests/tools/check_bundled_roundtrip.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(wildcard tests/data/*.igs)
+
 # the VM computes, the pty transfers mostly wait (paced like a serial line): run the two side by side
 .PHONY: check-hw-and-links
 check-hw-and-links: $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,tiny)/cmz-terminal $(call bdir,terminal)/cmz-decode
@@ -299,12 +326,13 @@ check-clang:
 
 # the IGES import fuzz target replayed under ASan/UBSan: seeds, regressions and the shared corpus
 SHARED_MODELS ?= ../shared/models
+FUZZ_REPLAY_SHARED ?= $(wildcard $(SHARED_MODELS)/iges)
 check-fuzz-replay:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
 		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
 		$(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges
 	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges \
-		tests/fuzz/corpus_iges $(wildcard tests/fuzz/regressions_iges) $(wildcard $(SHARED_MODELS)/iges)
+		tests/fuzz/corpus_iges $(wildcard tests/fuzz/regressions_iges) $(FUZZ_REPLAY_SHARED)
 
 # the decode fuzz target (terminal profile, the board's limits) replayed under ASan/UBSan:
 # seeds (valid files of every method), named malformed inputs and regressions

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# check_bundled_roundtrip.sh CMZ CMZ_DECODE MESH_CHECK MODEL.igs... - the product end to end on the
+# models bundled in tests/data (make test's quick round trip; the shared corpus is make check's):
+# cmz encode -> the terminal build's cmz-decode -> GLB and STL, the mesh welded and closed where
+# the model is (mesh_check), every rebuilt face within its tolerance (cmz eval).  One TAP line per
+# model; stands alone without ../shared.
+set -u
+cmz=$1 decode=$2 mesh_check=$3
+shift 3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+n=0 fail=0
+size() { stat -c %s "$1" 2>/dev/null || echo 0; }
+for f in "$@"; do
+    n=$((n + 1))
+    b=$(basename "$f")
+    why=""
+    if ! "$cmz" encode -q "$f" -o "$tmp/m.cmz" > "$tmp/enc" 2>&1; then
+        why="encode: $(tail -n 1 "$tmp/enc")"
+    elif ! "$decode" "$tmp/m.cmz" -o "$tmp/m.glb" > "$tmp/dec" 2>&1 ||
+         ! "$decode" "$tmp/m.cmz" -o "$tmp/m.stl" >> "$tmp/dec" 2>&1; then
+        why="cmz-decode: $(tail -n 1 "$tmp/dec")"
+    elif [ "$(size "$tmp/m.glb")" -eq 0 ] || [ "$(size "$tmp/m.stl")" -lt 284 ]; then
+        why="empty output (glb $(size "$tmp/m.glb") bytes, stl $(size "$tmp/m.stl"))"
+    elif ! topo=$("$mesh_check" "$tmp/m.cmz" 2>&1); then
+        why="mesh_check: $(tail -n 1 <<<"$topo")"
+    elif ! ev=$("$cmz" eval -q "$f" "$tmp/m.cmz" 2>&1); then
+        why="cmz eval: $(grep -m 2 'eval\|FAILED' <<<"$ev" | tr '\n' ' ')"
+    fi
+    if [ -z "$why" ]; then
+        echo "ok $n - $b: encoded $(size "$tmp/m.cmz") bytes, decoded by the terminal build, mesh and rebuild checked"
+    else
+        echo "not ok $n - $b: $why"
+        fail=$((fail + 1))
+    fi
+done
+[ "$n" -gt 0 ] || { echo "not ok 1 - no models given"; n=1; fail=1; }
+echo "$((n - fail)) passed, $fail failed"
+[ "$fail" -eq 0 ]
