@@ -267,6 +267,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
 		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
 		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
+		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header" \
 		"gate:hostile-input:$(MAKE) --no-print-directory -s hostile HOSTILE_TRIES=2 HOSTILE_TAP=--tap" \
 		"gate:hw-and-links:$(MAKE) --no-print-directory -s check-hw-and-links"
 
@@ -284,7 +285,8 @@ test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,termi
 		"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
 		"gate:fuzz-replays:$(MAKE) --no-print-directory -s check-fuzz-replay-fast" \
-		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip"
+		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip" \
+		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header"
 
 # every fuzz target's seeds and regressions replayed under the sanitizers, the shared corpus left
 # to check-fuzz-replay (2.5 minutes of 2-4 MB models under ASan)
@@ -293,6 +295,11 @@ check-fuzz-replay-fast:
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-decode-replay
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-tess-replay
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-link-replay
+
+# a header declaring 1 triangle: both decoders still give the honest file's mesh (issue 11)
+.PHONY: check-lying-header
+check-lying-header: $(CMZ) $(call bdir,terminal)/cmz-decode
+	$(Q)tests/tools/check_lying_header.sh $(CMZ) $(call bdir,terminal)/cmz-decode tests/data/geo_example.igs
 
 check-bundled-roundtrip: $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK)
 	$(Q)tests/tools/check_bundled_roundtrip.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(wildcard tests/data/*.igs)
