@@ -104,6 +104,14 @@ static void progress(const char *stage, int done, int total, void *ctx)
 }
 
 /* the exit status of a failure: out of memory, I/O, else the input */
+/* an import warning about the structure around faces (iges_brep.c): a solid, shell or instance
+   left out, or a member pointer of one skipped */
+static int is_structure_warning(const char *msg)
+{
+    return (strncmp(msg, "entity ", 7) == 0 && strstr(msg, ") left out: ")) ||
+           ((strncmp(msg, "shell DE ", 9) == 0 || strncmp(msg, "solid DE ", 9) == 0) && strstr(msg, " skipped"));
+}
+
 static int exit_for(cm_err code)
 {
     return code == CM_E_NOMEM ? EXIT_NOMEM : code == CM_E_IO ? EXIT_IO : EXIT_INPUT;
@@ -356,6 +364,8 @@ static int cmd_info(int argc, char **argv)
                    lm.stats.face_entities);
         if (m->faces_failed)
             printf("; %d could not be read (see warnings)", m->faces_failed);
+        if (m->entities_failed)
+            printf("; %d solids, shells or instances left out (see warnings)", m->entities_failed);
         printf("\n  by surface:");
         for (int k = 0; k < nsc; k++)
             printf(" %d %s (%d)%s", sc[k].read, iges_type_name(sc[k].type), sc[k].type, k + 1 < nsc ? "," : "");
@@ -604,6 +614,16 @@ static int cmd_encode(int argc, char **argv)
     }
     encode_result r;
     cm_status_init(&st);
+    if (o.strict && lm.brep.entities_failed > 0) {
+        for (int i = 0; i < lm.iges.nwarn; i++)
+            if (is_structure_warning(lm.iges.warn[i].msg)) {
+                fprintf(stderr, "%s: %s: line %d: %s (--strict: nothing written)\n", prog, path, lm.iges.warn[i].line,
+                        lm.iges.warn[i].msg);
+                break;
+            }
+        model_free(&lm);
+        return EXIT_INPUT;
+    }
     if (o.strict && lm.nleft_out > 0) {
         const iges_warning *w = &lm.iges.warn[lm.left_out[0]];
         fprintf(stderr, "%s: %s: %s%.0d%s%s (--strict: nothing written)\n", prog, path, w->line ? "line " : "",
@@ -613,11 +633,18 @@ static int cmd_encode(int argc, char **argv)
     }
     cm_err e = encode_model(&lm, &o, &r, &st);
     int rc = EXIT_OK;
-    /* every face left out, by the import or the encoder, is named */
+    /* every face left out, by the import or the encoder, is named; so is every solid, shell or
+       instance the import left out, and every member pointer it skipped */
     for (int i = 0; i < lm.nleft_out; i++) {
         const iges_warning *w = &lm.iges.warn[lm.left_out[i]];
         fprintf(stderr, "%s: %s: warning: %s%.0d%s%s\n", prog, path, w->line ? "line " : "", w->line,
                 w->line ? ": " : "", w->msg);
+    }
+    for (int i = 0; i < lm.iges.nwarn; i++) {
+        const iges_warning *w = &lm.iges.warn[i];
+        if (is_structure_warning(w->msg))
+            fprintf(stderr, "%s: %s: warning: %s%.0d%s%s\n", prog, path, w->line ? "line " : "", w->line,
+                    w->line ? ": " : "", w->msg);
     }
     if (r.refusal[0] && e != CM_E_LIMIT) {
         fprintf(stderr, "%s: %s: %s (nothing written)\n", prog, path, r.refusal);
@@ -661,9 +688,12 @@ static int cmd_encode(int argc, char **argv)
             isize = ftell(in);
             fclose(in);
         }
-        char left[64] = "";
+        char left[128] = "";
         if (lm.nleft_out > 0)
             snprintf(left, sizeof left, ", %d left out (see warnings)", lm.nleft_out);
+        if (lm.brep.entities_failed > 0)
+            snprintf(left + strlen(left), sizeof left - strlen(left), "; %d solids, shells or instances left out "
+                     "(see warnings)", lm.brep.entities_failed);
         printf("%s -> %s: %d faces (%d plane, %d gregory, %d kept%s), %d edges (%d lines), %zu bytes, %.1fx smaller "
                "than the IGES (%ld bytes)\n",
                path, out, lm.mesh.nfaces, r.faces_plane, r.faces_gregory, r.faces_keep, left,

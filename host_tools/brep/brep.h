@@ -53,6 +53,7 @@ typedef struct brep_model {
     hbox box;             /* of all boundary curves (millimetres) */
     double resolution_mm; /* the file's minimum resolution, converted; 0 if none */
     int faces_failed;     /* faces skipped because they could not be built (warned) */
+    int entities_failed;  /* solids, shells and instances left out because they could not be read (warned) */
 } brep_model;
 
 void brep_free(brep_model *m);

@@ -232,6 +232,26 @@ static void warn_skipped(importer *im, const iges_entity *e, int ordinal, const 
     im->m->faces_failed++;
 }
 
+/* f->err without its "line N: entity T (name, DE d): " prefix when it is about entity e (a warning
+   that names e already says so) */
+static const char *bare_error(const iges_file *f, const iges_entity *e)
+{
+    char prefix[160];
+    snprintf(prefix, sizeof prefix, "line %d: entity %d (%s, DE %d): ", e->pd_line, e->type, iges_type_name(e->type),
+             e->de);
+    size_t n = strlen(prefix);
+    return strncmp(f->err, prefix, n) == 0 ? f->err + n : f->err;
+}
+
+/* forget an error already reported as a warning (the import goes on without what it concerned) */
+static void forget_error(importer *im)
+{
+    im->f->err[0] = 0;
+    im->f->err_line = 0;
+    if (im->st)
+        cm_status_init(im->st);
+}
+
 /* skip a face: warn with the reason already in f->err (every failure path names its entity; the
  * status is the fallback) and forget the error */
 static void face_failed(importer *im, const iges_entity *e, int nsurfs, int nfaces, int nloops, int nsegs)
@@ -850,8 +870,14 @@ static cm_err shell_514(importer *im, const iges_entity *e, const haffine *paren
     int shell = im->m->nshells++;
     for (int i = 0; i < n; i++) {
         int fde, of;
-        if (iges_ptr(f, e, 1 + 2 * i, 0, &fde))
-            return cm_fail(im->st, CM_E_IGES, "514");
+        if (iges_ptr(f, e, 1 + 2 * i, 0, &fde)) {
+            /* one bad member pointer loses that face, not the shell */
+            /* (no face is lost: the pointer names none; a face it was meant to name, now owned by
+               nothing, is imported on its own) */
+            iges_warn(f, e->pd_line, "shell DE %d: member %d skipped: %s", e->de, i + 1, bare_error(f, e));
+            forget_error(im);
+            continue;
+        }
         of = iges_int_or(e, 2 + 2 * i, 1);
         const iges_entity *fe = iges_by_de(f, fde);
         if (fe->type != 510 || fe->bad) {
@@ -887,8 +913,12 @@ static cm_err solid_186(importer *im, const iges_entity *e, const haffine *paren
     cm_err err = shell_514(im, s, &map, sof == 0);
     for (int i = 0; i < nv && err == CM_OK; i++) {
         int vde;
-        if (iges_ptr(f, e, 3 + 2 * i, 0, &vde))
-            return cm_fail(im->st, CM_E_IGES, "186");
+        if (iges_ptr(f, e, 3 + 2 * i, 0, &vde)) {
+            /* a bad void shell pointer loses that void, not the solid */
+            iges_warn(f, e->pd_line, "solid DE %d: void shell %d skipped: %s", e->de, i + 1, bare_error(f, e));
+            forget_error(im);
+            continue;
+        }
         const iges_entity *vs = iges_by_de(f, vde);
         if (vs->type == 514 && !vs->bad)
             err = shell_514(im, vs, &map, iges_int_or(e, 4 + 2 * i, 1) == 0);
@@ -1193,7 +1223,25 @@ cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_st
         const iges_entity *e = &f->ents[k];
         if (im.ref[k])
             continue; /* owned by another entity: imported through it */
+        int nsurfs = m->nsurfs, nfaces = m->nfaces, nloops = m->nloops, nsegs = m->nsegs, nshells = m->nshells;
         err = import_entity(&im, e, &to_mm, 0);
+        if (err != CM_OK && err != CM_E_NOMEM && err != CM_E_LIMIT && err != CM_E_IO) {
+            /* one malformed solid, shell or instance never sinks the model: what it had added is
+               taken back, it is left out by name, and the other entities are imported (faces
+               fail one by one inside; what reaches here is the structure around them) */
+            brep_truncate(m, nsurfs, nfaces, nloops, nsegs);
+            m->nshells = nshells;
+            char why[512];
+            if (f->err[0])
+                snprintf(why, sizeof why, "%s", bare_error(f, e));
+            else
+                snprintf(why, sizeof why, "%s (%s)", cm_strerror(err), st && st->where ? st->where : "?");
+            iges_warn(f, e->pd_line, "entity %d (%s, DE %d) left out: %s", e->type, iges_type_name(e->type), e->de,
+                      why);
+            forget_error(&im);
+            m->entities_failed++;
+            err = CM_OK;
+        }
     }
     if (err == CM_OK)
         err = drop_far_faces(&im);
