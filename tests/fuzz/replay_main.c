@@ -2,8 +2,11 @@
  * replay - run a fuzz target's LLVMFuzzerTestOneInput over files and
  * directories without libFuzzer (lz4's standaloneengine idea), so gcc and
  * CI replay the corpus and the regression inputs.  Each input gets
- * REPLAY_TIMEOUT seconds (default 120) of wall-clock time via alarm():
- * a hang is a failure too (SQLite fuzzcheck's setAlarm).
+ * 20 s plus 1 s per 10 kB of wall-clock time, at most REPLAY_TIMEOUT
+ * seconds (default 400), via alarm(): a hang is a failure too (SQLite
+ * fuzzcheck's setAlarm).  Scaled by size so that a small input which runs
+ * for minutes (a 35 kB subfigure DAG placing 2^18 faces) fails, while the
+ * corpus's 2.5 MB assembly has the time it needs under ASan.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
@@ -47,7 +50,8 @@ static int run_file(const char *path, unsigned timeout)
     }
     fclose(f);
     current = path;
-    alarm(timeout);
+    unsigned limit = 20u + (unsigned)(n / 10000);
+    alarm(limit < timeout ? limit : timeout);
     LLVMFuzzerTestOneInput(buf, (size_t)n);
     alarm(0);
     free(buf);
