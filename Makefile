@@ -269,6 +269,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
 		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header" \
 		"gate:hostile-input:$(MAKE) --no-print-directory -s hostile HOSTILE_TRIES=2 HOSTILE_TAP=--tap" \
+		"gate:store-kill:$(MAKE) --no-print-directory -s check-store-kill" \
 		"gate:hw-and-links:$(MAKE) --no-print-directory -s check-hw-and-links"
 
 # `make test`: the fast tier for the inner loop (under 2 minutes warm on 2 cores): unit tests of

@@ -130,6 +130,33 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
     return CM_OK;
 }
 
+/* the serialiser's bytes into fd; step(ctx, "written") after the first chunk */
+static cm_err write_all(cm_out *w, int fd, uint64_t *total, cm_write_step *step, void *ctx, cm_status *st)
+{
+    uint8_t chunk[65536];
+    cm_err e = CM_OK;
+    *total = 0;
+    for (;;) {
+        size_t n = 0;
+        int done = 0;
+        if ((e = cm_out_next(w, chunk, sizeof chunk, &n, &done, st)) != CM_OK)
+            return e;
+        for (size_t off = 0; off < n;) {
+            ssize_t k = write(fd, chunk + off, n - off);
+            if (k < 0 && errno == EINTR)
+                continue;
+            if (k <= 0)
+                return io_fail(st, "write");
+            off += (size_t)k;
+        }
+        if (*total == 0 && step)
+            step(ctx, "written");
+        *total += n;
+        if (done)
+            return CM_OK;
+    }
+}
+
 cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_path, uint64_t *bytes, cm_status *st)
 {
     char tmp[4096];
@@ -143,27 +170,8 @@ cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_pat
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0)
         return io_fail(st, "create");
-    uint8_t chunk[65536];
     uint64_t total = 0;
-    for (;;) {
-        size_t n = 0;
-        int done = 0;
-        if ((e = cm_out_next(&w, chunk, sizeof chunk, &n, &done, st)) != CM_OK)
-            break;
-        for (size_t off = 0; off < n;) {
-            ssize_t k = write(fd, chunk + off, n - off);
-            if (k < 0 && errno == EINTR)
-                continue;
-            if (k <= 0) {
-                e = io_fail(st, "write");
-                break;
-            }
-            off += (size_t)k;
-        }
-        total += n;
-        if (e != CM_OK || done)
-            break;
-    }
+    e = write_all(&w, fd, &total, NULL, NULL, st);
     if (e == CM_OK && fsync(fd) != 0)
         e = io_fail(st, "fsync");
     if (close(fd) != 0 && e == CM_OK)
@@ -175,4 +183,33 @@ cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_pat
     else if (bytes)
         *bytes = total;
     return e;
+}
+
+cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int dirfd, const char *name, uint64_t *bytes,
+                        cm_write_step *step, void *ctx, cm_status *st)
+{
+    static cm_out w;
+    cm_err e = cm_out_begin(&w, fmt, mesh, st);
+    if (e != CM_OK)
+        return e;
+    int fd = openat(dirfd, name, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0)
+        return io_fail(st, "create");
+    if (step)
+        step(ctx, "created");
+    uint64_t total = 0;
+    e = write_all(&w, fd, &total, step, ctx, st);
+    if (e == CM_OK && fsync(fd) != 0)
+        e = io_fail(st, "fsync");
+    if (close(fd) != 0 && e == CM_OK)
+        e = io_fail(st, "close");
+    if (e != CM_OK) {
+        unlinkat(dirfd, name, 0);
+        return e;
+    }
+    if (step)
+        step(ctx, "closed");
+    if (bytes)
+        *bytes = total;
+    return CM_OK;
 }

@@ -58,4 +58,51 @@ CM_NODISCARD cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *m
 CM_NODISCARD cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_path, uint64_t *bytes,
                                   cm_status *st);
 
+/**
+ * What cm_write_mesh_at has just done to its file: "created", "written" (its first chunk, up to
+ * 64 KiB) or "closed" (all of it written, synced and closed).  cmz-terminal's fault injection
+ * (cm_kill_point.h) stops there.
+ */
+typedef void cm_write_step(void *ctx, const char *step);
+
+/**
+ * Write mesh in `fmt` as the new file `name` in directory dirfd: created exclusively, written,
+ * fsynced; no temporary file and no rename, for a directory that no viewer sees yet (cmz-terminal's
+ * next generation, made visible as a whole).  On failure the file is removed.  step (may be NULL)
+ * is called with ctx after each stage.
+ */
+CM_NODISCARD cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int dirfd, const char *name,
+                                     uint64_t *bytes, cm_write_step *step, void *ctx, cm_status *st);
+
+/* cm_out_bytes_bound: the JSON of one glTF primitive and its three accessors (with min/max) takes
+   about 440 bytes in the corpus, 768 leave room for the longest numbers; the fixed JSON and 64
+   materials stay under 32 KiB */
+#define CM_OUT_GLB_FACE_BYTES 768u
+#define CM_OUT_GLB_FIXED_BYTES 32768u
+#define CM_OUT_BYTES_PER_CMZ_BYTE 256u
+
+/**
+ * How large the GLB (or STL) that a .cmz of cmz_bytes decodes to on this build can be, for a
+ * free-space check before the file has arrived (nothing but its size is known then): the smaller of
+ *  - what this build's mesh holds (cmz-terminal's arrays): CM_MAX_TRIS triangles, CM_MAX_TRIS +
+ *    2 CM_MAX_FACES vertices of 24 bytes, 12 bytes of indices a triangle and one primitive of
+ *    CM_OUT_GLB_FACE_BYTES JSON per face (STL: 50 bytes a triangle); a true bound, 32 MB for the
+ *    terminal profile, too much to ask of every small model;
+ *  - CM_OUT_BYTES_PER_CMZ_BYTE (256) times the .cmz (STL twice that): the bundled and corpus models
+ *    at their own tolerance make at most 140 GLB bytes per .cmz byte (bug22869 Spring; 60 among
+ *    those the terminal profile loads) and STL 283.
+ * The second is a measured factor, not a bound: a model that tessellates finer than any seen (or a
+ * terminal run with a finer --tess) can exceed it.  Then the disk may fill while the model is
+ * stored, and the store fails without touching the model on screen.
+ */
+static inline uint64_t cm_out_bytes_bound(cm_out_format fmt, uint64_t cmz_bytes)
+{
+    uint64_t tris = CM_MAX_TRIS, verts = (uint64_t)CM_MAX_TRIS + 2u * (uint64_t)CM_MAX_FACES;
+    uint64_t cap = fmt == CM_OUT_STL ? 84u + 50u * tris
+                                     : CM_OUT_GLB_FIXED_BYTES + 24u * verts + 12u * tris +
+                                           (uint64_t)CM_OUT_GLB_FACE_BYTES * CM_MAX_FACES;
+    uint64_t seen = (fmt == CM_OUT_STL ? 2u : 1u) * CM_OUT_BYTES_PER_CMZ_BYTE * cmz_bytes;
+    return seen < cap ? seen : cap;
+}
+
 #endif /* CM_DECODE_FILE_H */

@@ -12,10 +12,11 @@
 #include <unistd.h>
 
 #include "cm/cm_arith.h"
+#include "cm_decode_file.h"
 #include "cm_report.h"
 
-#define META_MAGIC 0x504C4D43u /* "CMLP" */
-#define META_BYTES 24u
+#define META_MAGIC 0x32504C43u /* "CLP2": protocol 2's meta (with the content id); an older one is dropped */
+#define META_BYTES 32u
 /* An fsync costs 10-200 ms on an SD card (and on this VM's disk): done every second it stalls
    the link, which a noisy line then pays in timeouts.  A power cut loses at most 5 s of transfer;
    a stall, a hang-up or a clean stop syncs at once. */
@@ -42,7 +43,7 @@ static void set_why(cm_link_term *t, const char *what, const char *detail)
     textf(t->why, sizeof t->why, "%s%s%s", what, detail ? ": " : "", detail ? detail : "");
 }
 
-/* ---- the meta file: size, crc, synced prefix, chunk origin; CRC-protected, replaced atomically ---- */
+/* ---- the meta file: size, crc, content id, synced prefix; CRC-protected, replaced atomically ---- */
 
 static int meta_write(cm_link_term *t)
 {
@@ -52,7 +53,8 @@ static int meta_write(cm_link_term *t)
     cm_link_put32(b + 8, t->offer.crc);
     cm_link_put32(b + 12, t->synced);
     cm_link_put32(b + 16, (uint32_t)strlen(t->offer.name));
-    cm_link_put32(b + 20, cm_crc32(b, 20));
+    cm_link_put64(b + 20, t->offer.id);
+    cm_link_put32(b + 28, cm_crc32(b, 28));
     char tmp[CM_TERM_PATH];
     if (snprintf(tmp, sizeof tmp, "%s.tmp", t->meta_path) >= (int)sizeof tmp)
         return -1;
@@ -64,6 +66,7 @@ static int meta_write(cm_link_term *t)
     return ok && rename(tmp, t->meta_path) == 0 ? 0 : -1;
 }
 
+/* the transfer left by an earlier run: size, crc and synced prefix; its content id goes straight to t->offer */
 static int meta_read(cm_link_term *t, uint32_t *size, uint32_t *crc, uint32_t *synced)
 {
     uint8_t b[META_BYTES];
@@ -72,8 +75,9 @@ static int meta_read(cm_link_term *t, uint32_t *size, uint32_t *crc, uint32_t *s
         return -1;
     ssize_t n = read(fd, b, sizeof b);
     close(fd);
-    if (n != (ssize_t)sizeof b || cm_link_get32(b) != META_MAGIC || cm_link_get32(b + 20) != cm_crc32(b, 20))
+    if (n != (ssize_t)sizeof b || cm_link_get32(b) != META_MAGIC || cm_link_get32(b + 28) != cm_crc32(b, 28))
         return -1;
+    t->offer.id = cm_link_get64(b + 20);
     *size = cm_link_get32(b + 4);
     *crc = cm_link_get32(b + 8);
     *synced = cm_link_get32(b + 12);
@@ -157,6 +161,24 @@ static void refuse(cm_link_term *t, int seq, int code, const char *text)
     send_text(t, CM_LINK_REFUSE, seq, -1, code, text);
 }
 
+static bool recover_verified(cm_link_term *t);
+static void remember_shown(cm_link_term *t);
+
+/*
+ * Disk space a new model takes until it is shown: the part file (renamed, then hard-linked into
+ * the new generation: it is never copied), the GLB and STL written beside the model on screen
+ * (the old generation is removed only after the swap), and 64 KiB for the meta file, directories
+ * and symlinks.  The GLB and STL are not known before the file is decoded: cm_out_bytes_bound
+ * estimates them from the size (cm_decode_file.h says how, and when it falls short).
+ */
+static uint64_t store_need(const cm_link_term *t, uint32_t size)
+{
+    uint64_t need = (uint64_t)size + cm_out_bytes_bound(CM_OUT_GLB, size) + 65536u;
+    if (t->writes_stl)
+        need += cm_out_bytes_bound(CM_OUT_STL, size);
+    return need;
+}
+
 int cm_link_term_open(cm_link_term *t, cm_decoder *dec, const char *dir, const char *name)
 {
     memset(t, 0, sizeof *t);
@@ -174,6 +196,17 @@ int cm_link_term_open(cm_link_term *t, cm_decoder *dec, const char *dir, const c
         return -1;
     }
     strcpy(t->dir, dir);
+    char tmp[CM_TERM_PATH + 8];
+    snprintf(tmp, sizeof tmp, "%s.tmp", t->meta_path);
+    unlink(tmp); /* meta_write killed before its rename */
+    /* a file verified and stored whole but killed before it was decoded: the caller finishes it.
+       The terminal decodes .incoming.cmz before it serves another frame, so a part file beside it
+       is older (the same transfer's meta, a kill before its unlink): dropped */
+    if (recover_verified(t)) {
+        drop_transfer(t);
+        return 0;
+    }
+    remember_shown(t);
     /* a transfer left by an earlier run: keep it to resume from its synced prefix */
     uint32_t size, crc, synced;
     if (meta_read(t, &size, &crc, &synced) == 0) {
@@ -230,7 +263,11 @@ static int on_offer(cm_link_term *t, const cm_link_frame *f)
     if (!cm_link_offer_unpack(f, &o))
         return CM_TERM_NONE;
     char text[CM_LINK_MAX_TEXT + 1];
-    if (o.size == 0 || o.size > CM_MAX_FILE_BYTES) {
+    if (o.size == 0) {
+        refuse(t, f->seq, CM_E_PROTOCOL, "invalid offer: size 0 (an empty file holds no model)");
+        return CM_TERM_FAILED;
+    }
+    if (o.size > CM_MAX_FILE_BYTES) {
         snprintf(text, sizeof text,
                  "exceeds a compile-time limit of this build (CM_E_LIMIT): the model needs MAX_FILE_BYTES=%u, this "
                  "build (profile %s) has %u",
@@ -241,13 +278,16 @@ static int on_offer(cm_link_term *t, const cm_link_frame *f)
     uint32_t chunk = o.chunk;
     if (chunk == 0 || chunk > CM_LINK_MAX_PAYLOAD - 4)
         chunk = CM_LINK_MAX_PAYLOAD - 4;
-    bool same = t->active && o.size == t->offer.size && o.crc == t->offer.crc;
+    /* resume only the same file: same size and content id (the CRC-32 alone is the same for every .cmz) */
+    bool same = t->active && o.size == t->offer.size && o.crc == t->offer.crc && o.id == t->offer.id;
     int ev = CM_TERM_NONE;
     if (!same) {
         struct statvfs v;
-        if (statvfs(t->dir, &v) == 0 && (uint64_t)v.f_bavail * v.f_frsize < 2ull * o.size + 65536u) {
-            textf(text, sizeof text, "no space: %s has %llu bytes free, the model needs %u (twice, while it is replaced)",
-                     t->dir, (unsigned long long)v.f_bavail * v.f_frsize, (unsigned)o.size);
+        uint64_t need = store_need(t, o.size);
+        if (statvfs(t->dir, &v) == 0 && (uint64_t)v.f_bavail * v.f_frsize < need) {
+            textf(text, sizeof text, "no space: %s has %llu bytes free, the model needs up to %llu (%u for the .cmz, "
+                  "the rest for the %s it decodes to)", t->dir, (unsigned long long)v.f_bavail * v.f_frsize,
+                  (unsigned long long)need, (unsigned)o.size, t->writes_stl ? "GLB and STL" : "GLB");
             refuse(t, f->seq, CM_E_IO, text);
             return CM_TERM_FAILED;
         }
@@ -281,10 +321,11 @@ static int on_offer(cm_link_term *t, const cm_link_frame *f)
     t->chunk = chunk;
     t->held = 0;
     t->idle_reported = false;
-    uint8_t p[12];
+    uint8_t p[CM_LINK_ACCEPT_BYTES];
     cm_link_put32(p, t->prefix);
     cm_link_put32(p + 4, chunk);
     cm_link_put32(p + 8, o.crc);
+    cm_link_put64(p + 12, o.id);
     (void)cm_link_send(&t->link, CM_LINK_ACCEPT, f->seq, p, sizeof p, 1000);
     return ev;
 }
@@ -342,22 +383,23 @@ static int on_data(cm_link_term *t, const cm_link_frame *f)
     return CM_TERM_NONE;
 }
 
-static uint32_t file_crc(int fd, uint32_t size, bool *ok)
+/* CRC-32 and content id of the stored bytes; false if they cannot be read back */
+static bool file_check(int fd, uint32_t size, uint32_t *crc, uint64_t *id)
 {
     uint8_t buf[4096];
-    uint32_t crc = 0, at = 0;
-    *ok = true;
+    uint32_t at = 0;
+    *crc = 0;
+    *id = 0;
     while (at < size) {
         size_t n = size - at < sizeof buf ? size - at : sizeof buf;
         ssize_t r = pread(fd, buf, n, (off_t)at);
-        if (r <= 0) {
-            *ok = false;
-            return 0;
-        }
-        crc = cm_crc32_update(crc, buf, (size_t)r);
+        if (r <= 0)
+            return false;
+        *crc = cm_crc32_update(*crc, buf, (size_t)r);
+        *id = cm_link_id_update(*id, buf, (size_t)r);
         at += (uint32_t)r;
     }
-    return crc;
+    return true;
 }
 
 static void remember(cm_link_term *t, int stage, int code, const char *text)
@@ -365,6 +407,7 @@ static void remember(cm_link_term *t, int stage, int code, const char *text)
     t->have_last = true;
     t->last_size = t->offer.size;
     t->last_crc = t->offer.crc;
+    t->last_id = t->offer.id;
     t->last_stage = stage;
     t->last_code = code;
     textf(t->last_text, sizeof t->last_text, "%s", text);
@@ -372,11 +415,12 @@ static void remember(cm_link_term *t, int stage, int code, const char *text)
 
 static int on_end(cm_link_term *t, const cm_link_frame *f)
 {
-    if (f->len != 8)
+    if (f->len != CM_LINK_END_BYTES)
         return CM_TERM_NONE;
     uint32_t size = cm_link_get32(f->payload), crc = cm_link_get32(f->payload + 4);
-    if (!t->active || size != t->offer.size || crc != t->offer.crc) {
-        if (t->have_last && size == t->last_size && crc == t->last_crc)
+    uint64_t id = cm_link_get64(f->payload + 8);
+    if (!t->active || size != t->offer.size || crc != t->offer.crc || id != t->offer.id) {
+        if (t->have_last && size == t->last_size && crc == t->last_crc && id == t->last_id)
             send_text(t, CM_LINK_DONE, f->seq, t->last_stage, t->last_code, t->last_text);
         else
             send_text(t, CM_LINK_ABORT, f->seq, -1, CM_E_FORMAT, "no such transfer in progress: offer it again");
@@ -386,12 +430,14 @@ static int on_end(cm_link_term *t, const cm_link_frame *f)
         send_ack(t, f->seq);
         return CM_TERM_NONE;
     }
-    bool ok;
-    uint32_t got = file_crc(t->part_fd, size, &ok);
+    uint32_t got;
+    uint64_t got_id;
+    bool ok = file_check(t->part_fd, size, &got, &got_id);
     char text[CM_LINK_MAX_TEXT + 1];
-    if (!ok || got != crc) {
-        snprintf(text, sizeof text, "file CRC %08x, the sender's %08x: received again from the start", (unsigned)got,
-                 (unsigned)crc);
+    if (!ok || got != crc || got_id != id) {
+        /* the CRC catches damage; the id also catches another file's bytes (a resume gone wrong) */
+        snprintf(text, sizeof text, "file CRC %08x id %016llx, the sender's %08x %016llx: received again from the start",
+                 (unsigned)got, (unsigned long long)got_id, (unsigned)crc, (unsigned long long)id);
         remember(t, CM_LINK_STAGE_STORED, CM_E_CRC, text);
         set_why(t, "CRC mismatch", text);
         drop_transfer(t);
@@ -445,9 +491,19 @@ int cm_link_term_poll(cm_link_term *t, int timeout_ms)
         int ev = CM_TERM_NONE;
         switch (f.type) {
         case CM_LINK_SYNC: {
-            uint8_t p[8 + 4 * CM_LIMIT_COUNT + CM_LINK_MAX_NAME];
+            uint8_t p[8 + 4 * CM_LIMIT_COUNT + CM_LINK_MAX_NAME], q[4 + CM_LINK_HELLO_PIECE];
             size_t n = cm_link_hello_pack(&t->hello, p);
-            (void)cm_link_send(&t->link, CM_LINK_HELLO, f.seq, p, n, 1000);
+            unsigned first = 0;
+            uint32_t mask = 0;
+            int ask = cm_link_sync_unpack(&f, &first, &mask);
+            if (ask == 0)
+                (void)cm_link_send(&t->link, CM_LINK_HELLO, f.seq, p, n, 1000);
+            /* the pieces asked for (a noisy line: docs/LINK.md, "Finding the terminal") */
+            for (unsigned j = 0; ask == 1 && j < 32; j++) {
+                size_t m = mask >> j & 1u ? cm_link_hello_part_pack(p, n, first + j, q) : 0;
+                if (m)
+                    (void)cm_link_send(&t->link, CM_LINK_HELLO_PART, f.seq, q, m, 1000);
+            }
             break;
         }
         case CM_LINK_OFFER:
@@ -482,4 +538,53 @@ void cm_link_term_decoded(cm_link_term *t, int code, const char *text)
 int cm_link_term_request(cm_link_term *t)
 {
     return cm_link_send(&t->link, CM_LINK_REQUEST, -1, NULL, 0, 1000);
+}
+
+/* t->offer's size, CRC and id from a whole .cmz file at path; false if there is none */
+static bool identify(cm_link_term *t, const char *path)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return false;
+    struct stat s;
+    bool ok = fstat(fd, &s) == 0 && S_ISREG(s.st_mode) && s.st_size > 0 && s.st_size <= CM_MAX_FILE_BYTES;
+    if (ok) {
+        t->offer.size = (uint32_t)s.st_size;
+        ok = file_check(fd, t->offer.size, &t->offer.crc, &t->offer.id);
+    }
+    close(fd);
+    return ok;
+}
+
+/* .incoming.cmz left by a kill between its rename (after the CRC matched) and its decode */
+static bool recover_verified(cm_link_term *t)
+{
+    t->recovered = identify(t, t->in_path);
+    if (!t->recovered) {
+        unlink(t->in_path); /* none, or not what a verified transfer leaves: nothing to finish */
+        memset(&t->offer, 0, sizeof t->offer);
+        return false;
+    }
+    /* what the sender's repeated END names it by (cm_link_term_recovered remembers it) */
+    snprintf(t->offer.name, sizeof t->offer.name, ".incoming.cmz");
+    return true;
+}
+
+/*
+ * The model on screen, as if its transfer had just finished: a kill after it was shown but before
+ * its DONE went out leaves a sender repeating END, and it is answered that the model is decoded.
+ */
+static void remember_shown(cm_link_term *t)
+{
+    char path[CM_TERM_PATH + 16];
+    snprintf(path, sizeof path, "%s/model.cmz", t->dir);
+    if (identify(t, path))
+        remember(t, CM_LINK_STAGE_DECODED, 0, "on screen (decoded before the terminal restarted)");
+    memset(&t->offer, 0, sizeof t->offer);
+}
+
+void cm_link_term_recovered(cm_link_term *t, int code, const char *text)
+{
+    remember(t, CM_LINK_STAGE_DECODED, code, text);
+    t->recovered = false;
 }

@@ -10,7 +10,9 @@
  *                    transfer (cable pulled, terminal rebooted, sender
  *                    restarted) starts from that prefix
  *   .incoming.cmz    the complete file after its CRC matched; the caller
- *                    decodes it and moves it into place
+ *                    decodes it and moves it into place.  One found by
+ *                    cm_link_term_open (a kill before it was decoded) is
+ *                    finished by the caller at start (t->recovered)
  * Nothing here touches the model the viewer shows.
  *
  * The decoder is fed the bytes as they become contiguous, so a model the
@@ -56,14 +58,23 @@ typedef struct cm_link_term {
     /* the last finished transfer, to answer a repeated END */
     bool have_last;
     uint32_t last_size, last_crc;
+    uint64_t last_id;
     int last_stage, last_code;
     char last_text[CM_LINK_MAX_TEXT + 1];
     char why[CM_LINK_MAX_TEXT + 1]; /* text of the last FAILED event */
+    /* set by cm_link_term_open: .incoming.cmz of an earlier run, verified and synced but never
+       decoded; t->offer holds its size, CRC and id.  The caller decodes it (it is not fed to
+       t->dec) and calls cm_link_term_recovered */
+    bool recovered;
+    bool writes_stl; /* set by the caller: the free-space check at OFFER counts model.stl too */
 } cm_link_term;
 
 /**
- * Set up on directory `dir` (must exist and be writable), loading any
- * transfer left by an earlier run.  @return 0, or -1 with t->why set
+ * Set up on directory `dir` (must exist and be writable), loading what an
+ * earlier run left: a transfer to resume, or a verified .incoming.cmz that
+ * was never decoded (t->recovered); and remembering the model on screen
+ * (DIR/model.cmz) as decoded, so that a sender repeating END for it after a
+ * restart gets DONE.  @return 0, or -1 with t->why set
  */
 int cm_link_term_open(cm_link_term *t, cm_decoder *dec, const char *dir, const char *name);
 
@@ -78,6 +89,12 @@ int cm_link_term_poll(cm_link_term *t, int timeout_ms);
 
 /** The model of the last COMPLETE event was decoded (code 0) or not: tell the sender. */
 void cm_link_term_decoded(cm_link_term *t, int code, const char *text);
+
+/**
+ * The file recovered at open was decoded (code 0) or not: remembered like a finished transfer, so
+ * the sender's repeated END (it waited through the restart) is answered with this DONE.
+ */
+void cm_link_term_recovered(cm_link_term *t, int code, const char *text);
 
 /** The operator pressed the button: ask the workstation to send again. */
 int cm_link_term_request(cm_link_term *t);

@@ -7,10 +7,13 @@
  *                --out DIR [options]          (cmz-terminal --help)
  *
  * Data flow: link frames -> .incoming.part (resumable) -> CRC verified ->
- * .incoming.cmz -> decoder (fed as the bytes arrived) -> model.glb written
- * atomically -> model.cmz.  The previous model stays on screen until the
- * new one is complete and decoded; a power cut at any point leaves either
- * the old files or the new ones, never half of one.
+ * .incoming.cmz -> decoder (fed as the bytes arrived) -> a new generation
+ * DIR/.gen-N (model.glb, model.stl, model.cmz) -> one rename of the symlink
+ * DIR/current shows it (cm_term_store.h).  The previous model stays on
+ * screen until the new one is complete and decoded; a power cut at any
+ * point leaves either the old model or the new one, never half of one or
+ * a mix, and a restart finishes a verified file that was not yet shown.
+ * CM_TERM_KILL_AT=STEP kills the daemon at a step of that (cm_kill_point.h).
  *
  * Exit status: 0 stopped by SIGTERM/SIGINT (or --once and the model
  * decoded), 1 --once and the model was refused or failed to decode,
@@ -29,8 +32,10 @@
 
 #include "cm_decode_file.h"
 #include "cm_gpio.h"
+#include "cm_kill_point.h"
 #include "cm_link_term.h"
 #include "cm_report.h"
+#include "cm_term_store.h"
 #include "cm_transport_fd.h"
 #include "cm_transport_serial.h"
 #ifdef CM_HAVE_LIBUSB
@@ -47,6 +52,7 @@ static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
 static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
 static cm_mesh_face mfaces[CM_MAX_FACES];
 static cm_link_term term;
+static cm_term_store store;
 static cm_serial serial;
 static cm_fdlink stdio_link;
 #ifdef CM_HAVE_LIBUSB
@@ -110,6 +116,7 @@ static void usage(FILE *f)
             "  --config FILE          read 'key = value' lines (the long options without --) first\n"
             "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
             "  -q                     only warnings and errors\n"
+            "environment: CM_TERM_KILL_AT=STEP  SIGKILL at that step of storing a model (tests)\n"
             "GPIO SPEC: CHIP:LINE, CHIP a name (gpiochip0), path or label, LINE a name or offset;\n"
             "           a leading '!' makes the line active-low.\n"
             "\n"
@@ -307,8 +314,8 @@ static void nap_ms(int ms)
     nanosleep(&ts, NULL);
 }
 
-/* decode .incoming.cmz (already fed to the decoder) into the viewer's files; 0 ok */
-static int decode_into_place(const config *c, char *text, size_t cap)
+/* decode .incoming.cmz (fed: already fed to the decoder as it arrived) and show it; 0 ok */
+static int decode_into_place(const config *c, int fed, char *text, size_t cap)
 {
     static cm_mesh mesh;
     mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
@@ -316,23 +323,20 @@ static int decode_into_place(const config *c, char *text, size_t cap)
     cm_status_init(&st);
     cm_decode_summary sum;
     uint64_t bytes = 0;
-    char glb[CM_TERM_PATH + 16], stl[CM_TERM_PATH + 16], cmz[CM_TERM_PATH + 16], bad[CM_TERM_PATH + 16];
-    snprintf(glb, sizeof glb, "%s/model.glb", c->out);
-    snprintf(stl, sizeof stl, "%s/model.stl", c->out);
-    snprintf(cmz, sizeof cmz, "%s/model.cmz", c->out);
+    char bad[CM_TERM_PATH + 16];
     snprintf(bad, sizeof bad, "%s/rejected.cmz", c->out);
     int64_t t0 = cm_link_now_ms();
-    if (cm_dec_finish(&decoder, &st) != CM_OK || cm_decode_mesh(&decoder, c->tess, &mesh, &tess, &sum, &st) != CM_OK ||
-        (c->stl && cm_write_mesh(&mesh, CM_OUT_STL, stl, &bytes, &st) != CM_OK) ||
-        cm_write_mesh(&mesh, CM_OUT_GLB, glb, &bytes, &st) != CM_OK) {
+    cm_err e = fed ? cm_dec_finish(&decoder, &st) : cm_decode_read(term.in_path, &decoder, &st);
+    if (e == CM_OK)
+        e = cm_decode_mesh(&decoder, c->tess, &mesh, &tess, &sum, &st);
+    if (e == CM_OK)
+        e = cm_term_store_install(&store, &mesh, term.in_path, &bytes, &st);
+    if (e != CM_OK) {
+        /* the model on screen is untouched (the store changes nothing until its one rename) */
         cm_format_status(text, cap, &st);
         if (rename(term.in_path, bad) != 0)
             unlink(term.in_path);
         return st.code ? (int)st.code : 1;
-    }
-    if (rename(term.in_path, cmz) != 0) {
-        textf(text, cap, "decoded, but cannot move the model to %s: %s", cmz, strerror(errno));
-        return CM_E_IO;
     }
     /* one bad face never sinks a model: the others are shown, and each one left out is logged */
     for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++) {
@@ -398,12 +402,37 @@ int main(int argc, char **argv)
         cm_gpio_close(&gpio);
         return 3;
     }
+    term.writes_stl = c.stl != 0;
+    /* what a kill left of storing a model: half-built generations, temporary files and links */
+    if (cm_term_store_open(&store, c.out, c.stl != 0) != 0) {
+        logline("error", "output", "why=\"%s\"", store.why);
+        cm_gpio_close(&gpio);
+        return 3;
+    }
     if (term.active)
         logline("info", "resumable", "bytes=%u of=%u", (unsigned)term.prefix, (unsigned)term.offer.size);
     logline("info", "start", "out=%s profile=%s max_file_bytes=%u", c.out, cm_profile_name, (unsigned)CM_MAX_FILE_BYTES);
 
     int rc = 0, said_waiting = 0, busy = 0;
     int64_t ready_off_at = 0, started_ms = 0;
+    if (term.recovered) {
+        /* received whole and verified, then killed before it was shown: show it now, and answer the
+           sender's repeated END with the outcome (it waited through the restart) */
+        logline("info", "recovered", "bytes=%u crc=%08x", (unsigned)term.offer.size, (unsigned)term.offer.crc);
+        cm_gpio_set(&gpio, CM_GPIO_BUSY, 1);
+        char text[CM_LINK_MAX_TEXT + 1];
+        int code = decode_into_place(&c, 0, text, sizeof text);
+        cm_link_term_recovered(&term, code, text);
+        cm_gpio_set(&gpio, CM_GPIO_BUSY, 0);
+        if (code == 0) {
+            logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
+            cm_gpio_set(&gpio, CM_GPIO_READY, 1);
+            ready_off_at = cm_link_now_ms() + c.ready_pulse_ms;
+        } else {
+            logline("error", "decode-failed", "name=\"%s\" why=\"%s\"", term.offer.name, text);
+            cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
+        }
+    }
     cm_transport *link = NULL;
     while (!stop_signal) {
         if (ready_off_at && cm_link_now_ms() >= ready_off_at) {
@@ -434,6 +463,8 @@ int main(int argc, char **argv)
             (void)cm_link_term_request(&term);
         }
         int ev = cm_link_term_poll(&term, 200);
+        if (term.active && term.prefix >= term.offer.size / 2 && term.prefix < term.offer.size)
+            cm_kill_point("incoming-mid-write");
         if (ev < 0) {
             logline("warn", "link-down", "link=\"%s\" why=\"%s\"", link->name,
                     ev == CM_T_HANGUP ? "hang-up" : link->err);
@@ -450,6 +481,8 @@ int main(int argc, char **argv)
             logline("info", "receiving", "name=\"%s\" bytes=%u from=%u chunk=%u", term.offer.name,
                     (unsigned)term.offer.size, (unsigned)term.prefix, (unsigned)term.chunk);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
+            if (term.prefix == 0)
+                cm_kill_point("part-created");
             break;
         case CM_TERM_IDLE:
             logline("warn", "stalled", "name=\"%s\" bytes=%u of=%u", term.offer.name, (unsigned)term.prefix,
@@ -469,8 +502,9 @@ int main(int argc, char **argv)
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
             logline("info", "stored", "name=\"%s\" bytes=%u crc=%08x ms=%lld", term.offer.name,
                     (unsigned)term.offer.size, (unsigned)term.offer.crc, (long long)(cm_link_now_ms() - started_ms));
+            cm_kill_point("incoming-renamed");
             char text[CM_LINK_MAX_TEXT + 1];
-            int code = decode_into_place(&c, text, sizeof text);
+            int code = decode_into_place(&c, 1, text, sizeof text);
             cm_link_term_decoded(&term, code, text);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
             if (code == 0) {
@@ -497,6 +531,7 @@ int main(int argc, char **argv)
     if (ready_off_at)
         nap_ms((int)(ready_off_at - cm_link_now_ms() > 0 ? ready_off_at - cm_link_now_ms() : 0));
     cm_link_term_close(&term);
+    cm_term_store_close(&store);
     if (link)
         link->close(link);
     cm_gpio_close(&gpio);

@@ -28,7 +28,9 @@
 #include "cm_transport_usb.h"
 #endif
 
-enum { S_OK = 0, S_INPUT = 1, S_USAGE = 2, S_LINK = 3 };
+/* S_SIGNAL + the signal's number: stopped by SIGINT (130) or SIGTERM (143), as a shell reports a
+   command a signal ended */
+enum { S_OK = 0, S_INPUT = 1, S_USAGE = 2, S_LINK = 3, S_SIGNAL = 128 };
 
 typedef struct send_ctx {
     const char *serial, *usb, *gadget;
@@ -77,7 +79,9 @@ static void send_usage(FILE *f)
             "  --tol REL              encoder tolerance for an IGES model (default 0.01)\n"
             "\n"
             "exit status: 0 stored and decoded on the terminal, 1 refused or not decodable there,\n"
-            "             2 usage, 3 link failure (no terminal, cable, timeout).\n");
+            "             2 usage, 3 link failure (no terminal, cable, timeout, no progress),\n"
+            "             130 / 143 stopped by SIGINT (Ctrl-C) / SIGTERM: within a second, the terminal\n"
+            "             told (ABORT) and keeping what it holds, so the same command resumes there.\n");
 }
 
 static int open_transport(send_ctx *c, cm_transport **t)
@@ -219,6 +223,24 @@ static void hello_table(const cm_link_hello *h, cm_limit_info *tab)
     }
 }
 
+/* what can bring a model under the terminal's limit `id`: only the tessellation's own limits
+   shrink with a coarser --tess; the others are the model's size (issue 11: the MAX_FILE_BYTES
+   refusal used to suggest a coarser --tess, which makes the file no smaller) */
+static const char *limit_hint(unsigned id)
+{
+    switch (id) {
+    case CM_LIMIT_MAX_TRIS:
+    case CM_LIMIT_MAX_TESS_POINTS:
+    case CM_LIMIT_MAX_EDGE_SAMPLES:
+        return "encode it again from the IGES with a coarser --tess, or use a larger board profile";
+    case CM_LIMIT_STACK_FN_MAX:
+    case CM_LIMIT_STACK_BUDGET:
+        return "the terminal's build is older or smaller than this model needs: use a larger board profile";
+    default:
+        return "the model itself is larger than this terminal holds: split it, or use a larger board profile";
+    }
+}
+
 /* would the terminal load this .cmz?  0 yes, else prints why */
 static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_link_hello *h, const cm_limit_info *tab)
 {
@@ -240,9 +262,8 @@ static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_li
         uint32_t need = cm_link_get32(b + 60 + 4 * i);
         if (need > tab[i].value) {
             fprintf(stderr,
-                    "cmz send: %s: refused before sending: the model needs %s=%u, terminal '%s' has %u "
-                    "(encode it again from the IGES with a coarser --tess, or use a larger board profile)\n",
-                    path, tab[i].name, (unsigned)need, h->name, (unsigned)tab[i].value);
+                    "cmz send: %s: refused before sending: the model needs %s=%u, terminal '%s' has %u (%s)\n",
+                    path, tab[i].name, (unsigned)need, h->name, (unsigned)tab[i].value, limit_hint(i));
             return -1;
         }
     }
@@ -317,6 +338,12 @@ static int report(const link_send_result *r, int rc, const char *name, uint32_t 
                    (unsigned long long)r->chunks_resent, r->reconnects, resumed, r->text);
         }
         return S_OK;
+    }
+    if (rc == LINK_SEND_STOPPED) {
+        if (!quiet)
+            fprintf(stderr, "cmz send: %s: stopped; the terminal keeps the %u bytes it holds (send again to resume)\n",
+                    name, (unsigned)r->held);
+        return S_SIGNAL + (int)interrupted;
     }
     fprintf(stderr, "cmz send: %s: %s\n", name, r->text);
     return rc > 0 ? S_INPUT : S_LINK;
@@ -420,6 +447,7 @@ int cmz_cmd_send(int argc, char **argv)
     o.progress_ctx = &c;
     o.log = log_cb;
     o.log_ctx = &c;
+    o.stop = &interrupted;
     link_send_result r;
     memset(&r, 0, sizeof r);
     cm_link_hello h;
@@ -427,7 +455,7 @@ int cmz_cmd_send(int argc, char **argv)
         fprintf(stderr, "cmz send: %s\n", r.text);
         link.t->close(link.t);
         free(data);
-        return S_LINK;
+        return interrupted ? S_SIGNAL + (int)interrupted : S_LINK;
     }
     if (!c.quiet)
         fprintf(stderr, "cmz send: terminal '%s' on %s: format %u.x-%u.%u, up to %u bytes per chunk\n", h.name,
@@ -488,9 +516,9 @@ int cmz_cmd_send(int argc, char **argv)
             break;
     }
     if (interrupted && rc == S_OK && stay)
-        rc = S_OK;
-    else if (interrupted)
-        rc = S_LINK;
+        rc = S_OK; /* --stay ends with Ctrl-C: that is how it is stopped */
+    else if (interrupted && rc < S_SIGNAL)
+        rc = S_SIGNAL + (int)interrupted;
     link.t->close(link.t);
     free(data);
     return rc;

@@ -82,7 +82,7 @@ term_pid=$!
 pids+=($term_pid)
 if wait_for 30 '[ -s "$T/out/model.glb" ]' && wait_for 5 'grep -q "event=decoded" "$T/term.log"'; then
     if cmp -s "$T/out/model.cmz" "$T/as1_pe_203.cmz"; then
-        pass "over USB (FunctionFS gadget -> libusb): model.cmz identical, decoded into model.glb ($(stat -c %s "$T/out/model.glb") bytes)"
+        pass "over USB (FunctionFS gadget -> libusb): model.cmz identical, decoded into model.glb ($(stat -L -c %s "$T/out/model.glb") bytes)"
     else
         fail "over USB: model.cmz identical" "it differs"
     fi

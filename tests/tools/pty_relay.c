@@ -17,7 +17,7 @@
  *                             PRNG stream from --seed (default 1)
  *   --baud B                  pace each direction like an 8N1 line at B (10 bits a byte)
  *   --hangup-after N          once N bytes have gone A->B (and B's reader has
- *                             taken them, up to 3 s): unlink B's link and close
+ *                             taken them, up to 10 s): unlink B's link and close
  *                             B's master (B's users see a hang-up: EIO/POLLHUP);
  *                             after --reopen-ms M (default 1000; -1: never) a
  *                             fresh pty appears at the same link.  Bytes sent
@@ -357,7 +357,9 @@ int main(int argc, char **argv)
                 quiet_ticks++;
             else
                 quiet_ticks = 0;
-            if (quiet_ticks >= 3 || now - phase_at > 3000000000LL) {
+            /* 10 s: a reader on a machine busy with another build may take seconds to be scheduled,
+               and the bytes it has not taken would be lost to the unplug */
+            if (quiet_ticks >= 3 || now - phase_at > 10000000000LL) {
                 unplug(&b);
                 ba.len = ba.off = 0;
                 ab.len = ab.off = 0;
