@@ -244,14 +244,15 @@ check:
 
 CROSS_TARGETS := aarch64-linux-gnu- arm-linux-gnueabihf-
 
+# what both tiers start with: the unit tests of every profile, the workstation tests, the no-heap gate
+UNIT_SUITES = "unit-host:$(call bdir,host)/tests/unit" "unit-terminal:$(call bdir,terminal)/tests/unit" \
+	"unit-tiny:$(call bdir,tiny)/tests/unit" "host:$(call bdir,host)/tests/host" \
+	"gate:noheap:$(MAKE) --no-print-directory -s check-noheap"
+
 check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,terminal)/libcmdecoder.a \
 		$(LIMIT_TOOLS) $(STACK_CHECK)
 	$(Q)tests/tools/run_suites.sh \
-		"unit-host:$(call bdir,host)/tests/unit" \
-		"unit-terminal:$(call bdir,terminal)/tests/unit" \
-		"unit-tiny:$(call bdir,tiny)/tests/unit" \
-		"host:$(call bdir,host)/tests/host" \
-		"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
+		$(UNIT_SUITES) \
 		"gate:gates-reject-bad-code:tests/tools/gate_selftest.sh $(HOSTCC) nm $(STACK_CHECK) $(BUILD_ROOT)/gate-selftest" \
 		"gate:readme-tables:$(MAKE) --no-print-directory -s check-readme" \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
@@ -279,11 +280,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 .PHONY: test check-fuzz-replay-fast check-bundled-roundtrip
 test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,terminal)/libcmdecoder.a $(STACK_CHECK)
 	$(Q)tests/tools/run_suites.sh \
-		"unit-host:$(call bdir,host)/tests/unit" \
-		"unit-terminal:$(call bdir,terminal)/tests/unit" \
-		"unit-tiny:$(call bdir,tiny)/tests/unit" \
-		"host:$(call bdir,host)/tests/host" \
-		"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
+		$(UNIT_SUITES) \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
 		"gate:fuzz-replays:$(MAKE) --no-print-directory -s check-fuzz-replay-fast" \
 		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip" \

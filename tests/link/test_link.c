@@ -323,9 +323,15 @@ static void test_refused_in_stream(const uint8_t *data, uint32_t size, const cha
         "a model over the terminal's MAX_FACES is refused once its header is in, naming the limit: %s", r.text);
 }
 
-static void test_resume(const uint8_t *data, uint32_t size, const char *dir)
+/* a transfer of `first` cut by a terminal restart after a third of it, then a send of `second` to the
+   restarted terminal (64-byte chunks): the two sends' codes, the terminals' exits, the second's result */
+typedef struct cut_send {
+    int rc1, c1, rc2, c2;
+    link_send_result r;
+} cut_send;
+
+static void send_cut_then(const uint8_t *first, const uint8_t *second, uint32_t size, const char *dir, cut_send *cs)
 {
-    /* the terminal restarts after a third of the file; the new one resumes from its synced prefix */
     int sv[2];
     int pid = spawn_terminal(sv, dir, 0, 1, (int)(size / 3));
     static cm_fdlink fl;
@@ -336,23 +342,29 @@ static void test_resume(const uint8_t *data, uint32_t size, const char *dir)
     quiet_opts(&o);
     o.connect_timeout_ms = 1500;
     o.chunk = 64;
-    link_send_result r;
-    int rc1 = link_send_file(&l, data, size, "seed.cmz", &o, &r);
+    cs->rc1 = link_send_file(&l, first, size, "first.cmz", &o, &cs->r);
     close(sv[0]);
-    int c1 = wait_child(pid);
+    cs->c1 = wait_child(pid);
     pid = spawn_terminal(sv, dir, 0, 1, 0);
     cm_fd_open(&fl, sv[0], sv[0], "socket");
     cm_link_init(&l, &fl.t);
     o.connect_timeout_ms = 15000; /* the new terminal answers as soon as it runs: on a busy machine, later */
-    int rc2 = link_send_file(&l, data, size, "seed.cmz", &o, &r);
+    cs->rc2 = link_send_file(&l, second, size, "second.cmz", &o, &cs->r);
     close(sv[0]);
-    int c2 = wait_child(pid);
+    cs->c2 = wait_child(pid);
+}
+
+static void test_resume(const uint8_t *data, uint32_t size, const char *dir)
+{
+    /* the terminal restarts after a third of the file; the new one resumes from its synced prefix */
+    cut_send cs;
+    send_cut_then(data, data, size, dir, &cs);
     char path[600];
     snprintf(path, sizeof path, "%s/.incoming.cmz", dir);
-    tap(rc1 == -1 && c1 == 0 && rc2 == 0 && c2 == 0 && r.resumes == 1 && r.resume_offset > 0 &&
+    tap(cs.rc1 == -1 && cs.c1 == 0 && cs.rc2 == 0 && cs.c2 == 0 && cs.r.resumes == 1 && cs.r.resume_offset > 0 &&
             file_equals(path, data, size),
         "a terminal restarted after %u bytes: the next one resumes at byte %u, file identical", (unsigned)(size / 3),
-        (unsigned)r.resume_offset);
+        (unsigned)cs.r.resume_offset);
     unlink(path);
 }
 
@@ -366,34 +378,15 @@ static void test_resume_other_file(const uint8_t *data, uint32_t size, const cha
     other[44 + 7] ^= 0x01; /* the recommended chordal tolerance, in the header: a different model file */
     cm_link_put32(other + h - 4, cm_crc32(other, h - 4));
     cm_link_put32(other + size - 4, cm_crc32(other, size - 4));
-    int sv[2];
-    int pid = spawn_terminal(sv, dir, 0, 1, (int)(size / 3));
-    static cm_fdlink fl;
-    cm_fd_open(&fl, sv[0], sv[0], "socket");
-    static cm_link l;
-    cm_link_init(&l, &fl.t);
-    link_send_opts o;
-    quiet_opts(&o);
-    o.connect_timeout_ms = 1500;
-    o.chunk = 64;
-    link_send_result r;
-    int rc1 = link_send_file(&l, data, size, "first.cmz", &o, &r);
-    close(sv[0]);
-    int c1 = wait_child(pid);
-    pid = spawn_terminal(sv, dir, 0, 1, 0);
-    cm_fd_open(&fl, sv[0], sv[0], "socket");
-    cm_link_init(&l, &fl.t);
-    o.connect_timeout_ms = 15000; /* the new terminal answers as soon as it runs: on a busy machine, later */
-    int rc2 = link_send_file(&l, other, size, "second.cmz", &o, &r);
-    close(sv[0]);
-    int c2 = wait_child(pid);
+    cut_send cs;
+    send_cut_then(data, other, size, dir, &cs);
     char path[600];
     snprintf(path, sizeof path, "%s/.incoming.cmz", dir);
-    tap(rc1 == -1 && c1 == 0 && cm_crc32(data, size) == cm_crc32(other, size) && rc2 == 0 && c2 == 0 &&
-            r.resumes == 0 && r.resumed_from == 0 && file_equals(path, other, size),
+    tap(cs.rc1 == -1 && cs.c1 == 0 && cm_crc32(data, size) == cm_crc32(other, size) && cs.rc2 == 0 && cs.c2 == 0 &&
+            cs.r.resumes == 0 && cs.r.resumed_from == 0 && file_equals(path, other, size),
         "another file of the same size and CRC-32 after a cut: not resumed (from byte %u, %u resumes), the second "
         "file stored whole",
-        (unsigned)r.resumed_from, r.resumes);
+        (unsigned)cs.r.resumed_from, cs.r.resumes);
     unlink(path);
 }
 
