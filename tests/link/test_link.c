@@ -26,20 +26,8 @@
 #include "fake/cm_transport_fault.h"
 #include "fake/cm_transport_mem.h"
 #include "send/link_send.h"
+#include "link_harness.h"
 
-static int n_test, n_fail;
-__attribute__((format(printf, 2, 3))) static void tap(int ok, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    printf("%sok %d - ", ok ? "" : "not ", ++n_test);
-    vprintf(fmt, ap);
-    printf("\n");
-    va_end(ap);
-    fflush(stdout);
-    if (!ok)
-        n_fail++;
-}
 
 static uint8_t wire[1 << 20];
 static cm_link la, lb;
@@ -237,38 +225,7 @@ static int spawn_terminal(int *sv, const char *dir, double noise, uint64_t seed,
     return (int)pid;
 }
 
-static int wait_child(int pid)
-{
-    int status = 0;
-    if (waitpid(pid, &status, 0) != pid)
-        return -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
-}
 
-static int file_equals(const char *path, const uint8_t *data, size_t n)
-{
-    static uint8_t buf[1 << 20];
-    int fd = open(path, O_RDONLY);
-    if (fd < 0)
-        return 0;
-    ssize_t got = read(fd, buf, sizeof buf);
-    close(fd);
-    return got == (ssize_t)n && memcmp(buf, data, n) == 0;
-}
-
-static void log_stderr(void *ctx, const char *line)
-{
-    (void)ctx;
-    fprintf(stderr, "# %lld %s\n", (long long)cm_link_now_ms() % 100000, line);
-}
-
-static void quiet_opts(link_send_opts *o)
-{
-    link_send_defaults(o);
-    o->connect_timeout_ms = 15000; /* a loaded CI machine under qemu is slow */
-    if (getenv("TEST_LINK_VERBOSE"))
-        o->log = log_stderr;
-}
 
 static void test_transfer(const uint8_t *data, uint32_t size, const char *dir, double noise, const char *what)
 {
@@ -282,7 +239,7 @@ static void test_transfer(const uint8_t *data, uint32_t size, const char *dir, d
     static cm_link l;
     cm_link_init(&l, &fault.t);
     link_send_opts o;
-    quiet_opts(&o);
+    test_send_opts(&o);
     link_send_result r;
     int rc = link_send_file(&l, data, size, "seed.cmz", &o, &r);
     close(sv[0]);
@@ -311,7 +268,7 @@ static void test_refused_in_stream(const uint8_t *data, uint32_t size, const cha
     static cm_link l;
     cm_link_init(&l, &fl.t);
     link_send_opts o;
-    quiet_opts(&o);
+    test_send_opts(&o);
     link_send_result r;
     int rc = link_send_file(&l, bad, size, "too-big.cmz", &o, &r);
     close(sv[0]);
@@ -339,7 +296,7 @@ static void send_cut_then(const uint8_t *first, const uint8_t *second, uint32_t 
     static cm_link l;
     cm_link_init(&l, &fl.t);
     link_send_opts o;
-    quiet_opts(&o);
+    test_send_opts(&o);
     o.connect_timeout_ms = 1500;
     o.chunk = 64;
     cs->rc1 = link_send_file(&l, first, size, "first.cmz", &o, &cs->r);

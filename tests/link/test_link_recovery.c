@@ -39,20 +39,8 @@
 #include "cm_transport_fd.h"
 #include "fake/cm_transport_fault.h"
 #include "send/link_send.h"
+#include "link_harness.h"
 
-static int n_test, n_fail;
-__attribute__((format(printf, 2, 3))) static void tap(int ok, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    printf("%sok %d - ", ok ? "" : "not ", ++n_test);
-    vprintf(fmt, ap);
-    printf("\n");
-    va_end(ap);
-    fflush(stdout);
-    if (!ok)
-        n_fail++;
-}
 
 static double cpu_s(void)
 {
@@ -358,38 +346,11 @@ static int spawn(int *sv, int (*child)(int, const char *, double, uint64_t), con
     return (int)pid;
 }
 
-static int wait_child(int pid)
-{
-    int status = 0;
-    if (waitpid(pid, &status, 0) != pid)
-        return -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
-}
-
-static int file_equals(const char *path, const uint8_t *data, size_t n)
-{
-    static uint8_t buf[1 << 20];
-    int fd = open(path, O_RDONLY);
-    if (fd < 0)
-        return 0;
-    ssize_t got = read(fd, buf, sizeof buf);
-    close(fd);
-    return got == (ssize_t)n && memcmp(buf, data, n) == 0;
-}
-
-static void log_stderr(void *ctx, const char *line)
-{
-    (void)ctx;
-    fprintf(stderr, "# %lld %s\n", (long long)cm_link_now_ms() % 100000, line);
-}
 
 static void opts(link_send_opts *o)
 {
-    link_send_defaults(o);
-    o->connect_timeout_ms = 15000;
+    test_send_opts(o);
     o->decode_timeout_ms = 20000; /* a test terminal that never decodes must not hold the suite 10 min */
-    if (getenv("TEST_LINK_VERBOSE"))
-        o->log = log_stderr;
 }
 
 static volatile sig_atomic_t stop_flag;
