@@ -68,4 +68,21 @@ static void test_send_opts(link_send_opts *o)
         o->log = log_stderr;
 }
 
+/* the .cmz in a decode fuzz seed (one chunking byte, then the file): NULL after a message if `path`
+   is not one */
+static const uint8_t *read_seed(const char *prog, const char *path, uint32_t *size)
+{
+    static uint8_t seed[1 << 20];
+    int fd = open(path, O_RDONLY);
+    ssize_t n = fd >= 0 ? read(fd, seed, sizeof seed) : -1;
+    if (fd >= 0)
+        close(fd);
+    if (n < 65 || seed[1] != 0x89 || seed[2] != 'C') {
+        fprintf(stderr, "%s: %s is not a decode seed (chunking byte + .cmz)\n", prog, path);
+        return NULL;
+    }
+    *size = (uint32_t)(n - 1);
+    return seed + 1;
+}
+
 #endif /* CM_LINK_HARNESS_H */

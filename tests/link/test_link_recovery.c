@@ -513,17 +513,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: test_link_recovery SEED.cmzf\n");
         return 2;
     }
-    static uint8_t seed[1 << 20];
-    int fd = open(argv[1], O_RDONLY);
-    ssize_t n = fd >= 0 ? read(fd, seed, sizeof seed) : -1;
-    if (fd >= 0)
-        close(fd);
-    if (n < 65 || seed[1] != 0x89 || seed[2] != 'C') {
-        fprintf(stderr, "test_link_recovery: %s is not a decode seed (chunking byte + .cmz)\n", argv[1]);
+    uint32_t size;
+    const uint8_t *data = read_seed("test_link_recovery", argv[1], &size);
+    if (!data)
         return 2;
-    }
-    const uint8_t *data = seed + 1;
-    uint32_t size = (uint32_t)(n - 1);
     char dir[] = "/tmp/cm-test-link-recovery-XXXXXX";
     if (!mkdtemp(dir))
         return 2;
