@@ -6,6 +6,7 @@
 #include <stdarg.h>
 #include <fcntl.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -284,9 +285,15 @@ static int on_offer(cm_link_term *t, const cm_link_frame *f)
     if (!same) {
         struct statvfs v;
         uint64_t need = store_need(t, o.size);
-        if (statvfs(t->dir, &v) == 0 && (uint64_t)v.f_bavail * v.f_frsize < need) {
+        uint64_t free_bytes = statvfs(t->dir, &v) == 0 ? (uint64_t)v.f_bavail * v.f_frsize : UINT64_MAX;
+        /* fault injection, like CM_TERM_KILL_AT (cm_kill_point.h): CM_TERM_FREE_BYTES=N makes the
+           directory look N bytes free, so the tests reach this refusal without a full disk */
+        const char *fake = getenv("CM_TERM_FREE_BYTES");
+        if (fake && *fake)
+            free_bytes = strtoull(fake, NULL, 10);
+        if (free_bytes < need) {
             textf(text, sizeof text, "no space: %s has %llu bytes free, the model needs up to %llu (%u for the .cmz, "
-                  "the rest for the %s it decodes to)", t->dir, (unsigned long long)v.f_bavail * v.f_frsize,
+                  "the rest for the %s it decodes to)", t->dir, (unsigned long long)free_bytes,
                   (unsigned long long)need, (unsigned)o.size, t->writes_stl ? "GLB and STL" : "GLB");
             refuse(t, f->seq, CM_E_IO, text);
             return CM_TERM_FAILED;

@@ -117,6 +117,7 @@ static void usage(FILE *f)
             "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
             "  -q                     only warnings and errors\n"
             "environment: CM_TERM_KILL_AT=STEP  SIGKILL at that step of storing a model (tests)\n"
+            "             CM_TERM_FREE_BYTES=N  the output directory looks N bytes free at an offer (tests)\n"
             "GPIO SPEC: CHIP:LINE, CHIP a name (gpiochip0), path or label, LINE a name or offset;\n"
             "           a leading '!' makes the line active-low.\n"
             "\n"

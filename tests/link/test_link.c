@@ -347,6 +347,49 @@ static void test_resume_other_file(const uint8_t *data, uint32_t size, const cha
     unlink(path);
 }
 
+/* issue 11: the free-space check at OFFER counted the .cmz twice and not the GLB it decodes to (about
+   30 times its size), so a good model on a nearly full disk ended as rejected.cmz.  The directory is
+   made to look 100 kB free (CM_TERM_FREE_BYTES): enough for the old check (2 x 7411 + 64 KiB), not
+   for the GLB.  And an empty offer is called invalid, not "needs MAX_FILE_BYTES=0". */
+static void test_offer_refusals(const uint8_t *data, uint32_t size, const char *dir)
+{
+    setenv("CM_TERM_FREE_BYTES", "100000", 1);
+    int sv[2];
+    int pid = spawn_terminal(sv, dir, 0, 1, 0);
+    unsetenv("CM_TERM_FREE_BYTES");
+    static cm_fdlink fl;
+    cm_fd_open(&fl, sv[0], sv[0], "socket");
+    static cm_link l;
+    cm_link_init(&l, &fl.t);
+    link_send_opts o;
+    test_send_opts(&o);
+    link_send_result r;
+    int rc = link_send_file(&l, data, size, "full-disk.cmz", &o, &r);
+    close(sv[0]);
+    int c = wait_child(pid);
+    tap(rc == 1 && c == 10 && strstr(r.text, "no space") && strstr(r.text, "GLB"),
+        "a disk with room for the .cmz but not its GLB: refused at the offer, saying so: %s", r.text);
+    /* an empty offer, straight to a terminal */
+    pid = spawn_terminal(sv, dir, 0, 1, 0);
+    cm_fd_open(&fl, sv[0], sv[0], "socket");
+    cm_link_init(&l, &fl.t);
+    uint8_t p[CM_LINK_MAX_PAYLOAD];
+    cm_link_offer of = {0, 0, 256, 0, "empty.cmz"};
+    cm_link_frame f;
+    int got = 0;
+    char text[CM_LINK_MAX_TEXT + 1] = "";
+    int code = 0;
+    for (int i = 0; i < 20 && !got; i++) {
+        (void)cm_link_send(&l, CM_LINK_OFFER, -1, p, cm_link_offer_pack(&of, p), 1000);
+        while (!got && cm_link_recv(&l, &f, 500) == 1)
+            got = f.type == CM_LINK_REFUSE && cm_link_text_unpack(&f, 0, NULL, &code, text, sizeof text);
+    }
+    close(sv[0]);
+    c = wait_child(pid);
+    tap(got && code == CM_E_PROTOCOL && strstr(text, "size 0") && !strstr(text, "MAX_FILE_BYTES"),
+        "an empty offer is refused as invalid, not as over MAX_FILE_BYTES: %s (code %d)", text, code);
+}
+
 /* --write-seeds: what a terminal's cable delivers for a whole transfer of data (SYNC, OFFER, DATA
    in 256-byte chunks, END), clean, with 1 % noise, and cut in the middle: seeds for fuzz_link */
 static int write_seeds(const uint8_t *data, uint32_t size, const char *dir)
@@ -417,6 +460,7 @@ int main(int argc, char **argv)
     test_refused_in_stream(data, size, dir);
     test_resume(data, size, dir);
     test_resume_other_file(data, size, dir);
+    test_offer_refusals(data, size, dir);
     char cmd[700];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     if (system(cmd) != 0)
