@@ -253,14 +253,10 @@ static void test_transfer(const uint8_t *data, uint32_t size, const char *dir, d
     unlink(path);
 }
 
-static void test_refused_in_stream(const uint8_t *data, uint32_t size, const char *dir)
+/* one send over a clean socket to a fresh terminal in dir: the sender's code; *child, the terminal's */
+static int send_once(const uint8_t *data, uint32_t size, const char *name, const char *dir, link_send_result *r,
+                     int *child)
 {
-    /* the header says the model needs one face more than this build has; CRC fixed up */
-    static uint8_t bad[1 << 20];
-    memcpy(bad, data, size);
-    uint32_t h = cm_link_get32(bad + 8);
-    cm_link_put32(bad + 60 + 4 * CM_LIMIT_MAX_FACES, CM_MAX_FACES + 1u);
-    cm_link_put32(bad + h - 4, cm_crc32(bad, h - 4));
     int sv[2];
     int pid = spawn_terminal(sv, dir, 0, 1, 0);
     static cm_fdlink fl;
@@ -269,10 +265,23 @@ static void test_refused_in_stream(const uint8_t *data, uint32_t size, const cha
     cm_link_init(&l, &fl.t);
     link_send_opts o;
     test_send_opts(&o);
-    link_send_result r;
-    int rc = link_send_file(&l, bad, size, "too-big.cmz", &o, &r);
+    int rc = link_send_file(&l, data, size, name, &o, r);
     close(sv[0]);
-    int crc = wait_child(pid);
+    *child = wait_child(pid);
+    return rc;
+}
+
+static void test_refused_in_stream(const uint8_t *data, uint32_t size, const char *dir)
+{
+    /* the header says the model needs one face more than this build has; CRC fixed up */
+    static uint8_t bad[1 << 20];
+    memcpy(bad, data, size);
+    uint32_t h = cm_link_get32(bad + 8);
+    cm_link_put32(bad + 60 + 4 * CM_LIMIT_MAX_FACES, CM_MAX_FACES + 1u);
+    cm_link_put32(bad + h - 4, cm_crc32(bad, h - 4));
+    link_send_result r;
+    int crc;
+    int rc = send_once(bad, size, "too-big.cmz", dir, &r, &crc);
     struct stat s;
     char path[600];
     snprintf(path, sizeof path, "%s/.incoming.part", dir);
@@ -353,24 +362,18 @@ static void test_resume_other_file(const uint8_t *data, uint32_t size, const cha
    for the GLB.  And an empty offer is called invalid, not "needs MAX_FILE_BYTES=0". */
 static void test_offer_refusals(const uint8_t *data, uint32_t size, const char *dir)
 {
-    setenv("CM_TERM_FREE_BYTES", "100000", 1);
-    int sv[2];
-    int pid = spawn_terminal(sv, dir, 0, 1, 0);
-    unsetenv("CM_TERM_FREE_BYTES");
-    static cm_fdlink fl;
-    cm_fd_open(&fl, sv[0], sv[0], "socket");
-    static cm_link l;
-    cm_link_init(&l, &fl.t);
-    link_send_opts o;
-    test_send_opts(&o);
+    setenv("CM_TERM_FREE_BYTES", "100000", 1); /* read by the terminal child at the offer */
     link_send_result r;
-    int rc = link_send_file(&l, data, size, "full-disk.cmz", &o, &r);
-    close(sv[0]);
-    int c = wait_child(pid);
+    int c;
+    int rc = send_once(data, size, "full-disk.cmz", dir, &r, &c);
+    unsetenv("CM_TERM_FREE_BYTES");
     tap(rc == 1 && c == 10 && strstr(r.text, "no space") && strstr(r.text, "GLB"),
         "a disk with room for the .cmz but not its GLB: refused at the offer, saying so: %s", r.text);
     /* an empty offer, straight to a terminal */
-    pid = spawn_terminal(sv, dir, 0, 1, 0);
+    int sv[2];
+    int pid = spawn_terminal(sv, dir, 0, 1, 0);
+    static cm_fdlink fl;
+    static cm_link l;
     cm_fd_open(&fl, sv[0], sv[0], "socket");
     cm_link_init(&l, &fl.t);
     uint8_t p[CM_LINK_MAX_PAYLOAD];
