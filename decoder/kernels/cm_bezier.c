@@ -108,8 +108,7 @@ cm_err cm_bez_split(const cm_vec3 *P, int p, double t, cm_vec3 *left, cm_vec3 *r
     return CM_OK;
 }
 
-/* binomial coefficient C(n,k) for n <= 2*CM_HARD_MAX_DEGREE: exact in double */
-static double binomial(int n, int k)
+double cm_binomial(int n, int k)
 {
     if (k < 0 || k > n)
         return 0.0;
@@ -119,20 +118,50 @@ static double binomial(int n, int k)
     return r;
 }
 
-cm_err cm_bez_elevate(const cm_vec3 *P, int p, int t, cm_vec3 *Q, cm_status *st)
+static cm_err elevate_args(int p, int t, cm_status *st, const char *where)
 {
     if (p < 1 || t < 0)
-        return cm_fail(st, CM_E_RANGE, __func__);
+        return cm_fail(st, CM_E_RANGE, where);
     if (p + t > CM_MAX_DEGREE)
-        return cm_fail_limit(st, CM_LIMIT_MAX_DEGREE, (uint64_t)(p + t), CM_MAX_DEGREE, __func__);
+        return cm_fail_limit(st, CM_LIMIT_MAX_DEGREE, (uint64_t)(p + t), CM_MAX_DEGREE, where);
+    return CM_OK;
+}
+
+cm_err cm_bez_elevate_h(const cm_hpt *P, int p, int t, cm_hpt *Q, cm_status *st)
+{
+    cm_err e = elevate_args(p, t, st, __func__);
+    if (e != CM_OK)
+        return e;
     for (int i = 0; i <= p + t; i++) {
         int j0 = i - t > 0 ? i - t : 0;
         int j1 = i < p ? i : p;
-        double denom = binomial(p + t, i);
-        cm_vec3 acc = cm_v3(0, 0, 0);
-        for (int j = j0; j <= j1; j++)
-            acc = cm_axpy(acc, binomial(p, j) * binomial(t, i - j) / denom, P[j]);
+        double denom = cm_binomial(p + t, i);
+        cm_hpt acc = {0, 0, 0, 0};
+        for (int j = j0; j <= j1; j++) {
+            double c = cm_binomial(p, j) * cm_binomial(t, i - j) / denom;
+            acc.x = acc.x + c * P[j].x;
+            acc.y = acc.y + c * P[j].y;
+            acc.z = acc.z + c * P[j].z;
+            acc.w = acc.w + c * P[j].w;
+        }
         Q[i] = acc;
     }
+    Q[0] = P[0];
+    Q[p + t] = P[p];
+    return CM_OK;
+}
+
+cm_err cm_bez_elevate(const cm_vec3 *P, int p, int t, cm_vec3 *Q, cm_status *st)
+{
+    cm_err e = elevate_args(p, t, st, __func__);
+    if (e != CM_OK)
+        return e;
+    cm_hpt H[CM_MAX_ORDER], E[CM_MAX_ORDER];
+    for (int i = 0; i <= p; i++)
+        H[i] = (cm_hpt){P[i].x, P[i].y, P[i].z, 1.0};
+    if ((e = cm_bez_elevate_h(H, p, t, E, st)) != CM_OK)
+        return e;
+    for (int i = 0; i <= p + t; i++)
+        Q[i] = cm_v3(E[i].x, E[i].y, E[i].z);
     return CM_OK;
 }

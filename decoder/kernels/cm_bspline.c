@@ -9,11 +9,6 @@
 
 #include "cm/cm_limits_info.h"
 
-/* homogeneous point (w*P, w) for rational evaluation and knot insertion */
-typedef struct hpt {
-    double x, y, z, w;
-} hpt;
-
 /* binomial coefficients up to CM_MAX_DERS (the rational quotient rule) */
 static const double binom[CM_MAX_DERS + 1][CM_MAX_DERS + 1] = {{1, 0, 0}, {1, 1, 0}, {1, 2, 1}};
 _Static_assert(CM_MAX_DERS == 2, "binom[] table is written for CM_MAX_DERS == 2");
@@ -267,8 +262,8 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
                     cm_status *st)
 {
     double Nu[CM_MAX_DERS + 1][CM_MAX_ORDER], Nv[CM_MAX_DERS + 1][CM_MAX_ORDER];
-    hpt temp[CM_MAX_ORDER];
-    hpt Aw[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+    cm_hpt temp[CM_MAX_ORDER];
+    cm_hpt Aw[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
     int p = s->p, q = s->q;
     cm_err e;
     if ((e = check_degree(p, st, __func__)) != CM_OK || (e = check_degree(q, st, __func__)) != CM_OK)
@@ -298,7 +293,7 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
     /* A3.6: contract u first into temp[s], then v; fixed summation order */
     for (int k = 0; k <= nd; k++) {
         for (int sidx = 0; sidx <= q; sidx++) {
-            hpt t = {0, 0, 0, 0};
+            cm_hpt t = {0, 0, 0, 0};
             for (int r = 0; r <= p; r++) {
                 long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
                 double wi = s->w ? s->w[idx] : 1.0;
@@ -311,7 +306,7 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
             temp[sidx] = t;
         }
         for (int l = 0; l <= nd - k; l++) {
-            hpt a = {0, 0, 0, 0};
+            cm_hpt a = {0, 0, 0, 0};
             for (int sidx = 0; sidx <= q; sidx++) {
                 double b = Nv[l][sidx];
                 a.x += b * temp[sidx].x;
@@ -347,6 +342,28 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
     return CM_OK;
 }
 
+void cm_knot_insert_steps(const double *knots, int p, int k, int s, int r, double u, cm_hpt *R, cm_hpt *out)
+{
+    const double *U = knots;
+    int first = k - p + 1; /* out[0] is Q[first] */
+    int L = k - p;
+    for (int j = 1; j <= r; j++) {
+        L = k - p + j;
+        for (int i = 0; i <= p - j - s; i++) {
+            double alpha = (u - U[L + i]) / (U[i + k + 1] - U[L + i]);
+            double beta = 1.0 - alpha;
+            R[i].x = alpha * R[i + 1].x + beta * R[i].x;
+            R[i].y = alpha * R[i + 1].y + beta * R[i].y;
+            R[i].z = alpha * R[i + 1].z + beta * R[i].z;
+            R[i].w = alpha * R[i + 1].w + beta * R[i].w;
+        }
+        out[L - first] = R[0];
+        out[k + r - j - s - first] = R[p - j - s];
+    }
+    for (int i = L + 1; i < k - s; i++)
+        out[i - first] = R[i - L];
+}
+
 cm_err cm_curve_insert_knot(const cm_curve *c, double u, int r, double *knots_out, cm_vec3 *ctrl_out,
                             double *w_out, int cap, cm_status *st)
 {
@@ -377,10 +394,7 @@ cm_err cm_curve_insert_knot(const cm_curve *c, double u, int r, double *knots_ou
     for (int i = k + 1; i <= mp; i++)
         knots_out[i + r] = U[i];
 
-    hpt Rw[CM_MAX_ORDER];
-#define HW(i) (c->w ? c->w[(i)] : 1.0)
-#define TO_H(P, wt) ((hpt){(P).x * (wt), (P).y * (wt), (P).z * (wt), (wt)})
-    /* unchanged control points at both ends; written homogeneous->Euclidean below */
+    /* unchanged control points at both ends */
     for (int i = 0; i <= k - p; i++) {
         ctrl_out[i] = c->ctrl[i];
         if (c->w)
@@ -391,35 +405,20 @@ cm_err cm_curve_insert_knot(const cm_curve *c, double u, int r, double *knots_ou
         if (c->w)
             w_out[i + r] = c->w[i];
     }
-    for (int i = 0; i <= p - s; i++)
-        Rw[i] = TO_H(c->ctrl[k - p + i], HW(k - p + i));
-    int L = 0;
-    for (int j = 1; j <= r; j++) {
-        L = k - p + j;
-        for (int i = 0; i <= p - j - s; i++) {
-            double alpha = (u - U[L + i]) / (U[i + k + 1] - U[L + i]);
-            double beta = 1.0 - alpha;
-            Rw[i].x = alpha * Rw[i + 1].x + beta * Rw[i].x;
-            Rw[i].y = alpha * Rw[i + 1].y + beta * Rw[i].y;
-            Rw[i].z = alpha * Rw[i + 1].z + beta * Rw[i].z;
-            Rw[i].w = alpha * Rw[i + 1].w + beta * Rw[i].w;
-        }
-        hpt a = Rw[0], b = Rw[p - j - s];
-        ctrl_out[L] = cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
-        ctrl_out[k + r - j - s] = cm_v3(b.x / b.w, b.y / b.w, b.z / b.w);
-        if (c->w) {
-            w_out[L] = a.w;
-            w_out[k + r - j - s] = b.w;
-        }
+    /* the new ones, computed homogeneous, written back Euclidean */
+    cm_hpt Rw[CM_MAX_ORDER], Qw[2 * CM_MAX_ORDER];
+    for (int i = 0; i <= p - s; i++) {
+        cm_vec3 P = c->ctrl[k - p + i];
+        double wt = c->w ? c->w[k - p + i] : 1.0;
+        Rw[i] = (cm_hpt){P.x * wt, P.y * wt, P.z * wt, wt};
     }
-    for (int i = L + 1; i < k - s; i++) {
-        hpt a = Rw[i - L];
-        ctrl_out[i] = cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
+    cm_knot_insert_steps(U, p, k, s, r, u, Rw, Qw);
+    for (int i = 0; i < p - s + r - 1; i++) {
+        cm_hpt a = Qw[i];
+        ctrl_out[k - p + 1 + i] = cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
         if (c->w)
-            w_out[i] = a.w;
+            w_out[k - p + 1 + i] = a.w;
     }
-#undef HW
-#undef TO_H
     return CM_OK;
 }
 

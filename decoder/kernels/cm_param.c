@@ -4,10 +4,22 @@
 #include <stddef.h>
 
 #include "cm/cm_limits_info.h"
-#include "cm/cm_lsq.h"
+#include "cm/cm_lm.h"
 
 #define CM_PARAM_MAX_TIES 16   /* chords over a pole considered per loop */
 #define CM_PARAM_POLE_PROBES 8 /* evaluations round a side to tell a pole */
+
+/* the Levenberg-Marquardt schedule of cm_psurf_project_from (cm_lm.h); cm_patch_project's differs in
+   accept_equal, mu_max, step_min and max_steps */
+static const cm_lm2_opts project_lm = {
+    .max_steps = 60,
+    .mu0 = 1e-3,
+    .mu_factor = 10.0,
+    .mu_min = 1e-12,
+    .mu_max = 1e8,
+    .step_min = 1e-14,
+    .accept_equal = 1,
+};
 
 static double wrap(double x, double a, double b, int periodic)
 {
@@ -63,57 +75,26 @@ cm_err cm_psurf_init(cm_psurf *ps, const cm_surf *s, double tol, cm_status *st)
 
 cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double *u, double *v, double *dist, cm_status *st)
 {
-    double uu = *u, vv = *v;
-    if (!ps->closed_u)
-        uu = wrap(uu, ps->u0, ps->u1, 0);
-    if (!ps->closed_v)
-        vv = wrap(vv, ps->v0, ps->v1, 0);
+    /* periodic parameters stay unwrapped, the others are clamped (the start too) */
+    cm_lm2_box box = {ps->u0, ps->u1, ps->v0, ps->v1, ps->closed_u ? CM_LM_FREE : CM_LM_CLAMP,
+                      ps->closed_v ? CM_LM_FREE : CM_LM_CLAMP};
+    double uu = cm_lm_bound_apply(*u, box.bound_u, box.u0, box.u1);
+    double vv = cm_lm_bound_apply(*v, box.bound_v, box.v0, box.v1);
     cm_vec3 d[3];
     cm_err e = cm_psurf_eval(ps, uu, vv, d, st);
     if (e != CM_OK)
         return e;
-    double f = cm_norm2(cm_sub(d[0], P)), mu = 1e-3;
-    double du = ps->u1 - ps->u0, dv = ps->v1 - ps->v0;
-    for (int it = 0; it < 60; it++) {
-        cm_vec3 r = cm_sub(d[0], P);
-        double J[4] = {cm_dot(d[1], d[1]), cm_dot(d[1], d[2]), cm_dot(d[1], d[2]), cm_dot(d[2], d[2])};
-        double g[2] = {-cm_dot(d[1], r), -cm_dot(d[2], r)};
-        double tr = J[0] + J[3];
-        if (!(tr > 0))
-            break;
-        double A[4] = {J[0] + mu * tr, J[1], J[2], J[3] + mu * tr}, x[2];
-        if (cm_solve2(A, g, 0.0, x, NULL) != CM_OK)
-            break;
-        double un = uu + x[0], vn = vv + x[1];
-        if (!ps->closed_u)
-            un = wrap(un, ps->u0, ps->u1, 0);
-        if (!ps->closed_v)
-            vn = wrap(vn, ps->v0, ps->v1, 0);
-        double step = fabs(un - uu) / du + fabs(vn - vv) / dv;
-        cm_vec3 dn[3];
-        if ((e = cm_psurf_eval(ps, un, vn, dn, st)) != CM_OK)
+    cm_lm2 lm;
+    cm_lm2_start(&lm, &project_lm, &box, P, uu, vv, d);
+    while (cm_lm2_next(&lm)) {
+        if ((e = cm_psurf_eval(ps, lm.un, lm.vn, d, st)) != CM_OK)
             return e;
-        double fn = cm_norm2(cm_sub(dn[0], P));
-        if (fn <= f) {
-            uu = un;
-            vv = vn;
-            f = fn;
-            d[0] = dn[0];
-            d[1] = dn[1];
-            d[2] = dn[2];
-            mu = mu / 10.0 > 1e-12 ? mu / 10.0 : 1e-12;
-        } else {
-            mu *= 10.0;
-            if (mu > 1e8)
-                break;
-        }
-        if (step < 1e-14)
-            break;
+        cm_lm2_take(&lm, d);
     }
-    *u = uu;
-    *v = vv;
+    *u = lm.u;
+    *v = lm.v;
     if (dist)
-        *dist = sqrt(f);
+        *dist = sqrt(lm.f);
     return CM_OK;
 }
 

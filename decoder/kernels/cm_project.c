@@ -3,14 +3,24 @@
 
 #include <stddef.h>
 
-#include "cm/cm_lsq.h"
-
+#include "cm/cm_lm.h"
 
 #define CURVE_SAMPLES 33 /* K9: initial guess from 33 uniform samples */
 #define CURVE_ITERS 30
 #define GRID 17          /* K9: 17x17 initial grid */
-#define LM_ITERS 50
 #define STEP_REL 1e-12   /* stop when a step is below 1e-12 of the domain */
+
+/* K9's Levenberg-Marquardt schedule (cm_lm.h); cm_psurf_project_from's differs in accept_equal,
+   mu_max, step_min and max_steps */
+static const cm_lm2_opts patch_lm = {
+    .max_steps = 50,
+    .mu0 = 1e-3,
+    .mu_factor = 10.0,
+    .mu_min = 1e-12,
+    .mu_max = 1e6,
+    .step_min = STEP_REL,
+    .accept_equal = 0,
+};
 
 cm_patch cm_patch_of_surf(const cm_surf *s)
 {
@@ -146,47 +156,19 @@ cm_err cm_patch_project(const cm_patch *s, cm_vec3 P, double *u_out, double *v_o
     }
     if ((e = cm_patch_eval(s, u, v, d, st)) != CM_OK)
         return e;
-    double mu = 1e-3;
-    for (int it = 0; it < LM_ITERS; it++) {
-        cm_vec3 r = cm_sub(d[0], P);
-        double J[4] = {cm_dot(d[1], d[1]), cm_dot(d[1], d[2]), 0.0, cm_dot(d[2], d[2])};
-        J[2] = J[1];
-        double g[2] = {-cm_dot(d[1], r), -cm_dot(d[2], r)};
-        double tr = J[0] + J[3];
-        if (!(tr > 0.0))
-            break; /* both partials vanish: no descent direction */
-        double A[4] = {J[0] + mu * tr, J[1], J[2], J[3] + mu * tr};
-        double x[2];
-        if (cm_solve2(A, g, 0.0, x, NULL) != CM_OK)
-            break;
-        double un = clampd(u + x[0], s->u0, s->u1);
-        double vn = clampd(v + x[1], s->v0, s->v1);
-        double step = fabs(un - u) / du + fabs(vn - v) / dv;
-        cm_vec3 dn[3];
-        if ((e = cm_patch_eval(s, un, vn, dn, st)) != CM_OK)
+    cm_lm2_box box = {s->u0, s->u1, s->v0, s->v1, CM_LM_CLAMP_LOW, CM_LM_CLAMP_LOW};
+    cm_lm2 lm;
+    cm_lm2_start(&lm, &patch_lm, &box, P, u, v, d);
+    while (cm_lm2_next(&lm)) {
+        if ((e = cm_patch_eval(s, lm.un, lm.vn, d, st)) != CM_OK)
             return e;
-        double fn = cm_norm2(cm_sub(dn[0], P));
-        if (fn < f) {
-            u = un;
-            v = vn;
-            f = fn;
-            d[0] = dn[0];
-            d[1] = dn[1];
-            d[2] = dn[2];
-            mu = mu / 10.0 > 1e-12 ? mu / 10.0 : 1e-12;
-        } else {
-            mu *= 10.0;
-            if (mu > 1e6)
-                break;
-        }
-        if (step < STEP_REL)
-            break;
+        cm_lm2_take(&lm, d);
     }
     if (u_out)
-        *u_out = u;
+        *u_out = lm.u;
     if (v_out)
-        *v_out = v;
+        *v_out = lm.v;
     if (dist_out)
-        *dist_out = sqrt(f);
+        *dist_out = sqrt(lm.f);
     return CM_OK;
 }

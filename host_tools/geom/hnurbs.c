@@ -5,10 +5,12 @@
  * A8.1-style surfaces of revolution).
  *
  * Host code: allocates, uses sin/cos, has no size limit on control point
- * counts (the shared kernel's knot insertion stops at CM_MAX_EDGE_CTRL, so
- * insertion and refinement are done here, in homogeneous coordinates).
- * Degrees stay within CM_MAX_DEGREE because the shared evaluators refuse
- * anything higher.
+ * counts (the shared kernel's cm_curve_insert_knot stops at
+ * CM_MAX_EDGE_CTRL, so the curves are held here, in homogeneous
+ * coordinates, and the kernel's per-span steps do the arithmetic: knot
+ * insertion by cm_knot_insert_steps, degree elevation by cm_bez_elevate_h;
+ * knot refinement, A5.4, is only here).  Degrees stay within CM_MAX_DEGREE
+ * because the shared evaluators refuse anything higher.
  *
  * Conventions of every builder: inputs are validated first (CM_E_ARG,
  * CM_E_KNOTS, CM_E_DEGENERATE, ...); the result is built in a temporary and
@@ -24,6 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cm/cm_bezier.h"
 #include "cm/cm_limits_info.h"
 
 #define HN_PI 3.14159265358979323846
@@ -326,15 +329,11 @@ static double mirror_knot(double u, double t0, double t1)
 
 /* ---- homogeneous working curves: insertion, refinement, elevation ---- */
 
-typedef struct hpt4 {
-    double x, y, z, w;
-} hpt4;
-
 /* A curve in homogeneous form (w*P, w); polynomial curves carry w = 1. */
 typedef struct hwork {
     int p, n;
-    double *U; /* n + p + 1 */
-    hpt4 *P;   /* n */
+    double *U;  /* n + p + 1 */
+    cm_hpt *P;  /* n */
 } hwork;
 
 static void hw_free(hwork *h)
@@ -360,24 +359,12 @@ static cm_err hw_alloc(hwork *h, int p, int n, cm_status *st, const char *where)
     return CM_OK;
 }
 
-/* (1-alpha) a + alpha b, the one affine step of every insertion algorithm */
-static hpt4 h4_lerp(hpt4 a, hpt4 b, double alpha)
+/* (1-alpha) a + alpha b, the affine step of knot refinement */
+static cm_hpt h4_lerp(cm_hpt a, cm_hpt b, double alpha)
 {
     double beta = 1.0 - alpha;
-    hpt4 r = {beta * a.x + alpha * b.x, beta * a.y + alpha * b.y, beta * a.z + alpha * b.z,
-              beta * a.w + alpha * b.w};
-    return r;
-}
-
-static hpt4 h4_scale(hpt4 a, double s)
-{
-    hpt4 r = {a.x * s, a.y * s, a.z * s, a.w * s};
-    return r;
-}
-
-static hpt4 h4_add(hpt4 a, hpt4 b)
-{
-    hpt4 r = {a.x + b.x, a.y + b.y, a.z + b.z, a.w + b.w};
+    cm_hpt r = {beta * a.x + alpha * b.x, beta * a.y + alpha * b.y, beta * a.z + alpha * b.z,
+                beta * a.w + alpha * b.w};
     return r;
 }
 
@@ -389,7 +376,7 @@ static cm_err hw_from_curve(const hcurve *c, hwork *h, cm_status *st, const char
     memcpy(h->U, c->knots, (size_t)(c->n + c->p + 1) * sizeof *h->U);
     for (int i = 0; i < c->n; i++) {
         double w = c->w ? c->w[i] : 1.0;
-        hpt4 q = {c->ctrl[i].x * w, c->ctrl[i].y * w, c->ctrl[i].z * w, w};
+        cm_hpt q = {c->ctrl[i].x * w, c->ctrl[i].y * w, c->ctrl[i].z * w, w};
         h->P[i] = q;
     }
     return CM_OK;
@@ -407,7 +394,7 @@ static cm_err hw_to_curve(const hwork *h, int src_rational, int rational, hcurve
         return e;
     memcpy(out->knots, h->U, (size_t)(h->n + h->p + 1) * sizeof *h->U);
     for (int i = 0; i < h->n; i++) {
-        hpt4 q = h->P[i];
+        cm_hpt q = h->P[i];
         if (src_rational) {
             out->ctrl[i] = cm_v3(q.x / q.w, q.y / q.w, q.z / q.w);
             if (rational)
@@ -430,7 +417,7 @@ static int hw_span(const hwork *h, double u, int *s)
     return k;
 }
 
-/* A5.1: insert u (U[p] <= u < U[n]) r times, r + multiplicity <= p. */
+/* A5.1: insert u (U[p] <= u < U[n]) r times, r + multiplicity <= p (the kernel's steps, any count). */
 static cm_err hw_insert(hwork *h, double u, int r, cm_status *st, const char *where)
 {
     if (r <= 0)
@@ -438,7 +425,7 @@ static cm_err hw_insert(hwork *h, double u, int r, cm_status *st, const char *wh
     int p = h->p, n = h->n, s;
     int k = hw_span(h, u, &s);
     const double *U = h->U;
-    const hpt4 *P = h->P;
+    const cm_hpt *P = h->P;
     hwork q;
     cm_err e = hw_alloc(&q, p, n + r, st, where);
     if (e != CM_OK)
@@ -453,21 +440,10 @@ static cm_err hw_insert(hwork *h, double u, int r, cm_status *st, const char *wh
         q.P[i] = P[i];
     for (int i = k - s; i < n; i++)
         q.P[i + r] = P[i];
-    hpt4 R[CM_MAX_ORDER];
+    cm_hpt R[CM_MAX_ORDER];
     for (int i = 0; i <= p - s; i++)
         R[i] = P[k - p + i];
-    int L = k - p;
-    for (int j = 1; j <= r; j++) {
-        L = k - p + j;
-        for (int i = 0; i <= p - j - s; i++) {
-            double alpha = (u - U[L + i]) / (U[i + k + 1] - U[L + i]);
-            R[i] = h4_lerp(R[i], R[i + 1], alpha);
-        }
-        q.P[L] = R[0];
-        q.P[k + r - j - s] = R[p - j - s];
-    }
-    for (int i = L + 1; i < k - s; i++)
-        q.P[i] = R[i - L];
+    cm_knot_insert_steps(U, p, k, s, r, u, R, q.P + (k - p + 1));
     hw_free(h);
     *h = q;
     return CM_OK;
@@ -508,7 +484,7 @@ static void hw_mirror(hwork *h)
     for (int i = 0; i < m; i++)
         h->U[i] = -h->U[i];
     for (int i = 0, j = h->n - 1; i < j; i++, j--) {
-        hpt4 t = h->P[i];
+        cm_hpt t = h->P[i];
         h->P[i] = h->P[j];
         h->P[j] = t;
     }
@@ -536,7 +512,7 @@ static cm_err hw_refine(hwork *h, const double *X, int nx, cm_status *st, const 
         return CM_OK;
     int p = h->p, nl = h->n - 1, m = h->n + p, r = nx - 1;
     const double *U = h->U;
-    const hpt4 *P = h->P;
+    const cm_hpt *P = h->P;
     hwork q;
     if (h->n > HN_MAX_COUNT - nx)
         return cm_fail(st, CM_E_ARG, where);
@@ -544,7 +520,7 @@ static cm_err hw_refine(hwork *h, const double *X, int nx, cm_status *st, const 
     if (e != CM_OK)
         return e;
     double *Ub = q.U;
-    hpt4 *Q = q.P;
+    cm_hpt *Q = q.P;
     int a = cm_bspl_find_span(h->n, p, U, X[0]);
     int b = cm_bspl_find_span(h->n, p, U, X[r]) + 1;
     for (int j = 0; j <= a - p; j++)
@@ -582,33 +558,10 @@ static cm_err hw_refine(hwork *h, const double *X, int nx, cm_status *st, const 
     return CM_OK;
 }
 
-/* Binomial coefficient; exact in binary64 for the degrees used here (<= 2 CM_MAX_DEGREE). */
-static double binom(int n, int k)
-{
-    double r = 1.0;
-    for (int i = 1; i <= k; i++)
-        r = r * (double)(n - k + i) / (double)i;
-    return r;
-}
-
-/* Eq. 5.36: Bezier P[0..p] raised by t to Q[0..p+t]; the end points are copied unchanged. */
-static void bezier_elevate(const hpt4 *P, int p, int t, hpt4 *Q)
-{
-    for (int i = 0; i <= p + t; i++) {
-        hpt4 acc = {0, 0, 0, 0};
-        int j0 = i - t > 0 ? i - t : 0, j1 = i < p ? i : p;
-        double den = binom(p + t, i);
-        for (int j = j0; j <= j1; j++)
-            acc = h4_add(acc, h4_scale(P[j], binom(p, j) * binom(t, i - j) / den));
-        Q[i] = acc;
-    }
-    Q[0] = P[0];
-    Q[p + t] = P[p];
-}
-
 /*
  * Raise a clamped curve to degree new_p: refine every interior knot to
- * multiplicity p (Bezier decomposition), elevate each segment, reassemble
+ * multiplicity p (Bezier decomposition), elevate each segment (eq. 5.36,
+ * the kernel's cm_bez_elevate_h: end points copied exactly), reassemble
  * with multiplicity new_p at the breakpoints (new_p + 1 where the input had
  * a full-multiplicity knot, so a discontinuity stays one).  Shared end points
  * of neighbouring segments are bit-identical, so nothing is averaged.
@@ -651,14 +604,17 @@ static cm_err hw_elevate(hwork *h, int new_p, cm_status *st, const char *where)
     if ((e = hw_alloc(&q, new_p, (int)nout, st, where)) != CM_OK)
         return e;
     /* 3. elevate and reassemble */
-    hpt4 E[CM_MAX_ORDER];
+    cm_hpt E[CM_MAX_ORDER];
     int np = 0, nk = 0;
     prev = -1;
     for (int k = p; k < h->n; k++) {
         if (!(h->U[k] < h->U[k + 1]))
             continue;
         int shared = prev >= 0 && k - p == prev;
-        bezier_elevate(h->P + (k - p), p, t, E);
+        if ((e = cm_bez_elevate_h(h->P + (k - p), p, t, E, st)) != CM_OK) {
+            hw_free(&q);
+            return e;
+        }
         int mult = prev < 0 ? new_p + 1 : shared ? new_p : new_p + 1;
         for (int j = 0; j < mult; j++)
             q.U[nk++] = h->U[k];

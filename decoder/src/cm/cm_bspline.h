@@ -32,6 +32,11 @@ typedef struct cm_curve {
     const double *w;    /* n_ctrl weights > 0, or NULL */
 } cm_curve;
 
+/** A point in homogeneous form (w*P, w): what the rational algorithms interpolate. */
+typedef struct cm_hpt {
+    double x, y, z, w;
+} cm_hpt;
+
 typedef struct cm_surf {
     int p, q;           /* degrees in u and v */
     int nu, nv;         /* control points per direction */
@@ -110,6 +115,17 @@ CM_NODISCARD cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd,
  */
 CM_NODISCARD cm_err cm_curve_insert_knot(const cm_curve *c, double u, int r, double *knots_out,
                                          cm_vec3 *ctrl_out, double *w_out, int cap, cm_status *st);
+
+/**
+ * K3 the affine steps of knot insertion (A5.1) on homogeneous points, for
+ * cm_curve_insert_knot and the workstation's unbounded curves: u, to be
+ * inserted r times (r >= 1), lies in span k (knots[k] <= u < knots[k+1])
+ * with multiplicity s (r + s <= p).  R[0..p-s] holds the old points
+ * P[k-p .. k-s] (overwritten); the new points Q[k-p+1 .. k-s+r-1] are
+ * written to out[0 .. p-s+r-2].  The points before and after them are the
+ * old ones (Q[i] = P[i] for i <= k-p, Q[i+r] = P[i] for i >= k-s).
+ */
+void cm_knot_insert_steps(const double *knots, int p, int k, int s, int r, double u, cm_hpt *R, cm_hpt *out);
 
 /**
  * K5 clamped uniform knot vector of degree p for n_ctrl control points:

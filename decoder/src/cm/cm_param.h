@@ -40,7 +40,11 @@ CM_NODISCARD cm_err cm_psurf_init(cm_psurf *ps, const cm_surf *s, double tol, cm
 /** S, S_u, S_v at (u,v): periodic parameters wrapped, others clamped. */
 CM_NODISCARD cm_err cm_psurf_eval(const cm_psurf *ps, double u, double v, cm_vec3 d[3], cm_status *st);
 
-/** Closest point by Levenberg-Marquardt from (u,v) (<= 60 steps); periodic parameters stay unwrapped. */
+/**
+ * Closest point by Levenberg-Marquardt from (u,v) (cm_lm.h: mu from 1e-3, x0.1 on a step that does not
+ * raise the distance, down to 1e-12, x10 on any other, up to 1e8; at most 60 steps; stop when
+ * |du|+|dv| < 1e-14 of the domain).  Periodic parameters stay unwrapped, the others are clamped.
+ */
 CM_NODISCARD cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double *u, double *v, double *dist,
                                           cm_status *st);
 

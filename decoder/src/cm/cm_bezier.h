@@ -50,12 +50,19 @@ cm_curve cm_cubic_as_curve(const cm_cubic *c);
  */
 CM_NODISCARD cm_err cm_bez_split(const cm_vec3 *P, int p, double t, cm_vec3 *left, cm_vec3 *right, cm_status *st);
 
+/** Binomial coefficient C(n,k), 0 unless 0 <= k <= n; exact in binary64 for n <= 2*CM_HARD_MAX_DEGREE. */
+double cm_binomial(int n, int k);
+
 /**
  * Degree elevation of a degree-p Bézier by t (NURBS Book eq. 5.36):
- * Q_i = sum_j C(p,j) C(t,i-j) / C(p+t,i) P_j.
+ * Q_i = sum_j C(p,j) C(t,i-j) / C(p+t,i) P_j; the end points are copied
+ * (Q_0 = P_0, Q_p+t = P_p, bit for bit).
  * @param[out] Q  p+t+1 points
  * @return CM_E_LIMIT if p+t > CM_MAX_DEGREE
  */
 CM_NODISCARD cm_err cm_bez_elevate(const cm_vec3 *P, int p, int t, cm_vec3 *Q, cm_status *st);
+
+/** cm_bez_elevate on homogeneous points (a rational Bézier: every channel, w too, as above). */
+CM_NODISCARD cm_err cm_bez_elevate_h(const cm_hpt *P, int p, int t, cm_hpt *Q, cm_status *st);
 
 #endif /* CM_BEZIER_H */

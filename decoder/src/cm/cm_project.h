@@ -52,9 +52,10 @@ CM_NODISCARD cm_err cm_curve_project(const cm_curve *c, double t0, double t1, cm
 
 /**
  * K9 surface projection: best point of a 17x17 parameter grid, then
- * Levenberg-Marquardt on |S(u,v)-P|^2 (mu from 1e-3, x0.1 on an accepted
- * step down to 1e-12, x10 on a rejected one up to 1e6; at most 50 steps;
- * stop when |du|+|dv| < 1e-12 of the rectangle).  Plain Newton fails at
+ * Levenberg-Marquardt on |S(u,v)-P|^2 (cm_lm.h: mu from 1e-3, x0.1 on a
+ * step that lowers the distance, down to 1e-12, x10 on any other, up to
+ * 1e6; at most 50 steps; stop when |du|+|dv| < 1e-12 of the rectangle;
+ * proposals clamped to it).  Plain Newton fails at
  * collapsed patch corners, LM does not (spec K9).
  * @param[out] u, v, dist  parameters and distance (any may be NULL)
  */
