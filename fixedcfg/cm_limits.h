@@ -198,6 +198,20 @@
 #  define CM_STACK_BUDGET 65536
 #endif
 
+/* ---- memory of one decode ---- */
+
+/* Static storage of one decode, sizeof(cm_decode_state) (cm_decode_state.h):
+ * the decoder (which holds the whole .cmz file and the model's pools), the
+ * triangulator's workspace and the output mesh at this profile's limits.
+ * Unit: bytes.  A budget, not a limit of a model: it is not in
+ * cm_limits_list.h (whose order is the limit id on the wire) and no file
+ * needs it.  A _Static_assert fails the build when the state outgrows it, so
+ * the board's RAM changes only on purpose; `--limits` prints both.  Terminal:
+ * 48 MiB for 44.6 MiB on x86-64 and aarch64. */
+#ifndef CM_DECODE_STATE_BUDGET
+#  define CM_DECODE_STATE_BUDGET 50331648
+#endif
+
 /* ---- derived sizes: never set directly ---- */
 #define CM_MAX_ORDER (CM_MAX_DEGREE + 1)                      /* order = degree + 1 */
 #define CM_MAX_DERS 2                                         /* derivatives evaluated: S, S', S'' */

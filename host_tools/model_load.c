@@ -6,11 +6,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "cm_clock.h"
+
 static double now(void)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+    return cm_clock_s();
 }
 
 /* remember warning w as one about a face left out of the model */

@@ -28,12 +28,13 @@ $(foreach p,$(PROFILES),$(call bdir,$(p))/platform/cmz_terminal_main.o $(call bd
 	$(call bdir,$(p))/platform/cm_transport_ffs.o $(call bdir,$(p))/host_tools/send/send_cmd.o): \
 	CPPFLAGS += $(LINK_USB_CFLAGS)
 
-# cmz-terminal: the board's daemon (no heap on the decode path: linked with the abort wrappers)
+# cmz-terminal: the board's daemon (no heap on the decode path: linked with the abort wrappers,
+# platform/cm_noheap_wrap.c)
 define TERMINAL_RULES
 $(call bdir,$(1))/cmz-terminal: $(call bdir,$(1))/platform/cmz_terminal_main.o \
 		$(patsubst %.c,$(call bdir,$(1))/%.o,$(LINK_TERM_SRC) $(GPIO_SRC)) \
 		$(call bdir,$(1))/platform/cm_decode_file.o $(call bdir,$(1))/platform/cm_report.o \
-		$(call bdir,$(1))/tests/unit/noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
+		$(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(LINK_USB_LIBS) $$(GPIO_LIBS) -lm
 endef

@@ -113,9 +113,8 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
         }
         if (info.max_gap > sum->max_gap)
             sum->max_gap = info.max_gap;
-        sum->faces_plane += m->faces[f].method == CM_METHOD_PLANE;
-        sum->faces_gregory += m->faces[f].method == CM_METHOD_GREGORY;
-        sum->faces_keep += m->faces[f].method == CM_METHOD_KEEP;
+        if (m->faces[f].method < CM_METHOD_COUNT)
+            sum->faces_by_method[m->faces[f].method]++;
     }
     sum->faces = m->nfaces;
     sum->triangles = mesh->nindex / 3;

@@ -12,6 +12,7 @@
 #define CM_DECODE_FILE_H
 
 #include "cm/cm_decode.h"
+#include "cm/cm_decode_state.h"
 #include "cm/cm_out.h"
 #include "cm/cm_tessellate.h"
 
@@ -20,7 +21,7 @@
 
 typedef struct cm_decode_summary {
     uint32_t faces, triangles, vertices;       /* faces: of the model; triangles, vertices: of the mesh */
-    uint32_t faces_plane, faces_gregory, faces_keep; /* faces in the mesh, by method */
+    uint32_t faces_by_method[CM_METHOD_COUNT]; /* faces in the mesh, by method number */
     uint32_t faces_left_out;                   /* faces whose tessellation failed: not in the mesh */
     cm_status left_out[CM_DECODE_LEFT_OUT_LIST]; /* why, for the first of them: code, face, byte offset */
     double tess_tol;
@@ -84,7 +85,7 @@ CM_NODISCARD cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int
 /**
  * How large the GLB (or STL) that a .cmz of cmz_bytes decodes to on this build can be, for a
  * free-space check before the file has arrived (nothing but its size is known then): the smaller of
- *  - what this build's mesh holds (cmz-terminal's arrays): CM_MAX_TRIS triangles, CM_MAX_TRIS +
+ *  - what this build's mesh holds (cm_decode_state's arrays): CM_MAX_TRIS triangles, CM_MAX_TRIS +
  *    2 CM_MAX_FACES vertices of 24 bytes, 12 bytes of indices a triangle and one primitive of
  *    CM_OUT_GLB_FACE_BYTES JSON per face (STL: 50 bytes a triangle); a true bound, 32 MB for the
  *    terminal profile, too much to ask of every small model;
@@ -97,7 +98,7 @@ CM_NODISCARD cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int
  */
 static inline uint64_t cm_out_bytes_bound(cm_out_format fmt, uint64_t cmz_bytes)
 {
-    uint64_t tris = CM_MAX_TRIS, verts = (uint64_t)CM_MAX_TRIS + 2u * (uint64_t)CM_MAX_FACES;
+    uint64_t tris = CM_MAX_TRIS, verts = CM_DECODE_MESH_VERTS;
     uint64_t cap = fmt == CM_OUT_STL ? 84u + 50u * tris
                                      : CM_OUT_GLB_FIXED_BYTES + 24u * verts + 12u * tris +
                                            (uint64_t)CM_OUT_GLB_FACE_BYTES * CM_MAX_FACES;

@@ -3,19 +3,17 @@
 #include "cm_link.h"
 
 #include <string.h>
-#include <time.h>
 
-#include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_format.h"
+#include "cm_clock.h"
 
 #define MAGIC0 0xC5u
 #define MAGIC1 0x4Du
 
 int64_t cm_link_now_ms(void)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
+    return cm_clock_ms();
 }
 
 void cm_link_init(cm_link *l, cm_transport *t)
@@ -25,7 +23,7 @@ void cm_link_init(cm_link *l, cm_transport *t)
     l->rx_off = 0;
     l->cand = l->stale_to = l->nest_from = 0;
     l->rxcrc[0] = 0;
-    l->last_rx_ms = cm_link_now_ms();
+    l->last_rx_ms = cm_clock_ms();
 }
 
 void cm_link_set_rate(cm_link *l, unsigned bytes_per_s)
@@ -233,7 +231,7 @@ static bool waiting(const cm_link *l)
 
 int cm_link_recv(cm_link *l, cm_link_frame *f, int timeout_ms)
 {
-    int64_t now = cm_link_now_ms();
+    int64_t now = cm_clock_ms();
     int64_t deadline = now + (timeout_ms > 0 ? timeout_ms : 0);
     uint64_t damaged = l->stats.bad_crc + l->stats.bad_header + l->stats.stalled;
     for (;;) {
@@ -254,7 +252,7 @@ int cm_link_recv(cm_link *l, cm_link_frame *f, int timeout_ms)
             l->rx_off += l->start;
             l->start = l->end = 0;
         }
-        now = cm_link_now_ms();
+        now = cm_clock_ms();
         int64_t left = deadline - now;
         bool cand = waiting(l);
         int64_t give_up = l->cand_deadline < l->last_rx_ms + CM_LINK_PARTIAL_GAP_MS ? l->cand_deadline
@@ -266,7 +264,7 @@ int cm_link_recv(cm_link *l, cm_link_frame *f, int timeout_ms)
         long n = l->t->read(l->t, l->rx + l->end, sizeof l->rx - l->end, (int)left);
         if (n < 0)
             return (int)n;
-        now = cm_link_now_ms();
+        now = cm_clock_ms();
         if (n == 0) {
             /* nothing more came (the kernel's queue is empty, so a slow reader is not mistaken for a
                stalled sender): give the partial frame up and resynchronise past its magic */
@@ -507,11 +505,4 @@ bool cm_link_text_unpack(const cm_link_frame *f, int has_stage, int *stage, int 
     }
     text[n] = '\0';
     return true;
-}
-
-const char *cm_link_type_name(int type)
-{
-    static const char *const names[] = {"?",    "SYNC", "HELLO", "OFFER", "ACCEPT",  "REFUSE",
-                                        "DATA", "ACK",  "END",   "DONE",  "REQUEST", "ABORT", "HELLO_PART"};
-    return type > 0 && type < (int)(sizeof names / sizeof names[0]) ? names[type] : "?";
 }

@@ -104,7 +104,7 @@ typedef struct cm_link {
     cm_link_stats stats;
 } cm_link;
 
-/** Milliseconds of CLOCK_MONOTONIC. */
+/** Milliseconds of CLOCK_MONOTONIC: cm_clock_ms() (cm_clock.h), for the link's users outside platform/. */
 int64_t cm_link_now_ms(void);
 
 /** Bind a link to a transport (also after a reopen; unread bytes are dropped, the rate is kept). */
@@ -216,8 +216,5 @@ static inline uint64_t cm_link_get64(const uint8_t *p)
 {
     return (uint64_t)cm_link_get32(p) | (uint64_t)cm_link_get32(p + 4) << 32;
 }
-
-/** Name of a frame type for logs ("DATA"), "?" if unknown. */
-const char *cm_link_type_name(int type);
 
 #endif /* CM_LINK_H */

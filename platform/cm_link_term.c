@@ -12,7 +12,8 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
-#include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
+#include "cm_clock.h"
 #include "cm_decode_file.h"
 #include "cm_report.h"
 
@@ -98,7 +99,7 @@ static void drop_transfer(cm_link_term *t)
 /* make the synced prefix durable: data first, then the meta that vouches for it */
 static void sync_prefix(cm_link_term *t, bool force)
 {
-    int64_t now = cm_link_now_ms();
+    int64_t now = cm_clock_ms();
     if (!force && t->prefix - t->synced < SYNC_EVERY_BYTES && now - t->last_sync_ms < SYNC_EVERY_MS)
         return;
     if (t->prefix == t->synced && !force)
@@ -151,7 +152,7 @@ static void send_ack(cm_link_term *t, int seq)
     cm_link_put32(p + 4, (uint32_t)t->held);
     cm_link_put32(p + 8, (uint32_t)(t->held >> 32));
     cm_link_put32(p + 12, damaged(t));
-    t->last_ack_ms = cm_link_now_ms();
+    t->last_ack_ms = cm_clock_ms();
     t->damage_reported = damaged(t);
     (void)cm_link_send(&t->link, CM_LINK_ACK, seq, p, sizeof p, 1000);
 }
@@ -308,7 +309,7 @@ static int on_offer(cm_link_term *t, const cm_link_frame *f)
         t->offer = o;
         t->prefix = t->synced = 0;
         t->active = true;
-        t->last_sync_ms = cm_link_now_ms();
+        t->last_sync_ms = cm_clock_ms();
         cm_dec_init(t->dec);
         /* no meta yet: the first sync writes it (before that there is nothing worth resuming) */
         ev = CM_TERM_STARTED;
@@ -471,16 +472,16 @@ static int on_end(cm_link_term *t, const cm_link_frame *f)
 
 int cm_link_term_poll(cm_link_term *t, int timeout_ms)
 {
-    int64_t deadline = cm_link_now_ms() + timeout_ms;
+    int64_t deadline = cm_clock_ms() + timeout_ms;
     for (;;) {
-        int64_t left = deadline - cm_link_now_ms();
+        int64_t left = deadline - cm_clock_ms();
         if (left < 0)
             left = 0;
         cm_link_frame f;
         int r = cm_link_recv(&t->link, &f, (int)left);
         if (r < 0)
             return r;
-        int64_t now = cm_link_now_ms();
+        int64_t now = cm_clock_ms();
         /* frames arriving damaged: say so (at most every 20 ms), so that a sender whose chunks
            never arrive whole learns it without waiting for timeouts */
         if (t->active && t->chunk && damaged(t) != t->damage_reported && now - t->last_ack_ms >= 20)
@@ -531,7 +532,7 @@ int cm_link_term_poll(cm_link_term *t, int timeout_ms)
         }
         if (ev != CM_TERM_NONE)
             return ev;
-        if (cm_link_now_ms() >= deadline)
+        if (cm_clock_ms() >= deadline)
             return CM_TERM_NONE;
     }
 }

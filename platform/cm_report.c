@@ -1,9 +1,12 @@
 /* cm_report.c - human-readable limits tables and error lines. */
 #include "cm_report.h"
 
+#include "cm/cm_method.h"
+
 #include <errno.h>
 #include <string.h>
 
+#include "cm/cm_decode_state.h"
 #include "cm/cm_limits_info.h"
 
 void cm_report_limits(FILE *f)
@@ -15,6 +18,18 @@ void cm_report_limits(FILE *f)
         fprintf(f, "%-18s %12lu %12lu  %-10s %s\n", l->name, (unsigned long)l->value, (unsigned long)l->hard_max,
                 l->unit, l->doc);
     }
+    /* not limits of a model: the memory one decode takes at these limits (cm_decode_state.h) */
+    unsigned long long budget = (unsigned long long)CM_DECODE_STATE_BUDGET;
+#if CM_DECODE_STATE_FITS
+    unsigned long long size = (unsigned long long)sizeof(cm_decode_state);
+    fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", "decode state", size, "", "bytes",
+            "static storage of one decode: decoder, triangulator, mesh", (double)size / 1048576.0);
+#else
+    fprintf(f, "%-18s %12s %12s  %-10s %s\n", "decode state", "-", "", "bytes",
+            "larger than this target's address space: not declared here");
+#endif
+    fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", "decode budget", budget, "", "bytes",
+            "CM_DECODE_STATE_BUDGET, checked at compile time", (double)budget / 1048576.0);
 }
 
 void cm_report_limits_markdown(FILE *f)
@@ -31,7 +46,8 @@ void cm_report_errors_markdown(FILE *f)
 {
     fprintf(f, "| code | name | meaning |\n|---:|---|---|\n");
     for (int e = 0; e < (int)CM_ERR_COUNT; e++)
-        fprintf(f, "| %d | `%s` | %s |\n", e, cm_err_name((cm_err)e), cm_strerror((cm_err)e));
+        if (cm_err_defined(e))
+            fprintf(f, "| %d | `%s` | %s |\n", e, cm_err_name((cm_err)e), cm_strerror((cm_err)e));
 }
 
 char *cm_format_status(char *buf, size_t cap, const cm_status *st)
@@ -75,4 +91,21 @@ void cm_report_status(FILE *f, const char *prog, const char *subject, const cm_s
     char buf[512];
     cm_format_status(buf, sizeof buf, st);
     fprintf(f, "%s%s%s%s%s\n", prog ? prog : "", prog ? ": " : "", subject ? subject : "", subject ? ": " : "", buf);
+}
+
+char *cm_report_method_counts(char *buf, size_t cap, const uint32_t *count, int key_value)
+{
+    size_t n = 0;
+    if (cap == 0)
+        return buf;
+    buf[0] = '\0';
+    for (int i = 0; i < CM_METHOD_COUNT && n < cap; i++) {
+        const cm_method *M = cm_method_table[i];
+        int w = key_value ? snprintf(buf + n, cap - n, "%s%s=%lu", i ? " " : "", M->counted, (unsigned long)count[M->id])
+                          : snprintf(buf + n, cap - n, "%s%lu %s", i ? ", " : "", (unsigned long)count[M->id], M->counted);
+        if (w < 0)
+            break;
+        n += (size_t)w;
+    }
+    return buf;
 }

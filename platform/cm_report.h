@@ -6,9 +6,16 @@
 #ifndef CM_REPORT_H
 #define CM_REPORT_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 #include "cm/cm_error.h"
+
+/**
+ * Faces by method, in the method table's order: "90 plane, 1 gregory, 69 kept" (key_value 0) or
+ * "plane=90 gregory=1 kept=69" (1, for logs).  count[] is indexed by the method's number.
+ */
+char *cm_report_method_counts(char *buf, size_t cap, const uint32_t *count, int key_value);
 
 /** The limits table of this build (profile name, then one row per limit). */
 void cm_report_limits(FILE *f);

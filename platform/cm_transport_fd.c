@@ -9,22 +9,16 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
-static long long now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (long long)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
+#include "cm_clock.h"
 
 /* What is left of a deadline for poll(): -1 (no limit) stays -1, a passed one is 0. */
 static int ms_left(int timeout_ms, long long deadline)
 {
     if (timeout_ms < 0)
         return -1;
-    long long left = deadline - now_ms();
+    long long left = deadline - cm_clock_ms();
     return left <= 0 ? 0 : (int)left;
 }
 
@@ -40,7 +34,7 @@ long cm_fd_read_within(int fd, uint8_t *buf, size_t n, int timeout_ms, int is_tt
     int empty_reads = 0;
     if (n == 0)
         return 0;
-    long long deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    long long deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     for (;;) {
         struct pollfd p = {.fd = fd, .events = POLLIN, .revents = 0};
         int pr = poll(&p, 1, ms_left(timeout_ms, deadline));
@@ -83,7 +77,7 @@ long cm_fd_read_within(int fd, uint8_t *buf, size_t n, int timeout_ms, int is_tt
 long cm_fd_write_within(int fd, const uint8_t *buf, size_t n, int timeout_ms, int use_send, int *err_no)
 {
     *err_no = 0;
-    long long deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    long long deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     size_t done = 0;
     while (done < n) {
         ssize_t put = use_send ? send(fd, buf + done, n - done, MSG_NOSIGNAL) : write(fd, buf + done, n - done);

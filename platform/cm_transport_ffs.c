@@ -30,6 +30,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "cm_clock.h"
+
 #define CM_FFS_INTERFACE_STRING "curvemesh link"
 /* the smallest bulk packet size (full speed), used if the enabled endpoint's cannot be read */
 #define CM_FFS_MIN_MPS 64u
@@ -43,16 +45,9 @@ _Static_assert(CM_FFS_BUF % 1024u == 0, "CM_FFS_BUF must be a multiple of every 
 
 /* ---- small helpers ---- */
 
-static int64_t now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
-
 static int ms_left(int64_t deadline)
 {
-    int64_t left = deadline - now_ms();
+    int64_t left = deadline - cm_clock_ms();
     if (left < 0)
         return 0;
     return left > INT_MAX ? INT_MAX : (int)left;
@@ -395,7 +390,7 @@ static long ffs_read(cm_transport *t, uint8_t *buf, size_t n, int timeout_ms)
     }
     if (n == 0)
         return 0;
-    int64_t deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    int64_t deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     int wait = 0;
     for (;;) {
         if (service(f, wait) < 0)
@@ -437,7 +432,7 @@ static void cancel_tx(cm_ffs *f)
     /* the completion (-ECONNRESET, or the bytes if it won the race) is posted to the eventfd */
     f->tx_cancelled = 1;
     (void)syscall(SYS_io_cancel, (aio_context_t)f->aio, iocb_at(f->iocb_tx), &ev);
-    (void)wait_tx(f, now_ms() + CM_FFS_CANCEL_MS);
+    (void)wait_tx(f, cm_clock_ms() + CM_FFS_CANCEL_MS);
 }
 
 static long ffs_write(cm_transport *t, const uint8_t *buf, size_t n, int timeout_ms)
@@ -453,7 +448,7 @@ static long ffs_write(cm_transport *t, const uint8_t *buf, size_t n, int timeout
         set_err(f, "%s: write of %zu bytes is too long", f->t.name, n);
         return CM_T_IO;
     }
-    int64_t deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    int64_t deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     /*
      * Zero-length packet: the terminal reads with a 16 KiB request, which ends
      * on a short packet or when full.  A write that is a multiple of the

@@ -22,6 +22,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "cm_clock.h"
+
 /* libusb_init_context() replaced libusb_init() in 1.0.27 (API 0x0100010A) */
 #if defined(LIBUSB_API_VERSION) && LIBUSB_API_VERSION >= 0x0100010A
 #define CM_LIBUSB_INIT(ctxp) libusb_init_context((ctxp), NULL, 0)
@@ -43,17 +45,10 @@ static cm_usb *usb_of(cm_transport *t)
     return (cm_usb *)(void *)t;
 }
 
-static int64_t now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
-
 /* libusb reads a timeout of 0 as "forever": the shortest real wait is 1 ms */
 static unsigned int libusb_timeout(int64_t deadline)
 {
-    int64_t left = deadline - now_ms();
+    int64_t left = deadline - cm_clock_ms();
     if (left < 1)
         return 1;
     if (left > INT_MAX)
@@ -441,7 +436,7 @@ static long usb_read(cm_transport *t, uint8_t *buf, size_t n, int timeout_ms)
         return 0;
     if (u->rx_pos < u->rx_len)
         return hand_out(u, buf, n);
-    int64_t deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    int64_t deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     for (;;) {
         int got = 0;
         /* always the whole buffer (a multiple of wMaxPacketSize), never n: a
@@ -458,7 +453,7 @@ static long usb_read(cm_transport *t, uint8_t *buf, size_t n, int timeout_ms)
             return transfer_failed(u, "IN", u->ep_in, rc);
         /* a zero-length packet (the end of a transfer that filled our previous
          * request exactly) or an interrupted wait: keep waiting */
-        if (now_ms() >= deadline)
+        if (cm_clock_ms() >= deadline)
             return 0;
     }
 }
@@ -476,7 +471,7 @@ static long usb_write(cm_transport *t, const uint8_t *buf, size_t n, int timeout
         set_err(u, "%s: write of %zu bytes is too long", u->t.name, n);
         return CM_T_IO;
     }
-    int64_t deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    int64_t deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     /* libusb takes a non-const buffer for both directions; OUT transfers only read it */
     unsigned char *p = (unsigned char *)buf;
     /*
@@ -503,7 +498,7 @@ static long usb_write(cm_transport *t, const uint8_t *buf, size_t n, int timeout
             return 0;
         if (rc != 0 && rc != LIBUSB_ERROR_INTERRUPTED)
             return transfer_failed(u, "OUT", u->ep_out, rc);
-        if (done < n && now_ms() >= deadline)
+        if (done < n && cm_clock_ms() >= deadline)
             return 0;
     }
     return (long)n;
@@ -513,7 +508,7 @@ int cm_usb_wait(uint16_t vid, uint16_t pid, const char *serial, int timeout_ms)
 {
     if (serial && !serial[0])
         serial = NULL;
-    int64_t deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    int64_t deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     for (;;) {
         libusb_context *ctx = NULL;
         if (CM_LIBUSB_INIT(&ctx) != 0)
@@ -524,7 +519,7 @@ int cm_usb_wait(uint16_t vid, uint16_t pid, const char *serial, int timeout_ms)
         /* present but not openable (permissions) still counts: cm_usb_open explains */
         if (rc == 0 || (rc != LIBUSB_ERROR_NOT_FOUND && n_match > 0))
             return 1;
-        int64_t left = deadline - now_ms();
+        int64_t left = deadline - cm_clock_ms();
         if (left <= 0)
             return 0;
         if (left > CM_USB_POLL_MS)

@@ -19,17 +19,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cm/cm_decode_state.h"
 #include "cm/cm_limits_info.h"
 #include "cm_decode_file.h"
 #include "cm_report.h"
 
-#define VERT_CAP (CM_MAX_TRIS + 2 * CM_MAX_FACES) /* a face of T triangles has at most T + 2 vertices */
-
-static cm_decoder decoder;
-static cm_tess_ws tess;
-static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
-static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
-static cm_mesh_face faces[CM_MAX_FACES];
+/* everything big is static: the decode path never touches the heap */
+static cm_decode_state state;
 
 /* "PROG: IN: [face F, ]byte N: text (CODE) [in where]": the place in the input first (cm_format_status) */
 static void report(FILE *f, const char *level, const char *in, const cm_status *st)
@@ -92,12 +88,13 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    cm_mesh mesh = {pos, nrm, idx, faces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
+    cm_mesh mesh = cm_decode_state_mesh(&state);
     cm_status st;
     cm_status_init(&st);
     cm_decode_summary sum;
     uint64_t bytes = 0;
-    if (cm_decode_read(in, &decoder, &st) != CM_OK || cm_decode_mesh(&decoder, tol, &mesh, &tess, &sum, &st) != CM_OK) {
+    if (cm_decode_read(in, &state.dec, &st) != CM_OK ||
+        cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK) {
         report(stderr, "", in, &st);
         return st.code == CM_E_IO ? 3 : 1;
     }

@@ -30,6 +30,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "cm/cm_decode_state.h"
+#include "cm_clock.h"
 #include "cm_decode_file.h"
 #include "cm_gpio.h"
 #include "cm_kill_point.h"
@@ -42,15 +44,10 @@
 #include "cm_transport_usb.h"
 #endif
 
-#define VERT_CAP (CM_MAX_TRIS + 2 * CM_MAX_FACES)
 #define PROG "cmz-terminal"
 
 /* everything big is static: the decode path never touches the heap */
-static cm_decoder decoder;
-static cm_tess_ws tess;
-static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
-static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
-static cm_mesh_face mfaces[CM_MAX_FACES];
+static cm_decode_state state;
 static cm_link_term term;
 static cm_term_store store;
 static cm_serial serial;
@@ -319,17 +316,17 @@ static void nap_ms(int ms)
 static int decode_into_place(const config *c, int fed, char *text, size_t cap)
 {
     static cm_mesh mesh;
-    mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
+    mesh = cm_decode_state_mesh(&state);
     cm_status st;
     cm_status_init(&st);
     cm_decode_summary sum;
     uint64_t bytes = 0;
     char bad[CM_TERM_PATH + 16];
     snprintf(bad, sizeof bad, "%s/rejected.cmz", c->out);
-    int64_t t0 = cm_link_now_ms();
-    cm_err e = fed ? cm_dec_finish(&decoder, &st) : cm_decode_read(term.in_path, &decoder, &st);
+    int64_t t0 = cm_clock_ms();
+    cm_err e = fed ? cm_dec_finish(&state.dec, &st) : cm_decode_read(term.in_path, &state.dec, &st);
     if (e == CM_OK)
-        e = cm_decode_mesh(&decoder, c->tess, &mesh, &tess, &sum, &st);
+        e = cm_decode_mesh(&state.dec, c->tess, &mesh, &state.tess, &sum, &st);
     if (e == CM_OK)
         e = cm_term_store_install(&store, &mesh, term.in_path, &bytes, &st);
     if (e != CM_OK) {
@@ -350,9 +347,10 @@ static int decode_into_place(const config *c, int fed, char *text, size_t cap)
         textf(text, cap, "%u faces, %u triangles, %u left out", sum.faces, sum.triangles, sum.faces_left_out);
     else
         textf(text, cap, "%u faces, %u triangles", sum.faces, sum.triangles);
-    logline("info", "decode", "faces=%u plane=%u gregory=%u kept=%u left_out=%u triangles=%u glb_bytes=%llu ms=%lld",
-            sum.faces, sum.faces_plane, sum.faces_gregory, sum.faces_keep, sum.faces_left_out, sum.triangles,
-            (unsigned long long)bytes, (long long)(cm_link_now_ms() - t0));
+    char methods[128];
+    cm_report_method_counts(methods, sizeof methods, sum.faces_by_method, 1);
+    logline("info", "decode", "faces=%u %s left_out=%u triangles=%u glb_bytes=%llu ms=%lld", sum.faces, methods,
+            sum.faces_left_out, sum.triangles, (unsigned long long)bytes, (long long)(cm_clock_ms() - t0));
     return 0;
 }
 
@@ -398,7 +396,7 @@ int main(int argc, char **argv)
         logline("error", "gpio", "why=\"%s\"", gpio.err);
         return 4;
     }
-    if (cm_link_term_open(&term, &decoder, c.out, c.name) != 0) {
+    if (cm_link_term_open(&term, &state.dec, c.out, c.name) != 0) {
         logline("error", "output", "why=\"%s\"", term.why);
         cm_gpio_close(&gpio);
         return 3;
@@ -428,7 +426,7 @@ int main(int argc, char **argv)
         if (code == 0) {
             logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
             cm_gpio_set(&gpio, CM_GPIO_READY, 1);
-            ready_off_at = cm_link_now_ms() + c.ready_pulse_ms;
+            ready_off_at = cm_clock_ms() + c.ready_pulse_ms;
         } else {
             logline("error", "decode-failed", "name=\"%s\" why=\"%s\"", term.offer.name, text);
             cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
@@ -436,7 +434,7 @@ int main(int argc, char **argv)
     }
     cm_transport *link = NULL;
     while (!stop_signal) {
-        if (ready_off_at && cm_link_now_ms() >= ready_off_at) {
+        if (ready_off_at && cm_clock_ms() >= ready_off_at) {
             cm_gpio_set(&gpio, CM_GPIO_READY, 0);
             ready_off_at = 0;
         }
@@ -478,7 +476,7 @@ int main(int argc, char **argv)
         }
         switch (ev) {
         case CM_TERM_STARTED:
-            started_ms = cm_link_now_ms();
+            started_ms = cm_clock_ms();
             logline("info", "receiving", "name=\"%s\" bytes=%u from=%u chunk=%u", term.offer.name,
                     (unsigned)term.offer.size, (unsigned)term.prefix, (unsigned)term.chunk);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
@@ -502,7 +500,7 @@ int main(int argc, char **argv)
         case CM_TERM_COMPLETE: {
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
             logline("info", "stored", "name=\"%s\" bytes=%u crc=%08x ms=%lld", term.offer.name,
-                    (unsigned)term.offer.size, (unsigned)term.offer.crc, (long long)(cm_link_now_ms() - started_ms));
+                    (unsigned)term.offer.size, (unsigned)term.offer.crc, (long long)(cm_clock_ms() - started_ms));
             cm_kill_point("incoming-renamed");
             char text[CM_LINK_MAX_TEXT + 1];
             int code = decode_into_place(&c, 1, text, sizeof text);
@@ -512,7 +510,7 @@ int main(int argc, char **argv)
                 logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
                 cm_gpio_set(&gpio, CM_GPIO_ERROR, 0);
                 cm_gpio_set(&gpio, CM_GPIO_READY, 1);
-                ready_off_at = cm_link_now_ms() + c.ready_pulse_ms;
+                ready_off_at = cm_clock_ms() + c.ready_pulse_ms;
             } else {
                 logline("error", "decode-failed", "name=\"%s\" why=\"%s\"", term.offer.name, text);
                 cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
@@ -530,7 +528,7 @@ int main(int argc, char **argv)
     if (stop_signal > 0)
         logline("info", "stop", "signal=%d", (int)stop_signal);
     if (ready_off_at)
-        nap_ms((int)(ready_off_at - cm_link_now_ms() > 0 ? ready_off_at - cm_link_now_ms() : 0));
+        nap_ms((int)(ready_off_at - cm_clock_ms() > 0 ? ready_off_at - cm_clock_ms() : 0));
     cm_link_term_close(&term);
     cm_term_store_close(&store);
     if (link)

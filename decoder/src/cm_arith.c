@@ -1,4 +1,4 @@
-/* cm_arith.c - adaptive binary range coder, integer models, CRC-32 (see cm_arith.h). */
+/* cm_arith.c - adaptive binary range coder and integer models (see cm_arith.h). */
 #include "cm/cm_arith.h"
 
 #define TOP (1u << 24)
@@ -218,22 +218,4 @@ int64_t cm_ac_dec_sint(cm_ac_dec *d, cm_ac_int *m)
     if (cm_ac_dec_bit(d, &m->sign))
         return -(int64_t)(mag - 1u) - 1;
     return (int64_t)mag;
-}
-
-/* ---- CRC-32, bitwise (no 1 KiB table: the terminal cares more about flash than speed here) ---- */
-
-uint32_t cm_crc32_update(uint32_t crc, const uint8_t *p, size_t n)
-{
-    crc = ~crc;
-    for (size_t i = 0; i < n; i++) {
-        crc ^= p[i];
-        for (int k = 0; k < 8; k++)
-            crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-    }
-    return ~crc;
-}
-
-uint32_t cm_crc32(const uint8_t *p, size_t n)
-{
-    return cm_crc32_update(0, p, n);
 }

@@ -3,24 +3,27 @@
 
 #include <stddef.h>
 
-#define CM_ERR_NAME_(id, text) "CM_" #id,
-#define CM_ERR_TEXT_(id, text) text,
-static const char *const err_names[] = {CM_ERRORS(CM_ERR_NAME_)};
-static const char *const err_texts[] = {CM_ERRORS(CM_ERR_TEXT_)};
+/* indexed by number; a number no code has (a dropped one) stays NULL */
+#define CM_ERR_NAME_(id, num, text) [num] = "CM_" #id,
+#define CM_ERR_TEXT_(id, num, text) [num] = text,
+static const char *const err_names[CM_ERR_COUNT] = {CM_ERRORS(CM_ERR_NAME_)};
+static const char *const err_texts[CM_ERR_COUNT] = {CM_ERRORS(CM_ERR_TEXT_)};
 #undef CM_ERR_NAME_
 #undef CM_ERR_TEXT_
 
-_Static_assert(sizeof err_names / sizeof err_names[0] == CM_ERR_COUNT, "error name table size");
-_Static_assert(sizeof err_texts / sizeof err_texts[0] == CM_ERR_COUNT, "error text table size");
+int cm_err_defined(int code)
+{
+    return code >= 0 && code < (int)CM_ERR_COUNT && err_names[code] != NULL;
+}
 
 const char *cm_err_name(cm_err e)
 {
-    return ((unsigned)e < (unsigned)CM_ERR_COUNT) ? err_names[e] : "CM_E_UNKNOWN";
+    return cm_err_defined((int)e) ? err_names[e] : "CM_E_UNKNOWN";
 }
 
 const char *cm_strerror(cm_err e)
 {
-    return ((unsigned)e < (unsigned)CM_ERR_COUNT) ? err_texts[e] : "unknown error";
+    return cm_err_defined((int)e) ? err_texts[e] : "unknown error";
 }
 
 void cm_status_init(cm_status *st)

@@ -32,4 +32,6 @@
 #define CM_MAX_EDGE_SAMPLES 4096
 #define CM_STACK_FN_MAX 8192
 #define CM_STACK_BUDGET 131072
+/* 3.25 GiB for 3.05 GiB on x86-64 (beyond a 32-bit address space: see cm_decode_state.h) */
+#define CM_DECODE_STATE_BUDGET 3489660928
 #endif

@@ -30,4 +30,6 @@
 #define CM_MAX_EDGE_SAMPLES 32
 #define CM_STACK_FN_MAX 8192
 #define CM_STACK_BUDGET 65536
+/* 64 KiB for 58 KiB on x86-64 */
+#define CM_DECODE_STATE_BUDGET 65536
 #endif

@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_error.h"
 
 #define CHUNK_MIN 16u

@@ -315,9 +315,10 @@ static int encode_for(const char *path, const cm_link_hello *h, const cm_limit_i
         } else {
             memcpy(*data, r.bytes, r.len);
             *size = (uint32_t)r.len;
+            char methods[128];
             if (!quiet)
-                fprintf(stderr, "cmz send: %s encoded for '%s': %zu bytes (%d plane, %d gregory, %d kept)\n", path,
-                        h->name, r.len, r.faces_plane, r.faces_gregory, r.faces_keep);
+                fprintf(stderr, "cmz send: %s encoded for '%s': %zu bytes (%s)\n", path, h->name, r.len,
+                        cm_report_method_counts(methods, sizeof methods, r.faces_by_method, 0));
         }
     }
     encode_result_free(&r);

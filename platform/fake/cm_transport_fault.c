@@ -4,7 +4,8 @@
 
 #include <stdio.h>
 #include <string.h>
-#include <time.h>
+
+#include "cm_clock.h"
 
 /* splitmix64: any seed (0 too) gives a full-period stream, and it is a few lines */
 static uint64_t next_u64(uint64_t *s)
@@ -65,18 +66,11 @@ size_t cm_fault_noise_apply(cm_fault_noise *z, const uint8_t *in, size_t n, size
 
 /* ---- the decorator ---- */
 
-static long long now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (long long)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
-
 static int ms_left(int timeout_ms, long long deadline)
 {
     if (timeout_ms < 0)
         return -1;
-    long long left = deadline - now_ms();
+    long long left = deadline - cm_clock_ms();
     return left <= 0 ? 0 : (int)left;
 }
 
@@ -106,7 +100,7 @@ static long fault_write(cm_transport *t, const uint8_t *buf, size_t n, int timeo
     cm_fault *f = fault_of(t);
     if (f->hung)
         return hung_up(f);
-    long long deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    long long deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     size_t done = 0;
     while (done < n) {
         size_t take = n - done;
@@ -147,7 +141,7 @@ static long fault_read(cm_transport *t, uint8_t *buf, size_t n, int timeout_ms)
         return 0;
     if (!f->on_read)
         return pass_error(f, f->inner->read(f->inner, buf, n, timeout_ms));
-    long long deadline = now_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    long long deadline = cm_clock_ms() + (timeout_ms > 0 ? timeout_ms : 0);
     for (;;) {
         if (f->carry_pos < f->carry_len) {
             size_t k = f->carry_len - f->carry_pos;

@@ -20,18 +20,14 @@
 #include <string.h>
 
 #include "cm/cm_decode.h"
+#include "cm/cm_decode_state.h"
 #include "cm/cm_out.h"
 #include "cm/cm_tessellate.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-#define VERT_CAP (CM_MAX_TRIS + 2 * CM_MAX_FACES)
 #define FUZZ_FACES 3
-static cm_decoder dec;
-static cm_tess_ws tess;
-static float pos[VERT_CAP][3], nrm[VERT_CAP][3];
-static uint32_t idx[3 * (size_t)CM_MAX_TRIS];
-static cm_mesh_face faces[CM_MAX_FACES];
+static cm_decode_state state;
 static cm_out writer;
 
 /* a failure of the file must always say why and where: the code, a reason and the byte offset (the
@@ -60,14 +56,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     cm_status st;
     cm_status_init(&st);
-    cm_dec_init(&dec);
+    cm_dec_init(&state.dec);
     cm_err e = CM_OK;
     for (size_t off = 0; off < size && e == CM_OK; off += chunk) {
         size_t n = size - off < chunk ? size - off : chunk;
-        e = cm_dec_feed(&dec, data + off, n, &st);
+        e = cm_dec_feed(&state.dec, data + off, n, &st);
     }
     if (e == CM_OK)
-        e = cm_dec_finish(&dec, &st);
+        e = cm_dec_finish(&state.dec, &st);
     check_reason(e, &st);
     if (e != CM_OK)
         return 0;
@@ -79,22 +75,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
        0.4 s under ASan (its loop projected onto a B-spline): 12 faces from the first one made the
        campaign crawl at 10 runs/s.  A face that fails is left out, as cm_decode_mesh
        (platform/cm_decode_file.c) does */
-    cm_mesh mesh = {pos, nrm, idx, faces, 0, VERT_CAP, 0, 3 * (uint32_t)CM_MAX_TRIS, 0, CM_MAX_FACES};
+    cm_mesh mesh = cm_decode_state_mesh(&state);
     cm_mesh_clear(&mesh);
-    uint32_t first = dec.model.nfaces ? (uint32_t)((size * 31u + data[size / 2]) % dec.model.nfaces) : 0;
-    for (uint32_t f = first; f < dec.model.nfaces && f < first + FUZZ_FACES; f++) {
+    uint32_t first = state.dec.model.nfaces ? (uint32_t)((size * 31u + data[size / 2]) % state.dec.model.nfaces) : 0;
+    for (uint32_t f = first; f < state.dec.model.nfaces && f < first + FUZZ_FACES; f++) {
         cm_tess_info info;
         cm_status_init(&st);
         cm_mesh_mark mark = cm_mesh_save(&mesh);
-        e = cm_tessellate_face(&dec.model, f, dec.model.tess_tol, &mesh, &tess, &info, &st);
-        check_face_reason(e, &st, f, dec.file_len);
+        e = cm_tessellate_face(&state.dec.model, f, state.dec.model.tess_tol, &mesh, &state.tess, &info, &st);
+        check_face_reason(e, &st, f, state.dec.file_len);
         if (e == CM_E_LIMIT)
             break; /* the mesh is full: the terminal stops here too */
         if (e != CM_OK) {
             cm_mesh_rollback(&mesh, &mark);
             if (mesh.nverts != mark.nverts || mesh.nindex != mark.nindex || mesh.nfaces != mark.nfaces)
                 __builtin_trap();
-        } else if (info.points > cm_tess_point_cap(&dec.model, dec.model.tess_tol)) {
+        } else if (info.points > cm_tess_point_cap(&state.dec.model, state.dec.model.tess_tol)) {
             __builtin_trap(); /* the face's work stayed within what the header declares */
         }
     }

@@ -20,6 +20,8 @@
 #include <unistd.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
+#include "cm/cm_format.h"
 #include "cm_link.h"
 #include "cm_link_term.h"
 #include "cm_transport_fd.h"
@@ -276,8 +278,8 @@ static void test_refused_in_stream(const uint8_t *data, uint32_t size, const cha
     /* the header says the model needs one face more than this build has; CRC fixed up */
     static uint8_t bad[1 << 20];
     memcpy(bad, data, size);
-    uint32_t h = cm_link_get32(bad + 8);
-    cm_link_put32(bad + 60 + 4 * CM_LIMIT_MAX_FACES, CM_MAX_FACES + 1u);
+    uint32_t h = cm_link_get32(bad + CM_HDR_LENGTH);
+    cm_link_put32(bad + cm_fmt_need_at(CM_LIMIT_MAX_FACES), CM_MAX_FACES + 1u);
     cm_link_put32(bad + h - 4, cm_crc32(bad, h - 4));
     link_send_result r;
     int crc;
@@ -340,8 +342,8 @@ static void test_resume_other_file(const uint8_t *data, uint32_t size, const cha
 {
     static uint8_t other[1 << 20];
     memcpy(other, data, size);
-    uint32_t h = cm_link_get32(other + 8);
-    other[44 + 7] ^= 0x01; /* the recommended chordal tolerance, in the header: a different model file */
+    uint32_t h = cm_link_get32(other + CM_HDR_LENGTH);
+    other[CM_HDR_TESS_TOL + 7] ^= 0x01; /* the recommended chordal tolerance, in the header: a different model file */
     cm_link_put32(other + h - 4, cm_crc32(other, h - 4));
     cm_link_put32(other + size - 4, cm_crc32(other, size - 4));
     cut_send cs;

@@ -33,6 +33,7 @@
 #include <unistd.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_error.h"
 #include "cm_link.h"
 #include "cm_link_term.h"

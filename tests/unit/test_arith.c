@@ -2,6 +2,7 @@
 #include "test_util.h"
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 
 static uint8_t buf[1 << 20];
 

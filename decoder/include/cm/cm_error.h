@@ -3,7 +3,11 @@
  *
  * One X-macro is the source of the enum, the symbolic names and the human
  * texts, so they cannot drift apart.  Codes travel in the link protocol's
- * NAK/ERROR frames: append new codes at the end, never renumber.
+ * REFUSE, DONE and ABORT messages, so each carries its number: a new code
+ * takes the next number at the end, a code is never renumbered, and the
+ * number of a code that was dropped stays unused (18-21: timeout, USB,
+ * serial and GPIO codes that nothing raised; the transports report
+ * CM_E_IO with errno).  The last entry has the largest number.
  *
  * Three families are kept apart on purpose:
  *   bad input      (E_TRUNCATED, E_MAGIC, E_RANGE, E_KNOTS, E_NONFINITE, ...)
@@ -15,33 +19,29 @@
 
 #include <stdint.h>
 
-#define CM_ERRORS(X)                                                              \
-    X(OK, "ok")                                                                   \
-    X(E_ARG, "invalid argument (a caller bug, not bad input)")                    \
-    X(E_LIMIT, "exceeds a compile-time limit of this build")                      \
-    X(E_NOSPACE, "output buffer too small")                                       \
-    X(E_TRUNCATED, "input ends before the size its header declares")             \
-    X(E_MAGIC, "not a curvemesh file")                                            \
-    X(E_VERSION, "unsupported format version")                                    \
-    X(E_CRC, "CRC mismatch: the data is corrupted")                               \
-    X(E_RANGE, "count or index out of range")                                     \
-    X(E_KNOTS, "knot vector decreasing, too short or multiplicity > order")       \
-    X(E_NONFINITE, "NaN or infinity in input")                                    \
-    X(E_FORMAT, "malformed data")                                                 \
-    X(E_SINGULAR, "linear system is singular or ill-conditioned")                 \
-    X(E_DEGENERATE, "degenerate geometry (zero-length vector or empty domain)")   \
-    X(E_CHECKSUM, "rebuilt surface differs from the encoder's (checksum)")        \
-    X(E_UNSUPPORTED, "feature not supported by this build")                       \
-    X(E_IGES, "malformed IGES file")                                              \
-    X(E_IO, "I/O error")                                                          \
-    X(E_TIMEOUT, "timed out")                                                     \
-    X(E_USB, "USB error")                                                         \
-    X(E_SERIAL, "serial line error")                                              \
-    X(E_GPIO, "GPIO error")                                                       \
-    X(E_PROTOCOL, "link protocol error")                                         \
-    X(E_NOMEM, "out of memory")
+#define CM_ERRORS(X)                                                            \
+    X(OK, 0, "ok")                                                              \
+    X(E_ARG, 1, "invalid argument (a caller bug, not bad input)")               \
+    X(E_LIMIT, 2, "exceeds a compile-time limit of this build")                 \
+    X(E_NOSPACE, 3, "output buffer too small")                                  \
+    X(E_TRUNCATED, 4, "input ends before the size its header declares")         \
+    X(E_MAGIC, 5, "not a curvemesh file")                                       \
+    X(E_VERSION, 6, "unsupported format version")                               \
+    X(E_CRC, 7, "CRC mismatch: the data is corrupted")                          \
+    X(E_RANGE, 8, "count or index out of range")                                \
+    X(E_KNOTS, 9, "knot vector decreasing, too short or multiplicity > order")  \
+    X(E_NONFINITE, 10, "NaN or infinity in input")                              \
+    X(E_FORMAT, 11, "malformed data")                                           \
+    X(E_SINGULAR, 12, "linear system is singular or ill-conditioned")           \
+    X(E_DEGENERATE, 13, "degenerate geometry (zero-length vector or empty domain)") \
+    X(E_CHECKSUM, 14, "rebuilt surface differs from the encoder's (checksum)")  \
+    X(E_UNSUPPORTED, 15, "feature not supported by this build")                 \
+    X(E_IGES, 16, "malformed IGES file")                                        \
+    X(E_IO, 17, "I/O error")                                                    \
+    X(E_PROTOCOL, 22, "link protocol error")                                    \
+    X(E_NOMEM, 23, "out of memory")
 
-#define CM_ERR_ENUM_(id, text) CM_##id,
+#define CM_ERR_ENUM_(id, num, text) CM_##id = num,
 typedef enum cm_err { CM_ERRORS(CM_ERR_ENUM_) CM_ERR_COUNT } cm_err;
 #undef CM_ERR_ENUM_
 
@@ -53,6 +53,8 @@ typedef enum cm_err { CM_ERRORS(CM_ERR_ENUM_) CM_ERR_COUNT } cm_err;
 
 /** Symbolic name, e.g. "CM_E_LIMIT" (for logs); "CM_E_UNKNOWN" if out of range. */
 const char *cm_err_name(cm_err e);
+/** 1 if `code` is the number of a code this build knows (numbers of dropped codes are not). */
+int cm_err_defined(int code);
 /** Human text (for the operator's screen); "unknown error" if out of range. */
 const char *cm_strerror(cm_err e);
 

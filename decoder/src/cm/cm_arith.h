@@ -74,9 +74,4 @@ uint32_t cm_ac_dec_direct(cm_ac_dec *d, unsigned nbits);
 uint64_t cm_ac_dec_uint(cm_ac_dec *d, cm_ac_int *m);
 int64_t cm_ac_dec_sint(cm_ac_dec *d, cm_ac_int *m);
 
-/* ---- CRC-32 (IEEE 802.3, reflected, as zlib) ---- */
-uint32_t cm_crc32_update(uint32_t crc, const uint8_t *p, size_t n);
-/** CRC-32 of a whole buffer (cm_crc32_update(0, p, n)). */
-uint32_t cm_crc32(const uint8_t *p, size_t n);
-
 #endif /* CM_ARITH_H */
