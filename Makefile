@@ -87,17 +87,18 @@ ifeq ($(CM_NO_STACK_FLAGS),1)
 stack_flags =
 endif
 # the decoder sees only fixedcfg and its own headers; everything else may also use platform/
-CM_INC := -Ifixedcfg -Idecoder/include
+CM_INC := -Ifixedcfg -Idecoder/include -Idecoder/src
 CM_INC_ALL := $(CM_INC) -Iplatform -Ihost_tools
 DEPFLAGS = -MMD -MP
 CMOCKA_CFLAGS = $(shell $(PKG_CONFIG) --cflags cmocka 2>/dev/null)
 CMOCKA_LIBS = $(shell $(PKG_CONFIG) --libs cmocka 2>/dev/null || echo -lcmocka)
-# the test binaries abort on any heap call made by project code (check-noheap, layer b)
+# the terminal's programs and the unit tests abort on any heap call made by project code: linked with
+# these flags and platform/cm_noheap_wrap.c (a security property of the terminal; check-noheap, layer b)
 NOHEAP_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free,--wrap=aligned_alloc,--wrap=posix_memalign
 
 # ---- sources ----
 KERNEL_SRC := $(sort $(wildcard decoder/kernels/*.c))
-DECODER_SRC := $(sort $(wildcard decoder/src/*.c))
+DECODER_SRC := $(sort $(wildcard decoder/src/*.c decoder/methods/*.c))
 OUT_SRC := $(sort $(wildcard decoder/out/*.c))
 LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC) $(OUT_SRC)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
@@ -129,7 +130,7 @@ $(call bdir,$(1))/libcmdecoder.a: $(patsubst %.c,$(call bdir,$(1))/%.o,$(LIB_SRC
 	$$(call say,AR      ,$$@)
 	$$(Q)rm -f $$@ && $$(AR) rcs $$@ $$^
 
-$(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES)): $(call bdir,$(1))/tests/unit/%: $(call bdir,$(1))/tests/unit/%.o $(call bdir,$(1))/tests/unit/noheap_wrap.o \
+$(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES)): $(call bdir,$(1))/tests/unit/%: $(call bdir,$(1))/tests/unit/%.o $(call bdir,$(1))/platform/cm_noheap_wrap.o \
 		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(CMOCKA_LIBS) -lm
@@ -147,7 +148,7 @@ unit-tests-$(1): $(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES) kernel_
 
 # the terminal's decoder, built with this profile; no heap on its path (linked with the abort wrappers)
 $(call bdir,$(1))/cmz-decode: $(call bdir,$(1))/platform/cmz_decode_main.o $(call bdir,$(1))/platform/cm_decode_file.o \
-		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/tests/unit/noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
+		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ -lm
 
@@ -244,10 +245,12 @@ check:
 
 CROSS_TARGETS := aarch64-linux-gnu- arm-linux-gnueabihf-
 
-# what both tiers start with: the unit tests of every profile, the workstation tests, the no-heap gate
+# what both tiers start with: the unit tests of every profile, the workstation tests, the no-heap gate,
+# and that no face method is named outside its module
 UNIT_SUITES = "unit-host:$(call bdir,host)/tests/unit" "unit-terminal:$(call bdir,terminal)/tests/unit" \
 	"unit-tiny:$(call bdir,tiny)/tests/unit" "host:$(call bdir,host)/tests/host" \
-	"gate:noheap:$(MAKE) --no-print-directory -s check-noheap"
+	"gate:noheap:$(MAKE) --no-print-directory -s check-noheap" \
+	"gate:method-modules:tests/tools/check_method_modules.sh"
 
 check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,terminal)/libcmdecoder.a \
 		$(LIMIT_TOOLS) $(STACK_CHECK)
@@ -527,9 +530,18 @@ bench-link: $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,host)/tests/to
 		$(BUILD_ROOT)/bench $(patsubst %,$(BUILD_ROOT)/bench/link-%.cmz,$(basename $(notdir $(BENCH_LINK_MODELS))))
 
 # ---- install / clean ----
+# The workstation's cmz (host profile) and cmz-usb-gadget.sh; the terminal's cmz-decode and cmz-terminal
+# and cm-limits, built with PROFILE (terminal by default) as `make` builds them; the udev rules example
+# (README "udev rules") and the LICENSE under DOCDIR.  A cross build installs the board's binaries:
+#   make install CROSS_COMPILE=aarch64-linux-gnu- PREFIX=/usr DESTDIR=/tmp/stage
+DOCDIR ?= $(PREFIX)/share/doc/curvemesh
+INSTALL_PROGS := $(CMZ) host_tools/scripts/cmz-usb-gadget.sh $(B)/cmz-decode $(B)/cmz-terminal $(B)/cm-limits
+INSTALL_DOCS := platform/99-cmz-terminal.rules.example LICENSE
 .PHONY: install clean
-install: $(B)/cm-limits
-	install -D -m 0755 $(B)/cm-limits $(DESTDIR)$(BINDIR)/cm-limits
+install: $(INSTALL_PROGS) $(INSTALL_DOCS)
+	install -d -m 0755 $(DESTDIR)$(BINDIR) $(DESTDIR)$(DOCDIR)
+	install -m 0755 $(INSTALL_PROGS) $(DESTDIR)$(BINDIR)/
+	install -m 0644 $(INSTALL_DOCS) $(DESTDIR)$(DOCDIR)/
 
 clean:
 	rm -rf $(BUILD_ROOT)

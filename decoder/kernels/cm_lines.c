@@ -18,7 +18,7 @@ int cm_lines_closest(cm_vec3 p, cm_vec3 d, cm_vec3 q, cm_vec3 e, double *lam, do
 int cm_ray_plane(cm_vec3 p, cm_vec3 d, cm_vec3 m, double c, double *lam)
 {
     double dm = cm_dot(d, m);
-    if (!(fabs(dm) >= CM_SIN_RAY_PLANE * cm_norm(d)))
+    if (!(fabs(dm) >= CM_SIN_FLAT * cm_norm(d)))
         return 0;
     *lam = (c - cm_dot(p, m)) / dm;
     return 1;

@@ -12,12 +12,11 @@
 
 #include <stddef.h>
 
+#include "cm/cm_const.h"
 #include "cm/cm_cubic_convert.h"
 #include "cm/cm_limits_info.h"
-#include "cm/cm_rebuild.h"
-
-/* spec §1 SIN_FLAT = sin 5 deg: corners flatter than this have no geometric normal */
-#define SIN_FLAT 0.08715574274765817
+#include "cm/cm_face_samples.h"
+#include "cm/cm_geom.h"
 
 /* unit tangent of use U at its start (at_end = 0) or end, in the use's direction; 0 if degenerate */
 static int use_tangent(const cm_model *m, const cm_use *U, int at_end, double eps, cm_vec3 *t)
@@ -63,7 +62,7 @@ static int geo_normal(const cm_model *m, const cm_use *in, const cm_use *out, cm
     if (!use_tangent(m, in, 1, eps, &ta) || !use_tangent(m, out, 0, eps, &tb))
         return 0;
     cm_vec3 a = cm_neg(ta), c = cm_cross(tb, a);
-    if (!(cm_norm(c) >= SIN_FLAT))
+    if (!(cm_norm(c) >= CM_SIN_FLAT))
         return 0;
     *N = cm_unit(c);
     if (cm_dot(*N, nF) < 0)

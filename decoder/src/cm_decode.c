@@ -1,10 +1,13 @@
-/* cm_decode.c - the .cmz v1 reader (see cm_decode.h and docs/FORMAT.md). */
+/* cm_decode.c - the .cmz reader, formats 1 and 2 (see cm_decode.h and docs/FORMAT.md). */
 #include "cm/cm_decode.h"
 
 #include <string.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_bspline.h"
+#include "cm/cm_limits_info.h"
+#include "cm/cm_method.h"
 #include "cm/cm_sections.h"
 
 #define COORD_MAX CM_FMT_COORD_MAX
@@ -76,31 +79,33 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
 {
     const uint8_t *b = d->buf;
     uint32_t H = d->header_len;
-    d->version_major = b[4];
-    d->version_minor = b[5];
-    d->flags = cm_get_u16(b + 6);
-    d->file_len = cm_get_u32(b + 12);
-    d->nlimits = b[16];
-    uint32_t nsec = b[17];
+    cm_fmt_header h;
+    cm_fmt_header_unpack(b, &h);
+    d->version_major = h.major;
+    d->version_minor = h.minor;
+    d->flags = h.flags;
+    d->file_len = h.file_len;
+    d->nlimits = h.nlimits;
+    uint32_t nsec = h.nsections;
     d->nsec = 0;
     /* H must be exactly the fixed fields, the two tables and the CRC (nlimits, nsec <= 255: no
        overflow); then the CRC, which covers every field below */
-    uint32_t table = CM_FMT_FIXED_HEADER + 4u * d->nlimits;
-    if (H != table + CM_FMT_SECTION_ENTRY * nsec + 4u)
-        return fail(d, st, CM_E_FORMAT, 8, "header length does not fit its need and section counts");
+    if (H != cm_fmt_header_len(d->nlimits, nsec))
+        return fail(d, st, CM_E_FORMAT, CM_HDR_LENGTH, "header length does not fit its need and section counts");
     uint32_t crc = cm_get_u32(b + H - 4);
     if (crc_differs(cm_crc32(b, H - 4), crc))
         return fail(d, st, CM_E_CRC, H - 4, "header CRC");
     if (nsec != CM_SEC_COUNT)
-        return fail(d, st, CM_E_FORMAT, 17, "section count (a .cmz has 5 sections)");
+        return fail(d, st, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count (a .cmz has 5 sections)");
     d->nsec = nsec;
     if (d->file_len > (uint32_t)CM_MAX_FILE_BYTES)
-        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->file_len, CM_MAX_FILE_BYTES, 12, "file length");
+        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->file_len, CM_MAX_FILE_BYTES, CM_HDR_FILE_LENGTH,
+                            "file length");
     if (d->file_len < H + 4u)
-        return fail(d, st, CM_E_FORMAT, 12, "file length shorter than its header and trailer");
+        return fail(d, st, CM_E_FORMAT, CM_HDR_FILE_LENGTH, "file length shorter than its header and trailer");
     /* the model's needs against this build: refused here, before the body */
     for (uint32_t i = 0; i < d->nlimits; i++) {
-        uint32_t at = CM_FMT_FIXED_HEADER + 4 * i;
+        uint32_t at = cm_fmt_need_at(i);
         uint32_t need = cm_get_u32(b + at);
         if (i < (uint32_t)CM_LIMIT_COUNT) {
             d->need[i] = need;
@@ -114,56 +119,57 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     for (uint32_t i = d->nlimits; i < (uint32_t)CM_LIMIT_COUNT; i++)
         d->need[i] = 0;
     /* the grid and the tolerances */
-    int qe = (int8_t)b[18];
+    int qe = h.q_exp;
     if (qe < -60 || qe > 20)
-        return fail(d, st, CM_E_RANGE, 18, "quantisation exponent (grid step 2^e mm, e in -60..20)");
-    for (int k = 0; k < 3; k++) {
-        double o = cm_get_f64(b + 20 + 8 * k);
+        return fail(d, st, CM_E_RANGE, CM_HDR_QEXP, "quantisation exponent (grid step 2^e mm, e in -60..20)");
+    for (uint32_t k = 0; k < 3; k++) {
+        double o = h.origin[k];
         if (!isfinite(o))
-            return fail(d, st, CM_E_NONFINITE, 20u + 8u * (uint32_t)k, "grid origin");
+            return fail(d, st, CM_E_NONFINITE, CM_HDR_ORIGIN + 8u * k, "grid origin");
         if (!(fabs(o) <= ORIGIN_MAX))
-            return fail(d, st, CM_E_RANGE, 20u + 8u * (uint32_t)k, "grid origin (|origin| <= 2^100 mm)");
+            return fail(d, st, CM_E_RANGE, CM_HDR_ORIGIN + 8u * k, "grid origin (|origin| <= 2^100 mm)");
         d->model.origin[k] = o;
     }
     double q = 1.0;
     for (int i = 0; i < (qe < 0 ? -qe : qe); i++)
         q = qe < 0 ? q * 0.5 : q * 2.0;
     d->model.q = q;
-    d->model.tess_tol = cm_get_f64(b + 44);
+    d->model.tess_tol = h.tess_tol;
     if (!isfinite(d->model.tess_tol))
-        return fail(d, st, CM_E_NONFINITE, 44, "chordal tolerance");
+        return fail(d, st, CM_E_NONFINITE, CM_HDR_TESS_TOL, "chordal tolerance");
     if (!(d->model.tess_tol > 0))
-        return fail(d, st, CM_E_RANGE, 44, "chordal tolerance (must be > 0)");
-    d->model.rel_tol = cm_get_f64(b + 52);
+        return fail(d, st, CM_E_RANGE, CM_HDR_TESS_TOL, "chordal tolerance (must be > 0)");
+    d->model.rel_tol = h.rel_tol;
     if (!isfinite(d->model.rel_tol))
-        return fail(d, st, CM_E_NONFINITE, 52, "rebuild tolerance");
+        return fail(d, st, CM_E_NONFINITE, CM_HDR_REL_TOL, "rebuild tolerance");
     if (!(d->model.rel_tol >= 0))
-        return fail(d, st, CM_E_RANGE, 52, "rebuild tolerance (must be >= 0)");
+        return fail(d, st, CM_E_RANGE, CM_HDR_REL_TOL, "rebuild tolerance (must be >= 0)");
     d->model.need_tess_points = d->need[CM_LIMIT_MAX_TESS_POINTS];
     d->model.need_edge_samples = d->need[CM_LIMIT_MAX_EDGE_SAMPLES];
     /* the section table: tags 1..5 in order, each once, back to back after the header, filling the
        file up to its trailer (offsets and lengths checked before cm_dec_finish addresses bytes) */
     uint32_t prev_end = H;
     for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
-        uint32_t at = table + CM_FMT_SECTION_ENTRY * s;
+        uint32_t at = cm_fmt_entry_at(d->nlimits, s);
         const uint8_t *e = b + at;
         cm_dec_section *sec = &d->sec[s];
-        sec->tag = e[0];
-        sec->off = cm_get_u32(e + 4);
-        sec->len = cm_get_u32(e + 8);
-        sec->crc = cm_get_u32(e + 12);
+        sec->tag = e[CM_ENT_TAG];
+        sec->off = cm_get_u32(e + CM_ENT_OFFSET);
+        sec->len = cm_get_u32(e + CM_ENT_LENGTH);
+        sec->crc = cm_get_u32(e + CM_ENT_CRC);
         if (sec->tag != s + 1)
             return fail(d, st, CM_E_FORMAT, at, "section table: tags must be 1..5 in order");
-        if (e[1] || e[2] || e[3])
-            return fail(d, st, CM_E_FORMAT, at + 1, "section table: reserved bytes must be 0");
+        if (e[CM_ENT_RESERVED] || e[CM_ENT_RESERVED + 1] || e[CM_ENT_RESERVED + 2])
+            return fail(d, st, CM_E_FORMAT, at + CM_ENT_RESERVED, "section table: reserved bytes must be 0");
         if (sec->off != prev_end)
-            return fail(d, st, CM_E_FORMAT, at + 4, "section offset: sections follow the header back to back");
+            return fail(d, st, CM_E_FORMAT, at + CM_ENT_OFFSET,
+                        "section offset: sections follow the header back to back");
         if (sec->len > d->file_len - 4u - sec->off)
-            return fail(d, st, CM_E_FORMAT, at + 8, "section length: beyond the end of the file");
+            return fail(d, st, CM_E_FORMAT, at + CM_ENT_LENGTH, "section length: beyond the end of the file");
         prev_end = sec->off + sec->len;
     }
     if (prev_end != d->file_len - 4u)
-        return fail(d, st, CM_E_FORMAT, 12, "sections do not fill the file");
+        return fail(d, st, CM_E_FORMAT, CM_HDR_FILE_LENGTH, "sections do not fill the file");
     d->state = CM_DEC_BODY;
     return CM_OK;
 }
@@ -178,15 +184,17 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
     for (uint32_t i = 0; i < d->len && i < 4; i++)
         if (d->buf[i] != magic[i])
             return fail(d, st, CM_E_MAGIC, i, "magic");
-    if (d->len >= 5 && (d->buf[4] < CM_FMT_VERSION_MIN_MAJOR || d->buf[4] > CM_FMT_VERSION_MAJOR))
-        return fail(d, st, CM_E_VERSION, 4, "version");
-    if (d->len < 12)
+    if (d->len > CM_HDR_MAJOR &&
+        (d->buf[CM_HDR_MAJOR] < CM_FMT_VERSION_MIN_MAJOR || d->buf[CM_HDR_MAJOR] > CM_FMT_VERSION_MAJOR))
+        return fail(d, st, CM_E_VERSION, CM_HDR_MAJOR, "version");
+    if (d->len < CM_HDR_LENGTH + 4)
         return CM_OK;
-    d->header_len = cm_get_u32(d->buf + 8);
+    d->header_len = cm_get_u32(d->buf + CM_HDR_LENGTH);
     if (d->header_len < CM_FMT_FIXED_HEADER + 4u || d->header_len > CM_FMT_MAX_HEADER)
-        return fail(d, st, CM_E_FORMAT, 8, "header length");
+        return fail(d, st, CM_E_FORMAT, CM_HDR_LENGTH, "header length");
     if (d->header_len > (uint32_t)CM_MAX_FILE_BYTES)
-        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->header_len, CM_MAX_FILE_BYTES, 8, "header length");
+        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->header_len, CM_MAX_FILE_BYTES, CM_HDR_LENGTH,
+                            "header length");
     if (d->len < d->header_len)
         return CM_OK;
     return check_header(d, st);
@@ -550,32 +558,22 @@ static cm_err sec_face(reader *r)
         uint64_t meth = cm_ac_dec_uint(&r->ac, &ctx.method);
         if (r->ac.overrun)
             return rfail(r, CM_E_TRUNCATED, "face method");
-        if (meth >= CM_METHOD_COUNT)
+        const cm_method *M = cm_method_of(meth > 255 ? 255u : (unsigned)meth);
+        if (!M)
             return rfail(r, CM_E_UNSUPPORTED, "face method");
-        /* format 1 knows KEEP and PLANE only */
-        if (meth == CM_METHOD_GREGORY && r->d->buf[4] < 2)
-            return rfail(r, CM_E_UNSUPPORTED, "GREGORY face in a format 1 file");
+        /* a method newer than the file's format version is a malformed file, not a newer one */
+        if (r->d->version_major < M->since_major)
+            return rfail(r, CM_E_UNSUPPORTED, M->too_new);
         F->method = (uint8_t)meth;
         F->layout = F->corner = 0;
         F->checksum = 0;
-        if (F->method == CM_METHOD_GREGORY) {
-            uint64_t layout = cm_ac_dec_uint(&r->ac, &ctx.layout);
-            uint64_t corner = cm_ac_dec_uint(&r->ac, &ctx.corner);
-            F->checksum = cm_ac_dec_direct(&r->ac, 16);
-            F->checksum |= cm_ac_dec_direct(&r->ac, 16) << 16;
-            if (r->ac.overrun)
-                return rfail(r, CM_E_TRUNCATED, "face record");
-            if (layout > 2)
-                return rfail(r, CM_E_RANGE, "GREGORY layout");
-            if (corner >= CM_MAX_SIDES || (layout != 2 && corner != 0))
-                return rfail(r, CM_E_RANGE, "GREGORY corner");
-            F->layout = (uint8_t)layout;
-            F->corner = (uint8_t)corner;
-        }
+        cm_method_fault why = {0};
+        if ((e = cm_method_read_record(M, &r->ac, &ctx, F, &why)) != CM_OK)
+            return rfail(r, e, why.what);
         F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.flip);
         F->color = 0;
         F->surf = 0;
-        if (F->method == CM_METHOD_KEEP) {
+        if (M->kept_surface) {
             if (snext >= m->nsurfs)
                 return rfail(r, CM_E_RANGE, "kept surface");
             F->surf = snext++;
@@ -629,21 +627,11 @@ static cm_err sec_face(reader *r)
                     return rfail(r, CM_E_FORMAT, "loop not closed");
             }
         }
-        /* GREGORY needs one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3
-           (reported at the face's record) */
-        if (F->method == CM_METHOD_GREGORY) {
-            uint32_t n = m->loops[F->loop0].nuse;
-            if (F->nloops != 1)
-                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY face with holes");
-            if (n < 3)
-                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY face with fewer than 3 sides");
-            if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3))
-                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY sides do not fit the layout");
-            if (F->layout == 2 && F->corner >= n)
-                return rfail_at(r, CM_E_FORMAT, F->rec_off, "GREGORY corner beyond the loop");
-            if (n > CM_MAX_SIDES)
-                return rlimit_at(r, CM_LIMIT_MAX_SIDES, n, CM_MAX_SIDES, F->rec_off, "GREGORY sides");
-        }
+        /* the loops must fit the method (reported at the face's record) */
+        if ((e = cm_method_check_loops(M, m, F, &why)) == CM_E_LIMIT)
+            return rlimit_at(r, why.limit, why.need, cm_limit_table[why.limit].value, F->rec_off, why.what);
+        if (e != CM_OK)
+            return rfail_at(r, e, F->rec_off, why.what);
     }
     r->face = CM_NO_FACE_INDEX;
     if (r->ac.overrun)
@@ -699,7 +687,7 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
     m->npalette = 0;
     /* check_header accepted exactly CM_SEC_COUNT sections, each within the file */
     if (d->nsec != CM_SEC_COUNT)
-        return fail(d, st, CM_E_FORMAT, 17, "section count (a .cmz has 5 sections)");
+        return fail(d, st, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count (a .cmz has 5 sections)");
     for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
         const cm_dec_section *sec = &d->sec[s];
         if (crc_differs(cm_crc32(d->buf + sec->off, sec->len), sec->crc))

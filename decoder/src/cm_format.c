@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "cm/cm_bspline.h"
+#include "cm/cm_method.h"
 
 double cm_get_f64(const uint8_t *p)
 {
@@ -23,6 +24,43 @@ void cm_put_f64(uint8_t *p, double v)
         p[i] = (uint8_t)u;
         u >>= 8;
     }
+}
+
+void cm_fmt_header_pack(uint8_t *b, const cm_fmt_header *h)
+{
+    b[CM_HDR_MAGIC + 0] = CM_FMT_MAGIC0;
+    b[CM_HDR_MAGIC + 1] = CM_FMT_MAGIC1;
+    b[CM_HDR_MAGIC + 2] = CM_FMT_MAGIC2;
+    b[CM_HDR_MAGIC + 3] = CM_FMT_MAGIC3;
+    b[CM_HDR_MAJOR] = h->major;
+    b[CM_HDR_MINOR] = h->minor;
+    cm_put_u16(b + CM_HDR_FLAGS, h->flags);
+    cm_put_u32(b + CM_HDR_LENGTH, h->header_len);
+    cm_put_u32(b + CM_HDR_FILE_LENGTH, h->file_len);
+    b[CM_HDR_NLIMITS] = h->nlimits;
+    b[CM_HDR_NSECTIONS] = h->nsections;
+    b[CM_HDR_QEXP] = (uint8_t)h->q_exp;
+    b[CM_HDR_RESERVED] = 0;
+    for (uint32_t k = 0; k < 3; k++)
+        cm_put_f64(b + CM_HDR_ORIGIN + 8 * k, h->origin[k]);
+    cm_put_f64(b + CM_HDR_TESS_TOL, h->tess_tol);
+    cm_put_f64(b + CM_HDR_REL_TOL, h->rel_tol);
+}
+
+void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h)
+{
+    h->major = b[CM_HDR_MAJOR];
+    h->minor = b[CM_HDR_MINOR];
+    h->flags = cm_get_u16(b + CM_HDR_FLAGS);
+    h->header_len = cm_get_u32(b + CM_HDR_LENGTH);
+    h->file_len = cm_get_u32(b + CM_HDR_FILE_LENGTH);
+    h->nlimits = b[CM_HDR_NLIMITS];
+    h->nsections = b[CM_HDR_NSECTIONS];
+    h->q_exp = (int8_t)b[CM_HDR_QEXP];
+    for (uint32_t k = 0; k < 3; k++)
+        h->origin[k] = cm_get_f64(b + CM_HDR_ORIGIN + 8 * k);
+    h->tess_tol = cm_get_f64(b + CM_HDR_TESS_TOL);
+    h->rel_tol = cm_get_f64(b + CM_HDR_REL_TOL);
 }
 
 void cm_model_edge_curve(const cm_model *m, uint32_t e, cm_curve *out)
@@ -56,7 +94,8 @@ void cm_model_adjacency(cm_model *m)
     }
     for (uint32_t f = 0; f < m->nfaces; f++) {
         const cm_face *F = &m->faces[f];
-        int split = F->method == CM_METHOD_GREGORY && F->layout == 1;
+        const cm_method *M = cm_method_of(F->method);
+        int split = M && cm_method_needs_midpoints(M, F);
         for (uint32_t l = 0; l < F->nloops; l++) {
             const cm_loop *L = &m->loops[F->loop0 + l];
             for (uint32_t u = 0; u < L->nuse; u++) {

@@ -133,10 +133,11 @@ static void reverse_pts(cm_vec2 *p, int *src, int n)
     }
 }
 
-/* the boundary points of every loop of face f, in use direction, into ws->bpts.
+/* the boundary points of every loop of face f, in use direction, into ws->bpts (patchwise: the face
+ * is tessellated patch by patch, each holding itself to the budget).
  * Not inlined: gcc 12 then reports a (false) maybe-uninitialized in the caller. */
-__attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const cm_face *F, double tol, cm_tess_ws *ws, int *nb,
-                              cm_tess_info *info, cm_status *st)
+__attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const cm_face *F, double tol, int patchwise,
+                                                        cm_tess_ws *ws, int *nb, cm_tess_info *info, cm_status *st)
 {
     int k = 0;
     for (uint32_t l = 0; l < F->nloops; l++) {
@@ -152,7 +153,7 @@ __attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const
                 info->max_edge_samples = n + 1;
             /* bpts holds CM_MAX_TESS_POINTS; a PLANE or KEEP face triangulates all of them at once,
                a GREGORY face a part per patch (tess_patch holds each patch to the budget) */
-            int cap = F->method == CM_METHOD_GREGORY ? CM_MAX_TESS_POINTS : ws->point_cap;
+            int cap = patchwise ? CM_MAX_TESS_POINTS : ws->point_cap;
             if (k + n > cap)
                 return over_budget(cap, (uint64_t)(k + n), st, __func__);
             if (l == 0 && u < CM_MAX_LOOP_EDGES) {
@@ -326,7 +327,7 @@ static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist,
 #define TESS_REFINE_ROUNDS 16
 
 /* what a face's (u,v) means: the plane's frame, a kept NURBS, or one Gregory patch */
-enum { CHART_PLANE, CHART_KEEP, CHART_GREGORY };
+enum { CHART_FRAME, CHART_NURBS, CHART_GREGORY };
 typedef struct chart {
     int kind;
     const cm_psurf *ps;     /* KEEP */
@@ -338,7 +339,7 @@ typedef struct chart {
 /* point and first partials at (u,v) */
 static cm_err chart_eval(const chart *c, double u, double v, cm_vec3 d[3], cm_status *st)
 {
-    if (c->kind == CHART_KEEP)
+    if (c->kind == CHART_NURBS)
         return cm_psurf_eval(c->ps, u, v, d, st);
     if (c->kind == CHART_GREGORY) {
         cm_greg_eval(c->g, u, v, &d[0], &d[1], &d[2]);
@@ -429,7 +430,7 @@ static int boundary_side(const int *loop_start, int nloops, int nbnd, int i, int
  * borrows the normal a little towards `toward` */
 static cm_vec3 chart_normal(const chart *c, double u, double v, cm_vec2 toward)
 {
-    if (c->kind == CHART_PLANE)
+    if (c->kind == CHART_FRAME)
         return c->frame->ez;
     for (int k = 0; k < 4; k++) {
         double s = k == 0 ? 0.0 : (k == 1 ? 1e-6 : (k == 2 ? 1e-4 : 1e-2));
@@ -458,7 +459,7 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
 {
     int npts = *npts_io, ntris = *ntris_io, nxyz = 0, nbnd = ws->loop_start[nloops];
     cm_err e = CM_OK;
-    for (int round = 0; c->kind != CHART_PLANE && round < TESS_REFINE_ROUNDS; round++) {
+    for (int round = 0; c->kind != CHART_FRAME && round < TESS_REFINE_ROUNDS; round++) {
         for (; nxyz < npts; nxyz++)
             if ((e = point_xyz(c, ws, nxyz, st)) != CM_OK)
                 return e;
@@ -723,7 +724,7 @@ static cm_err tess_gregory(const cm_model *m, uint32_t f, const cm_greg_surface 
     int n = (int)L->nuse, k = 0, sn[4];
     cm_err e = CM_OK;
     if (m->faces[f].nloops != 1)
-        return cm_fail(st, CM_E_UNSUPPORTED, "GREGORY face with holes");
+        return cm_fail(st, CM_E_UNSUPPORTED, "Gregory patches on a face with holes");
     if (gs->layout != CM_GREG_LAYOUT_SPLIT) {
         /* one patch: sides 0, 1, 2 along v=0, u=1, v=1 (backwards); layout 0's side 3 along u=0,
            layout 2's collapsed into V_j (its corners (0,1) and (0,0) are both V_j) */
@@ -798,12 +799,12 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     if (e != CM_OK)
         return e;
     int nb;
-    if ((e = sample_boundary(m, F, tol, ws, &nb, info, st)) != CM_OK)
+    if ((e = sample_boundary(m, F, tol, rb.repr == CM_REPR_PATCHES, ws, &nb, info, st)) != CM_OK)
         return e;
     cm_mesh_face *mf = NULL;
     if ((e = begin_face(m, f, mesh, &mf, st)) != CM_OK)
         return e;
-    if (F->method == CM_METHOD_GREGORY) {
+    if (rb.repr == CM_REPR_PATCHES) {
         if ((e = tess_gregory(m, f, rb.greg, tol, nb, mesh, ws, info, st)) != CM_OK)
             return e;
         end_face(mesh, mf);
@@ -811,8 +812,8 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     }
     int npts = 0, nloops = (int)F->nloops;
     cm_psurf ps;
-    int keep = F->method == CM_METHOD_KEEP;
-    chart c = {keep ? CHART_KEEP : CHART_PLANE, &ps, &rb.frame, NULL, keep && F->flip ? -1.0 : 1.0};
+    int keep = rb.repr == CM_REPR_NURBS;
+    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, rb.sign};
     if (keep) {
         if ((e = cm_psurf_init(&ps, &rb.surf, 1e-9 * rb.bbox, st)) != CM_OK)
             return e;
@@ -930,8 +931,8 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     info->points = npts;
     /* a flipped kept face turns its triangles */
     int emitted = 0;
-    if ((e = emit_region(&c, ws, npts, ntris, cm_v2(0.5 * (umin + umax), 0.5 * (vmin + vmax)), keep && F->flip,
-                         mesh, &emitted, st)) != CM_OK)
+    if ((e = emit_region(&c, ws, npts, ntris, cm_v2(0.5 * (umin + umax), 0.5 * (vmin + vmax)), rb.sign < 0, mesh,
+                         &emitted, st)) != CM_OK)
         return e;
     info->triangles = emitted;
     end_face(mesh, mf);

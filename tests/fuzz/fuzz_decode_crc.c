@@ -35,6 +35,7 @@
 #include "fuzz_decode.c"
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_limits_info.h"
 
 size_t LLVMFuzzerMutate(uint8_t *data, size_t size, size_t max_size) __attribute__((weak));
@@ -71,22 +72,21 @@ static int take_apart(const uint8_t *b, size_t n, parts *p)
 {
     if (n < CM_FMT_FIXED_HEADER + 8)
         return 0;
-    uint32_t H = cm_get_u32(b + 8);
-    p->nneeds = b[16];
-    p->nsec = b[17];
-    uint32_t table = CM_FMT_FIXED_HEADER + 4u * p->nneeds;
-    if (H != table + CM_FMT_SECTION_ENTRY * p->nsec + 4u || H > n)
+    uint32_t H = cm_get_u32(b + CM_HDR_LENGTH);
+    p->nneeds = b[CM_HDR_NLIMITS];
+    p->nsec = b[CM_HDR_NSECTIONS];
+    if (H != cm_fmt_header_len(p->nneeds, p->nsec) || H > n)
         return 0;
     memcpy(p->fixed, b, CM_FMT_FIXED_HEADER);
     for (uint32_t i = 0; i < p->nneeds; i++)
-        p->needs[i] = cm_get_u32(b + CM_FMT_FIXED_HEADER + 4 * i);
+        p->needs[i] = cm_get_u32(b + cm_fmt_need_at(i));
     for (uint32_t s = 0; s < p->nsec; s++) {
-        const uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * s;
-        uint32_t off = cm_get_u32(e + 4), len = cm_get_u32(e + 8);
+        const uint8_t *e = b + cm_fmt_entry_at(p->nneeds, s);
+        uint32_t off = cm_get_u32(e + CM_ENT_OFFSET), len = cm_get_u32(e + CM_ENT_LENGTH);
         if (off > n || len > n - off)
             return 0;
-        p->tag[s] = e[0];
-        memcpy(p->reserved[s], e + 1, 3);
+        p->tag[s] = e[CM_ENT_TAG];
+        memcpy(p->reserved[s], e + CM_ENT_RESERVED, 3);
         p->body[s] = b + off;
         p->len[s] = len;
     }
@@ -96,27 +96,28 @@ static int take_apart(const uint8_t *b, size_t n, parts *p)
 /* lay p out into out (cap bytes) with every length, offset and CRC right; 0 if it does not fit */
 static size_t put_together(const parts *p, uint8_t *out, size_t cap)
 {
-    uint32_t table = CM_FMT_FIXED_HEADER + 4u * p->nneeds;
-    size_t H = table + CM_FMT_SECTION_ENTRY * (size_t)p->nsec + 4u, total = H + 4;
+    size_t H = cm_fmt_header_len(p->nneeds, p->nsec), total = H + 4;
     for (uint32_t s = 0; s < p->nsec; s++)
         total += p->len[s];
     if (total > cap)
         return 0;
+    /* the fixed fields as they were taken apart (or mutated: magic and reserved byte included, so
+       not through cm_fmt_header_pack), the lengths and counts of this layout over them */
     memcpy(out, p->fixed, CM_FMT_FIXED_HEADER);
-    cm_put_u32(out + 8, (uint32_t)H);
-    cm_put_u32(out + 12, (uint32_t)total);
-    out[16] = (uint8_t)p->nneeds;
-    out[17] = (uint8_t)p->nsec;
+    cm_put_u32(out + CM_HDR_LENGTH, (uint32_t)H);
+    cm_put_u32(out + CM_HDR_FILE_LENGTH, (uint32_t)total);
+    out[CM_HDR_NLIMITS] = (uint8_t)p->nneeds;
+    out[CM_HDR_NSECTIONS] = (uint8_t)p->nsec;
     for (uint32_t i = 0; i < p->nneeds; i++)
-        cm_put_u32(out + CM_FMT_FIXED_HEADER + 4 * i, p->needs[i]);
+        cm_put_u32(out + cm_fmt_need_at(i), p->needs[i]);
     size_t off = H;
     for (uint32_t s = 0; s < p->nsec; s++) {
-        uint8_t *e = out + table + CM_FMT_SECTION_ENTRY * s;
-        e[0] = p->tag[s];
-        memcpy(e + 1, p->reserved[s], 3);
-        cm_put_u32(e + 4, (uint32_t)off);
-        cm_put_u32(e + 8, p->len[s]);
-        cm_put_u32(e + 12, cm_crc32(p->body[s], p->len[s]));
+        uint8_t *e = out + cm_fmt_entry_at(p->nneeds, s);
+        e[CM_ENT_TAG] = p->tag[s];
+        memcpy(e + CM_ENT_RESERVED, p->reserved[s], 3);
+        cm_put_u32(e + CM_ENT_OFFSET, (uint32_t)off);
+        cm_put_u32(e + CM_ENT_LENGTH, p->len[s]);
+        cm_put_u32(e + CM_ENT_CRC, cm_crc32(p->body[s], p->len[s]));
         memmove(out + off, p->body[s], p->len[s]);
         off += p->len[s];
     }
@@ -130,12 +131,12 @@ static void fix_crcs(uint8_t *b, size_t n)
 {
     if (n < CM_FMT_FIXED_HEADER + 8)
         return;
-    uint32_t H = cm_get_u32(b + 8), L = cm_get_u32(b + 12), table = CM_FMT_FIXED_HEADER + 4u * b[16];
-    for (uint32_t s = 0; s < b[17] && table + CM_FMT_SECTION_ENTRY * (s + 1) <= n; s++) {
-        uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * s;
-        uint32_t off = cm_get_u32(e + 4), len = cm_get_u32(e + 8);
+    uint32_t H = cm_get_u32(b + CM_HDR_LENGTH), L = cm_get_u32(b + CM_HDR_FILE_LENGTH), nl = b[CM_HDR_NLIMITS];
+    for (uint32_t s = 0; s < b[CM_HDR_NSECTIONS] && cm_fmt_entry_at(nl, s + 1) <= n; s++) {
+        uint8_t *e = b + cm_fmt_entry_at(nl, s);
+        uint32_t off = cm_get_u32(e + CM_ENT_OFFSET), len = cm_get_u32(e + CM_ENT_LENGTH);
         if (off <= n && len <= n - off)
-            cm_put_u32(e + 12, cm_crc32(b + off, len));
+            cm_put_u32(e + CM_ENT_CRC, cm_crc32(b + off, len));
     }
     if (H >= CM_FMT_FIXED_HEADER + 4 && H <= n) /* (a shorter H has no room for its CRC) */
         cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
@@ -184,12 +185,12 @@ static void put_interesting_f64(uint8_t *at)
 static void mutate_fixed(parts *p)
 {
     switch (below(6)) {
-    case 0: p->fixed[4 + below(2)] = (uint8_t)interesting_u32(p->fixed[4]); break; /* version */
-    case 1: p->fixed[6 + below(2)] ^= (uint8_t)(1u << below(8)); break;           /* flags */
-    case 2: p->fixed[18] = (uint8_t)interesting_u32(p->fixed[18]); break;          /* grid exponent */
-    case 3: p->fixed[19] = (uint8_t)rnd(); break;                                  /* reserved */
-    case 4: put_interesting_f64(p->fixed + 20 + 8 * below(3)); break;              /* origin */
-    default: put_interesting_f64(p->fixed + 44 + 8 * below(2)); break;             /* tolerances */
+    case 0: p->fixed[CM_HDR_MAJOR + below(2)] = (uint8_t)interesting_u32(p->fixed[CM_HDR_MAJOR]); break; /* version */
+    case 1: p->fixed[CM_HDR_FLAGS + below(2)] ^= (uint8_t)(1u << below(8)); break;                    /* flags */
+    case 2: p->fixed[CM_HDR_QEXP] = (uint8_t)interesting_u32(p->fixed[CM_HDR_QEXP]); break; /* grid exponent */
+    case 3: p->fixed[CM_HDR_RESERVED] = (uint8_t)rnd(); break;                              /* reserved */
+    case 4: put_interesting_f64(p->fixed + CM_HDR_ORIGIN + 8 * below(3)); break;            /* origin */
+    default: put_interesting_f64(p->fixed + CM_HDR_TESS_TOL + 8 * below(2)); break;         /* tolerances */
     }
 }
 
@@ -245,20 +246,23 @@ static void mutate_section_count(parts *p)
 /* after layout: one entry of the section table, or a length of the header, made wrong on purpose */
 static void break_layout(uint8_t *b, size_t n)
 {
-    uint32_t table = CM_FMT_FIXED_HEADER + 4u * b[16], ns = b[17];
+    uint32_t nl = b[CM_HDR_NLIMITS], ns = b[CM_HDR_NSECTIONS];
     if (below(3) == 0 || ns == 0) {
-        uint32_t at = below(2) ? 8 : 12;
+        uint32_t at = below(2) ? CM_HDR_LENGTH : CM_HDR_FILE_LENGTH;
         cm_put_u32(b + at, interesting_u32(cm_get_u32(b + at)));
         return;
     }
-    uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * below(ns);
+    uint8_t *e = b + cm_fmt_entry_at(nl, below(ns));
     if (e + CM_FMT_SECTION_ENTRY > b + n)
         return;
     switch (below(4)) {
-    case 0: e[0] = (uint8_t)interesting_u32(e[0]); break;
-    case 1: e[1 + below(3)] = (uint8_t)rnd(); break;
-    case 2: cm_put_u32(e + 4, below(2) ? (uint32_t)n - below(8) : interesting_u32(cm_get_u32(e + 4))); break;
-    default: cm_put_u32(e + 8, interesting_u32(cm_get_u32(e + 8))); break;
+    case 0: e[CM_ENT_TAG] = (uint8_t)interesting_u32(e[CM_ENT_TAG]); break;
+    case 1: e[CM_ENT_RESERVED + below(3)] = (uint8_t)rnd(); break; /* the reserved bytes */
+    case 2:
+        cm_put_u32(e + CM_ENT_OFFSET,
+                   below(2) ? (uint32_t)n - below(8) : interesting_u32(cm_get_u32(e + CM_ENT_OFFSET)));
+        break;
+    default: cm_put_u32(e + CM_ENT_LENGTH, interesting_u32(cm_get_u32(e + CM_ENT_LENGTH))); break;
     }
 }
 

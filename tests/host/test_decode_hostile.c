@@ -31,6 +31,7 @@
 #include <stdlib.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
 #include "cm/cm_sections.h"
@@ -244,8 +245,8 @@ static void put_colr(const tmodel *m, section *s)
 #define MAX_SECTIONS 255
 
 typedef struct spec {
-    uint8_t fixed[CM_FMT_FIXED_HEADER]; /* magic, version, flags, grid, origin, tolerances (lengths and
-                                            counts are filled in by assemble) */
+    cm_fmt_header hdr; /* version, flags, grid, origin, tolerances (lengths and counts are filled in by
+                          assemble) */
     uint32_t nneeds, need[255];
     uint32_t nsec;
     section *sec[MAX_SECTIONS];
@@ -257,19 +258,15 @@ static section model_sec[CM_SEC_COUNT], extra_sec; /* extra_sec: an extra sectio
 static void spec_of(const tmodel *m, spec *sp)
 {
     memset(sp, 0, sizeof *sp);
-    uint8_t *b = sp->fixed;
-    b[0] = CM_FMT_MAGIC0;
-    b[1] = CM_FMT_MAGIC1;
-    b[2] = CM_FMT_MAGIC2;
-    b[3] = CM_FMT_MAGIC3;
-    b[4] = 1;
-    b[5] = 0;
-    cm_put_u16(b + 6, (uint16_t)(m->npalette ? 1 : 0));
-    b[18] = (uint8_t)(int8_t)-10; /* grid 2^-10 mm */
+    cm_fmt_header *h = &sp->hdr;
+    h->major = 1;
+    h->minor = 0;
+    h->flags = (uint16_t)(m->npalette ? 1 : 0);
+    h->q_exp = -10; /* grid 2^-10 mm */
     for (int k = 0; k < 3; k++)
-        cm_put_f64(b + 20 + 8 * k, 0.0);
-    cm_put_f64(b + 44, 0.01);
-    cm_put_f64(b + 52, 0.01);
+        h->origin[k] = 0.0;
+    h->tess_tol = 0.01;
+    h->rel_tol = 0.01;
     sp->nneeds = CM_LIMIT_COUNT;
     void (*writers[CM_SEC_COUNT])(const tmodel *, section *) = {put_vert, put_edge, put_surf, put_face, put_colr};
     sp->nsec = CM_SEC_COUNT;
@@ -284,28 +281,28 @@ static void spec_of(const tmodel *m, spec *sp)
 /* lay sp out; returns the malloc'd file, *len its length */
 static uint8_t *assemble(const spec *sp, size_t *len)
 {
-    uint32_t table = CM_FMT_FIXED_HEADER + 4u * sp->nneeds;
-    size_t H = table + CM_FMT_SECTION_ENTRY * (size_t)sp->nsec + 4u, total = H + 4u;
+    size_t H = cm_fmt_header_len(sp->nneeds, sp->nsec), total = H + 4u;
     for (uint32_t s = 0; s < sp->nsec; s++)
         total += sp->sec[s]->len;
     uint8_t *b = calloc(1, total);
     assert_non_null(b);
-    memcpy(b, sp->fixed, CM_FMT_FIXED_HEADER);
-    cm_put_u32(b + 8, (uint32_t)H);
-    cm_put_u32(b + 12, (uint32_t)total);
-    b[16] = (uint8_t)sp->nneeds;
-    b[17] = (uint8_t)sp->nsec;
+    cm_fmt_header h = sp->hdr;
+    h.header_len = (uint32_t)H;
+    h.file_len = (uint32_t)total;
+    h.nlimits = (uint8_t)sp->nneeds;
+    h.nsections = (uint8_t)sp->nsec;
+    cm_fmt_header_pack(b, &h);
     for (uint32_t i = 0; i < sp->nneeds; i++)
-        cm_put_u32(b + CM_FMT_FIXED_HEADER + 4 * i, sp->need[i]);
+        cm_put_u32(b + cm_fmt_need_at(i), sp->need[i]);
     size_t off = H;
     for (uint32_t s = 0; s < sp->nsec; s++) {
         const section *S = sp->sec[s];
-        uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * s;
-        e[0] = S->tag;
-        memcpy(e + 1, S->reserved, 3);
-        cm_put_u32(e + 4, (uint32_t)off);
-        cm_put_u32(e + 8, S->len);
-        cm_put_u32(e + 12, cm_crc32(S->bytes, S->len));
+        uint8_t *e = b + cm_fmt_entry_at(sp->nneeds, s);
+        e[CM_ENT_TAG] = S->tag;
+        memcpy(e + CM_ENT_RESERVED, S->reserved, 3);
+        cm_put_u32(e + CM_ENT_OFFSET, (uint32_t)off);
+        cm_put_u32(e + CM_ENT_LENGTH, S->len);
+        cm_put_u32(e + CM_ENT_CRC, cm_crc32(S->bytes, S->len));
         memcpy(b + off, S->bytes, S->len);
         off += S->len;
     }
@@ -318,12 +315,12 @@ static uint8_t *assemble(const spec *sp, size_t *len)
 /* after a field was changed in place: every CRC the file still has room for made right again */
 static void fix_crcs(uint8_t *b, size_t n)
 {
-    uint32_t H = cm_get_u32(b + 8), L = cm_get_u32(b + 12), table = CM_FMT_FIXED_HEADER + 4u * b[16];
-    for (uint32_t s = 0; s < b[17] && table + CM_FMT_SECTION_ENTRY * (s + 1) <= n; s++) {
-        uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * s;
-        uint32_t off = cm_get_u32(e + 4), len = cm_get_u32(e + 8);
+    uint32_t H = cm_get_u32(b + CM_HDR_LENGTH), L = cm_get_u32(b + CM_HDR_FILE_LENGTH), nl = b[CM_HDR_NLIMITS];
+    for (uint32_t s = 0; s < b[CM_HDR_NSECTIONS] && cm_fmt_entry_at(nl, s + 1) <= n; s++) {
+        uint8_t *e = b + cm_fmt_entry_at(nl, s);
+        uint32_t off = cm_get_u32(e + CM_ENT_OFFSET), len = cm_get_u32(e + CM_ENT_LENGTH);
         if (off <= n && len <= n - off)
-            cm_put_u32(e + 12, cm_crc32(b + off, len));
+            cm_put_u32(e + CM_ENT_CRC, cm_crc32(b + off, len));
     }
     if (H >= CM_FMT_FIXED_HEADER + 4 && H <= n) /* (a shorter H has no room for its CRC) */
         cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
@@ -415,7 +412,7 @@ static void test_six_sections_valid_crcs(void **state)
     extra_sec.len = 41;
     sp.sec[sp.nsec++] = &extra_sec;
     uint8_t *b = assemble(&sp, &n);
-    assert_refused(b, n, CM_E_FORMAT, 17, "section count");
+    assert_refused(b, n, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count");
     free(b);
 }
 
@@ -433,11 +430,11 @@ static void test_200_sections(void **state)
     }
     assert_int_equal(sp.nsec, 200);
     uint8_t *b = assemble(&sp, &n);
-    assert_refused(b, n, CM_E_FORMAT, 17, "section count");
+    assert_refused(b, n, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count");
     free(b);
 }
 
-/* every section count but 5, the header's length consistent with it: refused at byte 17, before the
+/* every section count but 5, the header's length consistent with it: refused at CM_HDR_NSECTIONS (byte 17), before the
    table is read (a count below 5 was once accepted until cm_dec_finish had decoded its sections) */
 static void test_every_other_section_count(void **state)
 {
@@ -458,11 +455,11 @@ static void test_every_other_section_count(void **state)
         uint8_t *b = assemble(&sp, &n);
         cm_status st;
         assert_err(decode(b, n, &st), CM_E_FORMAT);
-        if (cm_get_u32(b + 8) > CM_FMT_MAX_HEADER) { /* a table that long is a header too long */
-            assert_int_equal(st.offset, 8);
+        if (cm_get_u32(b + CM_HDR_LENGTH) > CM_FMT_MAX_HEADER) { /* a table that long is a header too long */
+            assert_int_equal(st.offset, CM_HDR_LENGTH);
             assert_says(&st, "header length");
         } else {
-            assert_int_equal(st.offset, 17);
+            assert_int_equal(st.offset, CM_HDR_NSECTIONS);
             assert_says(&st, "section count");
         }
         free(b);
@@ -477,48 +474,48 @@ static void test_section_table_entries(void **state)
     size_t n;
     uint8_t *ref = reference_file(&sp, &n);
     assert_decodes(ref, n);
-    const uint32_t table = CM_FMT_FIXED_HEADER + 4u * CM_LIMIT_COUNT;
     struct {
         uint32_t entry, at, value, width;
         uint32_t want_at;
         cm_err want;
         const char *cause;
     } cases[] = {
-        {2, 0, 4, 1, 0, CM_E_FORMAT, "tags must be 1..5"},          /* SURF tagged FACE */
-        {4, 0, 6, 1, 0, CM_E_FORMAT, "tags must be 1..5"},
-        {0, 0, 0, 1, 0, CM_E_FORMAT, "tags must be 1..5"},
-        {1, 2, 1, 1, 1, CM_E_FORMAT, "reserved bytes"},
-        {3, 4, 0xffffffffu, 4, 4, CM_E_FORMAT, "section offset"},    /* offset far beyond the file */
-        {3, 4, 0, 4, 4, CM_E_FORMAT, "section offset"},              /* inside the header */
-        {0, 8, 0xffffffffu, 4, 8, CM_E_FORMAT, "section length"},    /* offset + length wraps */
-        {4, 8, 0x7fffffffu, 4, 8, CM_E_FORMAT, "section length"},
+        {2, CM_ENT_TAG, 4, 1, CM_ENT_TAG, CM_E_FORMAT, "tags must be 1..5"}, /* SURF tagged FACE */
+        {4, CM_ENT_TAG, 6, 1, CM_ENT_TAG, CM_E_FORMAT, "tags must be 1..5"},
+        {0, CM_ENT_TAG, 0, 1, CM_ENT_TAG, CM_E_FORMAT, "tags must be 1..5"},
+        /* the second reserved byte set: refused at the first one */
+        {1, CM_ENT_RESERVED + 1, 1, 1, CM_ENT_RESERVED, CM_E_FORMAT, "reserved bytes"},
+        {3, CM_ENT_OFFSET, 0xffffffffu, 4, CM_ENT_OFFSET, CM_E_FORMAT, "section offset"}, /* far beyond the file */
+        {3, CM_ENT_OFFSET, 0, 4, CM_ENT_OFFSET, CM_E_FORMAT, "section offset"},           /* inside the header */
+        {0, CM_ENT_LENGTH, 0xffffffffu, 4, CM_ENT_LENGTH, CM_E_FORMAT, "section length"}, /* offset + length wraps */
+        {4, CM_ENT_LENGTH, 0x7fffffffu, 4, CM_ENT_LENGTH, CM_E_FORMAT, "section length"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         uint8_t *b = malloc(n);
         memcpy(b, ref, n);
-        uint8_t *e = b + table + CM_FMT_SECTION_ENTRY * cases[i].entry;
+        uint8_t *e = b + cm_fmt_entry_at(CM_LIMIT_COUNT, cases[i].entry);
         if (cases[i].width == 1)
             e[cases[i].at] = (uint8_t)cases[i].value;
         else
             cm_put_u32(e + cases[i].at, cases[i].value);
         fix_crcs(b, n);
-        assert_refused(b, n, cases[i].want, table + CM_FMT_SECTION_ENTRY * cases[i].entry + cases[i].want_at,
+        assert_refused(b, n, cases[i].want, cm_fmt_entry_at(CM_LIMIT_COUNT, cases[i].entry) + cases[i].want_at,
                        cases[i].cause);
         free(b);
     }
     /* a section one byte shorter leaves a byte between it and the next */
     uint8_t *b = malloc(n);
     memcpy(b, ref, n);
-    uint8_t *e = b + table;
-    cm_put_u32(e + 8, cm_get_u32(e + 8) - 1);
+    uint8_t *e = b + cm_fmt_entry_at(CM_LIMIT_COUNT, 0);
+    cm_put_u32(e + CM_ENT_LENGTH, cm_get_u32(e + CM_ENT_LENGTH) - 1);
     fix_crcs(b, n);
-    assert_refused(b, n, CM_E_FORMAT, table + CM_FMT_SECTION_ENTRY + 4, "section offset");
+    assert_refused(b, n, CM_E_FORMAT, cm_fmt_entry_at(CM_LIMIT_COUNT, 1) + CM_ENT_OFFSET, "section offset");
     /* the last one shorter: the sections do not reach the trailer */
     memcpy(b, ref, n);
-    e = b + table + CM_FMT_SECTION_ENTRY * 4;
-    cm_put_u32(e + 8, cm_get_u32(e + 8) - 1);
+    e = b + cm_fmt_entry_at(CM_LIMIT_COUNT, CM_SEC_COUNT - 1);
+    cm_put_u32(e + CM_ENT_LENGTH, cm_get_u32(e + CM_ENT_LENGTH) - 1);
     fix_crcs(b, n);
-    assert_refused(b, n, CM_E_FORMAT, 12, "do not fill the file");
+    assert_refused(b, n, CM_E_FORMAT, CM_HDR_FILE_LENGTH, "do not fill the file");
     free(b);
     free(ref);
 }
@@ -543,7 +540,7 @@ static void test_need_counts(void **state)
         /* the last entry, one this build does not know, needed */
         sp.need[counts[i] - 1] = 1;
         b = assemble(&sp, &n);
-        assert_refused(b, n, CM_E_VERSION, CM_FMT_FIXED_HEADER + 4 * (counts[i] - 1), "unknown limit");
+        assert_refused(b, n, CM_E_VERSION, cm_fmt_need_at(counts[i] - 1), "unknown limit");
         free(b);
     }
     /* a need over this build's limit: named, at its entry */
@@ -552,7 +549,7 @@ static void test_need_counts(void **state)
     free(reference_file(&sp, &n));
     sp.need[CM_LIMIT_MAX_FACES] = CM_MAX_FACES + 1u;
     uint8_t *b = assemble(&sp, &n);
-    assert_refused(b, n, CM_E_LIMIT, CM_FMT_FIXED_HEADER + 4 * CM_LIMIT_MAX_FACES, "MAX_FACES");
+    assert_refused(b, n, CM_E_LIMIT, cm_fmt_need_at(CM_LIMIT_MAX_FACES), "MAX_FACES");
     free(b);
 }
 
@@ -563,26 +560,26 @@ static void test_header_and_file_lengths(void **state)
     size_t n;
     uint8_t *ref = reference_file(&sp, &n);
     uint8_t *b = malloc(n + 64);
-    const uint32_t H = cm_get_u32(ref + 8);
-    /* H that does not fit the counts, too small, too large: refused at byte 8 */
+    const uint32_t H = cm_get_u32(ref + CM_HDR_LENGTH);
+    /* H that does not fit the counts (an entry less or more), too small, too large: refused at its field */
     static const uint32_t hs[] = {0, 4, CM_FMT_FIXED_HEADER + 3, 0, 0, CM_FMT_MAX_HEADER + 1, 0xffffffffu};
     for (size_t i = 0; i < sizeof hs / sizeof hs[0]; i++) {
         memcpy(b, ref, n);
-        uint32_t h = hs[i] ? hs[i] : (i == 3 ? H - 16 : H + 16);
-        cm_put_u32(b + 8, h);
+        uint32_t h = hs[i] ? hs[i] : (i == 3 ? H - CM_FMT_SECTION_ENTRY : H + CM_FMT_SECTION_ENTRY);
+        cm_put_u32(b + CM_HDR_LENGTH, h);
         fix_crcs(b, n);
-        assert_refused(b, n, CM_E_FORMAT, 8, "header length");
+        assert_refused(b, n, CM_E_FORMAT, CM_HDR_LENGTH, "header length");
     }
     /* L shorter than header and trailer */
     memcpy(b, ref, n);
-    cm_put_u32(b + 12, H + 3);
+    cm_put_u32(b + CM_HDR_FILE_LENGTH, H + 3);
     fix_crcs(b, n);
-    assert_refused(b, n, CM_E_FORMAT, 12, "file length");
+    assert_refused(b, n, CM_E_FORMAT, CM_HDR_FILE_LENGTH, "file length");
     /* L over this build's file size */
     memcpy(b, ref, n);
-    cm_put_u32(b + 12, (uint32_t)CM_MAX_FILE_BYTES + 1u);
+    cm_put_u32(b + CM_HDR_FILE_LENGTH, (uint32_t)CM_MAX_FILE_BYTES + 1u);
     fix_crcs(b, n);
-    assert_refused(b, n, CM_E_LIMIT, 12, "MAX_FILE_BYTES");
+    assert_refused(b, n, CM_E_LIMIT, CM_HDR_FILE_LENGTH, "MAX_FILE_BYTES");
     /* L and the table agree, but the bytes end early, or go on */
     memcpy(b, ref, n);
     cm_status st;
@@ -607,13 +604,13 @@ static void test_grid_and_tolerances(void **state)
     static const int8_t qes[] = {-128, -61, 21, 127};
     for (size_t i = 0; i < sizeof qes / sizeof qes[0]; i++) {
         memcpy(b, ref, n);
-        b[18] = (uint8_t)qes[i];
+        b[CM_HDR_QEXP] = (uint8_t)qes[i];
         fix_crcs(b, n);
-        assert_refused(b, n, CM_E_RANGE, 18, "quantisation exponent");
+        assert_refused(b, n, CM_E_RANGE, CM_HDR_QEXP, "quantisation exponent");
     }
     for (int8_t qe = -60; qe <= 20; qe += 80) { /* the bounds themselves load */
         memcpy(b, ref, n);
-        b[18] = (uint8_t)qe;
+        b[CM_HDR_QEXP] = (uint8_t)qe;
         fix_crcs(b, n);
         assert_decodes(b, n);
     }
@@ -623,17 +620,17 @@ static void test_grid_and_tolerances(void **state)
         cm_err want;
         const char *cause;
     } cases[] = {
-        {20, (double)NAN, CM_E_NONFINITE, "grid origin"},
-        {28, (double)INFINITY, CM_E_NONFINITE, "grid origin"},
-        {36, -(double)INFINITY, CM_E_NONFINITE, "grid origin"},
-        {20, 1e300, CM_E_RANGE, "grid origin"},
-        {36, -0x1p101, CM_E_RANGE, "grid origin"},
-        {44, 0.0, CM_E_RANGE, "chordal tolerance"},
-        {44, -1.0, CM_E_RANGE, "chordal tolerance"},
-        {44, (double)NAN, CM_E_NONFINITE, "chordal tolerance"},
-        {44, (double)INFINITY, CM_E_NONFINITE, "chordal tolerance"},
-        {52, -1e-9, CM_E_RANGE, "rebuild tolerance"},
-        {52, (double)NAN, CM_E_NONFINITE, "rebuild tolerance"},
+        {CM_HDR_ORIGIN + 0, (double)NAN, CM_E_NONFINITE, "grid origin"}, /* x, y, z: 8 bytes each */
+        {CM_HDR_ORIGIN + 8, (double)INFINITY, CM_E_NONFINITE, "grid origin"},
+        {CM_HDR_ORIGIN + 16, -(double)INFINITY, CM_E_NONFINITE, "grid origin"},
+        {CM_HDR_ORIGIN + 0, 1e300, CM_E_RANGE, "grid origin"},
+        {CM_HDR_ORIGIN + 16, -0x1p101, CM_E_RANGE, "grid origin"},
+        {CM_HDR_TESS_TOL, 0.0, CM_E_RANGE, "chordal tolerance"},
+        {CM_HDR_TESS_TOL, -1.0, CM_E_RANGE, "chordal tolerance"},
+        {CM_HDR_TESS_TOL, (double)NAN, CM_E_NONFINITE, "chordal tolerance"},
+        {CM_HDR_TESS_TOL, (double)INFINITY, CM_E_NONFINITE, "chordal tolerance"},
+        {CM_HDR_REL_TOL, -1e-9, CM_E_RANGE, "rebuild tolerance"},
+        {CM_HDR_REL_TOL, (double)NAN, CM_E_NONFINITE, "rebuild tolerance"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         memcpy(b, ref, n);
@@ -654,7 +651,7 @@ static void test_every_header_byte_hostile(void **state)
     size_t n;
     uint8_t *ref = reference_file(&sp, &n);
     uint8_t *b = malloc(n);
-    const uint32_t H = cm_get_u32(ref + 8);
+    const uint32_t H = cm_get_u32(ref + CM_HDR_LENGTH);
     static const uint8_t values[] = {0x00, 0x01, 0x04, 0x05, 0x06, 0x7f, 0x80, 0xc4, 0xfe, 0xff};
     int refused = 0;
     for (uint32_t at = 0; at < H - 4; at++)
@@ -711,7 +708,7 @@ static void test_face_record_error_names_face(void **state)
     three_squares(&M);
     spec_of(&M, &sp);
     b = assemble(&sp, &n);
-    cm_put_u32(b + CM_FMT_FIXED_HEADER + 4u * CM_LIMIT_COUNT + CM_FMT_SECTION_ENTRY * 5u, 0); /* header CRC */
+    cm_put_u32(b + cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT) - 4u, 0); /* header CRC */
     assert_err(decode(b, n, &st), CM_E_CRC);
     assert_int_equal(st.face, CM_NO_FACE_INDEX);
     free(b);
@@ -772,7 +769,7 @@ static void test_bad_face_left_out(void **state)
     assert_int_equal(st.code, CM_OK);
     assert_int_equal(sum.faces, 3);
     assert_int_equal(sum.faces_left_out, 1);
-    assert_int_equal(sum.faces_plane, 2);
+    assert_int_equal(sum.faces_by_method[CM_METHOD_PLANE], 2);
     assert_int_equal(sum.left_out[0].face, 1);
     assert_int_equal(sum.left_out[0].offset, dec->model.faces[1].rec_off);
     assert_true(sum.left_out[0].code != CM_OK && sum.left_out[0].code != CM_E_LIMIT);

@@ -22,6 +22,7 @@
 #include <stdlib.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
 #include "cm/cm_rebuild.h"
@@ -220,7 +221,7 @@ static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, si
                                                          put_colours};
     uint8_t *sec[CM_SEC_COUNT];
     size_t seclen[CM_SEC_COUNT];
-    const size_t H = CM_FMT_FIXED_HEADER + 4u * CM_LIMIT_COUNT + CM_FMT_SECTION_ENTRY * CM_SEC_COUNT + 4u;
+    const size_t H = cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT);
     size_t total = H + 4u;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
         sec[s] = malloc(SECTION_CAP);
@@ -237,31 +238,29 @@ static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, si
     int qe = ilogb(m->q);
     if (!(ldexp(1.0, qe) == m->q))
         fail_msg("grid step %.17g is not a power of 2", m->q);
-    b[0] = CM_FMT_MAGIC0;
-    b[1] = CM_FMT_MAGIC1;
-    b[2] = CM_FMT_MAGIC2;
-    b[3] = CM_FMT_MAGIC3;
-    b[4] = (uint8_t)major;
-    b[5] = 0;
-    cm_put_u16(b + 6, (uint16_t)(m->npalette ? 1 : 0));
-    cm_put_u32(b + 8, (uint32_t)H);
-    cm_put_u32(b + 12, (uint32_t)total);
-    b[16] = CM_LIMIT_COUNT;
-    b[17] = CM_SEC_COUNT;
-    b[18] = (uint8_t)(int8_t)qe;
+    cm_fmt_header h = {0};
+    h.major = (uint8_t)major;
+    h.minor = 0;
+    h.flags = (uint16_t)(m->npalette ? 1 : 0);
+    h.header_len = (uint32_t)H;
+    h.file_len = (uint32_t)total;
+    h.nlimits = CM_LIMIT_COUNT;
+    h.nsections = CM_SEC_COUNT;
+    h.q_exp = (int8_t)qe;
     for (int k = 0; k < 3; k++)
-        cm_put_f64(b + 20 + 8 * k, m->origin[k]);
-    cm_put_f64(b + 44, m->tess_tol);
-    cm_put_f64(b + 52, m->rel_tol);
-    for (int i = 0; i < CM_LIMIT_COUNT; i++)
-        cm_put_u32(b + CM_FMT_FIXED_HEADER + 4 * i, need ? need[i] : 0);
+        h.origin[k] = m->origin[k];
+    h.tess_tol = m->tess_tol;
+    h.rel_tol = m->rel_tol;
+    cm_fmt_header_pack(b, &h);
+    for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+        cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);
     size_t off = H;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
-        uint8_t *ent = b + CM_FMT_FIXED_HEADER + 4 * CM_LIMIT_COUNT + CM_FMT_SECTION_ENTRY * s;
-        ent[0] = (uint8_t)(s + 1);
-        cm_put_u32(ent + 4, (uint32_t)off);
-        cm_put_u32(ent + 8, (uint32_t)seclen[s]);
-        cm_put_u32(ent + 12, cm_crc32(sec[s], seclen[s]));
+        uint8_t *ent = b + cm_fmt_entry_at(CM_LIMIT_COUNT, (uint32_t)s);
+        ent[CM_ENT_TAG] = (uint8_t)(s + 1);
+        cm_put_u32(ent + CM_ENT_OFFSET, (uint32_t)off);
+        cm_put_u32(ent + CM_ENT_LENGTH, (uint32_t)seclen[s]);
+        cm_put_u32(ent + CM_ENT_CRC, cm_crc32(sec[s], seclen[s]));
         memcpy(b + off, sec[s], seclen[s]);
         off += seclen[s];
         free(sec[s]);
@@ -298,8 +297,8 @@ static const encode_result *split_cylinder(void)
     o.gregory = 1;
     assert_ok(encode_model(&lm, &o, &r, &st));
     model_free(&lm);
-    assert_int_equal(r.faces_gregory, 2);
-    assert_int_equal(r.bytes[4], 2);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 2);
+    assert_int_equal(r.bytes[CM_HDR_MAJOR], 2);
     return &r;
 }
 
@@ -557,7 +556,7 @@ static void test_gregory_sides_over_limit(void **state)
     free(b);
     assert_false(cm_dec_header_ok(dec));
     assert_int_equal(st.limit, CM_LIMIT_MAX_SIDES);
-    assert_int_equal(st.offset, CM_FMT_FIXED_HEADER + 4 * CM_LIMIT_MAX_SIDES);
+    assert_int_equal(st.offset, cm_fmt_need_at(CM_LIMIT_MAX_SIDES));
     assert_says(&st, want);
 }
 

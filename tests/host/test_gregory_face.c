@@ -11,6 +11,7 @@
 #include <stdlib.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_rebuild.h"
 #include "cm/cm_tessellate.h"
@@ -64,8 +65,8 @@ static void split_cylinder_gregory(loaded_model *lm, encode_result *r)
 {
     load_split_cylinder(lm);
     encode_with(lm, 0.01, 1, r);
-    assert_int_equal(r->faces_gregory, 2);
-    assert_int_equal(r->faces_keep, 0);
+    assert_int_equal(r->faces_by_method[CM_METHOD_GREGORY], 2);
+    assert_int_equal(r->faces_by_method[CM_METHOD_KEEP], 0);
 }
 
 static void decode(const encode_result *r)
@@ -105,7 +106,7 @@ static void test_split_cylinder_gregory(void **state)
     decode(&r);
     const cm_model *m = &dec.model;
     assert_int_equal(m->nfaces, 2);
-    assert_int_equal(dec.buf[4], 2); /* GREGORY faces need format 2 */
+    assert_int_equal(dec.buf[CM_HDR_MAJOR], 2); /* GREGORY faces need format 2 */
     cm_rebuilt rb[2];
     cm_status st;
     cm_status_init(&st);
@@ -184,19 +185,19 @@ static void test_gregory_falls_back_to_keep(void **state)
     /* the cylinder at 1e-5 of its size: its arcs are not cubics that closely (K7 rejects them) */
     load_split_cylinder(&lm);
     encode_with(&lm, 1e-5, 1, &r);
-    assert_int_equal(r.faces_gregory, 0);
-    assert_int_equal(r.faces_keep, 2);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 0);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 2);
     for (int f = 0; f < 2; f++) {
         assert_non_null(r.faces[f].why);
         assert_string_equal(r.faces[f].why, "edge not cubic-convertible");
     }
     decode(&r);
-    assert_int_equal(dec.buf[4], 1); /* nothing needs format 2: the oldest readers still load it */
+    assert_int_equal(dec.buf[CM_HDR_MAJOR], 1); /* nothing needs format 2: the oldest readers still load it */
     encode_result_free(&r);
     /* and --no-gregory keeps them too */
     encode_with(&lm, 0.01, 0, &r);
-    assert_int_equal(r.faces_gregory, 0);
-    assert_int_equal(r.faces_keep, 2);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 0);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 2);
     encode_result_free(&r);
     model_free(&lm);
     /* a bicubic patch whose interior bulges beyond what its boundary says: the boundary is exactly
@@ -212,7 +213,7 @@ static void test_gregory_falls_back_to_keep(void **state)
     assert_ok(model_load_data("bicubic", text, len, &lm, NULL, NULL, &st));
     free(text);
     encode_with(&lm, 0.01, 1, &r);
-    assert_int_equal(r.faces_keep, 1);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
     assert_non_null(r.faces[0].why);
     assert_string_equal(r.faces[0].why, "error");
     assert_true(r.faces[0].greg_ratio >= 0.01);
@@ -220,7 +221,7 @@ static void test_gregory_falls_back_to_keep(void **state)
        error of a plane through its boundary (11 %) */
     encode_result_free(&r);
     encode_with(&lm, 0.1, 1, &r);
-    assert_int_equal(r.faces_gregory, 1);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 1);
     assert_true(r.faces[0].ratio >= 0.01 && r.faces[0].ratio < 0.1);
     encode_result_free(&r);
     model_free(&lm);
@@ -234,14 +235,14 @@ static void test_gregory_needs_format_2(void **state)
     encode_result r;
     split_cylinder_gregory(&lm, &r);
     /* claim version 1: the header CRC covers the version byte, so that alone is refused by CRC */
-    r.bytes[4] = 1;
+    r.bytes[CM_HDR_MAJOR] = 1;
     cm_status st;
     cm_status_init(&st);
     cm_dec_init(&dec);
     assert_int_equal(cm_dec_feed(&dec, r.bytes, r.len, &st), CM_E_CRC);
     /* a well-made 1.0 file: the header's and the file's CRCs recomputed (no section holds the
        version); the header is accepted and the FACE section refuses the GREGORY method */
-    uint32_t H = cm_get_u32(r.bytes + 8);
+    uint32_t H = cm_get_u32(r.bytes + CM_HDR_LENGTH);
     cm_put_u32(r.bytes + H - 4, cm_crc32(r.bytes, H - 4));
     cm_put_u32(r.bytes + r.len - 4, cm_crc32(r.bytes, r.len - 4));
     cm_status_init(&st);
@@ -254,7 +255,7 @@ static void test_gregory_needs_format_2(void **state)
     assert_string_equal(st.where, "GREGORY face in a format 1 file");
     const cm_dec_section *face = &dec.sec[CM_SEC_FACE - 1];
     assert_true(st.offset >= face->off && st.offset <= face->off + face->len);
-    r.bytes[4] = 3; /* a major version this reader does not know */
+    r.bytes[CM_HDR_MAJOR] = 3; /* a major version this reader does not know */
     cm_status_init(&st);
     cm_dec_init(&dec);
     assert_int_equal(cm_dec_feed(&dec, r.bytes, r.len, &st), CM_E_VERSION);

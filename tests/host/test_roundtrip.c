@@ -15,6 +15,7 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_tessellate.h"
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "encode/encode.h"
 #include "igs_writer.h"
 #include "mesh_topo.h"
@@ -96,8 +97,8 @@ static void check_box(igw *w)
     loaded_model lm;
     encode_result r;
     encode_igw(w, &lm, &r);
-    assert_int_equal(r.faces_plane, 6); /* the six planar faces need no surface data */
-    assert_int_equal(r.faces_keep, 1);  /* the cylinder travels */
+    assert_int_equal(r.faces_by_method[CM_METHOD_PLANE], 6); /* the six planar faces need no surface data */
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);  /* the cylinder travels */
     for (int f = 0; f < lm.mesh.nfaces; f++)
         if (r.faces[f].method == CM_METHOD_PLANE && !(r.faces[f].ratio <= 0.01))
             fail_msg("plane face %d verified at %.3g of its size, above the 1%% tolerance", f, r.faces[f].ratio);
@@ -186,7 +187,7 @@ static void test_half_cylinder(void **state)
     encode_result r;
     encode_igw(&w, &lm, &r);
     igw_free(&w);
-    assert_int_equal(r.faces_keep, 1);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
     cm_status st;
     assert_ok(decode_bytes(r.bytes, r.len, 7, &st));
     double q = dec.model.q, tol = dec.model.tess_tol;
@@ -285,15 +286,16 @@ static int teardown_good(void **state)
     return 0;
 }
 
-static uint32_t hdr_len(const uint8_t *p) { return cm_get_u32(p + 8); }
-static uint32_t sec_off(const uint8_t *p, int s) { return cm_get_u32(p + CM_FMT_FIXED_HEADER + 4u * p[16] + 16u * (uint32_t)s + 4); }
-static uint32_t sec_len(const uint8_t *p, int s) { return cm_get_u32(p + CM_FMT_FIXED_HEADER + 4u * p[16] + 16u * (uint32_t)s + 8); }
+static uint32_t hdr_len(const uint8_t *p) { return cm_get_u32(p + CM_HDR_LENGTH); }
+static uint32_t entry_at(const uint8_t *p, int s) { return cm_fmt_entry_at(p[CM_HDR_NLIMITS], (uint32_t)s); }
+static uint32_t sec_off(const uint8_t *p, int s) { return cm_get_u32(p + entry_at(p, s) + CM_ENT_OFFSET); }
+static uint32_t sec_len(const uint8_t *p, int s) { return cm_get_u32(p + entry_at(p, s) + CM_ENT_LENGTH); }
 
 /* recompute the header CRC, every section CRC and the trailer (so only the intended damage remains) */
 static void reseal(uint8_t *p, size_t n)
 {
-    for (int s = 0; s < p[17]; s++)
-        cm_put_u32(p + CM_FMT_FIXED_HEADER + 4u * p[16] + 16u * (uint32_t)s + 12, cm_crc32(p + sec_off(p, s), sec_len(p, s)));
+    for (int s = 0; s < p[CM_HDR_NSECTIONS]; s++)
+        cm_put_u32(p + entry_at(p, s) + CM_ENT_CRC, cm_crc32(p + sec_off(p, s), sec_len(p, s)));
     uint32_t H = hdr_len(p);
     cm_put_u32(p + H - 4, cm_crc32(p, H - 4));
     cm_put_u32(p + n - 4, cm_crc32(p, n - 4));
@@ -316,18 +318,18 @@ static void test_damaged_files(void **state)
     (void)state;
     uint32_t H = hdr_len(good), L = (uint32_t)good_len;
     uint32_t face_sec = sec_off(good, 3);
-    const uint32_t need_faces_at = CM_FMT_FIXED_HEADER + 4u * CM_LIMIT_MAX_FACES;
+    const uint32_t need_faces_at = cm_fmt_need_at(CM_LIMIT_MAX_FACES);
     const damage cases[] = {
         {"empty file", CUT, 0, 0, 0, CM_E_TRUNCATED, 0},
         {"cut inside the header", CUT, 10, 0, 0, CM_E_TRUNCATED, 10},
         {"cut inside the body", CUT, (int64_t)L - 9, 0, 0, CM_E_TRUNCATED, (int64_t)L - 9},
         {"cut before the trailer", CUT, (int64_t)L - 4, 0, 0, CM_E_TRUNCATED, (int64_t)L - 4},
-        {"not a .cmz (magic)", SET_U8, 1, 'X', 0, CM_E_MAGIC, 1},
-        {"7-bit transfer (high bit of the magic lost)", SET_U8, 0, 0x09, 0, CM_E_MAGIC, 0},
-        {"newer major version", SET_U8, 4, CM_FMT_VERSION_MAJOR + 1, 1, CM_E_VERSION, 4},
-        {"header damaged", FLIP_BYTE, 30, 0, 0, CM_E_CRC, (int64_t)H - 4},
-        {"header length absurd", SET_U32, 8, 0xFFFFFF00u, 0, CM_E_FORMAT, 8},
-        {"file length smaller than the header", SET_U32, 12, 8, 1, CM_E_FORMAT, 12},
+        {"not a .cmz (magic)", SET_U8, CM_HDR_MAGIC + 1, 'X', 0, CM_E_MAGIC, CM_HDR_MAGIC + 1},
+        {"7-bit transfer (high bit of the magic lost)", SET_U8, CM_HDR_MAGIC, 0x09, 0, CM_E_MAGIC, CM_HDR_MAGIC},
+        {"newer major version", SET_U8, CM_HDR_MAJOR, CM_FMT_VERSION_MAJOR + 1, 1, CM_E_VERSION, CM_HDR_MAJOR},
+        {"header damaged", FLIP_BYTE, CM_HDR_ORIGIN + 10, 0, 0, CM_E_CRC, (int64_t)H - 4}, /* in the origin's y */
+        {"header length absurd", SET_U32, CM_HDR_LENGTH, 0xFFFFFF00u, 0, CM_E_FORMAT, CM_HDR_LENGTH},
+        {"file length smaller than the header", SET_U32, CM_HDR_FILE_LENGTH, 8, 1, CM_E_FORMAT, CM_HDR_FILE_LENGTH},
         {"face section damaged", FLIP_BYTE, face_sec + 3, 0, 0, CM_E_CRC, -2},
         {"trailer damaged", FLIP_BYTE, -1, 0, 0, CM_E_CRC, (int64_t)L - 4},
         {"a byte too many", APPEND, 0, 0, 0, CM_E_RANGE, L},

@@ -13,12 +13,16 @@ t() { n=$((n + 1)); if [ "$1" = ok ]; then echo "ok $n - $2"; else echo "not ok 
 "$cmz" encode -q "$model" -o "$tmp/m.cmz" > /dev/null 2>&1 || { echo "not ok 1 - encode $model"; echo "0 passed, 1 failed"; exit 1; }
 # MAX_TRIS's id: its line in --limits (the need table's order)
 id=$("$cmz" --limits | awk 'NR > 2 && $1 == "MAX_TRIS" { print NR - 3; exit }')
+# the header's fields by their byte offsets (decoder/include/cm/cm_format.h, enum cm_fmt_header_at):
+# 8 = CM_HDR_LENGTH (u32, header bytes, its CRC the last 4), 16 = CM_HDR_NLIMITS (u8, entries of the
+# need table), 60 + 4 * i = cm_fmt_need_at(i) (CM_HDR_NEEDS: limit i's u32 need); the file's CRC is
+# its last 4 bytes
 python3 - "$tmp/m.cmz" "$tmp/lie.cmz" "$id" <<'PY'
 import struct, sys, zlib
 b = bytearray(open(sys.argv[1], 'rb').read())
-h, i = struct.unpack_from('<I', b, 8)[0], int(sys.argv[3])
-assert i < b[16]
-struct.pack_into('<I', b, 60 + 4 * i, 1)
+h, i = struct.unpack_from('<I', b, 8)[0], int(sys.argv[3])  # CM_HDR_LENGTH
+assert i < b[16]  # CM_HDR_NLIMITS
+struct.pack_into('<I', b, 60 + 4 * i, 1)  # cm_fmt_need_at(i): CM_HDR_NEEDS + 4 * i
 struct.pack_into('<I', b, h - 4, zlib.crc32(bytes(b[:h - 4])))
 struct.pack_into('<I', b, len(b) - 4, zlib.crc32(bytes(b[:-4])))
 open(sys.argv[2], 'wb').write(b)

@@ -37,7 +37,8 @@ SENTINEL="previous output: must survive a failed run"
 declare -A tries accepted clean unplaced crash hang lost slowest
 fail=0 kept=0
 
-# whole_file KIND PATH: 0 if PATH is a complete output of its kind
+# whole_file KIND PATH: 0 if PATH is a complete output of its kind (a .cmz: its magic, and the u32 at
+# byte 12, CM_HDR_FILE_LENGTH in decoder/include/cm/cm_format.h, equal to its size)
 whole_file() {
     case $1 in
     cmz) [ "$(head -c 4 "$2" | od -An -tx1 | tr -d ' ')" = "89434d5a" ] &&

@@ -31,6 +31,7 @@
 #include <string.h>
 
 #include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
 #include "cm/cm_format.h"
 
 static uint64_t rng;
@@ -233,17 +234,16 @@ static void fix_crcs(buf *b)
 {
     if (b->n < CM_FMT_FIXED_HEADER + 8)
         return;
-    uint32_t H = cm_get_u32(b->p + 8);
+    uint32_t H = cm_get_u32(b->p + CM_HDR_LENGTH);
     if (H < CM_FMT_FIXED_HEADER + 4 || H > b->n)
         return;
-    uint32_t table = CM_FMT_FIXED_HEADER + 4u * b->p[16];
-    for (uint32_t s = 0; s < b->p[17]; s++) {
-        uint32_t at = table + CM_FMT_SECTION_ENTRY * s;
+    for (uint32_t s = 0; s < b->p[CM_HDR_NSECTIONS]; s++) {
+        uint32_t at = cm_fmt_entry_at(b->p[CM_HDR_NLIMITS], s);
         if (at + CM_FMT_SECTION_ENTRY > H - 4)
             break;
-        uint32_t off = cm_get_u32(b->p + at + 4), len = cm_get_u32(b->p + at + 8);
+        uint32_t off = cm_get_u32(b->p + at + CM_ENT_OFFSET), len = cm_get_u32(b->p + at + CM_ENT_LENGTH);
         if (off <= b->n && len <= b->n - off)
-            cm_put_u32(b->p + at + 12, cm_crc32(b->p + off, len));
+            cm_put_u32(b->p + at + CM_ENT_CRC, cm_crc32(b->p + off, len));
     }
     cm_put_u32(b->p + H - 4, cm_crc32(b->p, H - 4));
     cm_put_u32(b->p + b->n - 4, cm_crc32(b->p, b->n - 4));
@@ -253,7 +253,7 @@ static void cmz_mutate(const char *fam, buf *b)
 {
     if (b->n < 80)
         return;
-    uint32_t H = cm_get_u32(b->p + 8);
+    uint32_t H = cm_get_u32(b->p + CM_HDR_LENGTH);
     if (strcmp(fam, "cmz-truncate") == 0) {
         b->n = pick(b->n);
     } else if (strcmp(fam, "cmz-flip") == 0 || strcmp(fam, "cmz-flip-crc") == 0) {
@@ -266,61 +266,64 @@ static void cmz_mutate(const char *fam, buf *b)
             fix_crcs(b);
     } else if (strcmp(fam, "cmz-header") == 0) {
         static const uint32_t vals[] = {0, 1, 5, 6, 200, 255, 0xffffffffu, 0x7fffffffu, 60, 4096};
-        size_t at = 4 + pick((H > 8 && H <= b->n ? H - 4 : 64) - 4);
+        /* a byte after the magic and before the header's CRC (the first 64 bytes if H is no use) */
+        size_t at = CM_HDR_MAJOR + pick((H > 8 && H <= b->n ? H - 4 : 64) - CM_HDR_MAJOR);
         uint32_t v = vals[pick(10)];
-        if (at == 16 || at == 17 || at == 18 || at == 4 || at == 5 || pick(2))
+        if (at == CM_HDR_NLIMITS || at == CM_HDR_NSECTIONS || at == CM_HDR_QEXP || at == CM_HDR_MAJOR ||
+            at == CM_HDR_MINOR || pick(2)) /* the one-byte fields, and any byte half the time */
             b->p[at] = (uint8_t)v;
         else if (at + 4 <= b->n)
             cm_put_u32(b->p + at, v);
         fix_crcs(b);
     } else if (strcmp(fam, "cmz-table") == 0) {
         static const uint32_t vals[] = {0, 1, 4, 6, 200, 255, 0xffffffffu, 0x7fffffffu, 0x10000u};
-        uint32_t v = vals[pick(9)], table = CM_FMT_FIXED_HEADER + 4u * b->p[16];
+        uint32_t v = vals[pick(9)], nl = b->p[CM_HDR_NLIMITS];
         int what = (int)pick(5);
-        if (what == 4 && b->p[17] == CM_SEC_COUNT) {
+        if (what == 4 && b->p[CM_HDR_NSECTIONS] == CM_SEC_COUNT) {
             /* well-formed extra sections after the five: tags 6, 7, ..., empty, at the file's end */
             uint32_t extra = pick(2) ? 1 : 1 + (uint32_t)pick(250 - CM_SEC_COUNT);
             uint32_t grow = CM_FMT_SECTION_ENTRY * extra, at_end = H - 4;
             uint8_t *ins = calloc(grow, 1);
             uint32_t end = (uint32_t)b->n - 4 + grow;
             for (uint32_t k = 0; k < extra; k++) {
-                ins[CM_FMT_SECTION_ENTRY * k] = (uint8_t)(CM_SEC_COUNT + 1 + k);
-                cm_put_u32(ins + CM_FMT_SECTION_ENTRY * k + 4, end);
+                ins[CM_FMT_SECTION_ENTRY * k + CM_ENT_TAG] = (uint8_t)(CM_SEC_COUNT + 1 + k);
+                cm_put_u32(ins + CM_FMT_SECTION_ENTRY * k + CM_ENT_OFFSET, end);
             }
             /* the existing entries' offsets move with the header */
             for (uint32_t k = 0; k < CM_SEC_COUNT; k++) {
-                uint8_t *e = b->p + table + CM_FMT_SECTION_ENTRY * k;
-                cm_put_u32(e + 4, cm_get_u32(e + 4) + grow);
+                uint8_t *e = b->p + cm_fmt_entry_at(nl, k);
+                cm_put_u32(e + CM_ENT_OFFSET, cm_get_u32(e + CM_ENT_OFFSET) + grow);
             }
             b->p = realloc(b->p, b->n + grow);
             memmove(b->p + at_end + grow, b->p + at_end, b->n - at_end);
             memcpy(b->p + at_end, ins, grow);
             b->n += grow;
             free(ins);
-            b->p[17] = (uint8_t)(CM_SEC_COUNT + extra);
-            cm_put_u32(b->p + 8, H + grow);
-            cm_put_u32(b->p + 12, (uint32_t)b->n);
+            b->p[CM_HDR_NSECTIONS] = (uint8_t)(CM_SEC_COUNT + extra);
+            cm_put_u32(b->p + CM_HDR_LENGTH, H + grow);
+            cm_put_u32(b->p + CM_HDR_FILE_LENGTH, (uint32_t)b->n);
         } else if (what == 0 || what == 1) {
             /* a count, and (half the time) the header length made to agree with it */
-            b->p[what == 0 ? 17 : 16] = (uint8_t)v;
+            b->p[what == 0 ? CM_HDR_NSECTIONS : CM_HDR_NLIMITS] = (uint8_t)v;
             if (pick(2)) {
-                uint32_t nh = CM_FMT_FIXED_HEADER + 4u * b->p[16] + CM_FMT_SECTION_ENTRY * b->p[17] + 4u;
+                uint32_t nh = cm_fmt_header_len(b->p[CM_HDR_NLIMITS], b->p[CM_HDR_NSECTIONS]);
                 if (nh <= b->n)
-                    cm_put_u32(b->p + 8, nh);
+                    cm_put_u32(b->p + CM_HDR_LENGTH, nh);
             }
-        } else if (table + CM_FMT_SECTION_ENTRY * CM_SEC_COUNT <= b->n) {
-            uint32_t at = table + CM_FMT_SECTION_ENTRY * (uint32_t)pick(CM_SEC_COUNT);
+        } else if (cm_fmt_entry_at(nl, CM_SEC_COUNT) <= b->n) {
+            uint32_t at = cm_fmt_entry_at(nl, (uint32_t)pick(CM_SEC_COUNT));
             if (what == 2)
-                b->p[at] = (uint8_t)v;
-            else
-                cm_put_u32(b->p + at + 4 + 4 * pick(2), pick(2) ? v : cm_get_u32(b->p + at + 4) + (uint32_t)pick(64));
+                b->p[at + CM_ENT_TAG] = (uint8_t)v;
+            else /* its offset or its length */
+                cm_put_u32(b->p + at + CM_ENT_OFFSET + (CM_ENT_LENGTH - CM_ENT_OFFSET) * pick(2),
+                           pick(2) ? v : cm_get_u32(b->p + at + CM_ENT_OFFSET) + (uint32_t)pick(64));
         }
         fix_crcs(b);
     } else if (strcmp(fam, "cmz-needs") == 0) {
         static const uint32_t vals[] = {0, 1, 0xffffffffu};
-        uint32_t nl = b->p[16];
+        uint32_t nl = b->p[CM_HDR_NLIMITS];
         if (nl)
-            cm_put_u32(b->p + CM_FMT_FIXED_HEADER + 4 * pick(nl), vals[pick(3)]);
+            cm_put_u32(b->p + cm_fmt_need_at((uint32_t)pick(nl)), vals[pick(3)]);
         fix_crcs(b);
     }
 }

@@ -1,5 +1,5 @@
 /*
- * cm_format.h - constants and the decoded model of the .cmz format v1
+ * cm_format.h - constants, the header layout and the decoded model of the .cmz format
  * (docs/FORMAT.md is the specification; this header is its C view).
  *
  * The model is what the terminal rebuilds surfaces from: vertices, edges
@@ -27,6 +27,55 @@
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
 #define CM_FMT_SECTION_ENTRY 16u  /* tag, 3 reserved, offset, length, crc */
+
+/* Byte offsets of the fixed header's fields (docs/FORMAT.md), named once for the reader, the writer
+   and the tests: the header is the need table (4 bytes per limit) and the section table after them,
+   then its CRC-32 */
+enum cm_fmt_header_at {
+    CM_HDR_MAGIC = 0,         /* 4 bytes: 0x89 'C' 'M' 'Z' */
+    CM_HDR_MAJOR = 4,         /* u8 */
+    CM_HDR_MINOR = 5,         /* u8 */
+    CM_HDR_FLAGS = 6,         /* u16: bit 0 = a COLR palette is present */
+    CM_HDR_LENGTH = 8,        /* u32: header bytes, its CRC included */
+    CM_HDR_FILE_LENGTH = 12,  /* u32: the whole file, its trailing CRC included */
+    CM_HDR_NLIMITS = 16,      /* u8: entries of the need table */
+    CM_HDR_NSECTIONS = 17,    /* u8: entries of the section table */
+    CM_HDR_QEXP = 18,         /* s8: the grid step is 2^e mm */
+    CM_HDR_RESERVED = 19,     /* u8: 0 */
+    CM_HDR_ORIGIN = 20,       /* 3 x f64: the grid origin (mm) */
+    CM_HDR_TESS_TOL = 44,     /* f64: recommended chordal tolerance (mm) */
+    CM_HDR_REL_TOL = 52,      /* f64: the encoder's rebuild tolerance (fraction of a face's size) */
+    CM_HDR_NEEDS = 60         /* u32 per limit, then the section table */
+};
+/* Byte offsets within one section table entry. */
+enum cm_fmt_entry_at { CM_ENT_TAG = 0, CM_ENT_RESERVED = 1 /* 3 bytes, 0 */, CM_ENT_OFFSET = 4, CM_ENT_LENGTH = 8,
+                       CM_ENT_CRC = 12 };
+
+/** The fixed header's fields (the tables after it are addressed with cm_fmt_need_at/cm_fmt_entry_at). */
+typedef struct cm_fmt_header {
+    uint8_t major, minor;
+    uint16_t flags;
+    uint32_t header_len, file_len;
+    uint8_t nlimits, nsections;
+    int8_t q_exp;
+    double origin[3], tess_tol, rel_tol;
+} cm_fmt_header;
+
+/** Write the fixed header (magic included) into b[0..CM_FMT_FIXED_HEADER). */
+void cm_fmt_header_pack(uint8_t *b, const cm_fmt_header *h);
+/** Read the fixed header from b[0..CM_FMT_FIXED_HEADER) (nothing checked: the reader does that). */
+void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
+/** Offset of limit i's need, and of section entry s, in a header with nlimits needs. */
+static inline uint32_t cm_fmt_need_at(uint32_t i) { return CM_HDR_NEEDS + 4u * i; }
+static inline uint32_t cm_fmt_entry_at(uint32_t nlimits, uint32_t s)
+{
+    return CM_HDR_NEEDS + 4u * nlimits + CM_FMT_SECTION_ENTRY * s;
+}
+/** Header length with nlimits needs and nsections entries: the tables and the CRC. */
+static inline uint32_t cm_fmt_header_len(uint32_t nlimits, uint32_t nsections)
+{
+    return cm_fmt_entry_at(nlimits, nsections) + 4u;
+}
 #define CM_FMT_MAX_HEADER 4096u   /* a header larger than this is malformed */
 #define CM_FMT_KNOT_BITS 30       /* knots quantised to 2^-30 of [0,1] */
 #define CM_FMT_WEIGHT_BITS 24     /* weights quantised to 2^-24 of the first weight */

@@ -1,5 +1,5 @@
 /*
- * cm_tessellate.h - a decoded model's faces as triangles (spec of issue 4):
+ * cm_tessellate.h - a decoded model's faces as triangles:
  * every edge sampled once (the same points for both faces that share it),
  * the samples mapped into each face's parameter domain, the trimmed region
  * triangulated with its holes (cm_tess.h), interior points added where the

@@ -5,11 +5,9 @@
 #ifndef CM_GEOM_H
 #define CM_GEOM_H
 
+#include "cm/cm_const.h"
 #include "cm/cm_error.h"
 #include "cm/cm_vec.h"
-
-/** sin 5 deg: a ray must meet a plane at least this steeply (spec K10). */
-#define CM_SIN_RAY_PLANE 0.08715574274765814
 
 /**
  * K10 closest points of the lines p + lam d and q + mu e.

@@ -1,0 +1,27 @@
+/*
+ * cm_method_impl.h - the operations each method module implements (see
+ * cm_method.h); only the modules and the dispatch in cm_methods.c include it.
+ */
+#ifndef CM_METHOD_IMPL_H
+#define CM_METHOD_IMPL_H
+
+#include "cm/cm_method.h"
+
+/* KEEP (keep.c) */
+cm_err cm_keep_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out, cm_rebuild_ws *ws,
+                       cm_status *st);
+
+/* PLANE (plane.c) */
+cm_err cm_plane_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
+                        cm_rebuild_ws *ws, cm_status *st);
+
+/* GREGORY (gregory.c) */
+cm_err cm_gregory_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_method_fault *why);
+void cm_gregory_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F);
+cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why);
+int cm_gregory_needs_midpoints(const cm_face *F);
+cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
+                          cm_rebuild_ws *ws, cm_status *st);
+void cm_gregory_needs(const cm_model *m, const cm_face *F, uint32_t *need);
+
+#endif /* CM_METHOD_IMPL_H */

@@ -1,0 +1,90 @@
+/* cm_methods.c - the table of face methods and the dispatch of their operations (see cm_method.h). */
+#include "cm_method_impl.h"
+
+#include <stddef.h>
+
+/* spec §14: PLANE first (exact and free when it applies), then the GREGORY family, KEEP last */
+const cm_method *const cm_method_table[CM_METHOD_COUNT] = {&cm_method_plane, &cm_method_gregory, &cm_method_keep};
+
+const cm_method *cm_method_of(unsigned id)
+{
+    for (int i = 0; i < CM_METHOD_COUNT; i++)
+        if (cm_method_table[i]->id == id)
+            return cm_method_table[i];
+    return NULL;
+}
+
+const char *cm_method_name(unsigned id)
+{
+    const cm_method *m = cm_method_of(id);
+    return m ? m->name : "?";
+}
+
+/* One switch per operation: a method without the operation falls to the default (nothing to do). */
+
+cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_method_fault *why)
+{
+    switch (M->id) {
+    case CM_METHOD_GREGORY:
+        return cm_gregory_read_record(ac, ctx, F, why);
+    default:
+        return CM_OK;
+    }
+}
+
+void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F)
+{
+    switch (M->id) {
+    case CM_METHOD_GREGORY:
+        cm_gregory_write_record(ac, ctx, F);
+        break;
+    default:
+        break;
+    }
+}
+
+cm_err cm_method_check_loops(const cm_method *M, const cm_model *m, const cm_face *F, cm_method_fault *why)
+{
+    switch (M->id) {
+    case CM_METHOD_GREGORY:
+        return cm_gregory_check_loops(m, F, why);
+    default:
+        return CM_OK;
+    }
+}
+
+int cm_method_needs_midpoints(const cm_method *M, const cm_face *F)
+{
+    switch (M->id) {
+    case CM_METHOD_GREGORY:
+        return cm_gregory_needs_midpoints(F);
+    default:
+        return 0;
+    }
+}
+
+cm_err cm_method_rebuild(const cm_method *M, const cm_model *m, uint32_t f, int check, int n, int n_outer,
+                         cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st)
+{
+    switch (M->id) {
+    case CM_METHOD_KEEP:
+        return cm_keep_rebuild(m, f, check, n, n_outer, out, ws, st);
+    case CM_METHOD_PLANE:
+        return cm_plane_rebuild(m, f, check, n, n_outer, out, ws, st);
+    case CM_METHOD_GREGORY:
+        return cm_gregory_rebuild(m, f, check, n, n_outer, out, ws, st);
+    default:
+        return cm_fail(st, CM_E_UNSUPPORTED, "face method");
+    }
+}
+
+void cm_method_needs(const cm_method *M, const cm_model *m, const cm_face *F, uint32_t *need)
+{
+    switch (M->id) {
+    case CM_METHOD_GREGORY:
+        cm_gregory_needs(m, F, need);
+        break;
+    default:
+        break;
+    }
+}

@@ -1,0 +1,115 @@
+/*
+ * gregory.c - GREGORY (spec §6, docs/METHODS.md): a face of one loop of 3
+ * to CM_MAX_SIDES edges rebuilt as Gregory patches from its boundary
+ * curves and the cross-boundary tangents of its G1 neighbours.  The record
+ * holds the layout (0: one four-sided patch, 1: N-split into one patch per
+ * side, 2: one patch degenerate at corner `corner` of a three-sided face)
+ * and the FNV-1a checksum of the encoder's patches (spec §2 rule 6): a
+ * terminal that rebuilds them differently says so instead of showing it.
+ */
+#include "cm/cm_limits_info.h"
+#include "cm_method_impl.h"
+
+cm_err cm_gregory_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_method_fault *why)
+{
+    uint64_t layout = cm_ac_dec_uint(ac, &ctx->layout);
+    uint64_t corner = cm_ac_dec_uint(ac, &ctx->corner);
+    F->checksum = cm_ac_dec_direct(ac, 16);
+    F->checksum |= cm_ac_dec_direct(ac, 16) << 16;
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    if (layout > 2) {
+        why->what = "GREGORY layout";
+        return CM_E_RANGE;
+    }
+    if (corner >= CM_MAX_SIDES || (layout != 2 && corner != 0)) {
+        why->what = "GREGORY corner";
+        return CM_E_RANGE;
+    }
+    F->layout = (uint8_t)layout;
+    F->corner = (uint8_t)corner;
+    return CM_OK;
+}
+
+void cm_gregory_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F)
+{
+    cm_ac_enc_uint(ac, &ctx->layout, F->layout);
+    cm_ac_enc_uint(ac, &ctx->corner, F->corner);
+    cm_ac_enc_direct(ac, F->checksum & 0xffffu, 16);
+    cm_ac_enc_direct(ac, F->checksum >> 16, 16);
+}
+
+/* one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3 */
+cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
+{
+    uint32_t n = m->loops[F->loop0].nuse;
+    why->what = NULL;
+    if (F->nloops != 1)
+        why->what = "GREGORY face with holes";
+    else if (n < 3)
+        why->what = "GREGORY face with fewer than 3 sides";
+    else if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3))
+        why->what = "GREGORY sides do not fit the layout";
+    else if (F->layout == 2 && F->corner >= n)
+        why->what = "GREGORY corner beyond the loop";
+    if (why->what)
+        return CM_E_FORMAT;
+    if (n > CM_MAX_SIDES) {
+        why->what = "GREGORY sides";
+        why->limit = CM_LIMIT_MAX_SIDES;
+        why->need = n;
+        return CM_E_LIMIT;
+    }
+    return CM_OK;
+}
+
+/* the N-split's inner curves start at each side's midpoint */
+int cm_gregory_needs_midpoints(const cm_face *F)
+{
+    return F->layout == CM_GREG_LAYOUT_SPLIT;
+}
+
+cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
+                          cm_rebuild_ws *ws, cm_status *st)
+{
+    (void)n;
+    (void)n_outer;
+    const cm_face *F = &m->faces[f];
+    cm_err e = cm_greg_input_build(m, f, &ws->gin, &ws->corner, st);
+    if (e != CM_OK)
+        return e;
+    if ((e = cm_greg_build(&ws->gin, F->layout, F->corner, &ws->greg, st)) != CM_OK)
+        return e;
+    out->repr = CM_REPR_PATCHES;
+    out->greg = &ws->greg;
+    out->checksum = cm_greg_surface_checksum(&ws->greg);
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+    check = 0; /* as with the CRCs: mutated records must reach the tessellation */
+#endif
+    if (check && out->checksum != F->checksum)
+        return cm_fail(st, CM_E_CHECKSUM, "GREGORY face rebuilt differently from the encoder");
+    return CM_OK;
+}
+
+/* sides of the outer loop; N-split: one patch per side */
+void cm_gregory_needs(const cm_model *m, const cm_face *F, uint32_t *need)
+{
+    uint32_t sides = m->loops[F->loop0].nuse;
+    uint32_t patches = F->layout == CM_GREG_LAYOUT_SPLIT ? sides : 1u;
+    if (sides > need[CM_LIMIT_MAX_SIDES])
+        need[CM_LIMIT_MAX_SIDES] = sides;
+    if (patches > need[CM_LIMIT_MAX_GREG])
+        need[CM_LIMIT_MAX_GREG] = patches;
+}
+
+const cm_method cm_method_gregory = {
+    .name = "gregory",
+    .counted = "gregory",
+    .id = CM_METHOD_GREGORY,
+    .since_major = 2,
+    .has_record = 1,
+    .layouts = 3,
+    .too_new = "GREGORY face in a format 1 file",
+};

@@ -1,0 +1,90 @@
+/*
+ * cm_method.h - a face method as one module (docs/METHODS.md).
+ *
+ * A face's surface is deleted by the encoder and rebuilt by the terminal
+ * by one of a family of methods.  Each method is one file in
+ * decoder/methods/ holding one cm_method row (what the method is) and the
+ * functions behind the operations below: how its record is read and
+ * written in the FACE section, what its loops must look like, and how its
+ * surface is rebuilt from the curve mesh.  The reader (cm_decode.c), the
+ * rebuild (cm_rebuild.c), the tessellation (through the representation
+ * the rebuild returns, cm_rebuilt.repr), the encoder's candidate list and
+ * its reports all go through this table; nothing else names a method
+ * (tests/tools/check_method_modules.sh).  Adding a method is one file, one
+ * row in cm_method_table, one case per operation in cm_methods.c and its
+ * tests.
+ */
+#ifndef CM_METHOD_H
+#define CM_METHOD_H
+
+#include <stdint.h>
+
+#include "cm/cm_arith.h"
+#include "cm/cm_format.h"
+#include "cm/cm_rebuild.h"
+#include "cm/cm_sections.h"
+
+/** Why a record or a face's loops were refused: the rule or field, and for a limit its id and need. */
+typedef struct cm_method_fault {
+    const char *what;
+    unsigned limit;   /* CM_E_LIMIT only: the limit's id (cm_limits_info.h) */
+    uint64_t need;    /* CM_E_LIMIT only: what the face needs */
+} cm_method_fault;
+
+typedef struct cm_method {
+    const char *name;     /* "plane": reports, --report, cmz eval */
+    const char *counted;  /* the word after its count in summaries: "plane", "kept" */
+    uint8_t id;           /* CM_METHOD_*: the number on the wire */
+    uint8_t since_major;  /* the first format major version that carries it */
+    uint8_t kept_surface; /* its surface travels in SURF (one per such face, in face order) */
+    uint8_t has_record;   /* fields follow the method number in the FACE section */
+    uint8_t layouts;      /* layouts its record chooses from (0: none): reports print the face's */
+    const char *too_new;  /* the error when a file older than since_major carries it */
+} cm_method;
+
+/*
+ * What a method does, dispatched by cm_methods.c to the method's module: one switch per operation,
+ * no function pointers, so that the stack gate sees every call the decoder makes.
+ */
+
+/**
+ * FACE section: the record's fields after the method number, into F (nothing for a method without
+ * a record).  CM_E_TRUNCATED when the coder overran; anything else names the field in why->what.
+ */
+CM_NODISCARD cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F,
+                                          cm_method_fault *why);
+/** The same fields written (the workstation's writer). */
+void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F);
+/** After the face's loops are read: do they fit the method? */
+CM_NODISCARD cm_err cm_method_check_loops(const cm_method *M, const cm_model *m, const cm_face *F,
+                                          cm_method_fault *why);
+/** Does the rebuild use the midpoint (t = 1/2) of the outer loop's edges? */
+int cm_method_needs_midpoints(const cm_method *M, const cm_face *F);
+/**
+ * Rebuild face f's surface into out (out->bbox, and the samples ws->samples[0..n) with the outer
+ * loop first, n_outer of them, are filled by the caller; spec §2 rule 1).  `check`: compare what was
+ * rebuilt with the record's checksum where the record has one.
+ */
+CM_NODISCARD cm_err cm_method_rebuild(const cm_method *M, const cm_model *m, uint32_t f, int check, int n,
+                                      int n_outer, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st);
+/** Raise need[] (indexed by limit id) by what face F's rebuild needs beyond its loops. */
+void cm_method_needs(const cm_method *M, const cm_model *m, const cm_face *F, uint32_t *need);
+
+/**
+ * Every method this version knows, in the encoder's order of trial (spec §14): the first whose
+ * rebuild passes the verification wins; the last (KEEP) always applies.
+ */
+extern const cm_method *const cm_method_table[CM_METHOD_COUNT];
+
+/** The method every face can fall back to: its own surface kept (the last row of the table). */
+#define CM_METHOD_FALLBACK CM_METHOD_KEEP
+
+/** The method numbered `id` on the wire, or NULL if this version does not know it. */
+const cm_method *cm_method_of(unsigned id);
+
+/** Its name, "?" for an unknown number (reports only). */
+const char *cm_method_name(unsigned id);
+
+extern const cm_method cm_method_keep, cm_method_plane, cm_method_gregory;
+
+#endif /* CM_METHOD_H */

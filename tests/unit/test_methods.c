@@ -1,0 +1,105 @@
+/*
+ * test_methods.c - the table of face methods (cm_method.h): every number on
+ * the wire has exactly one module, the fallback is last and keeps its
+ * surface, every module can rebuild, and each record that the writer puts
+ * down the reader takes back unchanged (the two halves of a method cannot
+ * disagree on its fields).  A new method gets these checks by its row.
+ */
+#include "test_util.h"
+
+#include "cm/cm_method.h"
+
+static void test_every_number_has_one_module(void **state)
+{
+    (void)state;
+    for (unsigned id = 0; id < CM_METHOD_COUNT; id++) {
+        const cm_method *M = cm_method_of(id);
+        assert_non_null(M);
+        assert_int_equal(M->id, id);
+        int rows = 0;
+        for (int i = 0; i < CM_METHOD_COUNT; i++)
+            rows += cm_method_table[i]->id == id;
+        assert_int_equal(rows, 1);
+        assert_non_null(M->name);
+        assert_string_equal(cm_method_name(id), M->name);
+        assert_true(M->since_major >= CM_FMT_VERSION_MIN_MAJOR && M->since_major <= CM_FMT_VERSION_MAJOR);
+        /* a method newer than format 1 must say so when an older file carries it */
+        if (M->since_major > CM_FMT_VERSION_MIN_MAJOR)
+            assert_non_null(M->too_new);
+        /* layouts are chosen in a record */
+        assert_true(M->layouts == 0 || M->has_record);
+    }
+    assert_null(cm_method_of(CM_METHOD_COUNT));
+    assert_null(cm_method_of(255));
+    assert_string_equal(cm_method_name(CM_METHOD_COUNT), "?");
+}
+
+static void test_fallback_is_last_and_kept(void **state)
+{
+    (void)state;
+    const cm_method *last = cm_method_table[CM_METHOD_COUNT - 1];
+    assert_int_equal(last->id, CM_METHOD_FALLBACK);
+    assert_true(last->kept_surface);
+    assert_false(last->has_record); /* nothing to choose: always applicable */
+    for (int i = 0; i < CM_METHOD_COUNT - 1; i++)
+        assert_false(cm_method_table[i]->kept_surface);
+}
+
+/* every field of every method's record through the range coder and back */
+static void test_records_round_trip(void **state)
+{
+    (void)state;
+    static uint8_t buf[1 << 12];
+    for (int i = 0; i < CM_METHOD_COUNT; i++) {
+        const cm_method *M = cm_method_table[i];
+        if (!M->has_record)
+            continue;
+        /* the fields a record can hold: layouts 0..2 with their corners, checksums at the extremes */
+        cm_face in[6] = {{0}};
+        for (int k = 0; k < 6; k++) {
+            in[k].method = M->id;
+            in[k].layout = (uint8_t)(M->layouts ? k % M->layouts : 0);
+            in[k].corner = (uint8_t)(in[k].layout == 2 ? k % 3 : 0);
+            in[k].checksum = k == 0 ? 0u : k == 1 ? 0xffffffffu : 0x9e3779b9u * (uint32_t)k;
+        }
+        cm_ac_enc e;
+        cm_face_ctx ctx;
+        cm_face_ctx_init(&ctx);
+        cm_ac_enc_init(&e, buf, sizeof buf);
+        for (int k = 0; k < 6; k++)
+            cm_method_write_record(M, &e, &ctx, &in[k]);
+        size_t n = cm_ac_enc_finish(&e);
+        assert_true(n > 0 && !e.overflow);
+        cm_ac_dec d;
+        cm_face_ctx_init(&ctx);
+        cm_ac_dec_init(&d, buf, n);
+        for (int k = 0; k < 6; k++) {
+            cm_face out = {0};
+            cm_method_fault why = {0};
+            assert_int_equal(cm_method_read_record(M, &d, &ctx, &out, &why), CM_OK);
+            assert_int_equal(out.layout, in[k].layout);
+            assert_int_equal(out.corner, in[k].corner);
+            assert_int_equal(out.checksum, in[k].checksum);
+        }
+        /* cut short: the reader says truncated, naming the record */
+        cm_face_ctx_init(&ctx);
+        cm_ac_dec_init(&d, buf, 1);
+        cm_face out = {0};
+        cm_method_fault why = {0};
+        cm_err got = CM_OK;
+        for (int k = 0; k < 6 && got == CM_OK; k++)
+            got = cm_method_read_record(M, &d, &ctx, &out, &why);
+        assert_int_equal(got, CM_E_TRUNCATED);
+        assert_non_null(why.what);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_number_has_one_module),
+        cmocka_unit_test(test_fallback_is_last_and_kept),
+        cmocka_unit_test(test_records_round_trip),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
