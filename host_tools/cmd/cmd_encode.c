@@ -1,0 +1,207 @@
+/*
+ * cmd_encode.c - `cmz encode MODEL.igs -o MODEL.cmz`: import the model,
+ * encode it (encode/encode.h), write the file atomically, and report every
+ * face left out, the summary line and, with --report, a row per face.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cmd.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cm/cm_format.h"
+#include "cm/cm_method.h"
+#include "cm_report.h"
+#include "encode/encode.h"
+#include "profiles.h"
+
+/* an import warning about the structure around faces (iges_brep.c): a solid, shell or instance
+   left out, or a member pointer of one skipped */
+static int is_structure_warning(const char *msg)
+{
+    return (strncmp(msg, "entity ", 7) == 0 && strstr(msg, ") left out: ")) ||
+           ((strncmp(msg, "shell DE ", 9) == 0 || strncmp(msg, "solid DE ", 9) == 0) && strstr(msg, " skipped"));
+}
+
+/* write a buffer to `path` through a temporary file and a rename: never half a file */
+static int write_atomic(const char *path, const uint8_t *data, size_t len)
+{
+    size_t tl = strlen(path) + 32;
+    char *tmp = malloc(tl);
+    if (!tmp) {
+        fprintf(stderr, "%s: out of memory\n", cmd_prog);
+        return EXIT_NOMEM;
+    }
+    snprintf(tmp, tl, "%s.tmp%ld", path, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    int ok = f && fwrite(data, 1, len, f) == len;
+    if (f && fclose(f) != 0)
+        ok = 0;
+    if (!ok || rename(tmp, path) != 0) {
+        fprintf(stderr, "%s: writing %s failed: %s\n", cmd_prog, path, strerror(errno));
+        remove(tmp);
+        free(tmp);
+        return EXIT_IO;
+    }
+    free(tmp);
+    return EXIT_OK;
+}
+
+int cmd_encode(int argc, char **argv)
+{
+    const char *path = NULL, *out = NULL, *report = NULL, *profile = NULL;
+    encode_opts o;
+    encode_opts_default(&o);
+    o.progress = cmd_progress;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(a, "-o") == 0 && v) {
+            out = v;
+            i++;
+        } else if (strcmp(a, "--report") == 0 && v) {
+            report = v;
+            i++;
+        } else if (strcmp(a, "--profile") == 0 && v) {
+            profile = v;
+            i++;
+        } else if (strcmp(a, "--tol") == 0 && v) {
+            if (cmd_parse_real(a, v, 1e-9, 0.5, &o.rel_tol))
+                return EXIT_USAGE;
+            o.rel_set = 1;
+            i++;
+        } else if (strcmp(a, "--tol-abs") == 0 && v) {
+            if (cmd_parse_real(a, v, 1e-9, 1e9, &o.abs_tol))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "--no-gregory") == 0) {
+            o.gregory = 0;
+        } else if (strcmp(a, "--strict") == 0) {
+            o.strict = 1;
+        } else if (strcmp(a, "--quant") == 0 && v) {
+            if (cmd_parse_real(a, v, 1e-12, 1e-2, &o.quant_rel))
+                return EXIT_USAGE;
+            i++;
+        } else if (strcmp(a, "--tess") == 0 && v) {
+            if (cmd_parse_real(a, v, 1e-7, 0.1, &o.tess_rel))
+                return EXIT_USAGE;
+            i++;
+        } else if (cmd_common_arg("encode", a, &path)) {
+            return EXIT_USAGE;
+        }
+    }
+    if (!path || !out) {
+        fprintf(stderr, "%s encode: usage: cmz encode MODEL.igs -o MODEL.cmz [options] (see cmz --help)\n", cmd_prog);
+        return EXIT_USAGE;
+    }
+    if (profile) {
+        o.target = cm_profile_limits(profile);
+        o.target_name = profile;
+        if (!o.target) {
+            fprintf(stderr, "%s encode: unknown profile '%s' (terminal, host or tiny)\n", cmd_prog, profile);
+            return EXIT_USAGE;
+        }
+    }
+    loaded_model lm;
+    cm_status st;
+    cm_status_init(&st);
+    if (model_load(path, &lm, cmd_progress, NULL, &st) != CM_OK) {
+        int rc = cmd_load_failed(path, &lm, &st);
+        model_free(&lm);
+        return rc;
+    }
+    encode_result r;
+    cm_status_init(&st);
+    if (o.strict && lm.brep.entities_failed > 0) {
+        for (int i = 0; i < lm.iges.nwarn; i++)
+            if (is_structure_warning(lm.iges.warn[i].msg)) {
+                fprintf(stderr, "%s: %s: line %d: %s (--strict: nothing written)\n", cmd_prog, path,
+                        lm.iges.warn[i].line, lm.iges.warn[i].msg);
+                break;
+            }
+        model_free(&lm);
+        return EXIT_INPUT;
+    }
+    if (o.strict && lm.nleft_out > 0) {
+        const iges_warning *w = &lm.iges.warn[lm.left_out[0]];
+        fprintf(stderr, "%s: %s: %s%.0d%s%s (--strict: nothing written)\n", cmd_prog, path, w->line ? "line " : "",
+                w->line, w->line ? ": " : "", w->msg);
+        model_free(&lm);
+        return EXIT_INPUT;
+    }
+    cm_err e = encode_model(&lm, &o, &r, &st);
+    int rc = EXIT_OK;
+    /* every face left out, by the import or the encoder, is named; so is every solid, shell or
+       instance the import left out, and every member pointer it skipped */
+    for (int i = 0; i < lm.nleft_out; i++) {
+        const iges_warning *w = &lm.iges.warn[lm.left_out[i]];
+        fprintf(stderr, "%s: %s: warning: %s%.0d%s%s\n", cmd_prog, path, w->line ? "line " : "", w->line,
+                w->line ? ": " : "", w->msg);
+    }
+    for (int i = 0; i < lm.iges.nwarn; i++) {
+        const iges_warning *w = &lm.iges.warn[i];
+        if (is_structure_warning(w->msg))
+            fprintf(stderr, "%s: %s: warning: %s%.0d%s%s\n", cmd_prog, path, w->line ? "line " : "", w->line,
+                    w->line ? ": " : "", w->msg);
+    }
+    if (r.refusal[0] && e != CM_E_LIMIT) {
+        fprintf(stderr, "%s: %s: %s (nothing written)\n", cmd_prog, path, r.refusal);
+        rc = EXIT_INPUT;
+    } else if (e == CM_E_LIMIT && r.refusal[0]) {
+        fprintf(stderr, "%s: %s: refused: %s (nothing written)\n", cmd_prog, path, r.refusal);
+        rc = EXIT_INPUT;
+    } else if (e != CM_OK) {
+        cm_report_status(stderr, cmd_prog, path, &st);
+        rc = cmd_exit_for(st.code);
+    }
+    if (rc == EXIT_OK)
+        rc = write_atomic(out, r.bytes, r.len);
+    if (rc == EXIT_OK && report) {
+        FILE *f = fopen(report, "w");
+        if (!f) {
+            fprintf(stderr, "%s: %s: %s\n", cmd_prog, report, strerror(errno));
+            rc = EXIT_IO;
+        } else {
+            fprintf(f, "face\tde\tentity\tsurface\tmethod\tbbox_mm\tplane_dev_mm\tmax_err_mm\tratio\tsurf_ctrl"
+                       "\tlayout\tavg_err_mm\tg1_worst_deg\tgregory_ratio\twhy_kept\n");
+            for (int i = 0; i < lm.mesh.nfaces; i++) {
+                const face_report *fr = &r.faces[i];
+                const brep_face *bf = &lm.brep.faces[lm.mesh.faces[i].brep_face];
+                double c = fr->g1_cos > 1.0 ? 1.0 : fr->g1_cos;
+                fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\t%d\t%.6g\t%.4g\t%.6g\t%s\n", i,
+                        bf->src_de, bf->src_type, bf->surf_type,
+                        cm_method_name((unsigned)fr->method), fr->bbox, fr->plane_dev, fr->rebuild_max, fr->ratio, fr->surf_ctrl,
+                        fr->layout, fr->rebuild_avg, acos(c) * 57.29577951308232, fr->greg_ratio,
+                        cm_method_of((unsigned)fr->method)->kept_surface && fr->why ? fr->why : "-");
+            }
+            if (fclose(f) != 0)
+                rc = EXIT_IO;
+        }
+    }
+    if (rc == EXIT_OK) {
+        FILE *in = fopen(path, "rb");
+        long isize = 0;
+        if (in) {
+            fseek(in, 0, SEEK_END);
+            isize = ftell(in);
+            fclose(in);
+        }
+        char left[128] = "";
+        if (lm.nleft_out > 0)
+            snprintf(left, sizeof left, ", %d left out (see warnings)", lm.nleft_out);
+        if (lm.brep.entities_failed > 0)
+            snprintf(left + strlen(left), sizeof left - strlen(left), "; %d solids, shells or instances left out "
+                     "(see warnings)", lm.brep.entities_failed);
+        char methods[128];
+        cm_report_method_counts(methods, sizeof methods, r.faces_by_method, 0);
+        printf("%s -> %s: %d faces (%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the IGES (%ld bytes)\n",
+               path, out, lm.mesh.nfaces, methods, left,
+               r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0, isize);
+    }
+    encode_result_free(&r);
+    model_free(&lm);
+    return rc;
+}
