@@ -1,17 +1,25 @@
 /*
  * encode.h - the workstation encoder: a loaded model (IGES -> curve mesh)
- * to .cmz v1 bytes (docs/FORMAT.md).
+ * to .cmz bytes (docs/FORMAT.md, docs/METHODS.md).
  *
- * Order of work (spec §14, the parts this version implements):
- *   1. orient every part consistently (shared edges run both ways);
- *   2. quantise the transmitted edges first (spec §2 rule 5): clamped on
- *      [0,1], ends exactly on the quantised vertices;
- *   3. per face try PLANE (spec 5A, checked against the original surface,
- *      spec §12 grid) and otherwise KEEP the quantised original surface;
- *   4. write the sections, then decode the result with the decoder's own
- *      code and check it is bit-identical to what was meant to be sent;
- *   5. record the model's needs in the header and compare them with the
- *      target profile's limits.
+ * Order of work (spec §14), one file each:
+ *   1. every part consistently oriented (shared edges run both ways) and
+ *      the edges quantised first (spec §2 rule 5): clamped on [0,1], ends
+ *      exactly on the quantised vertices (tx_build.c);
+ *   2. the file written with every face kept and decoded with the
+ *      terminal's code, so that the methods are tried on exactly the
+ *      transmitted edges: per face the first method of the table whose
+ *      rebuild passes the check against the source surface (spec §12),
+ *      then the G1 fix-point (§13) (choose_methods.c, enc_plane.c,
+ *      enc_gregory.c, enc_keep.c);
+ *   3. the terminal's tessellation of every face: the needs, and closed
+ *      parts turned outwards by the volume they enclose (needs.c); a part
+ *      turned is encoded again from 1;
+ *   4. the final file written (write_sections.c), decoded once more, its
+ *      needs compared with the target profile's limits (encode.c).
+ * A face that cannot be sent is settled between passes (encode.c:
+ * encode_model).  All work storage is allocated per call: two encodes may
+ * run side by side.
  */
 #ifndef ENCODE_H
 #define ENCODE_H
@@ -19,6 +27,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "cm/cm_format.h"
 #include "cm/cm_limits_info.h"
 #include "model_load.h"
 
@@ -59,7 +68,7 @@ typedef struct encode_result {
     uint8_t *bytes;    /* malloc'd file */
     size_t len;
     uint32_t need[CM_LIMIT_COUNT];
-    int faces_plane, faces_gregory, faces_keep;
+    uint32_t faces_by_method[CM_METHOD_COUNT]; /* faces sent by each method, indexed by its number */
     int edges_line, edges_curve;
     int faces_flipped; /* faces turned to make every part consistently oriented */
     int faces_left_out; /* faces the encoder left out (model_leave_out_face: warned, in lm->left_out) */

@@ -10,11 +10,12 @@
 int face_surface_set(face_surface *fs, const cm_rebuilt *rb)
 {
     face_surface_free(fs);
-    fs->method = rb->method;
+    fs->rebuilt = 1;
+    fs->repr = rb->repr;
     fs->bbox = rb->bbox;
     fs->frame = rb->frame;
     memcpy(fs->rect, rb->rect, sizeof fs->rect);
-    if (rb->method == CM_METHOD_GREGORY && rb->greg) {
+    if (rb->repr == CM_REPR_PATCHES && rb->greg) {
         fs->greg = malloc(sizeof *fs->greg);
         if (!fs->greg)
             return 0;
@@ -27,7 +28,7 @@ void face_surface_free(face_surface *fs)
 {
     free(fs->greg);
     fs->greg = NULL;
-    fs->method = CM_METHOD_KEEP;
+    fs->rebuilt = 0;
 }
 
 static double dist_to_plane_patch(const cm_frame *fr, const double rect[4], cm_vec3 p)
@@ -158,14 +159,14 @@ static double greg_dist(greg_walk *w, cm_vec3 p)
 static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
 {
 
-    return rb->method == CM_METHOD_GREGORY ? greg_dist(w, p) : dist_to_plane_patch(&rb->frame, rb->rect, p);
+    return rb->repr == CM_REPR_PATCHES ? greg_dist(w, p) : dist_to_plane_patch(&rb->frame, rb->rect, p);
 }
 
 int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol, face_error *out)
 {
     memset(out, 0, sizeof *out);
     const face_domain *fd = &lm->fds[lm->mesh.faces[f].brep_face];
-    if (!fd->uv || (rb->method == CM_METHOD_GREGORY && !rb->greg))
+    if (!fd->uv || (rb->repr == CM_REPR_PATCHES && !rb->greg))
         return 0;
     /* a walk's local answer is a distance to a point of the surface, so never below the true one:
        one within a tenth of the tolerance cannot change the verdict and needs no global search */
@@ -255,12 +256,12 @@ static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n
 static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg_walk *w, cm_vec3 P, cm_vec3 *n)
 {
     const face_surface *S = &fs[f];
-    if (S->method == CM_METHOD_PLANE) {
+    if (S->rebuilt && S->repr == CM_REPR_FRAME) {
         *n = S->frame.ez;
         return 1;
     }
-    if (S->method != CM_METHOD_GREGORY || !S->greg)
-        return source_normal_at(lm, f, P, n); /* KEEP: the surface as it was */
+    if (!S->rebuilt || S->repr != CM_REPR_PATCHES || !S->greg)
+        return source_normal_at(lm, f, P, n); /* a kept surface: the surface as it was */
     cm_vec3 Su, Sv, X;
     w->s = S->greg;
     greg_dist(w, P);

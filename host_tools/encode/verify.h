@@ -18,10 +18,11 @@
 
 /** A face's surface as the terminal shows it, kept for the G1 check across its edges. */
 typedef struct face_surface {
-    int method;           /* CM_METHOD_* */
-    cm_frame frame;       /* PLANE */
+    int rebuilt;          /* 0: the face keeps its surface (measured on the source surface) */
+    cm_repr repr;         /* rebuilt: what the rebuild made (cm_rebuilt.repr) */
+    cm_frame frame;       /* FRAME */
     double rect[4];
-    cm_greg_surface *greg; /* GREGORY: malloc'd copy (face_surface_free) */
+    cm_greg_surface *greg; /* PATCHES: malloc'd copy (face_surface_free) */
     double bbox;           /* bbox_F */
 } face_surface;
 
@@ -40,8 +41,8 @@ int face_surface_set(face_surface *fs, const cm_rebuilt *rb);
 void face_surface_free(face_surface *fs);
 
 /**
- * Spec §12 for face f of the decoded model m, rebuilt as rb (PLANE or
- * GREGORY): the source surface on the 21 x 21 grid of its parameter box,
+ * Spec §12 for face f of the decoded model m, rebuilt as rb (a frame or
+ * patches): the source surface on the 21 x 21 grid of its parameter box,
  * points inside the outer loop (holes included, as the papers say), and the
  * transmitted edges of every loop at t = k/20, each projected on the rebuilt
  * surface.  Stops at the first point at or over `tol` mm (the face fails; HUGE_VAL measures all

@@ -1,0 +1,141 @@
+/* enc_gregory.c - the encoder's half of GREGORY (spec §6; decoder/methods/gregory.c). */
+#include "enc_method.h"
+
+#include <math.h>
+
+#include "cm/cm_const.h"
+#include "cm/cm_corner.h"
+#include "cm/cm_cubic_convert.h"
+#include "cm/cm_method.h"
+
+/* the K7 acceptance of spec 6 */
+#define K7_ACCEPT 0.25
+
+/*
+ * Spec §6 applicability of GREGORY for face f: an outer loop of 3..CM_MAX_SIDES edges, each
+ * cubic-convertible within a quarter of the tolerance (K7), no reflex corner.  This version also
+ * asks for no holes: the rebuilt patches cover the outer loop, and a terminal would have to trim
+ * them by the holes' projections (left to the fitting methods).  Fills the corner angles' cosines
+ * for the layout-2 order.  Returns 0 (and why, in rep->why) when not applicable.
+ */
+static int gregory_applicable(enc_work *w, int f, double tol, double *corner_cos, face_report *rep)
+{
+    const cm_model *m = &w->dec.model;
+    const cm_face *F = &m->faces[f];
+    const cm_loop *L = &m->loops[F->loop0];
+    int n = (int)L->nuse;
+    if (F->nloops != 1) {
+        rep->why = "holes";
+        return 0;
+    }
+    if (n < 3 || n > CM_MAX_SIDES) {
+        rep->why = n < 3 ? "fewer than 3 sides" : "too many sides";
+        return 0;
+    }
+    cm_cubic cub[CM_MAX_SIDES];
+    for (int k = 0; k < n; k++) {
+        const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
+        cm_curve c;
+        cm_model_edge_curve(m, U->edge, &c);
+        double delta = 0;
+        if (cm_cubic_convert(&c, 0.0, 1.0, &cub[k], &delta, NULL, NULL) != CM_OK || !(delta <= K7_ACCEPT * tol)) {
+            rep->why = "edge not cubic-convertible";
+            return 0;
+        }
+        if (U->rev)
+            cub[k] = cm_cubic_reverse(&cub[k]);
+    }
+    double bbox;
+    cm_vec3 nF;
+    if (cm_face_normal(m, (uint32_t)f, w->rbws.samples, &bbox, &nF, NULL) != CM_OK) {
+        rep->why = "no face normal";
+        return 0;
+    }
+    for (int k = 0; k < n; k++) {
+        const cm_cubic *in = &cub[(k + n - 1) % n], *out = &cub[k];
+        cm_vec3 ta = cm_sub(in->c[3], in->c[2]), tb = cm_sub(out->c[1], out->c[0]);
+        if (!(cm_norm(ta) > 0) || !(cm_norm(tb) > 0)) {
+            rep->why = "degenerate edge";
+            return 0;
+        }
+        cm_vec3 a = cm_neg(cm_unit(ta)), b = cm_unit(tb), x = cm_cross(b, a);
+        corner_cos[k] = cm_dot(a, b);
+        if (cm_norm(x) >= CM_SIN_FLAT && cm_dot(x, nF) <= 0) {
+            rep->why = "reflex corner";
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* spec §14 candidate list of the GREGORY family; the first that passes §12 wins */
+static int try_gregory(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
+                       face_surface *fs)
+{
+    enc_work *w = t->w;
+    double ccos[CM_MAX_SIDES];
+    if (!o->gregory)
+        return 0;
+    double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
+    if (!gregory_applicable(w, f, tol, ccos, rep))
+        return 0;
+    int n = (int)w->dec.model.loops[w->dec.model.faces[f].loop0].nuse;
+    int cand_layout[4], cand_j[4], nc = 0;
+    if (n == 4) {
+        cand_layout[nc] = CM_GREG_LAYOUT_QUAD;
+        cand_j[nc++] = 0;
+    } else {
+        cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
+        cand_j[nc++] = 0;
+    }
+    if (n == 3) {
+        /* layout 2 with j by increasing corner angle: decreasing cosine of the angle between a, b */
+        int order[3] = {0, 1, 2};
+        for (int i = 1; i < 3; i++)
+            for (int k = i; k > 0 && ccos[order[k]] > ccos[order[k - 1]]; k--) {
+                int x = order[k];
+                order[k] = order[k - 1];
+                order[k - 1] = x;
+            }
+        for (int i = 0; i < 3; i++) {
+            cand_layout[nc] = CM_GREG_LAYOUT_DEGEN;
+            cand_j[nc++] = order[i];
+        }
+    }
+    double best_ratio = HUGE_VAL;
+    for (int c = 0; c < nc; c++) {
+        cm_rebuilt rb;
+        if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY, cand_layout[c], cand_j[c], &rb) != CM_OK) {
+            rep->why = "construction failed";
+            continue;
+        }
+        face_error fe;
+        if (!verify_face(lm, &w->dec.model, f, &rb, tol, &fe)) {
+            rep->why = "no source domain";
+            continue;
+        }
+        if (fe.ratio < best_ratio) {
+            best_ratio = fe.ratio;
+            rep->greg_ratio = fe.ratio;
+        }
+        if (!(fe.max < tol)) {
+            rep->why = "error";
+            continue;
+        }
+        if (!face_surface_set(&fs[f], &rb))
+            return 0;
+        t->layout[f] = cand_layout[c];
+        t->corner[f] = cand_j[c];
+        t->checksum[f] = rb.checksum;
+        rep->layout = cand_layout[c];
+        rep->corner = cand_j[c];
+        rep->rebuild_max = fe.max;
+        rep->rebuild_avg = fe.avg;
+        rep->ratio = fe.ratio;
+        rep->why = NULL;
+        return 1;
+    }
+    return 0;
+}
+
+const enc_method enc_method_gregory = {CM_METHOD_GREGORY, try_gregory, NULL};

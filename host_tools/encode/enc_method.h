@@ -1,0 +1,32 @@
+/*
+ * enc_method.h - the encoder's half of a face method (the decoder's half is
+ * its module in decoder/methods/, cm_method.h): the trial that decides
+ * whether face f may be sent by the method, and what the report says about
+ * a face that keeps its surface.  One file per method (enc_plane.c,
+ * enc_gregory.c, enc_keep.c), one row in choose_methods.c.
+ */
+#ifndef ENC_METHOD_H
+#define ENC_METHOD_H
+
+#include "encode_internal.h"
+#include "verify.h"
+
+typedef struct enc_method {
+    unsigned id; /* CM_METHOD_*: the row of cm_method_table it belongs to */
+    /**
+     * Try the method on face f of the decoded model t->w->dec.model: rebuild it with the decoder's
+     * code (enc_trial_rebuild) and verify it against the source surface (spec §12).  1 when it
+     * passes: its surface in fs[f], its record in t, its numbers in rep; 0 with rep->why otherwise.
+     * NULL: the method always applies (the fallback).
+     */
+    int (*trial)(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep, face_surface *fs);
+    /** For a face that ends with this method and keeps its surface: its report's numbers (NULL: none). */
+    void (*measure_kept)(enc_work *w, const loaded_model *lm, int f, face_report *rep);
+} enc_method;
+
+extern const enc_method enc_method_plane, enc_method_gregory, enc_method_keep;
+
+/** Rebuild face f of the decoded model with a trial record (decoder code, no checksum check). */
+cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, cm_rebuilt *rb);
+
+#endif /* ENC_METHOD_H */

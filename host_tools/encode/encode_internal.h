@@ -1,0 +1,116 @@
+/*
+ * encode_internal.h - what the encoder's files share (see encode.h for the
+ * order of work): the transmitted model (tx_build.c), the section writers
+ * (write_sections.c), the method choice (choose_methods.c) and the needs
+ * and orientation measured on the terminal's tessellation (needs.c);
+ * encode.c runs them.  Not for use outside host_tools/encode/.
+ */
+#ifndef ENCODE_INTERNAL_H
+#define ENCODE_INTERNAL_H
+
+#include <stdint.h>
+
+#include "cm/cm_arith.h"
+#include "cm/cm_decode.h"
+#include "cm/cm_format.h"
+#include "cm/cm_rebuild.h"
+#include "cm/cm_tessellate.h"
+#include "encode.h"
+#include "model_load.h"
+
+#define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
+#define KNOT_ONE (1ll << CM_FMT_KNOT_BITS)
+/* what the decoder accepts: a value beyond cannot be sent */
+#define GRID_MAX CM_FMT_COORD_MAX
+#define WEIGHT_MAX CM_FMT_WEIGHT_MAX
+
+/*
+ * Everything one encode works in besides the model: a decoder like the terminal's, the rebuild's and
+ * the tessellation's workspaces (tens of MB: allocated once per encode_model, never file-static, so
+ * two encodes in one process do not share state).
+ */
+typedef struct enc_work {
+    cm_decoder dec;
+    cm_rebuild_ws rbws;
+    cm_tess_ws tess_ws;
+    float face_pos[CM_MAX_TESS_POINTS][3], face_nrm[CM_MAX_TESS_POINTS][3];
+    uint32_t face_idx[3 * CM_MAX_TESS_TRIS];
+} enc_work;
+
+/* ---- the transmitted model (quantised, in transmission order) ---- */
+
+typedef struct tx_edge {
+    int v0, v1;       /* transmitted vertex numbers */
+    int g1, kind, p, n, rational, uniform;
+    int64_t *kq;      /* n - p - 1 interior knots */
+    int64_t (*cq)[3]; /* n control points on the grid (ends = vertices) */
+    int64_t *wq;      /* n weights */
+} tx_edge;
+
+typedef struct tx_surf {
+    int p, q, nu, nv, rational, uniform_u, uniform_v;
+    int64_t *ku, *kv;
+    int64_t (*cq)[3];
+    int64_t *wq;
+} tx_surf;
+
+typedef struct tx {
+    double origin[3], q;
+    int q_exp;
+    int nverts, nedges, nfaces, nsurfs;
+    int64_t (*vq)[3];   /* vertices in transmission order */
+    tx_edge *edges;     /* in transmission order */
+    int *edge_tx;       /* cmesh edge -> transmission number */
+    int *vert_tx;       /* cmesh vertex -> transmission number */
+    tx_surf *surfs;     /* one per face (used for KEEP faces) */
+    int *method;        /* per face */
+    int *layout, *corner; /* per GREGORY face: its record (spec 15.2) */
+    uint32_t *checksum;
+    uint32_t palette[CM_FMT_MAX_PALETTE + 1];
+    int npalette;
+    int *color;         /* per face palette index */
+    const unsigned char *keep_only; /* per B-rep face: KEEP, a rebuilt surface did not tessellate */
+    const char **fault; /* per face: why it cannot be sent (NULL: it can); see encode_model */
+    int nfaults;
+    enc_work *w;        /* the decoder and tessellation storage this encode works in */
+} tx;
+
+/* face f cannot be sent as it is; the first reason stays */
+void tx_face_fault(tx *t, int f, const char *why);
+
+/* drop the transmitted edges and vertices (tx_build_edges makes them again) */
+void tx_free_edges(tx *t);
+
+void tx_free(tx *t);
+
+/* ---- orientation: every part's faces agree on shared edges (they run both ways) ---- */
+void enc_flip_face(loaded_model *lm, int f);
+
+int enc_orient_parts(loaded_model *lm);
+
+cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
+
+cm_err tx_build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_status *st);
+
+/* assemble header + sections + trailer; needs may be NULL (all zero) */
+cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o, const uint32_t *need,
+                         encode_result *r, cm_status *st);
+
+/* ---- decoding what we wrote, with the terminal's code ---- */
+cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st);
+
+/*
+ * The file with every face kept (so that every face can be measured against a decoded model that
+ * has all surfaces), decoded; the methods chosen on it; the file with those, decoded again.
+ */
+cm_err enc_choose_and_write(loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, cm_status *st);
+
+/* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples */
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st);
+
+/* flip every closed part (no free edges) whose faces enclose a negative volume; returns faces flipped */
+int enc_outward_parts(loaded_model *lm, const double *fvol, encode_result *r);
+
+void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need);
+
+#endif /* ENCODE_INTERNAL_H */

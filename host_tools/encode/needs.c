@@ -1,0 +1,148 @@
+/* needs.c - what the terminal will need, measured with its own tessellation, and closed parts
+   turned outwards by the volume they enclose (see encode_internal.h). */
+#include "encode_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cm/cm_const.h"
+#include "cm/cm_corner.h"
+#include "cm/cm_crc32.h"
+#include "cm/cm_cubic_convert.h"
+#include "cm/cm_method.h"
+#include "cm/cm_sections.h"
+
+/* ---- needs ---- */
+
+
+/* why a face does not tessellate, for its warning */
+static const char *tess_fault(cm_err e)
+{
+    switch (e) {
+    case CM_E_DEGENERATE: return "its boundary cannot be triangulated (loops cross, or are degenerate)";
+    case CM_E_LIMIT: return "its tessellation exceeds a limit of every profile";
+    case CM_E_NONFINITE: return "its surface gives non-finite points";
+    default: return "it cannot be tessellated";
+    }
+}
+
+/* a face that does not tessellate is a fault of that face (see encode_model), not of the model */
+/* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples */
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st)
+{
+    enc_work *w = t->w;
+    const cm_model *m = &w->dec.model;
+    cm_mesh_face mf;
+    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1};
+    uint64_t tris = 0;
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        if (o->progress)
+            o->progress("tessellating", (int)f + 1, (int)m->nfaces, o->progress_ctx);
+        cm_tess_info info;
+        cm_mesh_clear(&mesh);
+        cm_status fst;
+        cm_status_init(&fst);
+        cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &w->tess_ws, &info, &fst);
+        if (e == CM_E_NOMEM) {
+            *st = fst;
+            return e;
+        }
+        face_volume[f] = 0;
+        if (e != CM_OK) {
+            tx_face_fault(t, (int)f, tess_fault(e));
+            continue;
+        }
+        tris += (uint64_t)info.triangles;
+        /* the face's share of its part's signed volume (divergence theorem, relative to the origin) */
+        double vol = 0;
+        for (uint32_t i = 0; i < mesh.nindex; i += 3) {
+            const float *a = w->face_pos[w->face_idx[i]], *b = w->face_pos[w->face_idx[i + 1]];
+            const float *c = w->face_pos[w->face_idx[i + 2]];
+            cm_vec3 A = cm_v3f(a), B = cm_v3f(b), C = cm_v3f(c);
+            vol += cm_dot(A, cm_cross(B, C)) / 6.0;
+        }
+        face_volume[f] = vol;
+        if ((uint32_t)info.points > need[CM_LIMIT_MAX_TESS_POINTS])
+            need[CM_LIMIT_MAX_TESS_POINTS] = (uint32_t)info.points;
+        if ((uint32_t)info.max_edge_samples > need[CM_LIMIT_MAX_EDGE_SAMPLES])
+            need[CM_LIMIT_MAX_EDGE_SAMPLES] = (uint32_t)info.max_edge_samples;
+    }
+    need[CM_LIMIT_MAX_TRIS] = tris > UINT32_MAX ? UINT32_MAX : (uint32_t)tris;
+    return CM_OK;
+}
+
+/* flip every closed part (no free edges) whose faces enclose a negative volume; returns faces flipped */
+int enc_outward_parts(loaded_model *lm, const double *fvol, encode_result *r)
+{
+    cmesh *cm = &lm->mesh;
+    int *comp = malloc((size_t)(cm->nfaces + 1) * sizeof *comp);
+    if (!comp)
+        return 0;
+    int nc = cmesh_components(cm, comp), flipped = 0;
+    double *vol = calloc((size_t)nc + 1, sizeof *vol);
+    unsigned char *open = calloc((size_t)nc + 1, 1);
+    if (vol && open && nc > 0) {
+        for (int e = 0; e < cm->nedges; e++)
+            if (cm->edges[e].kind == CMESH_FREE)
+                open[comp[cm->edges[e].face[0]]] = 1;
+        for (int f = 0; f < cm->nfaces; f++)
+            vol[comp[f]] += fvol[f];
+        for (int f = 0; f < cm->nfaces; f++)
+            if (!open[comp[f]] && vol[comp[f]] < 0) {
+                enc_flip_face(lm, f);
+                flipped++;
+            }
+    }
+    r->faces_flipped += flipped;
+    free(vol);
+    free(open);
+    free(comp);
+    return flipped;
+}
+
+void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need)
+{
+    const cm_model *m = &w->dec.model;
+    memset(need, 0, sizeof(uint32_t) * CM_LIMIT_COUNT);
+#define NEED(id, v)                                                                                                    \
+    do {                                                                                                               \
+        uint64_t v_ = (uint64_t)(v);                                                                                   \
+        if (v_ > need[CM_LIMIT_##id])                                                                                  \
+            need[CM_LIMIT_##id] = (uint32_t)v_;                                                                        \
+    } while (0)
+    for (uint32_t e = 0; e < m->nedges; e++) {
+        NEED(MAX_DEGREE, m->edges[e].p);
+        NEED(MAX_EDGE_CTRL, m->edges[e].nctrl);
+    }
+    for (uint32_t s = 0; s < m->nsurfs; s++) {
+        const cm_ksurf *S = &m->surfs[s];
+        NEED(MAX_DEGREE, S->p);
+        NEED(MAX_DEGREE, S->q);
+        NEED(MAX_SURF_CTRL_DIR, S->nu);
+        NEED(MAX_SURF_CTRL_DIR, S->nv);
+        NEED(MAX_SURF_CTRL, (uint32_t)S->nu * S->nv);
+    }
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        const cm_face *F = &m->faces[f];
+        uint32_t uses = 0;
+        NEED(MAX_LOOPS, F->nloops);
+        const cm_method *M = cm_method_of(F->method);
+        cm_method_needs(M, m, F, need);
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            NEED(MAX_LOOP_EDGES, m->loops[F->loop0 + l].nuse);
+            uses += m->loops[F->loop0 + l].nuse;
+        }
+        NEED(MAX_FACE_EDGES, uses);
+    }
+    NEED(MAX_FACES, m->nfaces);
+    NEED(MAX_EDGES, m->nedges);
+    NEED(MAX_VERTICES, m->nverts);
+    NEED(MAX_FILE_BYTES, r->len);
+    NEED(MAX_MODEL_CTRL, m->nctrl);
+    NEED(MAX_MODEL_KNOTS, m->nknots);
+    NEED(MAX_MODEL_LOOPS, m->nloops);
+    NEED(MAX_MODEL_USES, m->nuses);
+#undef NEED
+}

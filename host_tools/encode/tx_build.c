@@ -1,0 +1,450 @@
+/* tx_build.c - the transmitted model: the curve mesh quantised, in transmission order, every part
+   consistently oriented (see encode_internal.h). */
+#include "encode_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cm/cm_const.h"
+#include "cm/cm_corner.h"
+#include "cm/cm_crc32.h"
+#include "cm/cm_cubic_convert.h"
+#include "cm/cm_method.h"
+#include "cm/cm_sections.h"
+
+/* face f cannot be sent as it is; the first reason stays */
+void tx_face_fault(tx *t, int f, const char *why)
+{
+    if (!t->fault[f]) {
+        t->fault[f] = why;
+        t->nfaults++;
+    }
+}
+
+/* drop the transmitted edges and vertices (tx_build_edges makes them again) */
+void tx_free_edges(tx *t)
+{
+    for (int i = 0; i < t->nedges; i++) {
+        free(t->edges[i].kq);
+        free(t->edges[i].cq);
+        free(t->edges[i].wq);
+    }
+    free(t->vq);
+    free(t->edges);
+    free(t->edge_tx);
+    free(t->vert_tx);
+    t->vq = NULL;
+    t->edges = NULL;
+    t->edge_tx = t->vert_tx = NULL;
+    t->nedges = t->nverts = 0;
+}
+
+void tx_free(tx *t)
+{
+    tx_free_edges(t);
+    for (int i = 0; i < t->nfaces; i++) {
+        free(t->surfs[i].ku);
+        free(t->surfs[i].kv);
+        free(t->surfs[i].cq);
+        free(t->surfs[i].wq);
+    }
+    free(t->surfs);
+    free(t->method);
+    free(t->layout);
+    free(t->corner);
+    free(t->checksum);
+    free(t->color);
+    free(t->fault);
+    memset(t, 0, sizeof *t);
+}
+
+
+/* p on the grid; 0 when it is not finite or beyond what the decoder accepts (out is then 0) */
+static int quantise(const tx *t, cm_vec3 p, int64_t out[3])
+{
+    double c[3] = {(p.x - t->origin[0]) / t->q, (p.y - t->origin[1]) / t->q, (p.z - t->origin[2]) / t->q};
+    int ok = 1;
+    for (int k = 0; k < 3; k++) {
+        ok &= fabs(c[k]) <= (double)GRID_MAX; /* false for NaN too */
+        out[k] = fabs(c[k]) <= (double)GRID_MAX ? llround(c[k]) : 0;
+    }
+    return ok;
+}
+
+/* a weight relative to the first on the format's grid; 0 when it cannot be sent */
+static int64_t quantise_weight(double w, double w0)
+{
+    double r = (double)WEIGHT_ONE * w / w0;
+    if (!(r > 0 && r <= (double)WEIGHT_MAX))
+        return 0;
+    int64_t q = llround(r);
+    return q < 1 ? 1 : q;
+}
+
+/* ---- orientation: every part's faces agree on shared edges (they run both ways) ---- */
+
+void enc_flip_face(loaded_model *lm, int f)
+{
+    cmesh *cm = &lm->mesh;
+    const cmesh_face *cf = &cm->faces[f];
+    for (int l = 0; l < cf->nloops; l++) {
+        const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+        for (int i = 0; i < cl->n / 2; i++) {
+            cmesh_use t = cm->uses[cl->first + i];
+            cm->uses[cl->first + i] = cm->uses[cl->first + cl->n - 1 - i];
+            cm->uses[cl->first + cl->n - 1 - i] = t;
+        }
+        for (int i = 0; i < cl->n; i++)
+            cm->uses[cl->first + i].rev ^= 1;
+    }
+    lm->brep.faces[cf->brep_face].flip ^= 1;
+}
+
+int enc_orient_parts(loaded_model *lm)
+{
+    cmesh *cm = &lm->mesh;
+    int nf = cm->nfaces, flips = 0;
+    /* per edge: the face and rev of its first two uses */
+    int *ef = malloc((size_t)cm->nedges * 2 * sizeof(int)), *er = malloc((size_t)cm->nedges * 2 * sizeof(int));
+    int *cnt = calloc((size_t)cm->nedges + 1, sizeof(int));
+    int *queue = malloc((size_t)(nf + 1) * sizeof(int));
+    unsigned char *seen = calloc((size_t)nf + 1, 1), *flip = calloc((size_t)nf + 1, 1);
+    if (!ef || !er || !cnt || !queue || !seen || !flip)
+        goto done;
+    for (int f = 0; f < nf; f++) {
+        const cmesh_face *cf = &cm->faces[f];
+        for (int l = 0; l < cf->nloops; l++) {
+            const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+            for (int i = 0; i < cl->n; i++) {
+                const cmesh_use *u = &cm->uses[cl->first + i];
+                if (cnt[u->edge] < 2) {
+                    ef[2 * u->edge + cnt[u->edge]] = f;
+                    er[2 * u->edge + cnt[u->edge]] = u->rev;
+                }
+                cnt[u->edge]++;
+            }
+        }
+    }
+    for (int s = 0; s < nf; s++) {
+        if (seen[s])
+            continue;
+        int head = 0, tail = 0;
+        queue[tail++] = s;
+        seen[s] = 1;
+        while (head < tail) {
+            int f = queue[head++];
+            const cmesh_face *cf = &cm->faces[f];
+            for (int l = 0; l < cf->nloops; l++) {
+                const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+                for (int i = 0; i < cl->n; i++) {
+                    int e = cm->uses[cl->first + i].edge;
+                    if (cm->edges[e].kind != CMESH_SHARED)
+                        continue;
+                    int side = ef[2 * e] == f ? 0 : 1, g = ef[2 * e + 1 - side];
+                    if (seen[g])
+                        continue;
+                    int rf = er[2 * e + side] ^ flip[f], rg = er[2 * e + 1 - side];
+                    flip[g] = rf == rg; /* the same way in both: turn g */
+                    seen[g] = 1;
+                    queue[tail++] = g;
+                }
+            }
+        }
+    }
+    for (int f = 0; f < nf; f++)
+        if (flip[f]) {
+            enc_flip_face(lm, f);
+            flips++;
+        }
+done:
+    free(ef);
+    free(er);
+    free(cnt);
+    free(queue);
+    free(seen);
+    free(flip);
+    return flips;
+}
+
+/* ---- building the transmitted model ---- */
+
+/*
+ * Clean a clamped knot vector on [0,1] for transmission: knots closer than
+ * a few quanta of the format's knot grid are made equal (exporters write
+ * spans of 1e-16 at the ends of arcs), then every basis function whose
+ * support has become empty is dropped with its control point: it has no
+ * influence on the curve.  Shape changes by the length of the dropped
+ * spans (far below the coordinate grid).  keep[j] tells which control
+ * points stay; the knot vector is compacted in place; returns the new
+ * count of control points.
+ */
+static int clean_knots(int p, int n, double *U, unsigned char *keep)
+{
+    const double eps = 4.0 / (double)KNOT_ONE;
+    int m = n + p + 1;
+    for (int j = 1; j < m; j++) {
+        if (U[j] - U[j - 1] < eps)
+            U[j] = U[j - 1];
+        if (1.0 - U[j] < eps)
+            U[j] = 1.0;
+    }
+    int nn = 0;
+    for (int j = 0; j < n; j++) {
+        keep[j] = U[j] != U[j + p + 1];
+        nn += keep[j];
+    }
+    int k = 0;
+    for (int j = 0; j < m; j++)
+        if (j >= n || keep[j])
+            U[k++] = U[j];
+    return nn;
+}
+
+/* 1 if the curve is the straight segment between its ends (collinear, monotone control points) */
+static int is_segment(const hcurve *c, double tol)
+{
+    cm_vec3 a = c->ctrl[0], b = c->ctrl[c->n - 1], d = cm_sub(b, a);
+    double L = cm_norm(d);
+    if (!(L > 10 * tol))
+        return 0;
+    cm_vec3 u = cm_scale(d, 1.0 / L);
+    double prev = -1;
+    for (int i = 0; i < c->n; i++) {
+        cm_vec3 r = cm_sub(c->ctrl[i], a);
+        double t = cm_dot(r, u);
+        if (cm_norm(cm_sub(r, cm_scale(u, t))) > tol || t < prev - tol)
+            return 0;
+        prev = t;
+    }
+    return 1;
+}
+
+cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
+{
+    cmesh *cm = &lm->mesh;
+    t->edge_tx = malloc((size_t)(cm->nedges + 1) * sizeof(int));
+    t->vert_tx = malloc((size_t)(cm->nverts + 1) * sizeof(int));
+    t->edges = calloc((size_t)cm->nedges + 1, sizeof *t->edges);
+    t->vq = malloc((size_t)(cm->nverts + 1) * sizeof *t->vq);
+    if (!t->edge_tx || !t->vert_tx || !t->edges || !t->vq)
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    for (int e = 0; e < cm->nedges; e++)
+        t->edge_tx[e] = -1;
+    for (int v = 0; v < cm->nverts; v++)
+        t->vert_tx[v] = -1;
+    /* edges in the order the faces first use them; vertices as the edges first touch them */
+    int *order = malloc((size_t)(cm->nedges + 1) * sizeof(int));
+    if (!order)
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    /* the same walk as sec_face (faces, their loops, the loops' uses): the cmesh
+       use array need not be in that order (a hole's loop may be stored later) */
+    for (int f = 0; f < t->nfaces; f++) {
+        const cmesh_face *cf = &cm->faces[f];
+        for (int l = 0; l < cf->nloops; l++) {
+            const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+            for (int i = 0; i < cl->n; i++) {
+                int e = cm->uses[cl->first + i].edge;
+                if (t->edge_tx[e] < 0) {
+                    order[t->nedges] = e;
+                    t->edge_tx[e] = t->nedges++;
+                }
+            }
+        }
+    }
+    /* an edge that cannot be sent (its curve or an end off the grid) takes its faces out: why[e] */
+    const char **why = calloc((size_t)cm->nedges + 1, sizeof *why);
+    unsigned char *off_grid = calloc((size_t)cm->nverts + 1, 1);
+    if (!why || !off_grid) {
+        free(why);
+        free(off_grid);
+        free(order);
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < t->nedges; i++) {
+        const cmesh_edge *E = &cm->edges[order[i]];
+        int vs[2] = {E->v0, E->v1};
+        for (int k = 0; k < 2; k++)
+            if (t->vert_tx[vs[k]] < 0) {
+                off_grid[vs[k]] = !quantise(t, cm->verts[vs[k]], t->vq[t->nverts]);
+                t->vert_tx[vs[k]] = t->nverts++;
+            }
+    }
+    for (int i = 0; i < t->nedges; i++)
+        if (off_grid[cm->edges[order[i]].v0] || off_grid[cm->edges[order[i]].v1])
+            why[order[i]] = "a vertex lies off the coordinate grid (not finite or too far from the model)";
+    free(off_grid);
+    cm_err err = CM_OK;
+    for (int i = 0; i < t->nedges && err == CM_OK; i++) {
+        const cmesh_edge *E = &cm->edges[order[i]];
+        tx_edge *X = &t->edges[i];
+        X->v0 = t->vert_tx[E->v0];
+        X->v1 = t->vert_tx[E->v1];
+        X->g1 = E->g1;
+        if (why[order[i]])
+            continue;
+        hcurve c = {0};
+        cm_status cst;
+        cm_status_init(&cst);
+        if ((err = hcurve_clamp(&E->c, &c, &cst)) != CM_OK) {
+            if (err == CM_E_NOMEM)
+                break;
+            why[order[i]] = "an edge curve cannot be clamped to its ends";
+            err = CM_OK;
+            continue;
+        }
+        hcurve_reparam(&c, 0.0, 1.0);
+        {
+            unsigned char *keep = malloc((size_t)c.n);
+            if (!keep) {
+                hcurve_free(&c);
+                err = cm_fail(st, CM_E_NOMEM, "out of memory");
+                break;
+            }
+            int nn = clean_knots(c.p, c.n, c.knots, keep), k = 0;
+            for (int j = 0; j < c.n; j++)
+                if (keep[j]) {
+                    c.ctrl[k] = c.ctrl[j];
+                    if (c.w)
+                        c.w[k] = c.w[j];
+                    k++;
+                }
+            c.n = nn;
+            free(keep);
+        }
+        if (X->v0 != X->v1 && (c.n == 2 || is_segment(&c, t->q))) {
+            X->kind = CM_EDGE_LINE;
+            X->p = 1;
+            X->n = 2;
+        } else {
+            X->kind = CM_EDGE_CURVE;
+            X->p = c.p;
+            X->n = c.n;
+        }
+        int n = X->n, p = X->p, interior = n - p - 1;
+        X->cq = malloc((size_t)n * sizeof *X->cq);
+        X->wq = malloc((size_t)n * sizeof *X->wq);
+        X->kq = malloc((size_t)(interior > 0 ? interior : 1) * sizeof *X->kq);
+        if (!X->cq || !X->wq || !X->kq) {
+            hcurve_free(&c);
+            err = cm_fail(st, CM_E_NOMEM, "out of memory");
+            break;
+        }
+        memcpy(X->cq[0], t->vq[X->v0], sizeof X->cq[0]);
+        memcpy(X->cq[n - 1], t->vq[X->v1], sizeof X->cq[0]);
+        X->rational = 0;
+        X->uniform = 1;
+        for (int j = 0; j < n; j++)
+            X->wq[j] = WEIGHT_ONE;
+        if (X->kind == CM_EDGE_CURVE) {
+            for (int j = 1; j < n - 1; j++)
+                if (!quantise(t, c.ctrl[j], X->cq[j]))
+                    why[order[i]] = "an edge's control point lies off the coordinate grid";
+            if (c.w)
+                for (int j = 0; j < n; j++) {
+                    X->wq[j] = quantise_weight(c.w[j], c.w[0]);
+                    if (X->wq[j] == 0)
+                        why[order[i]] = "an edge's weights cannot be sent (ratio out of range)";
+                    if (X->wq[j] != WEIGHT_ONE)
+                        X->rational = 1;
+                }
+            for (int j = 1; j <= interior; j++) {
+                double k = c.knots[p + j];
+                X->kq[j - 1] = llround(k * (double)KNOT_ONE);
+                if (fabs(k - (double)j / (double)(interior + 1)) > 0.5 / (double)KNOT_ONE)
+                    X->uniform = 0;
+            }
+        }
+        hcurve_free(&c);
+    }
+    for (int f = 0; f < t->nfaces && err == CM_OK; f++) {
+        const cmesh_face *cf = &cm->faces[f];
+        for (int l = 0; l < cf->nloops; l++) {
+            const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+            for (int i = 0; i < cl->n; i++)
+                if (why[cm->uses[cl->first + i].edge])
+                    tx_face_fault(t, f, why[cm->uses[cl->first + i].edge]);
+        }
+    }
+    free(why);
+    free(order);
+    return err;
+}
+
+cm_err tx_build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
+{
+    hsurf s = {0};
+    double u0, u1, v0, v1;
+    hsurf_domain(orig, &u0, &u1, &v0, &v1);
+    cm_err e = hsurf_subrange(orig, u0, u1, v0, v1, &s, st); /* clamped on its domain */
+    if (e != CM_OK)
+        return e;
+    /* knots on [0,1], cleaned like the edges' (rows and columns without influence dropped) */
+    for (int i = 0; i < s.nu + s.p + 1; i++)
+        s.U[i] = i <= s.p ? 0.0 : (i >= s.nu ? 1.0 : (s.U[i] - u0) / (u1 - u0));
+    for (int i = 0; i < s.nv + s.q + 1; i++)
+        s.V[i] = i <= s.q ? 0.0 : (i >= s.nv ? 1.0 : (s.V[i] - v0) / (v1 - v0));
+    unsigned char *ku = malloc((size_t)s.nu), *kv = malloc((size_t)s.nv);
+    if (!ku || !kv) {
+        free(ku);
+        free(kv);
+        hsurf_free(&s);
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    }
+    int nu = clean_knots(s.p, s.nu, s.U, ku), nv = clean_knots(s.q, s.nv, s.V, kv), kept = 0;
+    for (int i = 0; i < s.nu; i++)
+        for (int j = 0; j < s.nv; j++)
+            if (ku[i] && kv[j]) {
+                s.ctrl[kept] = s.ctrl[i * s.nv + j];
+                if (s.w)
+                    s.w[kept] = s.w[i * s.nv + j];
+                kept++;
+            }
+    s.nu = nu;
+    s.nv = nv;
+    free(ku);
+    free(kv);
+    S->p = s.p;
+    S->q = s.q;
+    S->nu = s.nu;
+    S->nv = s.nv;
+    int nku = s.nu - s.p - 1, nkv = s.nv - s.q - 1;
+    long total = (long)s.nu * s.nv;
+    S->ku = malloc((size_t)(nku > 0 ? nku : 1) * sizeof(int64_t));
+    S->kv = malloc((size_t)(nkv > 0 ? nkv : 1) * sizeof(int64_t));
+    S->cq = malloc((size_t)total * sizeof *S->cq);
+    S->wq = malloc((size_t)total * sizeof *S->wq);
+    if (!S->ku || !S->kv || !S->cq || !S->wq) {
+        hsurf_free(&s);
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    }
+    S->uniform_u = S->uniform_v = 1;
+    for (int j = 1; j <= nku; j++) {
+        double k = s.U[s.p + j];
+        S->ku[j - 1] = llround(k * (double)KNOT_ONE);
+        if (fabs(k - (double)j / (double)(nku + 1)) > 0.5 / (double)KNOT_ONE)
+            S->uniform_u = 0;
+    }
+    for (int j = 1; j <= nkv; j++) {
+        double k = s.V[s.q + j];
+        S->kv[j - 1] = llround(k * (double)KNOT_ONE);
+        if (fabs(k - (double)j / (double)(nkv + 1)) > 0.5 / (double)KNOT_ONE)
+            S->uniform_v = 0;
+    }
+    S->rational = 0;
+    for (long i = 0; i < total && e == CM_OK; i++) {
+        if (!quantise(t, s.ctrl[i], S->cq[i]))
+            e = cm_fail(st, CM_E_RANGE, "a surface control point lies off the coordinate grid");
+        S->wq[i] = WEIGHT_ONE;
+        if (s.w) {
+            S->wq[i] = quantise_weight(s.w[i], s.w[0]);
+            if (S->wq[i] == 0)
+                e = cm_fail(st, CM_E_RANGE, "the surface's weights cannot be sent (ratio out of range)");
+            if (S->wq[i] != WEIGHT_ONE)
+                S->rational = 1;
+        }
+    }
+    hsurf_free(&s);
+    return e;
+}

@@ -1,0 +1,274 @@
+/* write_sections.c - the transmitted model and the methods' records as .cmz bytes (docs/FORMAT.md). */
+#include "encode_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cm/cm_const.h"
+#include "cm/cm_corner.h"
+#include "cm/cm_crc32.h"
+#include "cm/cm_cubic_convert.h"
+#include "cm/cm_method.h"
+#include "cm/cm_sections.h"
+
+/* ---- writing ---- */
+
+typedef struct outbuf {
+    uint8_t *p;
+    size_t len;
+} outbuf;
+
+typedef void (*section_fn)(const tx *t, cm_ac_enc *e, const loaded_model *lm);
+
+static void put_knots(cm_ac_enc *e, cm_ac_prob *puni, cm_ac_int *mk, int uniform, const int64_t *kq, int interior)
+{
+    cm_ac_enc_bit(e, puni, (unsigned)uniform);
+    if (uniform)
+        return;
+    int64_t prev = 0;
+    for (int j = 0; j < interior; j++) {
+        cm_ac_enc_uint(e, mk, (uint64_t)(kq[j] - prev));
+        prev = kq[j];
+    }
+}
+
+static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+{
+    (void)lm;
+    cm_vert_ctx ctx;
+    cm_vert_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nverts);
+    int64_t prev[3] = {0, 0, 0};
+    for (int i = 0; i < t->nverts; i++)
+        for (int k = 0; k < 3; k++) {
+            cm_ac_enc_sint(e, &ctx.coord[k], t->vq[i][k] - prev[k]);
+            prev[k] = t->vq[i][k];
+        }
+}
+
+static void put_vref(cm_ac_enc *e, cm_ac_prob *pnew, cm_ac_int *mb, int *next, int v)
+{
+    if (v == *next) {
+        cm_ac_enc_bit(e, pnew, 1);
+        (*next)++;
+    } else {
+        cm_ac_enc_bit(e, pnew, 0);
+        cm_ac_enc_uint(e, mb, (uint64_t)(*next - 1 - v));
+    }
+}
+
+static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+{
+    (void)lm;
+    cm_edge_ctx ctx;
+    cm_edge_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nedges);
+    int vnext = 0;
+    for (int i = 0; i < t->nedges; i++) {
+        const tx_edge *X = &t->edges[i];
+        put_vref(e, &ctx.is_new, &ctx.back, &vnext, X->v0);
+        put_vref(e, &ctx.is_new, &ctx.back, &vnext, X->v1);
+        cm_ac_enc_bit(e, &ctx.g1, (unsigned)X->g1);
+        cm_ac_enc_bit(e, &ctx.kind, (unsigned)X->kind);
+        if (X->kind == CM_EDGE_LINE)
+            continue;
+        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(X->p - 1));
+        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(X->n - X->p - 1));
+        cm_ac_enc_bit(e, &ctx.rational, (unsigned)X->rational);
+        put_knots(e, &ctx.uniform, &ctx.knot, X->uniform, X->kq, X->n - X->p - 1);
+        int64_t prev[3] = {X->cq[0][0], X->cq[0][1], X->cq[0][2]};
+        for (int j = 1; j < X->n - 1; j++)
+            for (int k = 0; k < 3; k++) {
+                cm_ac_enc_sint(e, &ctx.coord[k], X->cq[j][k] - prev[k]);
+                prev[k] = X->cq[j][k];
+            }
+        if (X->rational)
+            for (int j = 1; j < X->n; j++)
+                cm_ac_enc_sint(e, &ctx.weight, X->wq[j] - X->wq[j - 1]);
+    }
+}
+
+static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+{
+    (void)lm;
+    cm_surf_ctx ctx;
+    cm_surf_ctx_init(&ctx);
+    int nkeep = 0;
+    for (int f = 0; f < t->nfaces; f++)
+        nkeep += cm_method_of((unsigned)t->method[f])->kept_surface;
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)nkeep);
+    for (int f = 0; f < t->nfaces; f++) {
+        if (!cm_method_of((unsigned)t->method[f])->kept_surface)
+            continue;
+        const tx_surf *S = &t->surfs[f];
+        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->p - 1));
+        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nu - S->p - 1));
+        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->q - 1));
+        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nv - S->q - 1));
+        cm_ac_enc_bit(e, &ctx.rational, (unsigned)S->rational);
+        put_knots(e, &ctx.uniform, &ctx.knot, S->uniform_u, S->ku, S->nu - S->p - 1);
+        put_knots(e, &ctx.uniform, &ctx.knot, S->uniform_v, S->kv, S->nv - S->q - 1);
+        int nu = S->nu, nv = S->nv;
+        for (int i = 0; i < nu; i++)
+            for (int j = 0; j < nv; j++) {
+                int idx = i * nv + j;
+                for (int k = 0; k < 3; k++) {
+                    int64_t pred = i && j ? S->cq[idx - nv][k] + S->cq[idx - 1][k] - S->cq[idx - nv - 1][k]
+                                   : i    ? S->cq[idx - nv][k]
+                                   : j    ? S->cq[idx - 1][k]
+                                          : 0;
+                    cm_ac_enc_sint(e, &ctx.coord[k], S->cq[idx][k] - pred);
+                }
+                if (S->rational && idx > 0) {
+                    int64_t pred = i && j ? S->wq[idx - nv] + S->wq[idx - 1] - S->wq[idx - nv - 1]
+                                   : i    ? S->wq[idx - nv]
+                                          : S->wq[idx - 1];
+                    cm_ac_enc_sint(e, &ctx.weight, S->wq[idx] - pred);
+                }
+            }
+    }
+}
+
+static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+{
+    const cmesh *cm = &lm->mesh;
+    cm_face_ctx ctx;
+    cm_face_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nfaces);
+    int enext = 0;
+    for (int f = 0; f < t->nfaces; f++) {
+        const cmesh_face *cf = &cm->faces[f];
+        cm_ac_enc_uint(e, &ctx.method, (uint64_t)t->method[f]);
+        const cm_method *M = cm_method_of((unsigned)t->method[f]);
+        if (M->has_record) {
+            cm_face rec = {0};
+            rec.method = (uint8_t)t->method[f];
+            rec.layout = (uint8_t)t->layout[f];
+            rec.corner = (uint8_t)t->corner[f];
+            rec.checksum = t->checksum[f];
+            cm_method_write_record(M, e, &ctx, &rec);
+        }
+        cm_ac_enc_bit(e, &ctx.flip, (unsigned)lm->brep.faces[cf->brep_face].flip);
+        cm_ac_enc_uint(e, &ctx.loops, (uint64_t)cf->nloops);
+        for (int l = 0; l < cf->nloops; l++) {
+            const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
+            cm_ac_enc_uint(e, &ctx.uses, (uint64_t)cl->n);
+            for (int i = 0; i < cl->n; i++) {
+                const cmesh_use *u = &cm->uses[cl->first + i];
+                int ex = t->edge_tx[u->edge];
+                /* the transmitted edge runs in its cmesh direction: rev carries over */
+                if (ex == enext) {
+                    cm_ac_enc_bit(e, &ctx.is_new, 1);
+                    cm_ac_enc_bit(e, &ctx.rev_new, (unsigned)u->rev);
+                    enext++;
+                } else {
+                    cm_ac_enc_bit(e, &ctx.is_new, 0);
+                    cm_ac_enc_uint(e, &ctx.back, (uint64_t)(enext - 1 - ex));
+                    cm_ac_enc_bit(e, &ctx.rev_old, (unsigned)u->rev);
+                }
+            }
+        }
+    }
+}
+
+static void sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+{
+    (void)lm;
+    cm_colr_ctx ctx;
+    cm_colr_ctx_init(&ctx);
+    cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->npalette);
+    for (int i = 1; i <= t->npalette; i++)
+        cm_ac_enc_direct(e, t->palette[i], 24);
+    if (t->npalette == 0)
+        return;
+    for (int f = 0; f < t->nfaces; f++)
+        cm_ac_enc_uint(e, &ctx.index, (uint64_t)t->color[f]);
+}
+
+static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, outbuf *out, cm_status *st)
+{
+    size_t cap = 1 << 16;
+    for (int attempt = 0; attempt < 24; attempt++, cap *= 2) {
+        uint8_t *buf = malloc(cap);
+        if (!buf)
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
+        cm_ac_enc e;
+        cm_ac_enc_init(&e, buf, cap);
+        fn(t, &e, lm);
+        size_t n = cm_ac_enc_finish(&e);
+        if (n > 0) {
+            out->p = buf;
+            out->len = n;
+            return CM_OK;
+        }
+        free(buf);
+    }
+    return cm_fail(st, CM_E_NOSPACE, "section too large");
+}
+
+/* assemble header + sections + trailer; needs may be NULL (all zero) */
+cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o, const uint32_t *need,
+                         encode_result *r, cm_status *st)
+{
+    static const section_fn fns[CM_SEC_COUNT] = {sec_vert, sec_edge, sec_surf, sec_face, sec_colr};
+    outbuf sec[CM_SEC_COUNT];
+    memset(sec, 0, sizeof sec);
+    cm_err e = CM_OK;
+    for (int s = 0; s < CM_SEC_COUNT && e == CM_OK; s++)
+        e = run_section(fns[s], t, lm, &sec[s], st);
+    size_t H = cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT);
+    size_t total = H + 4;
+    for (int s = 0; s < CM_SEC_COUNT; s++) {
+        total += sec[s].len;
+        r->section_bytes[s + 1] = sec[s].len;
+    }
+    r->section_bytes[0] = H;
+    uint8_t *b = e == CM_OK ? calloc(1, total) : NULL;
+    if (e == CM_OK && !b)
+        e = cm_fail(st, CM_E_NOMEM, "out of memory");
+    if (e == CM_OK && total > 0x7fffffffu)
+        e = cm_fail(st, CM_E_NOSPACE, "file larger than 2 GiB");
+    if (e == CM_OK) {
+        /* the oldest version that can say it: format 1 readers still load files of format 1's methods */
+        int major = 1;
+        for (int f = 0; f < t->nfaces; f++)
+            if (cm_method_of((unsigned)t->method[f])->since_major > major)
+                major = cm_method_of((unsigned)t->method[f])->since_major;
+        cm_fmt_header h = {0};
+        h.major = (uint8_t)major;
+        h.minor = major == CM_FMT_VERSION_MAJOR ? CM_FMT_VERSION_MINOR : 0;
+        h.flags = (uint16_t)(t->npalette ? 1 : 0);
+        h.header_len = (uint32_t)H;
+        h.file_len = (uint32_t)total;
+        h.nlimits = CM_LIMIT_COUNT;
+        h.nsections = CM_SEC_COUNT;
+        h.q_exp = (int8_t)t->q_exp;
+        for (int k = 0; k < 3; k++)
+            h.origin[k] = t->origin[k];
+        h.tess_tol = o->tess_rel * brep_diag(&lm->brep);
+        h.rel_tol = o->rel_tol;
+        cm_fmt_header_pack(b, &h);
+        for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+            cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);
+        size_t off = H;
+        for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+            uint8_t *ent = b + cm_fmt_entry_at(CM_LIMIT_COUNT, s);
+            ent[CM_ENT_TAG] = (uint8_t)(s + 1);
+            cm_put_u32(ent + CM_ENT_OFFSET, (uint32_t)off);
+            cm_put_u32(ent + CM_ENT_LENGTH, (uint32_t)sec[s].len);
+            cm_put_u32(ent + CM_ENT_CRC, cm_crc32(sec[s].p, sec[s].len));
+            memcpy(b + off, sec[s].p, sec[s].len);
+            off += sec[s].len;
+        }
+        cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
+        cm_put_u32(b + total - 4, cm_crc32(b, total - 4));
+        free(r->bytes);
+        r->bytes = b;
+        r->len = total;
+    }
+    for (int s = 0; s < CM_SEC_COUNT; s++)
+        free(sec[s].p);
+    return e;
+}
