@@ -8,6 +8,7 @@
 
 #include "brep/brep.h"
 #include "brep/face_domain.h"
+#include "iges/iges_brep.h"
 #include "iges/iges_file.h"
 #include "mesh/cmesh.h"
 

@@ -20,8 +20,8 @@
 
 #include <stdint.h>
 
+#include "geom/hbox.h"
 #include "geom/hnurbs.h"
-#include "iges/iges_geom.h"
 
 typedef struct brep_loop {
     int first, n; /* segments [first, first + n) */
@@ -83,20 +83,5 @@ void brep_truncate(brep_model *m, int nsurfs, int nfaces, int nloops, int nsegs)
  * unchanged) if the bookkeeping cannot be allocated.
  */
 CM_NODISCARD cm_err brep_remove_faces(brep_model *m, const unsigned char *drop, cm_status *st);
-
-/** Counts per kind of IGES input, for `cmz info`. */
-typedef struct brep_import_stats {
-    int faces_144, faces_143, faces_510, faces_untrimmed;
-    int instances;        /* expanded 408 subfigure instances */
-    int face_entities;    /* distinct 144/143/510 entities imported (instances place some several times) */
-} brep_import_stats;
-
-/**
- * Import every face of an IGES file into m (model space, millimetres).
- * A face that cannot be built is skipped with a warning in f->warn naming
- * its entity and line; the import fails only on errors that leave no
- * usable model (none of the file's faces could be read).
- */
-CM_NODISCARD cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_status *st);
 
 #endif /* BREP_H */

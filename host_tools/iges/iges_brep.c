@@ -1,5 +1,5 @@
 /*
- * iges_brep.c - IGES faces into the workstation B-rep (see brep/brep.h).
+ * iges_brep.c - IGES faces into the workstation B-rep (see iges_brep.h, brep/brep.h).
  *
  * Which entities are faces: every 144 trimmed surface, 143 bounded
  * surface, 510 face (through 186 solids and 514 shells), and every
@@ -9,6 +9,8 @@
  * base surface, a shell's faces, a definition's members...), not through
  * 402 groups or 406 properties, which annotate but do not own.
  */
+#include "iges_brep.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -15,6 +15,7 @@
 #ifndef IGES_GEOM_H
 #define IGES_GEOM_H
 
+#include "geom/hbox.h" /* hbox: the extent that sizes unbounded surfaces; hbox_* are defined in iges_geom.c */
 #include "geom/hnurbs.h"
 #include "iges/iges_file.h"
 
@@ -95,17 +96,6 @@ CM_NODISCARD cm_err iges_curve(iges_file *f, int de, const haffine *parent, hcur
  * -1 if the count cannot be allocated.
  */
 int iges_curve_pieces(iges_file *f, int de);
-
-/** An axis-aligned box (millimetre model space), for sizing unbounded surfaces. */
-typedef struct hbox {
-    cm_vec3 lo, hi;
-    int empty;
-} hbox;
-
-hbox hbox_empty(void);
-void hbox_add(hbox *b, cm_vec3 p);
-/** Box of sample points of a curve (33 per span). */
-void hbox_add_curve(hbox *b, const hcurve *c);
 
 /**
  * Surface `de` as a NURBS in millimetre model space.  `extent` bounds the

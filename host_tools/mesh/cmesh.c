@@ -6,11 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cm/cm_const.h"
 #include "cm/cm_geom.h"
 #include "cm/cm_project.h"
-
-#define COS_G1 0.9998476951563913     /* cos 1 deg (spec §1) */
-#define SIN_FLAT 0.08715574274765817  /* sin 5 deg (spec §1) */
 
 /* ---- a spatial hash of points ---- */
 
@@ -24,9 +22,9 @@ typedef struct grid {
     double cell;
     cm_vec3 lo, hi; /* box of the (finite) points inserted */
     int empty;
-    int *head;      /* hash bucket -> first point, -1 */
-    int *next;      /* point -> next point in bucket */
-    int64_t *key;   /* point -> its cell key */
+    int *head;    /* hash bucket -> first point, -1 */
+    int *next;    /* point -> next point in bucket */
+    int64_t *key; /* point -> its cell key */
     unsigned mask;
 } grid;
 
@@ -198,19 +196,24 @@ static void curve_box(const hcurve *c, cm_vec3 *lo, cm_vec3 *hi)
 /* ---- building ---- */
 
 typedef struct piece {
-    hcurve c;        /* owned until moved into an edge */
-    int va, vb;      /* vertices at start / end */
-    int face, loop;  /* brep face index, cmesh loop index */
-    int order;       /* position in the loop (for rebuilding loops) */
-    int edge, rev;   /* result of pairing */
+    hcurve c;       /* owned until moved into an edge */
+    int va, vb;     /* vertices at start / end */
+    int face, loop; /* brep face index, cmesh loop index */
+    int order;      /* position in the loop (for rebuilding loops) */
+    int edge, rev;  /* result of pairing */
 } piece;
 
+/* what one cmesh_build works on, handed from phase to phase */
 typedef struct builder {
     const brep_model *m;
     cmesh *cm;
-    piece *pc;
-    int npc, cappc;
     cm_status *st;
+    double diag; /* of the model box */
+    double tol;  /* cm->tol_vertex */
+    int *vid;    /* phase 1 -> 2: segment end (2 s its start, 2 s + 1 its end) -> vertex */
+    int *vbody;  /* phase 1 -> 2: vertex -> body */
+    piece *pc;   /* phase 2 -> 4: the segments cut at T-junctions, in loop order */
+    int npc, cappc;
 } builder;
 
 static int push_piece(builder *b, piece *p)
@@ -259,7 +262,6 @@ static void split_candidate(int v, void *vctx)
     }
 }
 
-
 typedef struct merge_ctx {
     const cm_vec3 *ends;
     const int *body;
@@ -276,364 +278,374 @@ static void merge_candidate(int j, void *vctx)
         uf_union(x->par, i, j);
 }
 
-/* sort piece indices by (min vertex, max vertex, index) */
-static const piece *sort_pieces;
-static int cmp_idx(const void *a, const void *b)
+/* a piece's sort key for pairing: its end vertices, lower first, then its index (a total order) */
+typedef struct piece_key {
+    int lo, hi, i;
+} piece_key;
+
+static int cmp_piece_key(const void *a, const void *b)
 {
-    const piece *p = &sort_pieces[*(const int *)a], *q = &sort_pieces[*(const int *)b];
-    int pa = p->va < p->vb ? p->va : p->vb, pb = p->va < p->vb ? p->vb : p->va;
-    int qa = q->va < q->vb ? q->va : q->vb, qb = q->va < q->vb ? q->vb : q->va;
-    if (pa != qa)
-        return pa < qa ? -1 : 1;
-    if (pb != qb)
-        return pb < qb ? -1 : 1;
-    return *(const int *)a - *(const int *)b;
+    const piece_key *p = a, *q = b;
+    if (p->lo != q->lo)
+        return p->lo < q->lo ? -1 : 1;
+    if (p->hi != q->hi)
+        return p->hi < q->hi ? -1 : 1;
+    return p->i - q->i;
 }
 
-cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_status *st)
+/*
+ * Phase 1, vertices: the segments' end points merged within tol (through a grid of cells of side
+ * tol); the two ends at a loop joint are always one vertex, however far apart (counted in
+ * nforced).  A vertex is the mean of its merged ends.  Sets cm->verts, b->vid and b->vbody.
+ */
+static cm_err merge_vertices(builder *b)
 {
-    memset(out, 0, sizeof *out);
-    builder b;
-    memset(&b, 0, sizeof b);
-    b.m = m;
-    b.cm = out;
-    b.st = st;
-    double diag = brep_diag(m);
-    out->tol_vertex = brep_tolerance(m);
-    out->tol_pair = 10 * out->tol_vertex;
-    double tol = out->tol_vertex;
-    cm_err err = CM_OK;
-
-    /* 1. vertices: segment ends merged within tol, loop joints always */
+    const brep_model *m = b->m;
+    cmesh *out = b->cm;
+    double tol = b->tol;
     int ns = m->nsegs;
     cm_vec3 *ends = malloc((size_t)(2 * ns + 1) * sizeof *ends);
     int *par = malloc((size_t)(2 * ns + 1) * sizeof *par);
-    int *seg_loop = malloc((size_t)(ns + 1) * sizeof *seg_loop);
-    if (!ends || !par || !seg_loop) {
-        free(ends);
-        free(par);
-        free(seg_loop);
-        return cm_fail(st, CM_E_NOMEM, "out of memory");
-    }
     /* a body is one subfigure instance: edges pair only inside a body, so two placed parts
      * of an assembly that touch do not become one non-manifold solid.  Shells do not
      * separate bodies: some exporters write every face of a solid as its own shell. */
     int *body = malloc((size_t)(2 * ns + 1) * sizeof *body);
-    if (!body) {
-        free(ends);
-        free(par);
-        free(seg_loop);
-        return cm_fail(st, CM_E_NOMEM, "out of memory");
-    }
-    for (int f = 0; f < m->nfaces; f++) {
-        const brep_face *bf = &m->faces[f];
-        int key = bf->instance;
-        for (int l = 0; l < bf->nloops; l++) {
-            const brep_loop *lp = &m->loops[bf->first_loop + l];
-            for (int i = 0; i < lp->n; i++)
-                body[2 * (lp->first + i)] = body[2 * (lp->first + i) + 1] = key;
-        }
-    }
-    for (int s = 0; s < ns; s++) {
-        ends[2 * s] = curve_point(&m->segs[s], 0.0);
-        ends[2 * s + 1] = curve_point(&m->segs[s], 1.0);
-        par[2 * s] = 2 * s;
-        par[2 * s + 1] = 2 * s + 1;
-        seg_loop[s] = -1;
-    }
-    for (int l = 0; l < m->nloops; l++) {
-        const brep_loop *lp = &m->loops[l];
-        for (int i = 0; i < lp->n; i++) {
-            int s = lp->first + i, nxt = lp->first + (i + 1) % lp->n;
-            seg_loop[s] = l;
-            double gap = cm_dist(ends[2 * s + 1], ends[2 * nxt]);
-            if (gap > tol) {
-                out->nforced++;
-                if (gap > out->max_forced_gap)
-                    out->max_forced_gap = gap;
-            }
-            uf_union(par, 2 * s + 1, 2 * nxt);
-        }
-    }
-    grid g;
-    if (grid_init(&g, ends, 2 * ns, tol > 0 ? tol : 1e-12) != 0) {
-        grid_free(&g);
-        free(body);
-        free(ends);
-        free(par);
-        free(seg_loop);
-        return cm_fail(st, CM_E_NOMEM, "out of memory");
-    }
-    merge_ctx mc = {ends, body, par, tol, 0};
-    for (int i = 0; i < 2 * ns; i++) {
-        if (!cm_finite3(ends[i]))
-            continue; /* near nothing: stays a vertex of its own (or its loop joint) */
-        cm_vec3 lo = cm_sub(ends[i], cm_v3(tol, tol, tol)), hi = cm_add(ends[i], cm_v3(tol, tol, tol));
-        mc.i = i;
-        /* +-tol in cells of side tol: 3 per axis, 27 cells (the cap is never reached) */
-        if (grid_query(&g, lo, hi, 64, merge_candidate, &mc) != 0)
-            for (int j = i + 1; j < 2 * ns; j++)
-                merge_candidate(j, &mc);
-    }
-    grid_free(&g);
-    int *vid = malloc((size_t)(2 * ns + 1) * sizeof *vid);
     int *cnt = calloc((size_t)(2 * ns + 1), sizeof *cnt);
-    int *vbody = malloc((size_t)(2 * ns + 1) * sizeof *vbody);
+    b->vid = malloc((size_t)(2 * ns + 1) * sizeof *b->vid);
+    b->vbody = malloc((size_t)(2 * ns + 1) * sizeof *b->vbody);
     out->verts = malloc((size_t)(2 * ns + 1) * sizeof *out->verts);
-    if (!vid || !cnt || !vbody || !out->verts) {
-        free(vid);
-        free(cnt);
-        free(vbody);
-        free(body);
-        free(ends);
-        free(par);
-        free(seg_loop);
-        return cm_fail(st, CM_E_NOMEM, "out of memory");
-    }
-    for (int i = 0; i < 2 * ns; i++)
-        vid[i] = -1;
-    for (int i = 0; i < 2 * ns; i++) {
-        int r = uf_find(par, i);
-        if (vid[r] < 0) {
-            vid[r] = out->nverts;
-            vbody[out->nverts] = body[i];
-            out->verts[out->nverts++] = cm_v3(0, 0, 0);
+    cm_err err = CM_OK;
+    if (!ends || !par || !body || !cnt || !b->vid || !b->vbody || !out->verts) {
+        err = cm_fail(b->st, CM_E_NOMEM, "out of memory");
+    } else {
+        for (int f = 0; f < m->nfaces; f++) {
+            const brep_face *bf = &m->faces[f];
+            int key = bf->instance;
+            for (int l = 0; l < bf->nloops; l++) {
+                const brep_loop *lp = &m->loops[bf->first_loop + l];
+                for (int i = 0; i < lp->n; i++)
+                    body[2 * (lp->first + i)] = body[2 * (lp->first + i) + 1] = key;
+            }
         }
-        vid[i] = vid[r];
-        out->verts[vid[i]] = cm_add(out->verts[vid[i]], ends[i]);
-        cnt[vid[i]]++;
+        for (int s = 0; s < ns; s++) {
+            ends[2 * s] = curve_point(&m->segs[s], 0.0);
+            ends[2 * s + 1] = curve_point(&m->segs[s], 1.0);
+            par[2 * s] = 2 * s;
+            par[2 * s + 1] = 2 * s + 1;
+        }
+        for (int l = 0; l < m->nloops; l++) {
+            const brep_loop *lp = &m->loops[l];
+            for (int i = 0; i < lp->n; i++) {
+                int s = lp->first + i, nxt = lp->first + (i + 1) % lp->n;
+                double gap = cm_dist(ends[2 * s + 1], ends[2 * nxt]);
+                if (gap > tol) {
+                    out->nforced++;
+                    if (gap > out->max_forced_gap)
+                        out->max_forced_gap = gap;
+                }
+                uf_union(par, 2 * s + 1, 2 * nxt);
+            }
+        }
+        grid g;
+        if (grid_init(&g, ends, 2 * ns, tol > 0 ? tol : 1e-12) != 0) {
+            err = cm_fail(b->st, CM_E_NOMEM, "out of memory");
+        } else {
+            merge_ctx mc = {ends, body, par, tol, 0};
+            for (int i = 0; i < 2 * ns; i++) {
+                if (!cm_finite3(ends[i]))
+                    continue; /* near nothing: stays a vertex of its own (or its loop joint) */
+                cm_vec3 lo = cm_sub(ends[i], cm_v3(tol, tol, tol)), hi = cm_add(ends[i], cm_v3(tol, tol, tol));
+                mc.i = i;
+                /* +-tol in cells of side tol: 3 per axis, 27 cells (the cap is never reached) */
+                if (grid_query(&g, lo, hi, 64, merge_candidate, &mc) != 0)
+                    for (int j = i + 1; j < 2 * ns; j++)
+                        merge_candidate(j, &mc);
+            }
+        }
+        grid_free(&g);
     }
-    for (int v = 0; v < out->nverts; v++)
-        out->verts[v] = cm_scale(out->verts[v], 1.0 / cnt[v]); /* the mean of the merged ends */
+    if (err == CM_OK) {
+        int *vid = b->vid;
+        for (int i = 0; i < 2 * ns; i++)
+            vid[i] = -1;
+        for (int i = 0; i < 2 * ns; i++) {
+            int r = uf_find(par, i);
+            if (vid[r] < 0) {
+                vid[r] = out->nverts;
+                b->vbody[out->nverts] = body[i];
+                out->verts[out->nverts++] = cm_v3(0, 0, 0);
+            }
+            vid[i] = vid[r];
+            out->verts[vid[i]] = cm_add(out->verts[vid[i]], ends[i]);
+            cnt[vid[i]]++;
+        }
+        for (int v = 0; v < out->nverts; v++)
+            out->verts[v] = cm_scale(out->verts[v], 1.0 / cnt[v]); /* the mean of the merged ends */
+    }
     free(cnt);
-    free(par);
     free(body);
+    free(par);
+    free(ends);
+    return err;
+}
 
-    /* 2. split every segment where another vertex lies on it */
-    grid vg;
-    double vcell = diag > 0 ? diag / 64 : 1.0;
-    if (grid_init(&vg, out->verts, out->nverts, vcell) != 0) {
-        grid_free(&vg);
-        free(vbody);
-        free(vid);
-        free(ends);
-        free(seg_loop);
-        return cm_fail(st, CM_E_NOMEM, "out of memory");
+#define MAX_CUTS 64 /* T-junction cuts looked for on one segment */
+
+/*
+ * The vertices of c's body other than its ends va, vb (and farther than tol from both) that lie
+ * within tol of segment c strictly inside it: their curve parameters in ts and vertices in tv,
+ * sorted by parameter.  Returns their number (at most MAX_CUTS).
+ */
+static int find_cuts(const builder *b, const grid *vg, const hcurve *c, int va, int vb, double *ts, int *tv)
+{
+    const cmesh *out = b->cm;
+    double tol = b->tol;
+    split_ctx x;
+    memset(&x, 0, sizeof x);
+    x.c = c;
+    x.verts = out->verts;
+    x.vbody = b->vbody;
+    x.va = va;
+    x.vb = vb;
+    x.tol = tol;
+    x.capts = MAX_CUTS;
+    x.ts = ts;
+    x.tv = tv;
+    cm_vec3 lo, hi;
+    curve_box(c, &lo, &hi);
+    lo = cm_sub(lo, cm_v3(tol, tol, tol));
+    hi = cm_add(hi, cm_v3(tol, tol, tol));
+    if (grid_query(vg, lo, hi, 1 << 20, split_candidate, &x) != 0)
+        for (int v = 0; v < out->nverts; v++)
+            split_candidate(v, &x);
+    /* sort the cut parameters (insertion sort: few) */
+    for (int a = 1; a < x.nts; a++)
+        for (int k = a; k > 0 && ts[k] < ts[k - 1]; k--) {
+            double t = ts[k];
+            ts[k] = ts[k - 1];
+            ts[k - 1] = t;
+            int q = tv[k];
+            tv[k] = tv[k - 1];
+            tv[k - 1] = q;
+        }
+    return x.nts;
+}
+
+/*
+ * Segment s (of loop li of face f) as its pieces between the vertices that cut it, appended to
+ * b->pc; *order is the next position in the loop.  A cut the knot insertion refuses keeps the
+ * segment whole.
+ */
+static cm_err cut_segment(builder *b, const grid *vg, int f, int li, int s, int *order)
+{
+    cmesh *out = b->cm;
+    cm_status *st = b->st;
+    const hcurve *c = &b->m->segs[s];
+    int va = b->vid[2 * s], vb = b->vid[2 * s + 1];
+    double ts[MAX_CUTS];
+    int tv[MAX_CUTS];
+    int nts = find_cuts(b, vg, c, va, vb, ts, tv);
+    double t0, t1;
+    hcurve_domain(c, &t0, &t1);
+    double prev_t = t0;
+    int prev_v = va;
+    int first_piece = b->npc, first_order = *order, splits = out->nsplits;
+    cm_err err = CM_OK;
+    for (int k = 0; k <= nts && err == CM_OK; k++) {
+        double nt = k < nts ? ts[k] : t1;
+        int nv = k < nts ? tv[k] : vb;
+        if (k < nts && (nv == prev_v || nt - prev_t <= 1e-9 * (t1 - t0)))
+            continue;
+        piece p;
+        memset(&p, 0, sizeof p);
+        if (nts == 0)
+            err = hcurve_copy(c, &p.c, st);
+        else
+            err = hcurve_subrange(c, prev_t, nt, &p.c, st);
+        if (err != CM_OK && err != CM_E_NOMEM && nts > 0) {
+            /* the cut was refused (a parameter the knot insertion cannot use): keep the
+             * segment whole, as if no vertex lay on it, rather than lose the model */
+            while (b->npc > first_piece)
+                hcurve_free(&b->pc[--b->npc].c);
+            *order = first_order;
+            out->nsplits = splits;
+            if (st)
+                cm_status_init(st);
+            nts = 0;
+            k = -1;
+            prev_t = t0;
+            prev_v = va;
+            err = CM_OK;
+            continue;
+        }
+        if (err != CM_OK)
+            break;
+        p.va = prev_v;
+        p.vb = nv;
+        p.face = f;
+        p.loop = li;
+        p.order = (*order)++;
+        p.edge = -1;
+        if (push_piece(b, &p)) {
+            hcurve_free(&p.c);
+            err = cm_fail(st, CM_E_NOMEM, "out of memory");
+        }
+        if (k < nts)
+            out->nsplits++;
+        prev_t = nt;
+        prev_v = nv;
     }
+    return err;
+}
+
+/* Phase 2, split: every segment, face by face and in loop order, cut where another vertex lies on it */
+static cm_err split_segments(builder *b)
+{
+    const brep_model *m = b->m;
+    grid vg;
+    cm_err err = CM_OK;
+    if (grid_init(&vg, b->cm->verts, b->cm->nverts, b->diag > 0 ? b->diag / 64 : 1.0) != 0)
+        err = cm_fail(b->st, CM_E_NOMEM, "out of memory");
     for (int f = 0; f < m->nfaces && err == CM_OK; f++) {
         const brep_face *bf = &m->faces[f];
         for (int l = 0; l < bf->nloops && err == CM_OK; l++) {
             int li = bf->first_loop + l;
             const brep_loop *lp = &m->loops[li];
             int order = 0;
-            for (int i = 0; i < lp->n && err == CM_OK; i++) {
-                int s = lp->first + i;
-                const hcurve *c = &m->segs[s];
-                split_ctx x;
-                memset(&x, 0, sizeof x);
-                x.c = c;
-                x.verts = out->verts;
-                x.vbody = vbody;
-                x.va = vid[2 * s];
-                x.vb = vid[2 * s + 1];
-                x.tol = tol;
-                x.capts = 64;
-                double ts[64];
-                int tv[64];
-                x.ts = ts;
-                x.tv = tv;
-                cm_vec3 lo, hi;
-                curve_box(c, &lo, &hi);
-                lo = cm_sub(lo, cm_v3(tol, tol, tol));
-                hi = cm_add(hi, cm_v3(tol, tol, tol));
-                if (grid_query(&vg, lo, hi, 1 << 20, split_candidate, &x) != 0)
-                    for (int v = 0; v < out->nverts; v++)
-                        split_candidate(v, &x);
-                /* sort the cut parameters (insertion sort: few) */
-                for (int a = 1; a < x.nts; a++)
-                    for (int k = a; k > 0 && ts[k] < ts[k - 1]; k--) {
-                        double t = ts[k];
-                        ts[k] = ts[k - 1];
-                        ts[k - 1] = t;
-                        int q = tv[k];
-                        tv[k] = tv[k - 1];
-                        tv[k - 1] = q;
-                    }
-                double t0, t1;
-                hcurve_domain(c, &t0, &t1);
-                double prev_t = t0;
-                int prev_v = x.va;
-                int first_piece = b.npc, first_order = order, splits = out->nsplits;
-                for (int k = 0; k <= x.nts && err == CM_OK; k++) {
-                    double nt = k < x.nts ? ts[k] : t1;
-                    int nv = k < x.nts ? tv[k] : x.vb;
-                    if (k < x.nts && (nv == prev_v || nt - prev_t <= 1e-9 * (t1 - t0)))
-                        continue;
-                    piece p;
-                    memset(&p, 0, sizeof p);
-                    if (x.nts == 0)
-                        err = hcurve_copy(c, &p.c, st);
-                    else
-                        err = hcurve_subrange(c, prev_t, nt, &p.c, st);
-                    if (err != CM_OK && err != CM_E_NOMEM && x.nts > 0) {
-                        /* the cut was refused (a parameter the knot insertion cannot use): keep the
-                         * segment whole, as if no vertex lay on it, rather than lose the model */
-                        while (b.npc > first_piece)
-                            hcurve_free(&b.pc[--b.npc].c);
-                        order = first_order;
-                        out->nsplits = splits;
-                        if (st)
-                            cm_status_init(st);
-                        x.nts = 0;
-                        k = -1;
-                        prev_t = t0;
-                        prev_v = x.va;
-                        err = CM_OK;
-                        continue;
-                    }
-                    if (err != CM_OK)
-                        break;
-                    p.va = prev_v;
-                    p.vb = nv;
-                    p.face = f;
-                    p.loop = li;
-                    p.order = order++;
-                    p.edge = -1;
-                    if (push_piece(&b, &p)) {
-                        hcurve_free(&p.c);
-                        err = cm_fail(st, CM_E_NOMEM, "out of memory");
-                    }
-                    if (k < x.nts)
-                        out->nsplits++;
-                    prev_t = nt;
-                    prev_v = nv;
-                }
-            }
+            for (int i = 0; i < lp->n && err == CM_OK; i++)
+                err = cut_segment(b, &vg, f, li, lp->first + i, &order);
         }
     }
     grid_free(&vg);
-    free(vbody);
-    free(vid);
-    free(ends);
-    free(seg_loop);
+    return err;
+}
 
-    /* 3. pair: pieces with the same end vertices whose curves coincide are one edge */
-    int *idx = malloc((size_t)(b.npc + 1) * sizeof *idx);
-    out->edges = calloc((size_t)(b.npc + 1), sizeof *out->edges);
-    if (err == CM_OK && (!idx || !out->edges))
-        err = cm_fail(st, CM_E_NOMEM, "out of memory");
-    if (err == CM_OK) {
-        for (int i = 0; i < b.npc; i++)
-            idx[i] = i;
-        sort_pieces = b.pc;
-        qsort(idx, (size_t)b.npc, sizeof *idx, cmp_idx);
-        int gstart = 0;
-        for (int k = 0; k < b.npc; k++) {
-            piece *p = &b.pc[idx[k]];
-            int pa = p->va < p->vb ? p->va : p->vb, pb = p->va < p->vb ? p->vb : p->va;
-            if (k > 0) {
-                const piece *q = &b.pc[idx[k - 1]];
-                int qa = q->va < q->vb ? q->va : q->vb, qb = q->va < q->vb ? q->vb : q->va;
-                if (qa != pa || qb != pb)
-                    gstart = out->nedges;
-            }
-            cm_vec3 mid = curve_point(&p->c, 0.5);
-            int found = -1;
-            for (int e = gstart; e < out->nedges && found < 0; e++) {
-                cmesh_edge *E = &out->edges[e];
-                if (dist_to_curve(&E->c, mid, NULL) <= out->tol_pair &&
-                    dist_to_curve(&p->c, curve_point(&E->c, 0.5), NULL) <= out->tol_pair)
-                    found = e;
-            }
-            if (found < 0) {
-                cmesh_edge *E = &out->edges[out->nedges];
-                E->c = p->c;
-                memset(&p->c, 0, sizeof p->c);
-                E->v0 = p->va;
-                E->v1 = p->vb;
-                E->face[0] = E->face[1] = -1;
-                p->edge = out->nedges++;
-                p->rev = 0;
+/*
+ * Phase 3, pair: pieces with the same end vertices whose curves coincide (the midpoint of each
+ * within tol_pair of the other) are one edge, stored once in the direction of its first use in
+ * the order (end vertices, piece index).  Sets cm->edges, each edge's uses and faces, and each
+ * piece's edge and direction.
+ */
+static cm_err pair_pieces(builder *b)
+{
+    cmesh *out = b->cm;
+    piece_key *key = malloc((size_t)(b->npc + 1) * sizeof *key);
+    out->edges = calloc((size_t)(b->npc + 1), sizeof *out->edges);
+    if (!key || !out->edges) {
+        free(key);
+        return cm_fail(b->st, CM_E_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < b->npc; i++) {
+        const piece *p = &b->pc[i];
+        key[i].lo = p->va < p->vb ? p->va : p->vb;
+        key[i].hi = p->va < p->vb ? p->vb : p->va;
+        key[i].i = i;
+    }
+    qsort(key, (size_t)b->npc, sizeof *key, cmp_piece_key);
+    int gstart = 0; /* the first edge made for the current end-vertex pair */
+    for (int k = 0; k < b->npc; k++) {
+        piece *p = &b->pc[key[k].i];
+        if (k > 0 && (key[k - 1].lo != key[k].lo || key[k - 1].hi != key[k].hi))
+            gstart = out->nedges;
+        cm_vec3 mid = curve_point(&p->c, 0.5);
+        int found = -1;
+        for (int e = gstart; e < out->nedges && found < 0; e++) {
+            cmesh_edge *E = &out->edges[e];
+            if (dist_to_curve(&E->c, mid, NULL) <= out->tol_pair &&
+                dist_to_curve(&p->c, curve_point(&E->c, 0.5), NULL) <= out->tol_pair)
+                found = e;
+        }
+        if (found < 0) {
+            cmesh_edge *E = &out->edges[out->nedges];
+            E->c = p->c;
+            memset(&p->c, 0, sizeof p->c);
+            E->v0 = p->va;
+            E->v1 = p->vb;
+            E->face[0] = E->face[1] = -1;
+            p->edge = out->nedges++;
+            p->rev = 0;
+        } else {
+            cmesh_edge *E = &out->edges[found];
+            p->edge = found;
+            if (E->v0 != E->v1) {
+                p->rev = p->va != E->v0;
             } else {
-                cmesh_edge *E = &out->edges[found];
-                p->edge = found;
-                if (E->v0 != E->v1) {
-                    p->rev = p->va != E->v0;
-                } else {
-                    double t;
-                    dist_to_curve(&E->c, mid, &t);
-                    double t0, t1;
-                    hcurve_domain(&E->c, &t0, &t1);
-                    p->rev = cm_dot(curve_tangent(&p->c, 0.5), curve_tangent(&E->c, (t - t0) / (t1 - t0))) < 0;
-                }
-            }
-            cmesh_edge *E = &out->edges[p->edge];
-            if (E->nuse < 2)
-                E->face[E->nuse] = p->face;
-            E->nuse++;
-        }
-    }
-    free(idx);
-
-    /* 4. loops of uses in loop order (pieces were made in that order) */
-    if (err == CM_OK) {
-        out->uses = malloc((size_t)(b.npc + 1) * sizeof *out->uses);
-        out->corners = calloc((size_t)(b.npc + 1), sizeof *out->corners);
-        out->loops = malloc((size_t)(m->nloops + 1) * sizeof *out->loops);
-        out->faces = malloc((size_t)(m->nfaces + 1) * sizeof *out->faces);
-        if (!out->uses || !out->corners || !out->loops || !out->faces)
-            err = cm_fail(st, CM_E_NOMEM, "out of memory");
-    }
-    if (err == CM_OK) {
-        int k = 0;
-        for (int f = 0; f < m->nfaces; f++) {
-            const brep_face *bf = &m->faces[f];
-            cmesh_face *cf = &out->faces[out->nfaces++];
-            cf->brep_face = f;
-            cf->first_loop = out->nloops;
-            cf->nloops = bf->nloops;
-            for (int l = 0; l < bf->nloops; l++) {
-                cmesh_loop *cl = &out->loops[out->nloops++];
-                cl->first = out->nuses;
-                while (k < b.npc && b.pc[k].loop == bf->first_loop + l) {
-                    out->uses[out->nuses].edge = b.pc[k].edge;
-                    out->uses[out->nuses].rev = b.pc[k].rev;
-                    out->nuses++;
-                    k++;
-                }
-                cl->n = out->nuses - cl->first;
+                double t;
+                dist_to_curve(&E->c, mid, &t);
+                double t0, t1;
+                hcurve_domain(&E->c, &t0, &t1);
+                p->rev = cm_dot(curve_tangent(&p->c, 0.5), curve_tangent(&E->c, (t - t0) / (t1 - t0))) < 0;
             }
         }
+        cmesh_edge *E = &out->edges[p->edge];
+        if (E->nuse < 2)
+            E->face[E->nuse] = p->face;
+        E->nuse++;
     }
-    for (int i = 0; i < b.npc; i++)
-        hcurve_free(&b.pc[i].c);
-    free(b.pc);
-    if (err != CM_OK) {
-        cmesh_free(out);
-        return err;
-    }
+    free(key);
+    return CM_OK;
+}
 
-    /* 5. kinds and orientation consistency */
+/* Phase 4, loops: each face's loops as edge uses in loop order (the pieces were made in that order) */
+static cm_err build_loops(builder *b)
+{
+    const brep_model *m = b->m;
+    cmesh *out = b->cm;
+    out->uses = malloc((size_t)(b->npc + 1) * sizeof *out->uses);
+    out->corners = calloc((size_t)(b->npc + 1), sizeof *out->corners);
+    out->loops = malloc((size_t)(m->nloops + 1) * sizeof *out->loops);
+    out->faces = malloc((size_t)(m->nfaces + 1) * sizeof *out->faces);
+    if (!out->uses || !out->corners || !out->loops || !out->faces)
+        return cm_fail(b->st, CM_E_NOMEM, "out of memory");
+    int k = 0;
+    for (int f = 0; f < m->nfaces; f++) {
+        const brep_face *bf = &m->faces[f];
+        cmesh_face *cf = &out->faces[out->nfaces++];
+        cf->brep_face = f;
+        cf->first_loop = out->nloops;
+        cf->nloops = bf->nloops;
+        for (int l = 0; l < bf->nloops; l++) {
+            cmesh_loop *cl = &out->loops[out->nloops++];
+            cl->first = out->nuses;
+            while (k < b->npc && b->pc[k].loop == bf->first_loop + l) {
+                out->uses[out->nuses].edge = b->pc[k].edge;
+                out->uses[out->nuses].rev = b->pc[k].rev;
+                out->nuses++;
+                k++;
+            }
+            cl->n = out->nuses - cl->first;
+        }
+    }
+    return CM_OK;
+}
+
+/*
+ * Phase 5, kinds: free, shared, seam or non-manifold by the edge's uses; a shared edge whose two
+ * uses run the same way (not one forward, one reversed) counts as inconsistent.
+ */
+static void classify_edges(cmesh *out)
+{
     for (int e = 0; e < out->nedges; e++) {
         cmesh_edge *E = &out->edges[e];
-        E->kind = E->nuse == 1 ? CMESH_FREE
+        E->kind = E->nuse == 1   ? CMESH_FREE
                   : E->nuse == 2 ? (E->face[0] == E->face[1] ? CMESH_SEAM : CMESH_SHARED)
                                  : CMESH_NONMANIFOLD;
         E->g1_min_cos = 1.0;
     }
-    {
-        int *rev_sum = calloc((size_t)out->nedges + 1, sizeof(int));
-        if (rev_sum) {
-            for (int u = 0; u < out->nuses; u++)
-                rev_sum[out->uses[u].edge] += out->uses[u].rev;
-            for (int e = 0; e < out->nedges; e++)
-                if (out->edges[e].kind == CMESH_SHARED && rev_sum[e] != 1)
-                    out->inconsistent++;
-            free(rev_sum);
-        }
+    int *rev_sum = calloc((size_t)out->nedges + 1, sizeof(int));
+    if (rev_sum) {
+        for (int u = 0; u < out->nuses; u++)
+            rev_sum[out->uses[u].edge] += out->uses[u].rev;
+        for (int e = 0; e < out->nedges; e++)
+            if (out->edges[e].kind == CMESH_SHARED && rev_sum[e] != 1)
+                out->inconsistent++;
+        free(rev_sum);
     }
+}
 
-    /* 6. face normals (K11 over 10 samples per outer edge use, spec 8.1) */
+/* Phase 6, face normals: the frame normal (K11, spec 8.1) of 10 samples per outer edge use */
+static void face_normals(cmesh *out, double diag)
+{
     for (int f = 0; f < out->nfaces; f++) {
         cmesh_face *cf = &out->faces[f];
         const cmesh_loop *ol = &out->loops[cf->first_loop];
@@ -654,73 +666,83 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
         }
         free(smp);
     }
+}
 
-    /* 7. G1 flags (spec 5.2): both faces' surface normals at 11 points of the edge agree within 1 deg */
-    if (fds) {
-        for (int e = 0; e < out->nedges; e++) {
-            cmesh_edge *E = &out->edges[e];
-            if (E->kind != CMESH_SHARED && E->kind != CMESH_SEAM)
-                continue;
-            const face_domain *A = &fds[E->face[0]], *B = &fds[E->face[1]];
-            if (!A->uv || !B->uv)
-                continue;
-            double worst = 1.0;
-            for (int k = 0; k <= 10; k++) {
-                double s = k / 10.0;
-                cm_vec3 P = curve_point(&E->c, s), n[2];
-                int ok = 1;
-                for (int side = 0; side < 2 && ok; side++) {
-                    const face_domain *D = side ? B : A;
-                    /* start from the nearest boundary sample of that face */
-                    int best = 0;
-                    double bd = HUGE_VAL;
-                    for (int i = 0; i < D->npts; i++) {
-                        if (!cm_finite3(D->xyz[i]))
-                            continue;
-                        double d = cm_norm2(cm_sub(D->xyz[i], P));
-                        if (d < bd) {
-                            bd = d;
-                            best = i;
-                        }
-                    }
-                    double u = D->uv[best].x, v = D->uv[best].y, dist;
-                    cm_vec3 d3[3];
-                    if (cm_psurf_project_from(&D->ps, P, &u, &v, &dist, NULL) != CM_OK ||
-                        cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK) {
-                        ok = 0;
-                        break;
-                    }
-                    cm_vec3 nn = cm_cross(d3[1], d3[2]);
-                    if (!(cm_norm(nn) > 1e-12 * cm_norm(d3[1]) * cm_norm(d3[2]))) {
-                        /* degenerate point (a pole): step 1e-3 along the edge (spec §13) */
-                        cm_vec3 P2 = curve_point(&E->c, k < 10 ? s + 1e-3 : s - 1e-3);
-                        if (cm_psurf_project_from(&D->ps, P2, &u, &v, &dist, NULL) != CM_OK ||
-                            cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK) {
-                            ok = 0;
-                            break;
-                        }
-                        nn = cm_cross(d3[1], d3[2]);
-                    }
-                    if (!(cm_norm(nn) > 0)) {
-                        ok = 0;
-                        break;
-                    }
-                    n[side] = cm_unit(nn);
-                }
-                if (!ok) {
-                    worst = 0.0;
-                    break;
-                }
-                double c = fabs(cm_dot(n[0], n[1]));
-                if (c < worst)
-                    worst = c;
-            }
-            E->g1_min_cos = worst;
-            E->g1 = worst >= COS_G1;
+/*
+ * The unit normal of face D's surface at P, the point at s = k / 10 of edge curve c: P projected
+ * onto the surface starting from D's nearest boundary sample; at a degenerate point (a pole) the
+ * point 1e-3 further along the edge is used instead (spec §13).  0 if it cannot be evaluated.
+ */
+static int surface_normal_near(const face_domain *D, const hcurve *c, cm_vec3 P, double s, int k, cm_vec3 *n)
+{
+    int best = 0;
+    double bd = HUGE_VAL;
+    for (int i = 0; i < D->npts; i++) {
+        if (!cm_finite3(D->xyz[i]))
+            continue;
+        double d = cm_norm2(cm_sub(D->xyz[i], P));
+        if (d < bd) {
+            bd = d;
+            best = i;
         }
     }
+    double u = D->uv[best].x, v = D->uv[best].y, dist;
+    cm_vec3 d3[3];
+    if (cm_psurf_project_from(&D->ps, P, &u, &v, &dist, NULL) != CM_OK ||
+        cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK)
+        return 0;
+    cm_vec3 nn = cm_cross(d3[1], d3[2]);
+    if (!(cm_norm(nn) > 1e-12 * cm_norm(d3[1]) * cm_norm(d3[2]))) {
+        cm_vec3 P2 = curve_point(c, k < 10 ? s + 1e-3 : s - 1e-3);
+        if (cm_psurf_project_from(&D->ps, P2, &u, &v, &dist, NULL) != CM_OK ||
+            cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK)
+            return 0;
+        nn = cm_cross(d3[1], d3[2]);
+    }
+    if (!(cm_norm(nn) > 0))
+        return 0;
+    *n = cm_unit(nn);
+    return 1;
+}
 
-    /* 8. corner normals (spec 5.3) from the edge tangents, with the G1 partner / face-normal fallbacks */
+/* min |nA . nB| of the two faces' normals over the 11 points s = 0, 0.1, ..., 1 of edge E; 0 if one fails */
+static double edge_min_cos(const cmesh_edge *E, const face_domain *A, const face_domain *B)
+{
+    double worst = 1.0;
+    for (int k = 0; k <= 10; k++) {
+        double s = k / 10.0;
+        cm_vec3 P = curve_point(&E->c, s), na, nb;
+        if (!surface_normal_near(A, &E->c, P, s, k, &na) || !surface_normal_near(B, &E->c, P, s, k, &nb))
+            return 0.0;
+        double c = fabs(cm_dot(na, nb));
+        if (c < worst)
+            worst = c;
+    }
+    return worst;
+}
+
+/* Phase 7, G1 flags (spec 5.2): both faces' surface normals at 11 points of the edge agree within 1 deg */
+static void g1_flags(cmesh *out, const face_domain *fds)
+{
+    for (int e = 0; e < out->nedges; e++) {
+        cmesh_edge *E = &out->edges[e];
+        if (E->kind != CMESH_SHARED && E->kind != CMESH_SEAM)
+            continue;
+        const face_domain *A = &fds[E->face[0]], *B = &fds[E->face[1]];
+        if (!A->uv || !B->uv)
+            continue;
+        E->g1_min_cos = edge_min_cos(E, A, B);
+        E->g1 = E->g1_min_cos >= CM_COS_G1;
+    }
+}
+
+/*
+ * Phase 8a, corner normals (spec 5.3): the cross product of the two edge tangents at the corner,
+ * turned to the face normal's side; where the tangents are (nearly) parallel the corner is flat
+ * and takes the face normal (fallback iii) for now.
+ */
+static void corner_normals(cmesh *out)
+{
     for (int f = 0; f < out->nfaces; f++) {
         const cmesh_face *cf = &out->faces[f];
         for (int l = 0; l < cf->nloops; l++) {
@@ -739,7 +761,7 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
                 cm_vec3 a = cm_neg(cm_unit_or(tin, 0, cm_v3(0, 0, 0), &ok1));
                 cm_vec3 bb = cm_unit_or(tout, 0, cm_v3(0, 0, 0), &ok2);
                 cm_vec3 x = cm_cross(bb, a);
-                if (ok1 && ok2 && cm_norm(x) >= SIN_FLAT) {
+                if (ok1 && ok2 && cm_norm(x) >= CM_SIN_FLAT) {
                     co->n = cm_unit(x);
                     if (cf->normal_ok && cm_dot(co->n, cf->normal) < 0)
                         co->n = cm_neg(co->n);
@@ -753,7 +775,14 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
             }
         }
     }
-    /* fallback (i): a flat corner next to a G1 edge takes the partner face's geometric normal there */
+}
+
+/*
+ * Phase 8b, fallback (i): a flat corner next to a G1 shared edge takes the partner face's
+ * geometric normal at the same vertex.
+ */
+static void corner_normals_from_partners(cmesh *out)
+{
     for (int f = 0; f < out->nfaces; f++) {
         const cmesh_face *cf = &out->faces[f];
         for (int l = 0; l < cf->nloops; l++) {
@@ -788,6 +817,47 @@ cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_s
             }
         }
     }
+}
+
+cm_err cmesh_build(const brep_model *m, const face_domain *fds, cmesh *out, cm_status *st)
+{
+    memset(out, 0, sizeof *out);
+    builder b;
+    memset(&b, 0, sizeof b);
+    b.m = m;
+    b.cm = out;
+    b.st = st;
+    b.diag = brep_diag(m);
+    out->tol_vertex = brep_tolerance(m);
+    out->tol_pair = 10 * out->tol_vertex;
+    b.tol = out->tol_vertex;
+
+    /* topology (the phases of cmesh.h): vertices, segments cut into pieces, pieces paired into
+     * edges, loops of edge uses */
+    cm_err err = merge_vertices(&b); /* 1 */
+    if (err == CM_OK)
+        err = split_segments(&b); /* 2 */
+    free(b.vid);
+    free(b.vbody);
+    if (err == CM_OK)
+        err = pair_pieces(&b); /* 3 */
+    if (err == CM_OK)
+        err = build_loops(&b); /* 4 */
+    for (int i = 0; i < b.npc; i++)
+        hcurve_free(&b.pc[i].c);
+    free(b.pc);
+    if (err != CM_OK) {
+        cmesh_free(out);
+        return err;
+    }
+
+    /* geometry on that topology */
+    classify_edges(out);       /* 5 */
+    face_normals(out, b.diag); /* 6 */
+    if (fds)
+        g1_flags(out, fds); /* 7 */
+    corner_normals(out);    /* 8 */
+    corner_normals_from_partners(out);
     return CM_OK;
 }
 

@@ -11,11 +11,15 @@
  *   3. pair: pieces with the same end vertices whose curves coincide (the
  *      midpoint of one projects onto the other within tol_pair) are one
  *      edge, stored once in the direction of its first use;
- *   4. classify: free (1 use), shared (2 faces), seam (one face twice),
+ *   4. loops: each face's loops as edge uses, in loop order;
+ *   5. classify: free (1 use), shared (2 faces), seam (one face twice),
  *      non-manifold (3 or more uses);
- *   5. G1 flag per edge (spec 5.2): normals of both faces at 11 points agree
+ *   6. face normal per face (frame of its outer loop's samples);
+ *   7. G1 flag per edge (spec 5.2): normals of both faces at 11 points agree
  *      within 1 degree;
- *   6. corner normals per face corner (spec 5.3).
+ *   8. corner normals per face corner (spec 5.3).
+ * cmesh_build (cmesh.c) runs these phases in this order, each in a function
+ * of its own.
  * Tolerances are relative to the model (and to the file's resolution when
  * that is coarser), never absolute.
  */

@@ -1,0 +1,25 @@
+/*
+ * hbox.h - an axis-aligned box in millimetre model space, for any input
+ * format: the B-rep's model box, and the extent that sizes an unbounded
+ * surface (a plane, cylinder or cone) to the face that uses it.
+ *
+ * Non-finite points are ignored.
+ */
+#ifndef HBOX_H
+#define HBOX_H
+
+#include "geom/hnurbs.h"
+
+typedef struct hbox {
+    cm_vec3 lo, hi;
+    int empty; /* 1: no point yet (lo = +inf, hi = -inf) */
+} hbox;
+
+/** The empty box. */
+hbox hbox_empty(void);
+/** Grow b to contain p (ignored unless finite). */
+void hbox_add(hbox *b, cm_vec3 p);
+/** Grow b to contain sample points of a curve (33 per span, at most 2001). */
+void hbox_add_curve(hbox *b, const hcurve *c);
+
+#endif /* HBOX_H */
