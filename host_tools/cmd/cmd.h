@@ -34,8 +34,9 @@ void cmd_progress(const char *stage, int done, int total, void *ctx);
 /** The exit status of a failure: out of memory, I/O, else the input. */
 int cmd_exit_for(cm_err code);
 
-/** Report a model_load failure of `path` and return the exit status. */
-int cmd_load_failed(const char *path, const loaded_model *lm, const cm_status *st);
+/** Load the model at `path` (progress on a TTY): EXIT_OK, or the failure reported, lm freed and the
+ *  exit status returned. */
+int cmd_load(const char *path, loaded_model *lm);
 
 /**
  * The arguments every command shares: -q, the one input file, and the refusal of anything else.

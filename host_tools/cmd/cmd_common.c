@@ -35,13 +35,18 @@ int cmd_exit_for(cm_err code)
 }
 
 /* the importer's own message names the file line; without one, the status says what failed */
-int cmd_load_failed(const char *path, const loaded_model *lm, const cm_status *st)
+int cmd_load(const char *path, loaded_model *lm)
 {
+    cm_status st;
+    cm_status_init(&st);
+    if (model_load(path, lm, cmd_progress, NULL, &st) == CM_OK)
+        return EXIT_OK;
     if (lm->iges.err[0])
         fprintf(stderr, "%s: %s:%s%s\n", cmd_prog, path, lm->iges.err_line ? "" : " ", lm->iges.err);
     else
-        cm_report_status(stderr, cmd_prog, path, st);
-    return cmd_exit_for(st->code);
+        cm_report_status(stderr, cmd_prog, path, &st);
+    model_free(lm);
+    return cmd_exit_for(st.code);
 }
 
 int cmd_common_arg(const char *cmd, const char *a, const char **path)

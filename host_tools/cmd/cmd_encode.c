@@ -106,13 +106,10 @@ int cmd_encode(int argc, char **argv)
         }
     }
     loaded_model lm;
+    int loaded = cmd_load(path, &lm);
+    if (loaded != EXIT_OK)
+        return loaded;
     cm_status st;
-    cm_status_init(&st);
-    if (model_load(path, &lm, cmd_progress, NULL, &st) != CM_OK) {
-        int rc = cmd_load_failed(path, &lm, &st);
-        model_free(&lm);
-        return rc;
-    }
     encode_result r;
     cm_status_init(&st);
     if (o.strict && lm.brep.entities_failed > 0) {

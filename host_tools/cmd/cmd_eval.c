@@ -110,12 +110,10 @@ int cmd_eval(int argc, char **argv)
         return cmd_exit_for(st.code);
     }
     loaded_model lm;
-    cm_err e = model_load(paths[0], &lm, cmd_progress, NULL, &st);
-    if (e != CM_OK) {
-        int rc = cmd_load_failed(paths[0], &lm, &st);
-        model_free(&lm);
-        return rc;
-    }
+    int loaded = cmd_load(paths[0], &lm);
+    if (loaded != EXIT_OK)
+        return loaded;
+    cm_err e = CM_OK;
     const cm_model *m = &decoder->model;
     if (!rel_set)
         rel = m->rel_tol > 0 ? m->rel_tol : 0.01;

@@ -87,13 +87,9 @@ int cmd_info(int argc, char **argv)
         return EXIT_USAGE;
     }
     loaded_model lm;
-    cm_status st;
-    cm_status_init(&st);
-    if (model_load(path, &lm, cmd_progress, NULL, &st) != CM_OK) {
-        int rc = cmd_load_failed(path, &lm, &st);
-        model_free(&lm);
-        return rc;
-    }
+    int loaded = cmd_load(path, &lm);
+    if (loaded != EXIT_OK)
+        return loaded;
     const iges_file *f = &lm.iges;
     const brep_model *m = &lm.brep;
     const cmesh *cm = &lm.mesh;

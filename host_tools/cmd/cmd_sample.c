@@ -35,13 +35,9 @@ int cmd_sample(int argc, char **argv)
         return EXIT_USAGE;
     }
     loaded_model lm;
-    cm_status st;
-    cm_status_init(&st);
-    if (model_load(path, &lm, cmd_progress, NULL, &st) != CM_OK) {
-        int rc = cmd_load_failed(path, &lm, &st);
-        model_free(&lm);
-        return rc;
-    }
+    int loaded = cmd_load(path, &lm);
+    if (loaded != EXIT_OK)
+        return loaded;
     /* write to a temporary file and rename, so a failure never leaves half an output */
     size_t tl = strlen(out) + 16;
     char *tmp = malloc(tl);
