@@ -6,15 +6,15 @@
  */
 #include "cm_method_impl.h"
 
+#include "cm/cm_const.h"
 cm_err cm_plane_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
                         cm_rebuild_ws *ws, cm_status *st)
 {
     (void)m;
     (void)f;
     (void)check;
-    /* EPS_LEN = 1e-12 of the model is approximated by the face here: the frame only needs "zero"
-     * relative to the loop it is built from */
-    cm_err e = cm_face_frame(ws->samples, n_outer, ws->samples, n, 1e-12 * out->bbox, &out->frame, st);
+    /* the frame only needs "zero" relative to the loop it is built from */
+    cm_err e = cm_face_frame(ws->samples, n_outer, ws->samples, n, CM_EPS_LEN_REL * out->bbox, &out->frame, st);
     if (e != CM_OK)
         return e;
     double x0 = 0, x1 = 0, y0 = 0, y1 = 0;

@@ -49,7 +49,7 @@ cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *samples, double *b
         return e;
     *bbox = cm_points_diag(samples, ns);
     cm_frame fr;
-    if ((e = cm_face_frame(samples, n_outer, samples, ns, 1e-12 * *bbox, &fr, st)) != CM_OK)
+    if ((e = cm_face_frame(samples, n_outer, samples, ns, CM_EPS_LEN_REL * *bbox, &fr, st)) != CM_OK)
         return e;
     *n = fr.ez;
     return CM_OK;
@@ -117,7 +117,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
     if (e != CM_OK)
         return e;
     in->n = n;
-    in->eps_len = 1e-12 * bbox;
+    in->eps_len = CM_EPS_LEN_REL * bbox;
     corner_ctx c = {m, in->nF, in->eps_len, ws->scratch};
     /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */
     for (int k = 0; k < n; k++) {
@@ -140,7 +140,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
             cm_vec3 nG, Ng;
             if ((e = partner_normal(&c, (uint32_t)g, &bg, &nG, st)) != CM_OK)
                 return e;
-            if (partner_geo(m, (uint32_t)g, U->edge, v, nG, 1e-12 * bg, &Ng)) {
+            if (partner_geo(m, (uint32_t)g, U->edge, v, nG, CM_EPS_LEN_REL * bg, &Ng)) {
                 in->corner_normal[k] = cm_dot(Ng, in->nF) < 0 ? cm_neg(Ng) : Ng;
                 break;
             }
@@ -170,7 +170,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
         for (int end = 0; end < 2; end++) {
             int kv = end ? k1 : k;
             cm_vec3 Ng, N;
-            int has_g = partner_geo(m, (uint32_t)g, U->edge, ws->vert[kv], nG, 1e-12 * bg, &Ng);
+            int has_g = partner_geo(m, (uint32_t)g, U->edge, ws->vert[kv], nG, CM_EPS_LEN_REL * bg, &Ng);
             if (ws->has_geo[kv] && has_g)
                 N = cm_unit(cm_add(ws->geo[kv], Ng));
             else if (ws->has_geo[kv])

@@ -3,6 +3,7 @@
 
 #include <stddef.h>
 
+#include "cm/cm_const.h"
 #include "cm/cm_limits_info.h"
 
 #define MAX_DOUBLINGS 12
@@ -375,7 +376,7 @@ static cm_err deviation(const chart *c, cm_vec2 uv, cm_vec3 flat, double *dev, c
         return e;
     cm_vec3 n = cm_cross(d[1], d[2]), off = cm_sub(d[0], flat);
     double ln = cm_norm(n);
-    *dev = ln > 1e-12 * cm_norm(d[1]) * cm_norm(d[2]) && ln > 0 ? fabs(cm_dot(off, n)) / ln : cm_norm(off);
+    *dev = ln > CM_EPS_CROSS_REL * cm_norm(d[1]) * cm_norm(d[2]) && ln > 0 ? fabs(cm_dot(off, n)) / ln : cm_norm(off);
     *p = d[0];
     return CM_OK;
 }
@@ -439,7 +440,7 @@ static cm_vec3 chart_normal(const chart *c, double u, double v, cm_vec2 toward)
             break;
         cm_vec3 n = cm_cross(d[1], d[2]);
         double l = cm_norm(n);
-        if (l > 1e-12 * cm_norm(d[1]) * cm_norm(d[2]) && l > 0)
+        if (l > CM_EPS_CROSS_REL * cm_norm(d[1]) * cm_norm(d[2]) && l > 0)
             return cm_scale(n, c->sign / l);
     }
     return cm_v3(0, 0, c->sign);

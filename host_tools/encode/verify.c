@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cm/cm_const.h"
 #include "cm/cm_geom.h"
 
 int face_surface_set(face_surface *fs, const cm_rebuilt *rb)
@@ -245,7 +246,7 @@ static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n
     if (cm_psurf_project_from(&D->ps, P, &u, &v, &dist, NULL) != CM_OK || cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK)
         return 0;
     cm_vec3 c = cm_cross(d3[1], d3[2]);
-    if (!(cm_norm(c) > 1e-12 * cm_norm(d3[1]) * cm_norm(d3[2])) || !(cm_norm(c) > 0))
+    if (!(cm_norm(c) > CM_EPS_CROSS_REL * cm_norm(d3[1]) * cm_norm(d3[2])) || !(cm_norm(c) > 0))
         return 0;
     *n = cm_unit(c);
     return 1;
@@ -267,7 +268,7 @@ static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg
     greg_dist(w, P);
     cm_greg_surface_eval(S->greg, w->patch, w->u, w->v, &X, &Su, &Sv);
     cm_vec3 c = cm_cross(Su, Sv);
-    if (!(cm_norm(c) > 1e-12 * cm_norm(Su) * cm_norm(Sv)) || !(cm_norm(c) > 0))
+    if (!(cm_norm(c) > CM_EPS_CROSS_REL * cm_norm(Su) * cm_norm(Sv)) || !(cm_norm(c) > 0))
         return 0;
     *n = cm_unit(c);
     return 1;

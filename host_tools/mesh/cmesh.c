@@ -660,7 +660,7 @@ static void face_normals(cmesh *out, double diag)
                 smp[i * 10 + k] = curve_point(&out->edges[u->edge].c, u->rev ? 1.0 - k / 10.0 : k / 10.0);
         }
         cm_frame fr;
-        if (n >= 3 && cm_face_frame(smp, n, smp, n, 1e-12 * diag, &fr, NULL) == CM_OK) {
+        if (n >= 3 && cm_face_frame(smp, n, smp, n, CM_EPS_LEN_REL * diag, &fr, NULL) == CM_OK) {
             cf->normal = fr.ez;
             cf->normal_ok = 1;
         }
@@ -692,7 +692,7 @@ static int surface_normal_near(const face_domain *D, const hcurve *c, cm_vec3 P,
         cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK)
         return 0;
     cm_vec3 nn = cm_cross(d3[1], d3[2]);
-    if (!(cm_norm(nn) > 1e-12 * cm_norm(d3[1]) * cm_norm(d3[2]))) {
+    if (!(cm_norm(nn) > CM_EPS_CROSS_REL * cm_norm(d3[1]) * cm_norm(d3[2]))) {
         cm_vec3 P2 = curve_point(c, k < 10 ? s + 1e-3 : s - 1e-3);
         if (cm_psurf_project_from(&D->ps, P2, &u, &v, &dist, NULL) != CM_OK ||
             cm_psurf_eval(&D->ps, u, v, d3, NULL) != CM_OK)
