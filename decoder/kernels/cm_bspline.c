@@ -204,12 +204,6 @@ cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots
     return CM_OK;
 }
 
-void cm_curve_domain(const cm_curve *c, double *u0, double *u1)
-{
-    *u0 = c->knots[c->p];
-    *u1 = c->knots[c->n_ctrl];
-}
-
 cm_err cm_curve_eval(const cm_curve *c, double u, int nd, cm_vec3 *d, cm_status *st)
 {
     double ders[CM_MAX_DERS + 1][CM_MAX_ORDER];

@@ -136,7 +136,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             }
             if (c >= CM_COS_G1)
                 continue;
-            /* spec 14.4 reverts the rebuilt face with the larger Max error; on the corpus that often
+            /* spec §14 step 4 reverts the rebuilt face with the larger Max error; on the corpus that often
                turned back an exact PLANE next to a Gregory face whose error is smaller in millimetres
                but whose normal is the one that strays.  The face whose normal is farther from its own
                source surface goes back (a KEEP face's is exact, so a rebuilt one is always picked). */

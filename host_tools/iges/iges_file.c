@@ -855,13 +855,6 @@ int iges_ptr(iges_file *f, const iges_entity *e, int i, int allow_null, int *de_
     return 0;
 }
 
-const char *iges_str_or(const iges_entity *e, int i, const char *dflt)
-{
-    if (i < 0 || i >= e->nparams || e->params[i].kind != IGES_P_STR)
-        return dflt;
-    return e->params[i].str;
-}
-
 const char *iges_type_name(int type)
 {
     switch (type) {

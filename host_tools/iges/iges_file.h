@@ -141,7 +141,6 @@ int iges_num(iges_file *f, const iges_entity *e, int i, double *out);
 int iges_int(iges_file *f, const iges_entity *e, int i, int *out);
 /** A pointer parameter: a DE number that must name an entity (0 allowed if allow_null). */
 int iges_ptr(iges_file *f, const iges_entity *e, int i, int allow_null, int *de_out);
-const char *iges_str_or(const iges_entity *e, int i, const char *dflt);
 
 /** Record an error about entity e (printf-style) into f->err unless one is there; returns CM_E_IGES. */
 cm_err iges_entity_error(iges_file *f, const iges_entity *e, const char *fmt, ...) __attribute__((format(printf, 3, 4)));

@@ -120,16 +120,6 @@ static int entity_map(iges_file *f, const iges_entity *e, const haffine *parent,
 
 /* ---- curves ---- */
 
-int iges_is_curve(int type)
-{
-    switch (type) {
-    case 100: case 102: case 104: case 106: case 110: case 112: case 126: case 142:
-        return 1;
-    default:
-        return 0;
-    }
-}
-
 static cm_err curve_rec(iges_file *f, int de, const haffine *parent, hcurve_list *out, int depth, cm_status *st);
 
 /* map a finished piece of entity e into model space and append it; geometry sent beyond

@@ -105,8 +105,6 @@ int iges_curve_pieces(iges_file *f, int de);
 CM_NODISCARD cm_err iges_surface(iges_file *f, int de, const haffine *parent, const hbox *extent, hsurf *out,
                                  cm_status *st);
 
-/** 1 if `type` is a curve entity iges_curve understands. */
-int iges_is_curve(int type);
 /** 1 if `type` is a surface entity iges_surface understands. */
 int iges_is_surface(int type);
 

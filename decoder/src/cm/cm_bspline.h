@@ -85,9 +85,6 @@ CM_NODISCARD cm_err cm_bspl_basis(int span, double u, int p, const double *knots
 CM_NODISCARD cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots,
                                        double ders[CM_MAX_DERS + 1][CM_MAX_ORDER], cm_status *st);
 
-/** Parameter domain [knots[p], knots[n_ctrl]] of a curve. */
-void cm_curve_domain(const cm_curve *c, double *u0, double *u1);
-
 /**
  * K2 curve point and derivatives (A3.2 / A4.2 for rational curves).
  * @param[out] d  d[k] = k-th derivative at u, k = 0..nd (nd <= CM_MAX_DERS)
