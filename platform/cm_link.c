@@ -197,6 +197,10 @@ static int parse(cm_link *l, cm_link_frame *f, int64_t now)
                 l->cand = at + 1;
                 l->nest_from = 0;
                 l->cand_deadline = now + CM_LINK_PARTIAL_FLOOR_MS + rx_line_ms(l, n - avail);
+                l->cand_t0 = now;
+                l->cand_have = avail;
+                l->cand_cap = now + CM_LINK_PARTIAL_FLOOR_MS +
+                              (int64_t)CM_LINK_PARTIAL_SLACK * (int64_t)((n - avail) * 1000u / CM_LINK_ASSUMED_BPS);
             }
             size_t q;
             if (nested_frame(l, &q)) {
@@ -221,6 +225,26 @@ static int parse(cm_link *l, cm_link_frame *f, int64_t now)
         l->stats.frames_in++;
         return 1;
     }
+}
+
+/* The candidate's deadline has passed: if its bytes are still coming, move it to when the rest will be
+   in at the pace seen since the wait began, plus the floor (cm_link.h), never past cand_cap.
+   True if it was moved. */
+static bool still_coming(cm_link *l, int64_t now)
+{
+    size_t avail = l->end - l->start, n = CM_LINK_HEADER + ((size_t)l->rx[l->start + 4] | (size_t)l->rx[l->start + 5] << 8) +
+                                          CM_LINK_TRAILER;
+    if (avail <= l->cand_have || avail >= n || now - l->last_rx_ms >= CM_LINK_PARTIAL_GAP_MS)
+        return false;
+    int64_t spent = now - l->cand_t0;
+    int64_t rest = (int64_t)((n - avail) * (uint64_t)(spent > 0 ? spent : 1) / (avail - l->cand_have));
+    int64_t moved = now + CM_LINK_PARTIAL_FLOOR_MS + rest;
+    if (moved > l->cand_cap)
+        moved = l->cand_cap;
+    if (moved <= l->cand_deadline)
+        return false;
+    l->cand_deadline = moved;
+    return true;
 }
 
 /* the partial frame at rx[start] is the one waited for */
@@ -255,6 +279,8 @@ int cm_link_recv(cm_link *l, cm_link_frame *f, int timeout_ms)
         now = cm_clock_ms();
         int64_t left = deadline - now;
         bool cand = waiting(l);
+        if (cand && now >= l->cand_deadline)
+            (void)still_coming(l, now);
         int64_t give_up = l->cand_deadline < l->last_rx_ms + CM_LINK_PARTIAL_GAP_MS ? l->cand_deadline
                                                                                     : l->last_rx_ms + CM_LINK_PARTIAL_GAP_MS;
         if (cand && give_up - now < left)
@@ -268,7 +294,7 @@ int cm_link_recv(cm_link *l, cm_link_frame *f, int timeout_ms)
         if (n == 0) {
             /* nothing more came (the kernel's queue is empty, so a slow reader is not mistaken for a
                stalled sender): give the partial frame up and resynchronise past its magic */
-            if (cand && now >= give_up) {
+            if (cand && now >= give_up && !(now < l->last_rx_ms + CM_LINK_PARTIAL_GAP_MS && still_coming(l, now))) {
                 l->stats.stalled++;
                 l->stale_to = l->rx_off + l->end;
                 l->start++;

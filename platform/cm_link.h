@@ -79,12 +79,18 @@ typedef struct cm_link_stats {
        contain one, but for a 2^-64 chance or a payload made of captured link traffic), or
      - CM_LINK_PARTIAL_FLOOR_MS plus the line time of the bytes it missed when the wait began has
        passed, at the link's rate (cm_link_set_rate) or, when unknown, at CM_LINK_ASSUMED_BPS, the
-       slowest line used (a legitimate frame on it must never be given up).
+       slowest line used (a legitimate frame on it must never be given up), and the bytes are not
+       still coming: while they are, the deadline moves to when they will be in at the pace seen since
+       the wait began, plus the floor.  A line's real pace is not its nominal rate (gaps between
+       characters, a converter's latency timer, a radio or USB bridge slower than the local UART's
+       setting); a frame still arriving is never cut for being slower than the number said.  That
+       waiting is bounded: at most CM_LINK_PARTIAL_SLACK times the frame's time at the slowest line.
    Without this a sender that stalls mid-frame leaves a header announcing 16 KiB that swallows whatever
    comes next until that many bytes have come. */
 #define CM_LINK_PARTIAL_GAP_MS 500
 #define CM_LINK_PARTIAL_FLOOR_MS 1000
 #define CM_LINK_ASSUMED_BPS 240u /* 2400 baud 8N1 */
+#define CM_LINK_PARTIAL_SLACK 3
 
 typedef struct cm_link {
     cm_transport *t;
@@ -95,6 +101,8 @@ typedef struct cm_link {
     uint64_t cand, stale_to; /* the partial frame waited for (stream offset + 1, 0: none); see parse */
     uint64_t nest_from;      /* stream offset from which to look for a whole frame inside the candidate */
     int64_t cand_deadline, last_rx_ms;
+    int64_t cand_t0, cand_cap; /* when the wait for the candidate began; the latest it may be moved to */
+    size_t cand_have;          /* its bytes held when the wait began */
     uint8_t rx[2 * CM_LINK_MAX_FRAME];
     /* rxcrc[i]: CRC-32 of the stream up to rx[i], so any frame's CRC is two lookups and a shift
        (cm_link.c, crc_window) instead of a pass over its bytes: a flood of valid-looking headers

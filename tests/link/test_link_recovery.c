@@ -5,6 +5,8 @@
  *                            sent); the next sender's SYNC is read within seconds, not minutes
  *   partial_frame_gap        the same, then silence: the partial frame is given up at the silence
  *   slow_frame_kept          a legitimate frame at 2400 baud, the rate not told: never given up
+ *   slower_than_told         a legitimate frame arriving slower than the rate the receiver was told
+ *                            (a 2400 baud line with gaps, a fast UART behind a slow radio): kept
  *   flood_resync_cost        a flood of valid-looking headers announcing 16 KiB each: the frames
  *                            after it come out, and resynchronising costs little CPU
  *   stop_resumable           link_send_file stops within a second of o->stop, the terminal keeps
@@ -247,6 +249,32 @@ static void slow_frame_kept(void)
         "slow_frame_kept: a 1 KiB frame trickling in at 2400 baud (rate not told) arrives whole after %lld ms "
         "(stalled %llu)",
         (long long)at, (unsigned long long)rxl.stats.stalled);
+}
+
+/* a 1 KiB DATA frame, 12 bytes every every_ms, to a receiver told the line carries told_bps: kept */
+static void slower_than_told(unsigned told_bps, int every_ms, const char *what)
+{
+    enum { PAY = 1024 + 4 };
+    static uint8_t whole[PAY + 12];
+    uint8_t body[PAY];
+    for (int i = 0; i < PAY; i++)
+        body[i] = (uint8_t)(i * 7 + 1);
+    size_t n = frame(CM_LINK_DATA, 4, body, PAY, whole);
+    static segment seg[PAY / 12 + 2];
+    size_t k = 0;
+    for (size_t off = 0; off < n; off += 12, k++)
+        seg[k] = (segment){(int64_t)k * every_ms, whole + off, n - off < 12 ? n - off : 12};
+    static scripted s;
+    scripted_open(&s, seg, k);
+    memset(&rxl, 0, sizeof rxl); /* the counters too */
+    cm_link_init(&rxl, &s.t);
+    cm_link_set_rate(&rxl, told_bps);
+    int64_t at;
+    int got = read_frames(&rxl, CM_LINK_DATA, 1, (int)(k * (size_t)every_ms) + 8000, s.t0, &at);
+    tap(got == 1 && rxl.stats.stalled == 0,
+        "slower_than_told: a 1 KiB frame at %u B/s, the receiver told %u B/s (%s): arrives whole after %lld ms "
+        "(stalled %llu)",
+        (unsigned)(12000 / every_ms), told_bps, what, (long long)at, (unsigned long long)rxl.stats.stalled);
 }
 
 static void flood_resync_cost(void)
@@ -531,6 +559,8 @@ int main(int argc, char **argv)
     RUN(partial_frame_deadline, partial_frame_deadline());
     RUN(partial_frame_gap, partial_frame_gap());
     RUN(slow_frame_kept, slow_frame_kept());
+    RUN(slower_than_told, slower_than_told(240, 63, "a 2400 baud line with gaps between characters"));
+    RUN(slower_than_told, slower_than_told(11520, 50, "a 115200 baud UART behind a 2400 baud radio"));
     RUN(flood_resync_cost, flood_resync_cost());
     RUN(stop_resumable, stop_resumable(data, size, dir));
     RUN(lost_transfer_bounded, lost_transfer_bounded(data, size));
