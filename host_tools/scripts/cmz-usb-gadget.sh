@@ -172,7 +172,20 @@ do_down() {
         fi
     fi
     if [ -d "$G" ] && [ -n "$(bound_udc)" ]; then echo "" > "$G/UDC" 2>/dev/null || true; fi
-    if [ -n "$mp" ]; then umount "$mp" || die "umount $mp failed (still in use?)"; fi
+    if [ -n "$mp" ]; then
+        # a process killed a moment ago may still hold the mount while the kernel tears it down:
+        # try for a few seconds; with --force, detach it lazily in the end (it goes when they do)
+        local i
+        for ((i = 0; i < 50; i++)); do umount "$mp" 2> /dev/null && break; sleep 0.1; done
+        if grep -q " $mp functionfs " /proc/mounts; then
+            if [ "$FORCE" = 1 ]; then
+                umount -l "$mp" || die "umount -l $mp failed"
+                say "$mp was still in use (pids $(holders "$mp")): detached lazily"
+            else
+                die "umount $mp failed (still in use by pids $(holders "$mp"))"
+            fi
+        fi
+    fi
     if [ -d "$G" ]; then
         # configfs: links out of configs, then configs' strings, configs, functions, strings, gadget
         rm -f "$G/configs/c.1/$FUNC"

@@ -27,9 +27,13 @@ pids=()
 cleanup() {
     # the sender must be gone before the gadget is unbound (hw-testing NOTES pitfall 6)
     for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
-    sleep 0.5
-    for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
-    timeout 20 "$gadget" down --force > /dev/null 2>&1
+    local p i
+    for p in "${pids[@]}"; do
+        for ((i = 0; i < 50; i++)); do kill -0 "$p" 2>/dev/null || break; sleep 0.1; done
+        kill -9 "$p" 2>/dev/null
+        wait "$p" 2>/dev/null
+    done
+    timeout 30 "$gadget" down --force >> "$T/gadget.log" 2>&1
 }
 show_logs() {
     for f in term.log send.log gadget.log; do
@@ -118,5 +122,8 @@ kill "$send_pid" 2>/dev/null
 wait "$send_pid" 2>/dev/null
 grep '^cmz-terminal: ' "$T/term.log" | sed 's/^/# /' | head -n 12
 cleanup
+# what this script set up is gone: a gadget left behind holds the only UDC and fails the next script
+[ ! -e /sys/kernel/config/usb_gadget/curvemesh ] && pass "the gadget is taken down (cmz-usb-gadget.sh down --force)" ||
+    fail "the gadget is taken down" "$(tail -n 2 "$T/gadget.log" | tr '\n' ' ')"
 echo "$((n - failed)) passed, $failed failed"
 [ $failed -eq 0 ]

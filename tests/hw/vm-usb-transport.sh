@@ -64,6 +64,11 @@ for m in dummy_hcd libcomposite usb_f_fs; do
 done
 check "a UDC exists ($(ls /sys/class/udc 2>/dev/null | tr '\n' ' '))" test -n "$(ls /sys/class/udc 2>/dev/null)"
 
+# a gadget left by an earlier script (its own test says so) would hold the only UDC: not this one's fault
+if [ -e "$G" ]; then
+    echo "# a gadget was left set up before this script: taking it down first"
+    timeout 30 "$GADGET" down --force 2>&1 | sed 's/^/# /'
+fi
 check "cmz-usb-gadget.sh up" "$GADGET" up --serial "$SERIAL" "$MNT"
 if ! start_gadget; then
     not_ok "usb_echo --gadget wrote its descriptors: $(cat "$T/gadget.err")"

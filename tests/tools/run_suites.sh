@@ -49,6 +49,7 @@ for s in "$@"; do
         name=${rest%%:*}
         cmd=${rest#*:}
         say "== gate $name"
+        t0=$SECONDS
         if out=$(bash -c "$cmd" 2>&1); then
             # a nested suite reports its own counts; a plain gate counts as one test
             if summary=$(grep -E '^[0-9]+ passed, [0-9]+ failed$' <<<"$out" | tail -n 1) && [ -n "$summary" ]; then
@@ -57,7 +58,7 @@ for s in "$@"; do
                 pass=$((pass + 1))
             fi
             [ $quiet -eq 1 ] || echo "$out" | grep -vE '^[0-9]+ passed, [0-9]+ failed$' | tail -n 15
-            say "  gate $name: ok"
+            say "  gate $name: ok ($((SECONDS - t0)) s)"
         else
             if summary=$(grep -E '^[0-9]+ passed, [0-9]+ failed$' <<<"$out" | tail -n 1) && [ -n "$summary" ]; then
                 p=${summary%% *}; f=${summary#*, }; f=${f%% *}
@@ -75,7 +76,7 @@ for s in "$@"; do
                 echo "  ..."
             fi
             echo "$out" | tail -n 40
-            echo "  gate $name: FAILED"
+            echo "  gate $name: FAILED ($((SECONDS - t0)) s)"
         fi
         ;;
     *:*)
@@ -102,5 +103,6 @@ if [ ${#failed_names[@]} -gt 0 ]; then
     printf '  %s\n' "${failed_names[@]}"
 fi
 [ "$skipped" -gt 0 ] && echo "$skipped skipped (see SKIP lines above)"
+[ $quiet -eq 1 ] || echo "# took $SECONDS s"
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
