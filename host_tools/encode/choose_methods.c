@@ -58,11 +58,6 @@ static const enc_method *enc_method_of(unsigned id)
     return NULL;
 }
 
-static int kept(int method)
-{
-    return cm_method_of((unsigned)method)->kept_surface;
-}
-
 /*
  * Spec §14 steps 3-4 on the decoded model (the transmitted edges): per face PLANE, then the
  * GREGORY candidates, else KEEP; then the G1 fix-point: every G1 edge next to a rebuilt face is
@@ -99,7 +94,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
                 break;
             }
         }
-        if (kept(t->method[f]))
+        if (enc_kept(t->method[f]))
             face_surface_free(&fs[f]);
     }
     /* each G1 edge is measured once, and again only when one of its faces went back to KEEP */
@@ -124,7 +119,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
             if (!m->edges[e].g1 || a < 0 || b < 0 || a == b)
                 continue;
-            if (kept(t->method[a]) && kept(t->method[b]))
+            if (enc_kept(t->method[a]) && enc_kept(t->method[b]))
                 continue;
             if (dirty[e])
                 ecos[e] = verify_g1_edge(lm, m, e, fs, &eworse[e]);
@@ -140,8 +135,8 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
                turned back an exact PLANE next to a Gregory face whose error is smaller in millimetres
                but whose normal is the one that strays.  The face whose normal is farther from its own
                source surface goes back (a KEEP face's is exact, so a rebuilt one is always picked). */
-            int pick = kept(t->method[a]) ? b : a;
-            if (!kept(t->method[a]) && !kept(t->method[b]))
+            int pick = enc_kept(t->method[a]) ? b : a;
+            if (!enc_kept(t->method[a]) && !enc_kept(t->method[b]))
                 pick = eworse[e] ? b : a;
             t->method[pick] = CM_METHOD_FALLBACK;
             face_surface_free(&fs[pick]);
@@ -166,7 +161,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         face_report *rep = &r->faces[f];
         rep->method = t->method[f];
         r->faces_by_method[t->method[f]]++;
-        if (kept(t->method[f])) {
+        if (enc_kept(t->method[f])) {
             t->layout[f] = t->corner[f] = 0;
             t->checksum[f] = 0;
             rep->layout = -1;

@@ -59,7 +59,10 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *o, c
         return cm_fail(st, CM_E_DEGENERATE, "empty model");
     if (!isfinite(diag) || !isfinite(log2(o->quant_rel * diag)))
         return cm_fail(st, CM_E_NONFINITE, "the model's extent is not finite");
+    /* every part's faces one way, closed parts outwards: before anything is built on the loops'
+       direction (edge numbering, Gregory patches, method choice) */
     r->faces_flipped = enc_orient_parts(lm);
+    r->faces_flipped += enc_outward_parts(lm);
     /* the grid: the largest power of two not above quant_rel * diagonal */
     t.q_exp = (int)floor(log2(o->quant_rel * diag));
     if (t.q_exp < -60)
@@ -119,28 +122,10 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *o, c
             r->edges_curve += t.edges[i].kind == CM_EDGE_CURVE;
         }
     }
-    double *fvol = calloc((size_t)t.nfaces + 1, sizeof(double));
-    if (e == CM_OK && !fvol)
-        e = cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK && t.nfaults == 0) {
         enc_compute_needs(t.w, r, r->need);
-        e = enc_tessellation_needs(&t, r->need, fvol, o, st);
+        e = enc_tessellation_needs(&t, r->need, o, st);
     }
-    /* closed parts face outwards: a part whose volume comes out negative is turned inside out */
-    if (e == CM_OK && t.nfaults == 0 && enc_outward_parts(lm, fvol, r) > 0) {
-        /* turned faces walk their loops the other way: edges and vertices are numbered by
-           first use in that walk, so number them again */
-        tx_free_edges(&t);
-        e = tx_build_edges(lm, &t, st);
-        /* the turned faces' loops run the other way: their Gregory patches change; choose again */
-        if (e == CM_OK)
-            e = enc_choose_and_write(lm, &t, o, r, st);
-        if (e == CM_OK) {
-            enc_compute_needs(t.w, r, r->need);
-            e = enc_tessellation_needs(&t, r->need, fvol, o, st);
-        }
-    }
-    free(fvol);
     if (e == CM_OK && t.nfaults > 0) {
         /* faces that cannot be sent: encode_model settles them and calls again */
         for (int f = 0; f < t.nfaces; f++)
@@ -217,7 +202,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             if (!fault[f])
                 continue;
             int b = lm->mesh.faces[f].brep_face;
-            if (r->faces && !cm_method_of((unsigned)r->faces[f].method)->kept_surface && !keep_only[b]) {
+            if (r->faces && !enc_kept(r->faces[f].method) && !keep_only[b]) {
                 keep_only[b] = 1;
                 retried++;
             } else {

@@ -13,6 +13,7 @@
 #include "cm/cm_arith.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_format.h"
+#include "cm/cm_method.h"
 #include "cm/cm_rebuild.h"
 #include "cm/cm_tessellate.h"
 #include "encode.h"
@@ -78,15 +79,27 @@ typedef struct tx {
 /* face f cannot be sent as it is; the first reason stays */
 void tx_face_fault(tx *t, int f, const char *why);
 
+/* 1 if faces of this method carry their surface (cm_method.h) */
+static inline int enc_kept(int method)
+{
+    return cm_method_of((unsigned)method)->kept_surface;
+}
+
 /* drop the transmitted edges and vertices (tx_build_edges makes them again) */
 void tx_free_edges(tx *t);
 
 void tx_free(tx *t);
 
-/* ---- orientation: every part's faces agree on shared edges (they run both ways) ---- */
+/* ---- orientation (orient.c): every part's faces agree on shared edges (they run both ways), and
+   every closed part faces outwards ---- */
 void enc_flip_face(loaded_model *lm, int f);
 
+/* turn faces so that each part's faces agree with its first; returns faces turned */
 int enc_orient_parts(loaded_model *lm);
+
+/* turn every closed part (no free edges) whose faces enclose a negative volume, measured on the
+   B-rep's own surfaces; returns faces turned */
+int enc_outward_parts(loaded_model *lm);
 
 cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 
@@ -106,10 +119,7 @@ cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st);
 cm_err enc_choose_and_write(loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, cm_status *st);
 
 /* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples */
-cm_err enc_tessellation_needs(tx *t, uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st);
-
-/* flip every closed part (no free edges) whose faces enclose a negative volume; returns faces flipped */
-int enc_outward_parts(loaded_model *lm, const double *fvol, encode_result *r);
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, cm_status *st);
 
 void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need);
 

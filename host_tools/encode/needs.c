@@ -1,5 +1,4 @@
-/* needs.c - what the terminal will need, measured with its own tessellation, and closed parts
-   turned outwards by the volume they enclose (see encode_internal.h). */
+/* needs.c - what the terminal will need, measured with its own tessellation (see encode_internal.h). */
 #include "encode_internal.h"
 
 #include <math.h>
@@ -30,7 +29,7 @@ static const char *tess_fault(cm_err e)
 
 /* a face that does not tessellate is a fault of that face (see encode_model), not of the model */
 /* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples */
-cm_err enc_tessellation_needs(tx *t, uint32_t *need, double *face_volume, const encode_opts *o, cm_status *st)
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, cm_status *st)
 {
     enc_work *w = t->w;
     const cm_model *m = &w->dec.model;
@@ -49,21 +48,11 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, double *face_volume, const 
             *st = fst;
             return e;
         }
-        face_volume[f] = 0;
         if (e != CM_OK) {
             tx_face_fault(t, (int)f, tess_fault(e));
             continue;
         }
         tris += (uint64_t)info.triangles;
-        /* the face's share of its part's signed volume (divergence theorem, relative to the origin) */
-        double vol = 0;
-        for (uint32_t i = 0; i < mesh.nindex; i += 3) {
-            const float *a = w->face_pos[w->face_idx[i]], *b = w->face_pos[w->face_idx[i + 1]];
-            const float *c = w->face_pos[w->face_idx[i + 2]];
-            cm_vec3 A = cm_v3f(a), B = cm_v3f(b), C = cm_v3f(c);
-            vol += cm_dot(A, cm_cross(B, C)) / 6.0;
-        }
-        face_volume[f] = vol;
         if ((uint32_t)info.points > need[CM_LIMIT_MAX_TESS_POINTS])
             need[CM_LIMIT_MAX_TESS_POINTS] = (uint32_t)info.points;
         if ((uint32_t)info.max_edge_samples > need[CM_LIMIT_MAX_EDGE_SAMPLES])
@@ -71,35 +60,6 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, double *face_volume, const 
     }
     need[CM_LIMIT_MAX_TRIS] = tris > UINT32_MAX ? UINT32_MAX : (uint32_t)tris;
     return CM_OK;
-}
-
-/* flip every closed part (no free edges) whose faces enclose a negative volume; returns faces flipped */
-int enc_outward_parts(loaded_model *lm, const double *fvol, encode_result *r)
-{
-    cmesh *cm = &lm->mesh;
-    int *comp = malloc((size_t)(cm->nfaces + 1) * sizeof *comp);
-    if (!comp)
-        return 0;
-    int nc = cmesh_components(cm, comp), flipped = 0;
-    double *vol = calloc((size_t)nc + 1, sizeof *vol);
-    unsigned char *open = calloc((size_t)nc + 1, 1);
-    if (vol && open && nc > 0) {
-        for (int e = 0; e < cm->nedges; e++)
-            if (cm->edges[e].kind == CMESH_FREE)
-                open[comp[cm->edges[e].face[0]]] = 1;
-        for (int f = 0; f < cm->nfaces; f++)
-            vol[comp[f]] += fvol[f];
-        for (int f = 0; f < cm->nfaces; f++)
-            if (!open[comp[f]] && vol[comp[f]] < 0) {
-                enc_flip_face(lm, f);
-                flipped++;
-            }
-    }
-    r->faces_flipped += flipped;
-    free(vol);
-    free(open);
-    free(comp);
-    return flipped;
 }
 
 void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need)

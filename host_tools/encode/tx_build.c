@@ -1,5 +1,5 @@
-/* tx_build.c - the transmitted model: the curve mesh quantised, in transmission order, every part
-   consistently oriented (see encode_internal.h). */
+/* tx_build.c - the transmitted model: the curve mesh quantised, in transmission order (see
+   encode_internal.h; orient.c turns the parts before). */
 #include "encode_internal.h"
 
 #include <math.h>
@@ -81,91 +81,6 @@ static int64_t quantise_weight(double w, double w0)
         return 0;
     int64_t q = llround(r);
     return q < 1 ? 1 : q;
-}
-
-/* ---- orientation: every part's faces agree on shared edges (they run both ways) ---- */
-
-void enc_flip_face(loaded_model *lm, int f)
-{
-    cmesh *cm = &lm->mesh;
-    const cmesh_face *cf = &cm->faces[f];
-    for (int l = 0; l < cf->nloops; l++) {
-        const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
-        for (int i = 0; i < cl->n / 2; i++) {
-            cmesh_use t = cm->uses[cl->first + i];
-            cm->uses[cl->first + i] = cm->uses[cl->first + cl->n - 1 - i];
-            cm->uses[cl->first + cl->n - 1 - i] = t;
-        }
-        for (int i = 0; i < cl->n; i++)
-            cm->uses[cl->first + i].rev ^= 1;
-    }
-    lm->brep.faces[cf->brep_face].flip ^= 1;
-}
-
-int enc_orient_parts(loaded_model *lm)
-{
-    cmesh *cm = &lm->mesh;
-    int nf = cm->nfaces, flips = 0;
-    /* per edge: the face and rev of its first two uses */
-    int *ef = malloc((size_t)cm->nedges * 2 * sizeof(int)), *er = malloc((size_t)cm->nedges * 2 * sizeof(int));
-    int *cnt = calloc((size_t)cm->nedges + 1, sizeof(int));
-    int *queue = malloc((size_t)(nf + 1) * sizeof(int));
-    unsigned char *seen = calloc((size_t)nf + 1, 1), *flip = calloc((size_t)nf + 1, 1);
-    if (!ef || !er || !cnt || !queue || !seen || !flip)
-        goto done;
-    for (int f = 0; f < nf; f++) {
-        const cmesh_face *cf = &cm->faces[f];
-        for (int l = 0; l < cf->nloops; l++) {
-            const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
-            for (int i = 0; i < cl->n; i++) {
-                const cmesh_use *u = &cm->uses[cl->first + i];
-                if (cnt[u->edge] < 2) {
-                    ef[2 * u->edge + cnt[u->edge]] = f;
-                    er[2 * u->edge + cnt[u->edge]] = u->rev;
-                }
-                cnt[u->edge]++;
-            }
-        }
-    }
-    for (int s = 0; s < nf; s++) {
-        if (seen[s])
-            continue;
-        int head = 0, tail = 0;
-        queue[tail++] = s;
-        seen[s] = 1;
-        while (head < tail) {
-            int f = queue[head++];
-            const cmesh_face *cf = &cm->faces[f];
-            for (int l = 0; l < cf->nloops; l++) {
-                const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
-                for (int i = 0; i < cl->n; i++) {
-                    int e = cm->uses[cl->first + i].edge;
-                    if (cm->edges[e].kind != CMESH_SHARED)
-                        continue;
-                    int side = ef[2 * e] == f ? 0 : 1, g = ef[2 * e + 1 - side];
-                    if (seen[g])
-                        continue;
-                    int rf = er[2 * e + side] ^ flip[f], rg = er[2 * e + 1 - side];
-                    flip[g] = rf == rg; /* the same way in both: turn g */
-                    seen[g] = 1;
-                    queue[tail++] = g;
-                }
-            }
-        }
-    }
-    for (int f = 0; f < nf; f++)
-        if (flip[f]) {
-            enc_flip_face(lm, f);
-            flips++;
-        }
-done:
-    free(ef);
-    free(er);
-    free(cnt);
-    free(queue);
-    free(seen);
-    free(flip);
-    return flips;
 }
 
 /* ---- building the transmitted model ---- */

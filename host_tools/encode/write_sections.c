@@ -97,10 +97,10 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     cm_surf_ctx_init(&ctx);
     int nkeep = 0;
     for (int f = 0; f < t->nfaces; f++)
-        nkeep += cm_method_of((unsigned)t->method[f])->kept_surface;
+        nkeep += enc_kept(t->method[f]);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)nkeep);
     for (int f = 0; f < t->nfaces; f++) {
-        if (!cm_method_of((unsigned)t->method[f])->kept_surface)
+        if (!enc_kept(t->method[f]))
             continue;
         const tx_surf *S = &t->surfs[f];
         cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->p - 1));
@@ -233,9 +233,10 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     if (e == CM_OK) {
         /* the oldest version that can say it: format 1 readers still load files of format 1's methods */
         int major = 1;
-        for (int f = 0; f < t->nfaces; f++)
-            if (cm_method_of((unsigned)t->method[f])->since_major > major)
-                major = cm_method_of((unsigned)t->method[f])->since_major;
+        for (int f = 0; f < t->nfaces; f++) {
+            int since = cm_method_of((unsigned)t->method[f])->since_major;
+            major = since > major ? since : major;
+        }
         cm_fmt_header h = {0};
         h.major = (uint8_t)major;
         h.minor = major == CM_FMT_VERSION_MAJOR ? CM_FMT_VERSION_MINOR : 0;

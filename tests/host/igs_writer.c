@@ -311,7 +311,7 @@ static int dir_123(igw *w, v3 d)
     return de;
 }
 
-void igw_box_with_hole_186(igw *w, double a, double b, double c, double r)
+void igw_box_with_hole_186_oriented(igw *w, double a, double b, double c, double r, int inside_out)
 {
     double cx = a / 2, cy = b / 2;
     /* vertices 1..8 box corners (i & 1 -> x, i & 2 -> y, i & 4 -> z), 9, 10 seam points */
@@ -390,11 +390,16 @@ void igw_box_with_hole_186(igw *w, double a, double b, double c, double r)
     for (int i = 0; i < 7; i++) {
         igw_set(w, face[i], 1, 0, 0);
         /* the hole's outward normal points at the axis: opposite to the cylinder's */
-        k += snprintf(sb + k, sizeof sb - (size_t)k, ",%d,%d", face[i], i == 6 ? 0 : 1);
+        k += snprintf(sb + k, sizeof sb - (size_t)k, ",%d,%d", face[i], (i == 6 ? 0 : 1) ^ (inside_out != 0));
     }
     int shell = igw_add(w, 514, 1, "%s", sb);
     igw_set(w, shell, 1, 0, 0);
     igw_add(w, 186, 0, "%d,1,0", shell);
+}
+
+void igw_box_with_hole_186(igw *w, double a, double b, double c, double r)
+{
+    igw_box_with_hole_186_oriented(w, a, b, c, r, 0);
 }
 
 void igw_half_cylinder_120(igw *w, double r, double h)

@@ -42,6 +42,9 @@ void igw_box_with_hole_144(igw *w, double a, double b, double c, double r);
 
 /** The same solid as a 186 manifold solid B-rep (502/504/508/510/514, planes 190, cylinder 192). */
 void igw_box_with_hole_186(igw *w, double a, double b, double c, double r);
+/** The same, with every face's orientation flag in the shell (514) turned when inside_out: an
+ *  exporter that wrote the solid inside out (every normal pointing in). */
+void igw_box_with_hole_186_oriented(igw *w, double a, double b, double c, double r, int inside_out);
 
 /** Half cylinder radius r, height h, as an untrimmed 120 surface of revolution (line revolved by pi). */
 void igw_half_cylinder_120(igw *w, double r, double h);

@@ -175,6 +175,44 @@ static void test_box_hole_186(void **state)
     igw_free(&w);
 }
 
+/* A solid written inside out (every face's flag in its shell turned), thick and thin: the part is
+   turned outwards on the B-rep before anything is written, so the terminal's mesh encloses a positive
+   volume and every face was turned once */
+static void check_inside_out(double c)
+{
+    igw w;
+    igw_init(&w);
+    igw_box_with_hole_186_oriented(&w, BA, BB, c, BR, 1);
+    loaded_model lm;
+    encode_result r;
+    encode_igw(&w, &lm, &r);
+    cm_status st;
+    assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+    cm_mesh mesh;
+    tessellate_all(&mesh);
+    mesh_topo t;
+    topo(&mesh, &t);
+    assert_int_equal(t.unpaired, 0);
+    double exact = BA * BB * c - M_PI * BR * BR * c;
+    double tol = 2 * M_PI * BR * dec.model.tess_tol * c + 1e-3;
+    if (fabs(t.volume - exact) > tol)
+        fail_msg("a %g mm thick solid written inside out encloses %.6g mm^3 after encoding, want %.6g (faces turned %d)",
+                 c, t.volume, exact, r.faces_flipped);
+    assert_int_equal(r.faces_flipped % 7, 0); /* all seven turned, or none twice */
+    assert_true(r.faces_flipped > 0);
+    mesh_topo_free(&t);
+    encode_result_free(&r);
+    model_free(&lm);
+    igw_free(&w);
+}
+
+static void test_inside_out(void **state)
+{
+    (void)state;
+    check_inside_out(BC);
+    check_inside_out(0.25); /* thin: the two large faces nearly cancel */
+}
+
 /* ---- an open surface: half cylinder, r = 5, h = 12 ---- */
 static void test_half_cylinder(void **state)
 {
@@ -402,6 +440,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_hole_144),
         cmocka_unit_test(test_box_hole_186),
+        cmocka_unit_test(test_inside_out),
         cmocka_unit_test(test_half_cylinder),
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
