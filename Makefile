@@ -2,7 +2,8 @@
 #
 #   make [all]            library, tools and terminal binaries for PROFILE
 #   make check            installs missing Debian packages (deps), then every test and gate
-#   make demo             encode + decode a bundled model (not yet: see README)
+#   make demo             encode a bundled model and decode it as the terminal does (out/demo.glb)
+#   make test             the fast tier (under 2 minutes warm)
 #   make print-limits     the compile-time limits of PROFILE
 #   make CROSS_COMPILE=aarch64-linux-gnu-    cross build (arm-linux-gnueabihf- too)
 #   make install PREFIX=/usr DESTDIR=/tmp/stage
@@ -239,9 +240,12 @@ $(STACK_CHECK): tests/tools/check_stack.c
 .PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-fuzz-decode-replay \
 	check-corpus-roundtrip check-decode-cross check-corpus-occt deps
 # `make check` on a fresh machine: install what is missing, then test.
+# The builds run on every core (CHECK_JOBS); the suites and gates still run one at a time, but their
+# own builds (clang, cross, -O0) share the job slots.
+CHECK_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 check:
 	$(Q)$(MAKE) --no-print-directory deps
-	$(Q)$(MAKE) --no-print-directory check-run
+	$(Q)$(MAKE) --no-print-directory -j$(CHECK_JOBS) check-run
 
 CROSS_TARGETS := aarch64-linux-gnu- arm-linux-gnueabihf-
 
