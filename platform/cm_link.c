@@ -232,8 +232,7 @@ static int parse(cm_link *l, cm_link_frame *f, int64_t now)
    True if it was moved. */
 static bool still_coming(cm_link *l, int64_t now)
 {
-    size_t avail = l->end - l->start, n = CM_LINK_HEADER + ((size_t)l->rx[l->start + 4] | (size_t)l->rx[l->start + 5] << 8) +
-                                          CM_LINK_TRAILER;
+    size_t avail = l->end - l->start, n = frame_at(l, l->start);
     if (avail <= l->cand_have || avail >= n || now - l->last_rx_ms >= CM_LINK_PARTIAL_GAP_MS)
         return false;
     int64_t spent = now - l->cand_t0;
@@ -294,7 +293,7 @@ int cm_link_recv(cm_link *l, cm_link_frame *f, int timeout_ms)
         if (n == 0) {
             /* nothing more came (the kernel's queue is empty, so a slow reader is not mistaken for a
                stalled sender): give the partial frame up and resynchronise past its magic */
-            if (cand && now >= give_up && !(now < l->last_rx_ms + CM_LINK_PARTIAL_GAP_MS && still_coming(l, now))) {
+            if (cand && now >= give_up && !still_coming(l, now)) {
                 l->stats.stalled++;
                 l->stale_to = l->rx_off + l->end;
                 l->start++;

@@ -11,7 +11,6 @@
 
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "brep/face_domain.h"
 
@@ -141,9 +140,9 @@ static double face_volume3(const brep_model *m, const face_domain *fd, cm_vec3 c
         qsort(xs, (size_t)nx, sizeof *xs, cmp_double);
         for (int i = 0; i + 1 < nx; i += 2) {
             double len = xs[i + 1] - xs[i];
-            int spans = (int)ceil(len / du_max);
-            if (spans < 1)
-                spans = 1;
+            /* a stretch wider than the outer loop's box comes only from a hole outside it: bounded */
+            double want = ceil(len / du_max);
+            int spans = want < 1 ? 1 : want > 4 * VOL_SPANS ? 4 * VOL_SPANS : (int)want;
             double du = len / spans;
             for (int s = 0; s < spans; s++)
                 for (int g = 0; g < 3; g++) {
