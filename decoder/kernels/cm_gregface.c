@@ -48,8 +48,7 @@ cm_err cm_greg_edge_basis(const cm_cubic *c, cm_vec3 Ns, cm_vec3 Ne, double eps_
     return CM_OK;
 }
 
-/* (k,h) = argmin |b - k A - h c|^2 (spec 6.2), with the zero-vector rules of cm_greg_cross */
-static cm_err fit_kh(cm_vec3 A, cm_vec3 c, cm_vec3 b, double eps_len, double *k, double *h, cm_status *st)
+cm_err cm_greg_fit_kh(cm_vec3 A, cm_vec3 c, cm_vec3 b, double eps_len, double *k, double *h, cm_status *st)
 {
     *k = 0.0;
     *h = 0.0;
@@ -77,9 +76,9 @@ cm_err cm_greg_cross(const cm_cubic *c, cm_vec3 As, cm_vec3 Ae, cm_vec3 b0, cm_v
     cm_vec3 c0 = cm_sub(c->c[1], c->c[0]), c1 = cm_sub(c->c[2], c->c[1]), c2 = cm_sub(c->c[3], c->c[2]);
     double k0, h0, k1, h1;
     cm_err e;
-    if ((e = fit_kh(As, c0, b0, eps_len, &k0, &h0, st)) != CM_OK)
+    if ((e = cm_greg_fit_kh(As, c0, b0, eps_len, &k0, &h0, st)) != CM_OK)
         return e;
-    if ((e = fit_kh(Ae, c2, b3, eps_len, &k1, &h1, st)) != CM_OK)
+    if ((e = cm_greg_fit_kh(Ae, c2, b3, eps_len, &k1, &h1, st)) != CM_OK)
         return e;
     cm_vec3 A1 = cm_scale(cm_add(cm_scale(As, 2.0), Ae), 1.0 / 3.0);
     cm_vec3 A2 = cm_scale(cm_add(As, cm_scale(Ae, 2.0)), 1.0 / 3.0);
@@ -271,10 +270,11 @@ static cm_err split_mid(const cm_greg_input *in, split_ws *w, cm_status *st)
     return CM_OK;
 }
 
-static cm_err split_centre(const cm_greg_input *in, split_ws *w, cm_greg_surface *out, cm_status *st)
+cm_err cm_greg_spoke_centre(int n, const cm_vec3 *Mk, const cm_vec3 *T, const cm_vec3 *nmid, const cm_vec3 *V,
+                            const cm_vec3 *corner_normal, double eps, cm_vec3 *U, cm_greg_surface *out,
+                            cm_status *st)
 {
-    int n = in->n;
-    double eps = in->eps_len, r;
+    double r;
     switch (n) {
     case 3: r = CM_GREG_SPOKE_R3; break;
     case 5: r = CM_GREG_SPOKE_R5; break;
@@ -283,25 +283,25 @@ static cm_err split_centre(const cm_greg_input *in, split_ws *w, cm_greg_surface
     }
     cm_vec3 sum = zero3, nsum = zero3;
     for (int k = 0; k < n; k++) {
-        cm_vec3 M = w->ha[k].c[3], O, tau;
+        cm_vec3 M = Mk[k], O, tau;
         if ((n & 1) == 0) {
             int o = (k + n / 2) % n;
-            O = w->ha[o].c[3];
-            tau = cm_neg(w->T[o]);
+            O = Mk[o];
+            tau = cm_neg(T[o]);
         } else {
             int vj = (k + (n + 1) / 2) % n;
-            O = in->side[vj].c.c[0];
+            O = V[vj];
             cm_vec3 d;
-            if (!unit_chk(reject(cm_sub(M, O), in->corner_normal[vj]), eps, &d))
+            if (!unit_chk(reject(cm_sub(M, O), corner_normal[vj]), eps, &d))
                 return degenerate(st, "gregface: short spoke projection");
             tau = cm_neg(d);
         }
-        double l = cm_greg_arc_handle(M, w->T[k], O, tau);
-        cm_cubic spoke = {{M, cm_axpy(M, l, w->T[k]), cm_axpy(O, -l, tau), O}};
+        double l = cm_greg_arc_handle(M, T[k], O, tau);
+        cm_cubic spoke = {{M, cm_axpy(M, l, T[k]), cm_axpy(O, -l, tau), O}};
         cm_vec3 d[3];
         cm_cubic_eval(&spoke, r, d);
         sum = cm_add(sum, d[0]);
-        nsum = cm_add(nsum, w->nmid[k]);
+        nsum = cm_add(nsum, nmid[k]);
     }
     cm_vec3 C = cm_scale(sum, 1.0 / (double)n), nC;
     if (!unit_chk(nsum, CM_GREG_EPS_DIR, &nC))
@@ -309,14 +309,24 @@ static cm_err split_centre(const cm_greg_input *in, split_ws *w, cm_greg_surface
     out->centre = C;
     out->centre_normal = nC;
     for (int k = 0; k < n; k++) {
-        cm_vec3 M = w->ha[k].c[3], d = cm_sub(M, C);
-        if (!(cm_norm(d) > eps) || !unit_chk(reject(d, nC), eps, &w->U[k]))
+        cm_vec3 M = Mk[k], d = cm_sub(M, C);
+        if (!(cm_norm(d) > eps) || !unit_chk(reject(d, nC), eps, &U[k]))
             return degenerate(st, "gregface: internal curve too short");
-        double l = cm_greg_arc_handle(M, w->T[k], C, cm_neg(w->U[k]));
-        cm_cubic I = {{M, cm_axpy(M, l, w->T[k]), cm_axpy(C, l, w->U[k]), C}};
+        double l = cm_greg_arc_handle(M, T[k], C, cm_neg(U[k]));
+        cm_cubic I = {{M, cm_axpy(M, l, T[k]), cm_axpy(C, l, U[k]), C}};
         out->inner[k] = I;
     }
     return CM_OK;
+}
+
+static cm_err split_centre(const cm_greg_input *in, split_ws *w, cm_greg_surface *out, cm_status *st)
+{
+    cm_vec3 M[CM_MAX_SIDES], V[CM_MAX_SIDES];
+    for (int k = 0; k < in->n; k++) {
+        M[k] = w->ha[k].c[3];
+        V[k] = in->side[k].c.c[0];
+    }
+    return cm_greg_spoke_centre(in->n, M, w->T, w->nmid, V, in->corner_normal, in->eps_len, w->U, out, st);
 }
 
 static cm_err split_patches(const cm_greg_input *in, const split_ws *w, cm_greg_surface *out, cm_status *st)
@@ -432,7 +442,7 @@ double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, 
     int bk = -1;
     int np = s->npatch < CM_MAX_GREG ? s->npatch : CM_MAX_GREG;
     for (int k = 0; k < np; k++) {
-        cm_patch pa = cm_patch_of_gregory(&s->g[k]);
+        cm_patch pa = s->exact ? cm_patch_of_egreg(&s->e[k]) : cm_patch_of_gregory(&s->g[k]);
         double pu, pv, d;
         if (cm_patch_project(&pa, p, &pu, &pv, &d, NULL) != CM_OK)
             continue; /* cannot happen for a Gregory patch */
@@ -452,17 +462,23 @@ double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, 
     return best;
 }
 
-void cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv)
+cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv)
 {
-    if (k < 0 || k >= s->npatch || k >= CM_MAX_GREG) {
-        *S = zero3;
-        if (Su)
-            *Su = zero3;
-        if (Sv)
-            *Sv = zero3;
-        return;
+    cm_err e = CM_OK;
+    if (k >= 0 && k < s->npatch && k < CM_MAX_GREG) {
+        if (!s->exact) {
+            cm_greg_eval(&s->g[k], u, v, S, Su, Sv);
+            return CM_OK;
+        }
+        if ((e = cm_egreg_eval(&s->e[k], u, v, S, Su, Sv, NULL)) == CM_OK)
+            return CM_OK;
     }
-    cm_greg_eval(&s->g[k], u, v, S, Su, Sv);
+    *S = zero3;
+    if (Su)
+        *Su = zero3;
+    if (Sv)
+        *Sv = zero3;
+    return e;
 }
 
 #define FNV_OFFSET 2166136261u
@@ -486,10 +502,48 @@ static uint32_t fnv_vec(uint32_t h, cm_vec3 p)
     return fnv_double(h, p.z);
 }
 
+/* an exact patch: per side its kind, edge, range, cubic, fan and cross data, then the corner data
+   (the curve itself is the model's, checked by the CRCs; its number says which) */
+static uint32_t egreg_checksum(uint32_t h, const cm_egreg *g)
+{
+    for (int k = 0; k < 4; k++) {
+        const cm_egreg_side *sd = &g->side[k];
+        h = fnv_double(h, (double)sd->kind);
+        h = fnv_double(h, (double)sd->edge);
+        h = fnv_double(h, sd->t0);
+        h = fnv_double(h, sd->t1);
+        for (int i = 0; i < 4 && sd->kind == CM_EGREG_SIDE_CUBIC; i++)
+            h = fnv_vec(h, sd->cub.c[i]); /* an edge side's union holds pointers: not hashed */
+        h = fnv_double(h, (double)sd->fan);
+        h = fnv_vec(h, sd->As);
+        h = fnv_vec(h, sd->Ae);
+        h = fnv_double(h, sd->k0);
+        h = fnv_double(h, sd->h0);
+        h = fnv_double(h, sd->k1);
+        h = fnv_double(h, sd->h1);
+        for (int i = 0; i < 4; i++)
+            h = fnv_vec(h, sd->fx[i]);
+    }
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            h = fnv_vec(h, g->M[i][j]);
+    for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2; b++) {
+            h = fnv_vec(h, g->tw_a[a][b]);
+            h = fnv_vec(h, g->tw_b[a][b]);
+        }
+    return h;
+}
+
 uint32_t cm_greg_surface_checksum(const cm_greg_surface *s)
 {
     uint32_t h = FNV_OFFSET;
     int np = s->npatch < CM_MAX_GREG ? s->npatch : CM_MAX_GREG;
+    if (s->exact) {
+        for (int k = 0; k < np; k++)
+            h = egreg_checksum(h, &s->e[k]);
+        return h;
+    }
     for (int k = 0; k < np; k++) {
         const cm_gregory *g = &s->g[k];
         for (int i = 0; i < 4; i++)

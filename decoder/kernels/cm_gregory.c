@@ -5,14 +5,7 @@
 
 #include "cm/cm_bezier.h"
 
-/*
- * One interior blend X = (a*A + b*B)/(a+b) with a, b affine in (u,v):
- * a = a0 + au*u + av*v, b likewise.  Writes X and its partials.  If a+b is
- * exactly 0 (a patch corner) X is the mean of A and B and the partials are
- * 0: the Bernstein weight and its derivative vanish there, so the value is
- * immaterial and the limit of the product is 0.
- */
-static void blend(cm_vec3 A, cm_vec3 B, double a, double b, double a_u, double a_v, double b_u, double b_v,
+void cm_greg_blend(cm_vec3 A, cm_vec3 B, double a, double b, double a_u, double a_v, double b_u, double b_v,
                   cm_vec3 *X, cm_vec3 *X_u, cm_vec3 *X_v)
 {
     double den = a + b;
@@ -46,10 +39,10 @@ void cm_greg_eval(const cm_gregory *g, double u, double v, cm_vec3 *S, cm_vec3 *
             Pu[i][j] = Pv[i][j] = cm_v3(0, 0, 0);
         }
     /* weights of P_ij0 (a) and P_ij1 (b) with their (u,v) gradients */
-    blend(g->I[0][0][0], g->I[0][0][1], u, v, 1, 0, 0, 1, &P[1][1], &Pu[1][1], &Pv[1][1]);
-    blend(g->I[0][1][0], g->I[0][1][1], u, 1.0 - v, 1, 0, 0, -1, &P[1][2], &Pu[1][2], &Pv[1][2]);
-    blend(g->I[1][0][0], g->I[1][0][1], 1.0 - u, v, -1, 0, 0, 1, &P[2][1], &Pu[2][1], &Pv[2][1]);
-    blend(g->I[1][1][0], g->I[1][1][1], 1.0 - u, 1.0 - v, -1, 0, 0, -1, &P[2][2], &Pu[2][2], &Pv[2][2]);
+    cm_greg_blend(g->I[0][0][0], g->I[0][0][1], u, v, 1, 0, 0, 1, &P[1][1], &Pu[1][1], &Pv[1][1]);
+    cm_greg_blend(g->I[0][1][0], g->I[0][1][1], u, 1.0 - v, 1, 0, 0, -1, &P[1][2], &Pu[1][2], &Pv[1][2]);
+    cm_greg_blend(g->I[1][0][0], g->I[1][0][1], 1.0 - u, v, -1, 0, 0, 1, &P[2][1], &Pu[2][1], &Pv[2][1]);
+    cm_greg_blend(g->I[1][1][0], g->I[1][1][1], 1.0 - u, 1.0 - v, -1, 0, 0, -1, &P[2][2], &Pu[2][2], &Pv[2][2]);
 
     double Bu[4], dBu[4], Bv[4], dBv[4];
     cm_bernstein3(u, Bu, dBu);

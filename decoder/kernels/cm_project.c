@@ -28,6 +28,7 @@ cm_patch cm_patch_of_surf(const cm_surf *s)
     p.kind = CM_PATCH_NURBS;
     p.nurbs = s;
     p.greg = NULL;
+    p.egreg = NULL;
     p.u0 = s->U[s->p];
     p.u1 = s->U[s->nu];
     p.v0 = s->V[s->q];
@@ -41,10 +42,19 @@ cm_patch cm_patch_of_gregory(const cm_gregory *g)
     p.kind = CM_PATCH_GREGORY;
     p.nurbs = NULL;
     p.greg = g;
+    p.egreg = NULL;
     p.u0 = 0.0;
     p.u1 = 1.0;
     p.v0 = 0.0;
     p.v1 = 1.0;
+    return p;
+}
+
+cm_patch cm_patch_of_egreg(const cm_egreg *g)
+{
+    cm_patch p = cm_patch_of_gregory(NULL);
+    p.kind = CM_PATCH_EGREG;
+    p.egreg = g;
     return p;
 }
 
@@ -73,6 +83,8 @@ cm_err cm_patch_eval(const cm_patch *s, double u, double v, cm_vec3 d[3], cm_sta
     case CM_PATCH_GREGORY:
         cm_greg_eval(s->greg, u, v, &d[0], &d[1], &d[2]);
         return CM_OK;
+    case CM_PATCH_EGREG:
+        return cm_egreg_eval(s->egreg, u, v, &d[0], &d[1], &d[2], st);
     }
     return cm_fail(st, CM_E_ARG, __func__);
 }

@@ -3,8 +3,10 @@
 
 #include <stddef.h>
 
-/* spec §14: PLANE first (exact and free when it applies), then the GREGORY family, KEEP last */
-const cm_method *const cm_method_table[CM_METHOD_COUNT] = {&cm_method_plane, &cm_method_gregory, &cm_method_keep};
+/* spec §14: PLANE first (exact and free when it applies), then the GREGORY family (the cubic patches
+   first: files that do without the exact ones stay readable by format 2.0), KEEP last */
+const cm_method *const cm_method_table[CM_METHOD_COUNT] = {&cm_method_plane, &cm_method_gregory,
+                                                           &cm_method_gregory_exact, &cm_method_keep};
 
 const cm_method *cm_method_of(unsigned id)
 {
@@ -26,6 +28,7 @@ cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
+    case CM_METHOD_GREGORY_EXACT:
         return cm_gregory_read_record(ac, ctx, F, why);
     default:
         return CM_OK;
@@ -36,6 +39,7 @@ void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx,
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
+    case CM_METHOD_GREGORY_EXACT:
         cm_gregory_write_record(ac, ctx, F);
         break;
     default:
@@ -47,6 +51,7 @@ cm_err cm_method_check_loops(const cm_method *M, const cm_model *m, const cm_fac
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
+    case CM_METHOD_GREGORY_EXACT:
         return cm_gregory_check_loops(m, F, why);
     default:
         return CM_OK;
@@ -57,6 +62,7 @@ int cm_method_needs_midpoints(const cm_method *M, const cm_face *F)
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
+    case CM_METHOD_GREGORY_EXACT:
         return cm_gregory_needs_midpoints(F);
     default:
         return 0;
@@ -73,6 +79,8 @@ cm_err cm_method_rebuild(const cm_method *M, const cm_model *m, uint32_t f, int 
         return cm_plane_rebuild(m, f, check, n, n_outer, out, ws, st);
     case CM_METHOD_GREGORY:
         return cm_gregory_rebuild(m, f, check, n, n_outer, out, ws, st);
+    case CM_METHOD_GREGORY_EXACT:
+        return cm_gregory_exact_rebuild(m, f, check, out, ws, st);
     default:
         return cm_fail(st, CM_E_UNSUPPORTED, "face method");
     }
@@ -82,6 +90,7 @@ void cm_method_needs(const cm_method *M, const cm_model *m, const cm_face *F, ui
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
+    case CM_METHOD_GREGORY_EXACT:
         cm_gregory_needs(m, F, need);
         break;
     default:

@@ -77,7 +77,7 @@ cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n
     (void)n;
     (void)n_outer;
     const cm_face *F = &m->faces[f];
-    cm_err e = cm_greg_input_build(m, f, &ws->gin, &ws->corner, st);
+    cm_err e = cm_greg_input_build(m, f, 0, &ws->gin, &ws->corner, st);
     if (e != CM_OK)
         return e;
     if ((e = cm_greg_build(&ws->gin, F->layout, F->corner, &ws->greg, st)) != CM_OK)

@@ -55,8 +55,14 @@ cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *samples, double *b
     return CM_OK;
 }
 
-/* N_geo at the corner between uses `in` and `out` (spec 5.3), turned to nF; 0 where undefined */
-static int geo_normal(const cm_model *m, const cm_use *in, const cm_use *out, cm_vec3 nF, double eps, cm_vec3 *N)
+/*
+ * N_geo at the corner between uses `in` and `out` (spec 5.3), turned to nF; 0 where undefined.
+ * nF NULL: as the loop's direction makes it (GREGORY-EXACT: a loop runs counter-clockwise about
+ * its face's outward normal, so at a convex corner this is that normal, however far it turns
+ * from the face's mean normal on a half cylinder; turning it to nF there is a coin toss).
+ */
+static int geo_normal(const cm_model *m, const cm_use *in, const cm_use *out, const cm_vec3 *nF, double eps,
+                      cm_vec3 *N)
 {
     cm_vec3 ta, tb;
     if (!use_tangent(m, in, 1, eps, &ta) || !use_tangent(m, out, 0, eps, &tb))
@@ -65,13 +71,14 @@ static int geo_normal(const cm_model *m, const cm_use *in, const cm_use *out, cm
     if (!(cm_norm(c) >= CM_SIN_FLAT))
         return 0;
     *N = cm_unit(c);
-    if (cm_dot(*N, nF) < 0)
+    if (nF && cm_dot(*N, *nF) < 0)
         *N = cm_neg(*N);
     return 1;
 }
 
 /* the partner's corner at vertex v next to edge e (as its incoming or outgoing use): N_geo(G, v) */
-static int partner_geo(const cm_model *m, uint32_t g, uint32_t e, int32_t v, cm_vec3 nG, double eps, cm_vec3 *N)
+static int partner_geo(const cm_model *m, uint32_t g, uint32_t e, int32_t v, const cm_vec3 *nG, double eps,
+                       cm_vec3 *N)
 {
     const cm_face *G = &m->faces[g];
     for (uint32_t l = 0; l < G->nloops; l++) {
@@ -93,17 +100,19 @@ typedef struct corner_ctx {
     cm_vec3 nF;
     double eps;
     cm_vec3 *scratch; /* samples for partner normals */
+    int exact;        /* GREGORY-EXACT: normals as the loops orient them, never turned (geo_normal) */
 } corner_ctx;
 
 static cm_err partner_normal(const corner_ctx *c, uint32_t g, double *bbox_g, cm_vec3 *nG, cm_status *st)
 {
     cm_err e = cm_face_normal(c->m, g, c->scratch, bbox_g, nG, st);
-    if (e == CM_OK && cm_dot(*nG, c->nF) < 0)
+    if (e == CM_OK && !c->exact && cm_dot(*nG, c->nF) < 0)
         *nG = cm_neg(*nG); /* sign-matched to n_F (spec 5.3 (i), 5.4) */
     return e;
 }
 
-cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_corner_ws *ws, cm_status *st)
+cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_input *in, cm_corner_ws *ws,
+                           cm_status *st)
 {
     const cm_face *F = &m->faces[f];
     const cm_loop *L = &m->loops[F->loop0];
@@ -118,14 +127,15 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
         return e;
     in->n = n;
     in->eps_len = CM_EPS_LEN_REL * bbox;
-    corner_ctx c = {m, in->nF, in->eps_len, ws->scratch};
+    corner_ctx c = {m, in->nF, in->eps_len, ws->scratch, exact};
+    const cm_vec3 *turn = exact ? NULL : &in->nF; /* what corner normals are turned to */
     /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */
     for (int k = 0; k < n; k++) {
         const cm_use *uin = &m->uses[L->use0 + (uint32_t)((k + n - 1) % n)], *uout = &m->uses[L->use0 + (uint32_t)k];
         const cm_edge *Ei = &m->edges[uin->edge];
         int32_t v = uin->rev ? Ei->v0 : Ei->v1;
         ws->vert[k] = v;
-        ws->has_geo[k] = geo_normal(m, uin, uout, in->nF, c.eps, &ws->geo[k]);
+        ws->has_geo[k] = geo_normal(m, uin, uout, turn, c.eps, &ws->geo[k]);
         in->corner_normal[k] = ws->geo[k];
         if (ws->has_geo[k])
             continue;
@@ -140,8 +150,8 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
             cm_vec3 nG, Ng;
             if ((e = partner_normal(&c, (uint32_t)g, &bg, &nG, st)) != CM_OK)
                 return e;
-            if (partner_geo(m, (uint32_t)g, U->edge, v, nG, CM_EPS_LEN_REL * bg, &Ng)) {
-                in->corner_normal[k] = cm_dot(Ng, in->nF) < 0 ? cm_neg(Ng) : Ng;
+            if (partner_geo(m, (uint32_t)g, U->edge, v, exact ? NULL : &nG, CM_EPS_LEN_REL * bg, &Ng)) {
+                in->corner_normal[k] = !exact && cm_dot(Ng, in->nF) < 0 ? cm_neg(Ng) : Ng;
                 break;
             }
         }
@@ -151,11 +161,14 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
         const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
         cm_curve cv;
         cm_model_edge_curve(m, U->edge, &cv);
-        cm_cubic cub;
-        if ((e = cm_cubic_convert(&cv, 0.0, 1.0, &cub, NULL, NULL, st)) != CM_OK)
+        cm_cubic cub = {{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}};
+        if (!exact && (e = cm_cubic_convert(&cv, 0.0, 1.0, &cub, NULL, NULL, st)) != CM_OK)
             return e;
         cm_greg_side *S = &in->side[k];
         S->c = U->rev ? cm_cubic_reverse(&cub) : cub;
+        S->curve = cv;
+        S->edge = U->edge;
+        S->rev = U->rev != 0;
         int k1 = (k + 1) % n;
         S->Ns = in->corner_normal[k];
         S->Ne = in->corner_normal[k1];
@@ -170,7 +183,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_
         for (int end = 0; end < 2; end++) {
             int kv = end ? k1 : k;
             cm_vec3 Ng, N;
-            int has_g = partner_geo(m, (uint32_t)g, U->edge, ws->vert[kv], nG, CM_EPS_LEN_REL * bg, &Ng);
+            int has_g = partner_geo(m, (uint32_t)g, U->edge, ws->vert[kv], exact ? NULL : &nG, CM_EPS_LEN_REL * bg, &Ng);
             if (ws->has_geo[kv] && has_g)
                 N = cm_unit(cm_add(ws->geo[kv], Ng));
             else if (ws->has_geo[kv])

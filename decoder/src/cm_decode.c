@@ -562,7 +562,8 @@ static cm_err sec_face(reader *r)
         if (!M)
             return rfail(r, CM_E_UNSUPPORTED, "face method");
         /* a method newer than the file's format version is a malformed file, not a newer one */
-        if (r->d->version_major < M->since_major)
+        if (r->d->version_major < M->since_major ||
+            (r->d->version_major == M->since_major && r->d->version_minor < M->since_minor))
             return rfail(r, CM_E_UNSUPPORTED, M->too_new);
         F->method = (uint8_t)meth;
         F->layout = F->corner = 0;

@@ -327,13 +327,14 @@ static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist,
  * at a 0.117 mm tolerance (Open CASCADE measured); sixteen bring every corpus face within it. */
 #define TESS_REFINE_ROUNDS 16
 
-/* what a face's (u,v) means: the plane's frame, a kept NURBS, or one Gregory patch */
+/* what a face's (u,v) means: the plane's frame, a kept NURBS, or one patch of a GREGORY-family face */
 enum { CHART_FRAME, CHART_NURBS, CHART_GREGORY };
 typedef struct chart {
     int kind;
     const cm_psurf *ps;     /* KEEP */
     const cm_frame *frame;  /* PLANE */
-    const cm_gregory *g;    /* GREGORY */
+    const cm_greg_surface *gs; /* GREGORY family: the patches ... */
+    int patch;              /* ... and which */
     double sign;            /* the face normal is sign * (Su x Sv) */
 } chart;
 
@@ -343,7 +344,9 @@ static cm_err chart_eval(const chart *c, double u, double v, cm_vec3 d[3], cm_st
     if (c->kind == CHART_NURBS)
         return cm_psurf_eval(c->ps, u, v, d, st);
     if (c->kind == CHART_GREGORY) {
-        cm_greg_eval(c->g, u, v, &d[0], &d[1], &d[2]);
+        cm_err e = cm_greg_surface_eval(c->gs, c->patch, u, v, &d[0], &d[1], &d[2]);
+        if (e != CM_OK)
+            return cm_fail(st, e, "Gregory patch");
         return cm_finite3(d[0]) ? CM_OK : cm_fail(st, CM_E_NONFINITE, "Gregory patch");
     }
     d[0] = cm_frame_world(c->frame, cm_v3(u, v, 0));
@@ -659,10 +662,10 @@ static cm_err add_use(cm_tess_ws *ws, int *k, int use, int a, int b, double u0, 
 }
 
 /* one Gregory patch whose boundary polygon is in ws->uv/src [0, npts): triangulate, refine, emit */
-static cm_err tess_patch(const cm_gregory *g, cm_tess_ws *ws, int npts, int side_n[4], double tol, cm_mesh *mesh,
+static cm_err tess_patch(const cm_greg_surface *gs, int patch, cm_tess_ws *ws, int npts, int side_n[4], double tol, cm_mesh *mesh,
                          cm_tess_info *info, cm_status *st)
 {
-    chart c = {CHART_GREGORY, NULL, NULL, g, 1.0};
+    chart c = {CHART_GREGORY, NULL, NULL, gs, patch, 1.0};
     cm_err e;
     ws->loop_start[0] = 0;
     ws->loop_start[1] = npts;
@@ -742,7 +745,7 @@ static cm_err tess_gregory(const cm_model *m, uint32_t f, const cm_greg_surface 
             if (e == CM_OK)
                 e = add_bnd(ws, &k, 0.0, 1.0, ws->use_first[j], st);
         }
-        return e != CM_OK ? e : tess_patch(&gs->g[0], ws, k, sn, tol, mesh, info, st);
+        return e != CM_OK ? e : tess_patch(gs, 0, ws, k, sn, tol, mesh, info, st);
     }
     /* N-split: internal curve I_i sampled once (s = q/m, q = 1..m-1, after the face's edge samples in
        bpts), its start M_i being edge i's own sample at t = 1/2 and its end the centre, one point */
@@ -783,7 +786,7 @@ static cm_err tess_gregory(const cm_model *m, uint32_t f, const cm_greg_surface 
         sn[2] = im[p];
         sn[3] = np - np / 2;
         if (e == CM_OK)
-            e = tess_patch(&gs->g[i], ws, k, sn, tol, mesh, info, st);
+            e = tess_patch(gs, i, ws, k, sn, tol, mesh, info, st);
     }
     return e;
 }
@@ -814,7 +817,7 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     int npts = 0, nloops = (int)F->nloops;
     cm_psurf ps;
     int keep = rb.repr == CM_REPR_NURBS;
-    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, rb.sign};
+    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign};
     if (keep) {
         if ((e = cm_psurf_init(&ps, &rb.surf, 1e-9 * rb.bbox, st)) != CM_OK)
             return e;

@@ -79,6 +79,8 @@ int cmd_encode(int argc, char **argv)
             i++;
         } else if (strcmp(a, "--no-gregory") == 0) {
             o.gregory = 0;
+        } else if (strcmp(a, "--no-gregory-exact") == 0) {
+            o.gregory_exact = 0;
         } else if (strcmp(a, "--strict") == 0) {
             o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {

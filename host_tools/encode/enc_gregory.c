@@ -1,4 +1,5 @@
-/* enc_gregory.c - the encoder's half of GREGORY (spec §6; decoder/methods/gregory.c). */
+/* enc_gregory.c - the encoder's half of GREGORY (spec §6; decoder/methods/gregory.c) and of
+   GREGORY-EXACT (the same layouts over the exact edges; decoder/methods/gregory_exact.c). */
 #include "enc_method.h"
 
 #include <math.h>
@@ -11,14 +12,28 @@
 /* the K7 acceptance of spec 6 */
 #define K7_ACCEPT 0.25
 
+/* unit tangent of use U at its start or end (at_end), in the face's direction, from the edge itself */
+static int use_tangent(const cm_model *m, const cm_use *U, int at_end, cm_vec3 *t)
+{
+    cm_curve c;
+    cm_model_edge_curve(m, U->edge, &c);
+    cm_vec3 d[2];
+    double s = (at_end != 0) != (U->rev != 0) ? 1.0 : 0.0;
+    if (cm_curve_eval(&c, s, 1, d, NULL) != CM_OK || !(cm_norm(d[1]) > 0))
+        return 0;
+    *t = U->rev ? cm_neg(cm_unit(d[1])) : cm_unit(d[1]);
+    return 1;
+}
+
 /*
  * Spec §6 applicability of GREGORY for face f: an outer loop of 3..CM_MAX_SIDES edges, each
- * cubic-convertible within a quarter of the tolerance (K7), no reflex corner.  This version also
+ * cubic-convertible within a quarter of the tolerance (K7; not asked by GREGORY-EXACT, whose
+ * patches take the edges as they are), no reflex corner.  This version also
  * asks for no holes: the rebuilt patches cover the outer loop, and a terminal would have to trim
  * them by the holes' projections (left to the fitting methods).  Fills the corner angles' cosines
  * for the layout-2 order.  Returns 0 (and why, in rep->why) when not applicable.
  */
-static int gregory_applicable(enc_work *w, int f, double tol, double *corner_cos, face_report *rep)
+static int gregory_applicable(enc_work *w, int f, double tol, int exact, double *corner_cos, face_report *rep)
 {
     const cm_model *m = &w->dec.model;
     const cm_face *F = &m->faces[f];
@@ -33,7 +48,15 @@ static int gregory_applicable(enc_work *w, int f, double tol, double *corner_cos
         return 0;
     }
     cm_cubic cub[CM_MAX_SIDES];
-    for (int k = 0; k < n; k++) {
+    cm_vec3 t_in[CM_MAX_SIDES], t_out[CM_MAX_SIDES]; /* unit tangents at the end and start of side k */
+    for (int k = 0; k < n && exact; k++) {
+        const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
+        if (!use_tangent(m, U, 1, &t_in[k]) || !use_tangent(m, U, 0, &t_out[k])) {
+            rep->why = "degenerate edge";
+            return 0;
+        }
+    }
+    for (int k = 0; k < n && !exact; k++) {
         const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
         cm_curve c;
         cm_model_edge_curve(m, U->edge, &c);
@@ -53,14 +76,17 @@ static int gregory_applicable(enc_work *w, int f, double tol, double *corner_cos
     }
     for (int k = 0; k < n; k++) {
         const cm_cubic *in = &cub[(k + n - 1) % n], *out = &cub[k];
-        cm_vec3 ta = cm_sub(in->c[3], in->c[2]), tb = cm_sub(out->c[1], out->c[0]);
+        cm_vec3 ta = exact ? t_in[(k + n - 1) % n] : cm_sub(in->c[3], in->c[2]);
+        cm_vec3 tb = exact ? t_out[k] : cm_sub(out->c[1], out->c[0]);
         if (!(cm_norm(ta) > 0) || !(cm_norm(tb) > 0)) {
             rep->why = "degenerate edge";
             return 0;
         }
         cm_vec3 a = cm_neg(cm_unit(ta)), b = cm_unit(tb), x = cm_cross(b, a);
         corner_cos[k] = cm_dot(a, b);
-        if (cm_norm(x) >= CM_SIN_FLAT && cm_dot(x, nF) <= 0) {
+        /* GREGORY-EXACT: a corner square to n_F (a half cylinder's) is not reflex; only one clearly
+           turned against it (its patch would face inwards there; corner normals are not turned) */
+        if (cm_norm(x) >= CM_SIN_FLAT && (exact ? cm_dot(cm_unit(x), nF) < -0.5 : cm_dot(x, nF) <= 0)) {
             rep->why = "reflex corner";
             return 0;
         }
@@ -68,16 +94,16 @@ static int gregory_applicable(enc_work *w, int f, double tol, double *corner_cos
     return 1;
 }
 
-/* spec §14 candidate list of the GREGORY family; the first that passes §12 wins */
-static int try_gregory(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
-                       face_surface *fs)
+/* spec §14 candidate list of the GREGORY family (method: GREGORY or GREGORY-EXACT); the first that
+   passes §12 wins */
+static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
+                      face_surface *fs, int method)
 {
     enc_work *w = t->w;
     double ccos[CM_MAX_SIDES];
-    if (!o->gregory)
-        return 0;
+    int exact = method == CM_METHOD_GREGORY_EXACT;
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
-    if (!gregory_applicable(w, f, tol, ccos, rep))
+    if (!gregory_applicable(w, f, tol, exact, ccos, rep))
         return 0;
     int n = (int)w->dec.model.loops[w->dec.model.faces[f].loop0].nuse;
     int cand_layout[4], cand_j[4], nc = 0;
@@ -105,7 +131,7 @@ static int try_gregory(tx *t, const loaded_model *lm, int f, const encode_opts *
     double best_ratio = HUGE_VAL;
     for (int c = 0; c < nc; c++) {
         cm_rebuilt rb;
-        if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY, cand_layout[c], cand_j[c], &rb) != CM_OK) {
+        if (enc_trial_rebuild(w, f, method, cand_layout[c], cand_j[c], &rb) != CM_OK) {
             rep->why = "construction failed";
             continue;
         }
@@ -138,4 +164,17 @@ static int try_gregory(tx *t, const loaded_model *lm, int f, const encode_opts *
     return 0;
 }
 
+static int try_gregory(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
+                       face_surface *fs)
+{
+    return o->gregory && try_family(t, lm, f, o, rep, fs, CM_METHOD_GREGORY);
+}
+
+static int try_gregory_exact(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
+                             face_surface *fs)
+{
+    return o->gregory && o->gregory_exact && try_family(t, lm, f, o, rep, fs, CM_METHOD_GREGORY_EXACT);
+}
+
 const enc_method enc_method_gregory = {CM_METHOD_GREGORY, try_gregory, NULL};
+const enc_method enc_method_gregory_exact = {CM_METHOD_GREGORY_EXACT, try_gregory_exact, NULL};

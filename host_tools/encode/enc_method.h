@@ -24,7 +24,7 @@ typedef struct enc_method {
     void (*measure_kept)(enc_work *w, const loaded_model *lm, int f, face_report *rep);
 } enc_method;
 
-extern const enc_method enc_method_plane, enc_method_gregory, enc_method_keep;
+extern const enc_method enc_method_plane, enc_method_gregory, enc_method_gregory_exact, enc_method_keep;
 
 /** Rebuild face f of the decoded model with a trial record (decoder code, no checksum check). */
 cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, cm_rebuilt *rb);

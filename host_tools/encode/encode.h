@@ -40,6 +40,7 @@ typedef struct encode_opts {
     double abs_tol;              /* > 0: a face's tolerance in mm (with rel_tol too when rel_set) */
     int rel_set;                 /* rel_tol was asked for (with abs_tol the smaller one applies) */
     int gregory;                 /* try GREGORY (spec §6) on non-planar faces (default 1) */
+    int gregory_exact;           /* then GREGORY-EXACT (with gregory; default 1) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;

@@ -232,14 +232,17 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
         e = cm_fail(st, CM_E_NOSPACE, "file larger than 2 GiB");
     if (e == CM_OK) {
         /* the oldest version that can say it: format 1 readers still load files of format 1's methods */
-        int major = 1;
+        int major = 1, minor = 0;
         for (int f = 0; f < t->nfaces; f++) {
-            int since = cm_method_of((unsigned)t->method[f])->since_major;
-            major = since > major ? since : major;
+            const cm_method *M = cm_method_of((unsigned)t->method[f]);
+            if (M->since_major > major || (M->since_major == major && M->since_minor > minor)) {
+                major = M->since_major;
+                minor = M->since_minor;
+            }
         }
         cm_fmt_header h = {0};
         h.major = (uint8_t)major;
-        h.minor = major == CM_FMT_VERSION_MAJOR ? CM_FMT_VERSION_MINOR : 0;
+        h.minor = (uint8_t)minor;
         h.flags = (uint16_t)(t->npalette ? 1 : 0);
         h.header_len = (uint32_t)H;
         h.file_len = (uint32_t)total;

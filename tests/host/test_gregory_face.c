@@ -2,7 +2,8 @@
  * test_gregory_face.c - GREGORY faces through the whole product: synthetic
  * IGES -> encoder (decision flow, §12, §13) -> .cmz -> the terminal's
  * decoder (checksum) -> triangles.  Spec §17 T4 and T5 on real records,
- * the fallback to KEEP, the checksum check and the watertight mesh.
+ * the fallback to KEEP, the checksum check and the watertight mesh; and
+ * GREGORY-EXACT, the same layouts over the exact edges, where K7 refuses.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "../unit/test_util.h"
@@ -47,13 +48,15 @@ static void load_split_cylinder(loaded_model *lm)
     assert_int_equal(lm->mesh.nfaces, 2);
 }
 
+/* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT (the default) */
 static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_result *r)
 {
     encode_opts o;
     encode_opts_default(&o);
     o.rel_tol = rel_tol;
     o.rel_set = 1;
-    o.gregory = gregory;
+    o.gregory = gregory & 1;
+    o.gregory_exact = (gregory & 2) != 0;
     cm_status st;
     cm_status_init(&st);
     memset(r, 0, sizeof *r);
@@ -227,6 +230,96 @@ static void test_gregory_falls_back_to_keep(void **state)
     model_free(&lm);
 }
 
+/* recompute the header's and the file's CRCs after a header byte was changed on purpose */
+static void reseal(encode_result *r)
+{
+    uint32_t H = cm_get_u32(r->bytes + CM_HDR_LENGTH);
+    cm_put_u32(r->bytes + H - 4, cm_crc32(r->bytes, H - 4));
+    cm_put_u32(r->bytes + r->len - 4, cm_crc32(r->bytes, r->len - 4));
+}
+
+/*
+ * The split cylinder at 1e-5 of its size, where K7 refuses its arcs (above): GREGORY-EXACT takes
+ * the quarter circles as they are, and a surface linear along its axis between two arcs comes back
+ * exactly: every mesh vertex on the cylinder within the grid, the faces G1 along the shared line,
+ * each face's checksum verified by the terminal's rebuild, a format 2.1 file that a 2.0 reader
+ * refuses by name.
+ */
+static void test_gregory_exact_cylinder(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    load_split_cylinder(&lm);
+    encode_with(&lm, 1e-5, 3, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 0);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 2);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 0);
+    for (int f = 0; f < 2; f++) {
+        assert_int_equal(r.faces[f].layout, CM_GREG_LAYOUT_QUAD);
+        if (!(r.faces[f].ratio < 1e-5))
+            fail_msg("face %d: %.3g of its size off the cylinder", f, r.faces[f].ratio);
+    }
+    decode(&r);
+    const cm_model *m = &dec.model;
+    assert_int_equal(dec.buf[CM_HDR_MAJOR], 2);
+    assert_int_equal(dec.buf[CM_HDR_MINOR], 1);
+    cm_rebuilt rb[2];
+    cm_status st;
+    cm_status_init(&st);
+    for (int f = 0; f < 2; f++) {
+        assert_ok(cm_rebuild_face(m, (uint32_t)f, &rb[f], &rbws[f], &st)); /* the checksum matches */
+        assert_int_equal(rb[f].method, CM_METHOD_GREGORY_EXACT);
+        assert_int_equal(rb[f].greg->exact, 1);
+    }
+    /* G1 along the shared line: normals agree within 1e-6 deg (the cross derivatives of both faces
+       lie in span(A, B') of the same edge) */
+    int shared = -1;
+    for (uint32_t e = 0; e < m->nedges; e++)
+        if (m->edge_face[e][0] >= 0 && m->edge_face[e][1] >= 0)
+            shared = (int)e;
+    assert_true(shared >= 0);
+    cm_curve c;
+    cm_model_edge_curve(m, (uint32_t)shared, &c);
+    for (int k = 1; k <= 9; k++) {
+        cm_vec3 P[1];
+        assert_ok(cm_curve_eval(&c, k / 10.0, 0, P, &st));
+        double cs = fabs(cm_dot(greg_normal(rb[0].greg, P[0]), greg_normal(rb[1].greg, P[0])));
+        if (!(cs >= cos(1e-6 * M_PI / 180)))
+            fail_msg("normals differ by %.3g deg along the shared edge", acos(cs) * 180 / M_PI);
+    }
+    /* the patches themselves: points of a 9 x 9 grid on the cylinder within the grid step */
+    double q = m->q;
+    for (int f = 0; f < 2; f++)
+        for (int i = 0; i <= 8; i++)
+            for (int j = 0; j <= 8; j++) {
+                cm_vec3 S;
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, i / 8.0, j / 8.0, &S, NULL, NULL));
+                assert_near(hypot(S.x, S.y), CR, 4 * q);
+            }
+    /* the mesh: closed along the shared line, every vertex on the cylinder */
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64};
+    cm_mesh_clear(&mesh);
+    for (uint32_t f = 0; f < m->nfaces; f++)
+        assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));
+    for (uint32_t i = 0; i < mesh.nverts; i++)
+        assert_near(hypot((double)pos[i][0], (double)pos[i][1]), CR, 4 * q + 1e-5);
+    /* a corrupted record: refused by checksum */
+    dec.model.faces[1].checksum ^= 1u;
+    cm_status_init(&st);
+    assert_int_equal(cm_rebuild_face(&dec.model, 1, &rb[1], &rbws[1], &st), CM_E_CHECKSUM);
+    /* a 2.0 reader's view: the same file claiming 2.0 is refused at the face, by name */
+    r.bytes[CM_HDR_MINOR] = 0;
+    reseal(&r);
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    assert_ok(cm_dec_feed(&dec, r.bytes, r.len, &st));
+    assert_int_equal(cm_dec_finish(&dec, &st), CM_E_UNSUPPORTED);
+    assert_string_equal(st.where, "GREGORY-EXACT face in a file older than format 2.1");
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 /* a format-1 reader's view: a GREGORY method in a version-1 file is refused, not guessed */
 static void test_gregory_needs_format_2(void **state)
 {
@@ -269,6 +362,7 @@ int main(void)
         cmocka_unit_test(test_split_cylinder_gregory),
         cmocka_unit_test(test_gregory_falls_back_to_keep),
         cmocka_unit_test(test_gregory_needs_format_2),
+        cmocka_unit_test(test_gregory_exact_cylinder),
     };
     return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
 }

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 2     /* what this writer emits when a face needs it (GREGORY) */
-#define CM_FMT_VERSION_MINOR 0
+#define CM_FMT_VERSION_MINOR 1     /* 1: GREGORY-EXACT */
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
@@ -99,7 +99,8 @@ enum cm_fmt_method {
     CM_METHOD_KEEP = 0,   /* the original surface travels in the SURF section */
     CM_METHOD_PLANE = 1,  /* spec 5A: rebuilt from the boundary */
     CM_METHOD_GREGORY = 2, /* spec §6: Gregory patches from the boundary curves (format 2) */
-    CM_METHOD_COUNT = 3   /* methods this version knows */
+    CM_METHOD_GREGORY_EXACT = 3, /* GREGORY's layouts over the exact edges (format 2.1) */
+    CM_METHOD_COUNT = 4   /* methods this version knows */
 };
 
 enum cm_fmt_edge_kind {

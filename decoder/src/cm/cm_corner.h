@@ -31,10 +31,13 @@ CM_NODISCARD cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *sampl
  * cubics in the face's direction, basis normals, corner normals, n_F and
  * EPS_LEN (1e-12 of the face's bbox).  Hints (spec 15.3) are not part of
  * this format version: a flat corner with no G1 partner takes n_F.
+ * Each side also names its edge and curve (for cm_egreg_build).  `exact` 1
+ * (GREGORY-EXACT): no K7 cubics (left zero), and corner and partner normals
+ * as the loops orient them, never turned to n_F (see geo_normal).
  * @return CM_E_UNSUPPORTED for fewer than 3 sides, CM_E_LIMIT above
  *         CM_MAX_SIDES, errors of K7
  */
-CM_NODISCARD cm_err cm_greg_input_build(const cm_model *m, uint32_t f, cm_greg_input *in, cm_corner_ws *ws,
+CM_NODISCARD cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_input *in, cm_corner_ws *ws,
                                         cm_status *st);
 
 #endif /* CM_CORNER_H */

@@ -54,6 +54,8 @@
 #include <stdint.h>
 
 #include "cm/cm_bezier.h"
+#include "cm/cm_bspline.h"
+#include "cm/cm_egreg.h"
 #include "cm/cm_error.h"
 #include "cm/cm_gregory.h"
 #include "cm/cm_vec.h"
@@ -79,7 +81,10 @@ enum { CM_GREG_LAYOUT_QUAD = 0, CM_GREG_LAYOUT_SPLIT = 1, CM_GREG_LAYOUT_DEGEN =
  * V_k -> V_{k+1}.
  */
 typedef struct cm_greg_side {
-    cm_cubic c;     /* the K7 cubic of the edge, in face direction */
+    cm_cubic c;     /* the K7 cubic of the edge, in face direction (zero when not asked for) */
+    cm_curve curve; /* the edge's own curve (into the model) in its stored direction */
+    uint32_t edge;  /* its number */
+    int rev;        /* 1: the face runs it from t = 1 to t = 0 */
     cm_vec3 Ns, Ne; /* basis normals at its start and end vertex (spec 5.4; the caller applies the G1 symmetric rule) */
 } cm_greg_side;
 
@@ -102,7 +107,11 @@ typedef struct cm_greg_surface {
     int n;                       /* sides of the face */
     int npatch;                  /* 1 (layouts 0, 2) or n (layout 1) */
     double t_split;              /* layout 1: CM_GREG_SPLIT_T; else 0 */
-    cm_gregory g[CM_MAX_GREG];
+    int exact;                   /* 1: the patches are e[] (cm_egreg_build), 0: g[] (cm_greg_build) */
+    union {                      /* one or the other: a board's decoder state holds one surface */
+        cm_gregory g[CM_MAX_GREG];
+        cm_egreg e[CM_MAX_GREG]; /* exact: the patches over the edges themselves (same layouts) */
+    };
     cm_cubic inner[CM_MAX_SIDES]; /* layout 1: I_k, M_k -> C (inner[k].c[0] = M_k) */
     cm_vec3 centre;              /* layout 1: C */
     cm_vec3 centre_normal;       /* layout 1: n_C (spec 6.4 step 2) */
@@ -152,6 +161,31 @@ CM_NODISCARD cm_err cm_greg_cross(const cm_cubic *c, cm_vec3 As, cm_vec3 Ae, cm_
 CM_NODISCARD cm_err cm_greg_quad(const cm_greg_quad_side s[4], int skip_side3, double eps_len, cm_gregory *g,
                                  cm_status *st);
 
+/**
+ * (k,h) = argmin |b - k A - h c|^2 (spec 6.2): b <= eps_len long gives k = h = 0; c <= eps_len long
+ * gives h = 0, k = A.b/|A|^2.  CM_E_DEGENERATE for a zero A or c (nearly) along A.
+ */
+CM_NODISCARD cm_err cm_greg_fit_kh(cm_vec3 A, cm_vec3 c, cm_vec3 b, double eps_len, double *k, double *h,
+                                   cm_status *st);
+
+/**
+ * Spec 6.4 steps 2-3, shared by both constructions: the centre C (spoke rule) and its normal n_C
+ * into out->centre and out->centre_normal, the internal cubics I_k into out->inner, and U_k.
+ * M[k]: the midpoint of side k; T[k], nmid[k]: the unit mid cross vector and mid normal; V[k]: the
+ * start vertex of side k; corner_normal[k]: N(F, V_k).
+ */
+CM_NODISCARD cm_err cm_greg_spoke_centre(int n, const cm_vec3 *M, const cm_vec3 *T, const cm_vec3 *nmid,
+                                         const cm_vec3 *V, const cm_vec3 *corner_normal, double eps,
+                                         cm_vec3 *U, cm_greg_surface *out, cm_status *st);
+
+/**
+ * The same layouts over the exact edges (cm_egreg.h): sides from in->side[k].curve/edge/rev, the
+ * basis normals Ns, Ne, the corner normals and nF as for cm_greg_build (the cubics are not used).
+ * Same return codes as cm_greg_build.
+ */
+CM_NODISCARD cm_err cm_egreg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface *out,
+                                   cm_status *st);
+
 /** arc_handle of spec 6.4: (2/3)|Q-P| / (1 + sqrt((1 + clamp(t0.t1,-1,1))/2)). */
 double cm_greg_arc_handle(cm_vec3 P, cm_vec3 t0, cm_vec3 Q, cm_vec3 t1);
 
@@ -181,8 +215,9 @@ CM_NODISCARD cm_err cm_greg_build(const cm_greg_input *in, int layout, int j, cm
 double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, double *u, double *v);
 
 /** Evaluate patch k at (u,v) (clamped to [0,1]^2): point and first partials (Su, Sv may be NULL).
- *  A k outside 0..npatch-1 gives zero vectors. */
-void cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv);
+ *  A k outside 0..npatch-1 gives zero vectors; an exact patch may fail (CM_E_NONFINITE, curve errors;
+ *  the vectors are then zero too). */
+cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv);
 
 /** FNV-1a 32 of the rebuilt control data (order: top of this file; spec §2 rule 6). */
 uint32_t cm_greg_surface_checksum(const cm_greg_surface *s);

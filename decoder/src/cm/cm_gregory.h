@@ -30,4 +30,15 @@ typedef struct cm_gregory {
  */
 void cm_greg_eval(const cm_gregory *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv);
 
+/**
+ * One interior blend X = (a*A + b*B)/(a+b) with a, b affine in (u,v) and the
+ * gradients a_u, a_v, b_u, b_v.  Writes X and its partials.  If a+b is
+ * exactly 0 (a patch corner) X is the mean of A and B and the partials are
+ * 0: the weight of X and its derivative vanish there, so the value is
+ * immaterial and the limit of the product is 0.  (Also the compatibility-
+ * corrected twists of the exact-boundary patch, cm_egreg.h.)
+ */
+void cm_greg_blend(cm_vec3 A, cm_vec3 B, double a, double b, double a_u, double a_v, double b_u, double b_v,
+                   cm_vec3 *X, cm_vec3 *X_u, cm_vec3 *X_v);
+
 #endif /* CM_GREGORY_H */

@@ -35,7 +35,8 @@ typedef struct cm_method {
     const char *name;     /* "plane": reports, --report, cmz eval */
     const char *counted;  /* the word after its count in summaries: "plane", "kept" */
     uint8_t id;           /* CM_METHOD_*: the number on the wire */
-    uint8_t since_major;  /* the first format major version that carries it */
+    uint8_t since_major;  /* the first format version that carries it: major ... */
+    uint8_t since_minor;  /* ... and minor */
     uint8_t kept_surface; /* its surface travels in SURF (one per such face, in face order) */
     uint8_t has_record;   /* fields follow the method number in the FACE section */
     uint8_t layouts;      /* layouts its record chooses from (0: none): reports print the face's */
@@ -85,6 +86,6 @@ const cm_method *cm_method_of(unsigned id);
 /** Its name, "?" for an unknown number (reports only). */
 const char *cm_method_name(unsigned id);
 
-extern const cm_method cm_method_keep, cm_method_plane, cm_method_gregory;
+extern const cm_method cm_method_keep, cm_method_plane, cm_method_gregory, cm_method_gregory_exact;
 
 #endif /* CM_METHOD_H */

@@ -11,19 +11,22 @@
 #define CM_PROJECT_H
 
 #include "cm/cm_bspline.h"
+#include "cm/cm_egreg.h"
 #include "cm/cm_error.h"
 #include "cm/cm_gregory.h"
 #include "cm/cm_vec.h"
 
 typedef enum cm_patch_kind {
     CM_PATCH_NURBS = 0,  /* cm_surf */
-    CM_PATCH_GREGORY = 1 /* cm_gregory on [0,1]^2 */
+    CM_PATCH_GREGORY = 1, /* cm_gregory on [0,1]^2 */
+    CM_PATCH_EGREG = 2    /* cm_egreg (exact boundaries) on [0,1]^2 */
 } cm_patch_kind;
 
 typedef struct cm_patch {
     cm_patch_kind kind;
     const cm_surf *nurbs;     /* kind == CM_PATCH_NURBS */
     const cm_gregory *greg;   /* kind == CM_PATCH_GREGORY */
+    const cm_egreg *egreg;    /* kind == CM_PATCH_EGREG */
     double u0, u1, v0, v1;    /* parameter rectangle */
 } cm_patch;
 
@@ -32,6 +35,9 @@ cm_patch cm_patch_of_surf(const cm_surf *s);
 
 /** View of a Gregory patch over [0,1]^2. */
 cm_patch cm_patch_of_gregory(const cm_gregory *g);
+
+/** View of an exact-boundary Gregory patch over [0,1]^2. */
+cm_patch cm_patch_of_egreg(const cm_egreg *g);
 
 /**
  * Point and first partials of a patch at (u,v) (clamped to the rectangle).

@@ -1,0 +1,178 @@
+/* cm_egreg.c - the Gregory patch over exact boundaries (cm_egreg.h). */
+#include "cm/cm_egreg.h"
+
+#include <stddef.h>
+
+#include "cm/cm_gregory.h"
+
+static const cm_vec3 zero3 = {0.0, 0.0, 0.0};
+
+static double clamp01(double s)
+{
+    if (!(s > 0.0))
+        return 0.0;
+    return s > 1.0 ? 1.0 : s;
+}
+
+cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_vec3 x[2], cm_status *st)
+{
+    cm_vec3 q[3];
+    s = clamp01(s);
+    if (sd->kind == CM_EGREG_SIDE_EDGE) {
+        double dt = sd->t1 - sd->t0;
+        cm_err e = cm_curve_eval(&sd->curve, sd->t0 + dt * s, 2, q, st);
+        if (e != CM_OK)
+            return e;
+        q[1] = cm_scale(q[1], dt);
+        q[2] = cm_scale(q[2], dt * dt);
+    } else {
+        cm_cubic_eval(&sd->cub, s, q);
+    }
+    if (d) {
+        d[0] = q[0];
+        d[1] = q[1];
+        d[2] = q[2];
+    }
+    if (!x)
+        return CM_OK;
+    if (sd->fan) {
+        double B[4], dB[4];
+        cm_bernstein3(s, B, dB);
+        x[0] = x[1] = zero3;
+        for (int i = 0; i < 4; i++) {
+            x[0] = cm_axpy(x[0], B[i], sd->fx[i]);
+            x[1] = cm_axpy(x[1], dB[i], sd->fx[i]);
+        }
+        return CM_OK;
+    }
+    /* X = k A + h B', X' = k' A + k A' + h' B' + h B'' (k, h, A linear in s) */
+    double dk = sd->k1 - sd->k0, dh = sd->h1 - sd->h0;
+    double k = sd->k0 + dk * s, h = sd->h0 + dh * s;
+    cm_vec3 dA = cm_sub(sd->Ae, sd->As);
+    cm_vec3 A = cm_axpy(sd->As, s, dA);
+    x[0] = cm_add(cm_scale(A, k), cm_scale(q[1], h));
+    cm_vec3 xd = cm_scale(A, dk);
+    xd = cm_axpy(xd, k, dA);
+    xd = cm_axpy(xd, dh, q[1]);
+    x[1] = cm_axpy(xd, h, q[2]);
+    return CM_OK;
+}
+
+cm_err cm_egreg_finish(cm_egreg *g, cm_status *st)
+{
+    cm_vec3 d[4][2][3], x[4][2][2]; /* side, end (s = 0, 1) */
+    for (int k = 0; k < 4; k++)
+        for (int end = 0; end < 2; end++) {
+            cm_err e = cm_egreg_side_eval(&g->side[k], (double)end, d[k][end], x[k][end], st);
+            if (e != CM_OK)
+                return e;
+        }
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            g->M[i][j] = zero3;
+    /* corners: (0,0) starts side 0, (1,0) side 1, (1,1) side 2, (0,1) side 3 */
+    g->M[0][0] = d[0][0][0];
+    g->M[3][0] = d[1][0][0];
+    g->M[3][3] = d[2][0][0];
+    g->M[0][3] = d[3][0][0];
+    /* the cross derivatives at the corners: t0 = X0(u), t2 = -X2(1-u), s0 = X3(1-v), s1 = -X1(v) */
+    g->M[0][1] = x[0][0][0];
+    g->M[3][1] = x[0][1][0];
+    g->M[0][2] = cm_neg(x[2][1][0]);
+    g->M[3][2] = cm_neg(x[2][0][0]);
+    g->M[1][0] = x[3][1][0];
+    g->M[1][3] = x[3][0][0];
+    g->M[2][0] = cm_neg(x[1][0][0]);
+    g->M[2][3] = cm_neg(x[1][1][0]);
+    /* twists: s0' = -X3'(1-v), s1' = -X1'(v) along the u-sides; t0' = X0'(u), t2' = X2'(1-u) */
+    g->tw_a[0][0] = cm_neg(x[3][1][1]);
+    g->tw_a[0][1] = cm_neg(x[3][0][1]);
+    g->tw_a[1][0] = cm_neg(x[1][0][1]);
+    g->tw_a[1][1] = cm_neg(x[1][1][1]);
+    g->tw_b[0][0] = x[0][0][1];
+    g->tw_b[1][0] = x[0][1][1];
+    g->tw_b[0][1] = x[2][1][1];
+    g->tw_b[1][1] = x[2][0][1];
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            if (!cm_finite3(g->M[i][j]))
+                return cm_fail(st, CM_E_NONFINITE, "exact Gregory patch: corner data");
+    for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2; b++)
+            if (!cm_finite3(g->tw_a[a][b]) || !cm_finite3(g->tw_b[a][b]))
+                return cm_fail(st, CM_E_NONFINITE, "exact Gregory patch: twist");
+    return CM_OK;
+}
+
+/* cubic Hermite basis (position at 0, derivative at 0, derivative at 1, position at 1) and its derivative */
+static void hermite(double s, double H[4], double dH[4])
+{
+    double s2 = s * s, s3 = s2 * s;
+    H[0] = 1.0 - 3.0 * s2 + 2.0 * s3;
+    H[1] = s - 2.0 * s2 + s3;
+    H[2] = s3 - s2;
+    H[3] = 3.0 * s2 - 2.0 * s3;
+    dH[0] = 6.0 * s2 - 6.0 * s;
+    dH[1] = 1.0 - 4.0 * s + 3.0 * s2;
+    dH[2] = 3.0 * s2 - 2.0 * s;
+    dH[3] = 6.0 * s - 6.0 * s2;
+}
+
+cm_err cm_egreg_eval(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv, cm_status *st)
+{
+    u = clamp01(u);
+    v = clamp01(v);
+    cm_vec3 d[4][3], x[4][2];
+    static const int at_u[4] = {1, 0, 1, 0}; /* sides 0, 2 run with u; 1, 3 with v */
+    static const int backwards[4] = {0, 0, 1, 1};
+    for (int k = 0; k < 4; k++) {
+        double s = at_u[k] ? u : v;
+        cm_err e = cm_egreg_side_eval(&g->side[k], backwards[k] ? 1.0 - s : s, d[k], x[k], st);
+        if (e != CM_OK)
+            return e;
+    }
+    /* the v-boundaries as functions of u, the u-boundaries as functions of v, with their derivatives */
+    cm_vec3 B[4] = {d[0][0], x[0][0], cm_neg(x[2][0]), d[2][0]};
+    cm_vec3 dB[4] = {d[0][1], x[0][1], x[2][1], cm_neg(d[2][1])};
+    cm_vec3 A[4] = {d[3][0], x[3][0], cm_neg(x[1][0]), d[1][0]};
+    cm_vec3 dA[4] = {cm_neg(d[3][1]), cm_neg(x[3][1]), cm_neg(x[1][1]), d[1][1]};
+    cm_vec3 M[4][4], Mu[4][4], Mv[4][4];
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            M[i][j] = g->M[i][j];
+            Mu[i][j] = Mv[i][j] = zero3;
+        }
+    cm_greg_blend(g->tw_a[0][0], g->tw_b[0][0], u, v, 1, 0, 0, 1, &M[1][1], &Mu[1][1], &Mv[1][1]);
+    cm_greg_blend(g->tw_a[0][1], g->tw_b[0][1], u, 1.0 - v, 1, 0, 0, -1, &M[1][2], &Mu[1][2], &Mv[1][2]);
+    cm_greg_blend(g->tw_a[1][0], g->tw_b[1][0], 1.0 - u, v, -1, 0, 0, 1, &M[2][1], &Mu[2][1], &Mv[2][1]);
+    cm_greg_blend(g->tw_a[1][1], g->tw_b[1][1], 1.0 - u, 1.0 - v, -1, 0, 0, -1, &M[2][2], &Mu[2][2], &Mv[2][2]);
+    double Hu[4], dHu[4], Hv[4], dHv[4];
+    hermite(u, Hu, dHu);
+    hermite(v, Hv, dHv);
+    cm_vec3 s = zero3, su = zero3, sv = zero3;
+    for (int i = 0; i < 4; i++) {
+        s = cm_axpy(s, Hu[i], A[i]);
+        su = cm_axpy(su, dHu[i], A[i]);
+        sv = cm_axpy(sv, Hu[i], dA[i]);
+    }
+    for (int j = 0; j < 4; j++) {
+        s = cm_axpy(s, Hv[j], B[j]);
+        su = cm_axpy(su, Hv[j], dB[j]);
+        sv = cm_axpy(sv, dHv[j], B[j]);
+    }
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            double w = Hu[i] * Hv[j];
+            s = cm_axpy(s, -w, M[i][j]);
+            su = cm_axpy(cm_axpy(su, -dHu[i] * Hv[j], M[i][j]), -w, Mu[i][j]);
+            sv = cm_axpy(cm_axpy(sv, -Hu[i] * dHv[j], M[i][j]), -w, Mv[i][j]);
+        }
+    if (!cm_finite3(s) || !cm_finite3(su) || !cm_finite3(sv))
+        return cm_fail(st, CM_E_NONFINITE, "exact Gregory patch");
+    *S = s;
+    if (Su)
+        *Su = su;
+    if (Sv)
+        *Sv = sv;
+    return CM_OK;
+}

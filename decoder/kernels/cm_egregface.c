@@ -1,0 +1,320 @@
+/*
+ * cm_egregface.c - GREGORY's layouts (spec 6.3-6.5) over the exact edges:
+ * the same corner normals, bases, N-split centre and internal curves as
+ * cm_gregface.c, but every side on the face's loop is the edge itself (or
+ * its half, for the N-split) and the patches are cm_egreg (cm_egreg.h).
+ * The cross derivative along a side is k(s) A(s) + h(s) B'(s) with the
+ * edge's own tangent B', fitted at the ends to the neighbouring sides'
+ * tangents (cm_greg_fit_kh, spec 6.2 in Hermite scale).
+ */
+#include "cm/cm_gregface.h"
+
+#include <stddef.h>
+#include <string.h>
+
+#include "cm/cm_limits_info.h"
+
+static const cm_vec3 zero3 = {0.0, 0.0, 0.0};
+
+static int unit_chk(cm_vec3 v, double eps, cm_vec3 *out)
+{
+    int ok;
+    cm_vec3 r = cm_unit_or(v, eps, zero3, &ok);
+    if (ok)
+        *out = r;
+    return ok;
+}
+
+static cm_err degenerate(cm_status *st, const char *where)
+{
+    return cm_fail(st, CM_E_DEGENERATE, where);
+}
+
+/* side k of the loop, or the part [a, b] of it (fractions of the use, in the face's direction) */
+static void edge_side(const cm_greg_side *gs, double a, double b, cm_egreg_side *out)
+{
+    memset(out, 0, sizeof *out);
+    out->kind = CM_EGREG_SIDE_EDGE;
+    out->edge = gs->edge;
+    out->curve = gs->curve;
+    out->t0 = gs->rev ? 1.0 - a : a;
+    out->t1 = gs->rev ? 1.0 - b : b;
+}
+
+static void cubic_side(const cm_cubic *c, cm_egreg_side *out)
+{
+    memset(out, 0, sizeof *out);
+    out->kind = CM_EGREG_SIDE_CUBIC;
+    out->cub = *c;
+}
+
+/* point and first two derivatives of a side at s */
+static cm_err side_at(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_status *st)
+{
+    return cm_egreg_side_eval(sd, s, d, NULL, st);
+}
+
+/* spec 5.4 on the exact side: A_s = unit(N_s x B'(0)), A_e = unit(N_e x B'(1)) */
+static cm_err side_basis(const cm_egreg_side *sd, cm_vec3 Ns, cm_vec3 Ne, double eps, cm_vec3 *As, cm_vec3 *Ae,
+                         cm_status *st)
+{
+    cm_vec3 d0[3], d1[3], ts, te;
+    cm_err e;
+    if ((e = side_at(sd, 0.0, d0, st)) != CM_OK || (e = side_at(sd, 1.0, d1, st)) != CM_OK)
+        return e;
+    if (!unit_chk(d0[1], eps, &ts) || !unit_chk(d1[1], eps, &te))
+        return degenerate(st, "egregface: zero end tangent");
+    if (!unit_chk(cm_cross(Ns, ts), CM_GREG_EPS_DIR, As) || !unit_chk(cm_cross(Ne, te), CM_GREG_EPS_DIR, Ae))
+        return degenerate(st, "egregface: basis normal parallel to the edge");
+    return CM_OK;
+}
+
+/*
+ * A patch from four sides whose kinds, ranges and bases (or fan) are set: the cross derivatives
+ * fitted at each side's ends to the neighbouring sides' tangents leaving that corner, the corner
+ * data, and the orientation check.  Spec 6.3 compares the normal at (1/2,1/2) with n_F; on a face
+ * that turns half a circle or more (a half or full cylinder) that normal is square to n_F or
+ * opposite it.  Here the patch must face the way of the normal N[c] at each of its corners
+ * (0,0), (1,0), (1,1), (0,1), a tenth of the way in: a patch folded over near a corner fails.
+ */
+static cm_err finish_patch(cm_egreg *g, const cm_vec3 N[4], double eps, cm_status *st)
+{
+    cm_vec3 d[4][2][3];
+    for (int k = 0; k < 4; k++)
+        for (int end = 0; end < 2; end++) {
+            cm_err e = side_at(&g->side[k], (double)end, d[k][end], st);
+            if (e != CM_OK)
+                return e;
+        }
+    for (int k = 0; k < 4; k++) {
+        cm_egreg_side *sd = &g->side[k];
+        if (sd->fan)
+            continue;
+        cm_vec3 b0 = cm_neg(d[(k + 3) & 3][1][1]), b3 = d[(k + 1) & 3][0][1];
+        cm_err e = cm_greg_fit_kh(sd->As, d[k][0][1], b0, eps, &sd->k0, &sd->h0, st);
+        if (e == CM_OK)
+            e = cm_greg_fit_kh(sd->Ae, d[k][1][1], b3, eps, &sd->k1, &sd->h1, st);
+        if (e != CM_OK)
+            return e;
+    }
+    cm_err e = cm_egreg_finish(g, st);
+    if (e != CM_OK)
+        return e;
+    static const double cu[4] = {0.1, 0.9, 0.9, 0.1}, cv[4] = {0.1, 0.1, 0.9, 0.9};
+    for (int c = 0; c < 4; c++) {
+        cm_vec3 S, Su, Sv;
+        if ((e = cm_egreg_eval(g, cu[c], cv[c], &S, &Su, &Sv, st)) != CM_OK)
+            return e;
+        if (!(cm_dot(cm_cross(Su, Sv), N[c]) > 0.0))
+            return degenerate(st, "egregface: orientation check");
+    }
+    return CM_OK;
+}
+
+/* ---- layout 0: the four edges ---- */
+static cm_err build_quad(const cm_greg_input *in, cm_greg_surface *out, cm_status *st)
+{
+    cm_egreg *g = &out->e[0];
+    for (int k = 0; k < 4; k++) {
+        cm_egreg_side *sd = &g->side[k];
+        edge_side(&in->side[k], 0.0, 1.0, sd);
+        cm_err e = side_basis(sd, in->side[k].Ns, in->side[k].Ne, in->eps_len, &sd->As, &sd->Ae, st);
+        if (e != CM_OK)
+            return e;
+    }
+    out->npatch = 1;
+    cm_vec3 N[4] = {in->corner_normal[0], in->corner_normal[1], in->corner_normal[2], in->corner_normal[3]};
+    return finish_patch(g, N, in->eps_len, st);
+}
+
+/* ---- layout 2: collapsed at V_j, the circular fan of spec 6.5 as side 3's cross derivative ---- */
+static cm_err build_degen(const cm_greg_input *in, int j, cm_greg_surface *out, cm_status *st)
+{
+    cm_egreg *g = &out->e[0];
+    double eps = in->eps_len;
+    cm_vec3 d0[3], d2[3];
+    cm_err e;
+    for (int m = 0; m < 3; m++) {
+        const cm_greg_side *gs = &in->side[(j + m) % 3];
+        cm_egreg_side *sd = &g->side[m];
+        edge_side(gs, 0.0, 1.0, sd);
+        if ((e = side_basis(sd, gs->Ns, gs->Ne, eps, &sd->As, &sd->Ae, st)) != CM_OK)
+            return e;
+    }
+    if ((e = side_at(&g->side[0], 0.0, d0, st)) != CM_OK || (e = side_at(&g->side[2], 1.0, d2, st)) != CM_OK)
+        return e;
+    cm_vec3 Vj = d0[0];
+    cm_cubic point = {{Vj, Vj, Vj, Vj}};
+    cubic_side(&point, &g->side[3]);
+    /* S_u(0, v) turns from e0 = S_u(0,0) (side 0's tangent) to e2 = S_u(0,1) (side 2's, reversed) */
+    cm_vec3 e0 = d0[1], e2 = cm_neg(d2[1]), u0, u2;
+    if (!unit_chk(e0, eps, &u0) || !unit_chk(e2, eps, &u2))
+        return degenerate(st, "egregface: zero edge at the collapsed vertex");
+    double gam = cm_dot(u0, u2);
+    cm_vec3 f1, f2;
+    if (gam > 1.0 - 1e-12) {
+        f1 = cm_add(e0, cm_scale(cm_sub(e2, e0), 1.0 / 3.0));
+        f2 = cm_add(e2, cm_scale(cm_sub(e0, e2), 1.0 / 3.0));
+    } else {
+        cm_vec3 w0, w2;
+        if (!unit_chk(cm_sub(u2, cm_scale(u0, gam)), CM_GREG_EPS_DIR, &w0) ||
+            !unit_chk(cm_sub(u0, cm_scale(u2, gam)), CM_GREG_EPS_DIR, &w2))
+            return degenerate(st, "egregface: flat collapsed corner");
+        double kap = (4.0 / 3.0) * sqrt((1.0 - gam) / 2.0) / (1.0 + sqrt((1.0 + gam) / 2.0));
+        f1 = cm_axpy(e0, kap * cm_norm(e0), w0);
+        f2 = cm_axpy(e2, kap * cm_norm(e2), w2);
+    }
+    /* side 3 runs from (0,1) to (0,0): its cross derivative X3(s) = S_u(0, 1-s) */
+    g->side[3].fan = 1;
+    g->side[3].fx[0] = e2;
+    g->side[3].fx[1] = f2;
+    g->side[3].fx[2] = f1;
+    g->side[3].fx[3] = e0;
+    out->npatch = 1;
+    cm_vec3 N[4] = {in->corner_normal[j], in->corner_normal[(j + 1) % 3], in->corner_normal[(j + 2) % 3],
+                    in->corner_normal[j]};
+    return finish_patch(g, N, eps, st);
+}
+
+/* ---- layout 1: N quads around a centre; the loop's sides are halves of the edges ---- */
+typedef struct esplit_ws {
+    cm_egreg_side full[CM_MAX_SIDES];
+    cm_vec3 A0[CM_MAX_SIDES], A1[CM_MAX_SIDES];
+    cm_vec3 M[CM_MAX_SIDES], V[CM_MAX_SIDES], T[CM_MAX_SIDES], nmid[CM_MAX_SIDES], U[CM_MAX_SIDES];
+} esplit_ws;
+
+static cm_err esplit_mid(const cm_greg_input *in, esplit_ws *w, cm_status *st)
+{
+    int n = in->n;
+    double eps = in->eps_len;
+    cm_vec3 d[CM_MAX_SIDES][2][3];
+    cm_err e;
+    for (int k = 0; k < n; k++) {
+        edge_side(&in->side[k], 0.0, 1.0, &w->full[k]);
+        for (int end = 0; end < 2; end++)
+            if ((e = side_at(&w->full[k], (double)end, d[k][end], st)) != CM_OK)
+                return e;
+        w->V[k] = d[k][0][0];
+    }
+    for (int k = 0; k < n; k++) {
+        cm_egreg_side *sd = &w->full[k];
+        if ((e = side_basis(sd, in->side[k].Ns, in->side[k].Ne, eps, &w->A0[k], &w->A1[k], st)) != CM_OK)
+            return e;
+        sd->As = w->A0[k];
+        sd->Ae = w->A1[k];
+        cm_vec3 b0 = cm_neg(d[(k + n - 1) % n][1][1]), b3 = d[(k + 1) % n][0][1];
+        if ((e = cm_greg_fit_kh(sd->As, d[k][0][1], b0, eps, &sd->k0, &sd->h0, st)) != CM_OK ||
+            (e = cm_greg_fit_kh(sd->Ae, d[k][1][1], b3, eps, &sd->k1, &sd->h1, st)) != CM_OK)
+            return e;
+        cm_vec3 m[3], x[2], tmid;
+        if ((e = cm_egreg_side_eval(sd, CM_GREG_SPLIT_T, m, x, st)) != CM_OK)
+            return e;
+        w->M[k] = m[0];
+        if (!unit_chk(m[1], eps, &tmid))
+            return degenerate(st, "egregface: zero mid tangent");
+        if (!unit_chk(x[0], eps, &w->T[k]))
+            return degenerate(st, "egregface: zero mid cross vector");
+        if (!unit_chk(cm_cross(tmid, x[0]), eps, &w->nmid[k]))
+            return degenerate(st, "egregface: mid cross vector along the edge");
+    }
+    return CM_OK;
+}
+
+static cm_err esplit_patches(const cm_greg_input *in, const esplit_ws *w, cm_greg_surface *out, cm_status *st)
+{
+    int n = in->n;
+    cm_vec3 nC = out->centre_normal;
+    for (int k = 0; k < n; k++) {
+        int p = (k + n - 1) % n;
+        cm_egreg *g = &out->e[k];
+        cm_egreg_side *q = g->side;
+        edge_side(&in->side[k], 0.0, CM_GREG_SPLIT_T, &q[0]);
+        q[0].As = w->A0[k];
+        q[0].Ae = cm_scale(cm_add(w->A0[k], w->A1[k]), 0.5);
+        cubic_side(&out->inner[k], &q[1]);
+        if (!unit_chk(cm_cross(w->nmid[k], w->T[k]), CM_GREG_EPS_DIR, &q[1].As) ||
+            !unit_chk(cm_cross(nC, cm_neg(w->U[k])), CM_GREG_EPS_DIR, &q[1].Ae))
+            return degenerate(st, "egregface: internal basis");
+        cm_cubic back = cm_cubic_reverse(&out->inner[p]);
+        cubic_side(&back, &q[2]);
+        if (!unit_chk(cm_cross(nC, w->U[p]), CM_GREG_EPS_DIR, &q[2].As) ||
+            !unit_chk(cm_cross(w->nmid[p], cm_neg(w->T[p])), CM_GREG_EPS_DIR, &q[2].Ae))
+            return degenerate(st, "egregface: internal basis");
+        edge_side(&in->side[p], CM_GREG_SPLIT_T, 1.0, &q[3]);
+        q[3].As = cm_scale(cm_add(w->A0[p], w->A1[p]), 0.5);
+        q[3].Ae = w->A1[p];
+        cm_vec3 N[4] = {in->corner_normal[k], w->nmid[k], nC, w->nmid[p]};
+        cm_err e = finish_patch(g, N, in->eps_len, st);
+        if (e != CM_OK)
+            return e;
+    }
+    out->npatch = n;
+    out->t_split = CM_GREG_SPLIT_T;
+    return CM_OK;
+}
+
+static cm_err build_split(const cm_greg_input *in, cm_greg_surface *out, cm_status *st)
+{
+    esplit_ws w;
+    cm_err e = esplit_mid(in, &w, st);
+    if (e == CM_OK)
+        e = cm_greg_spoke_centre(in->n, w.M, w.T, w.nmid, w.V, in->corner_normal, in->eps_len, w.U, out, st);
+    if (e == CM_OK)
+        e = esplit_patches(in, &w, out, st);
+    return e;
+}
+
+static int input_finite(const cm_greg_input *in)
+{
+    for (int k = 0; k < in->n; k++) {
+        const cm_greg_side *s = &in->side[k];
+        if (!cm_finite3(s->Ns) || !cm_finite3(s->Ne) || !cm_finite3(in->corner_normal[k]))
+            return 0;
+    }
+    return cm_finite3(in->nF);
+}
+
+cm_err cm_egreg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface *out, cm_status *st)
+{
+    if (!in || !out)
+        return cm_fail(st, CM_E_ARG, __func__);
+    memset(out, 0, sizeof *out);
+    out->layout = layout;
+    out->n = in->n;
+    out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
+    out->exact = 1;
+    int n = in->n;
+    if (!(in->eps_len >= 0.0) || !isfinite(in->eps_len))
+        return cm_fail(st, CM_E_ARG, "egregface: eps_len");
+    if (n > CM_MAX_SIDES)
+        return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, "egregface: sides");
+    if (n < 3)
+        return cm_fail(st, CM_E_RANGE, "egregface: fewer than 3 sides");
+    if (layout == CM_GREG_LAYOUT_QUAD && n != 4)
+        return cm_fail(st, CM_E_RANGE, "egregface: layout 0 needs 4 sides");
+    if (layout == CM_GREG_LAYOUT_SPLIT && n > CM_MAX_GREG)
+        return cm_fail_limit(st, CM_LIMIT_MAX_GREG, (uint64_t)n, CM_MAX_GREG, "egregface: N-split patches");
+    if (layout == CM_GREG_LAYOUT_DEGEN && n != 3)
+        return cm_fail(st, CM_E_RANGE, "egregface: layout 2 needs 3 sides");
+    if (layout == CM_GREG_LAYOUT_DEGEN && (j < 0 || j > 2))
+        return cm_fail(st, CM_E_RANGE, "egregface: layout 2 vertex index");
+    if (layout < CM_GREG_LAYOUT_QUAD || layout > CM_GREG_LAYOUT_DEGEN)
+        return cm_fail(st, CM_E_RANGE, "egregface: unknown layout");
+    if (!input_finite(in))
+        return cm_fail(st, CM_E_NONFINITE, "egregface: input");
+    cm_err e;
+    if (layout == CM_GREG_LAYOUT_QUAD)
+        e = build_quad(in, out, st);
+    else if (layout == CM_GREG_LAYOUT_SPLIT)
+        e = build_split(in, out, st);
+    else
+        e = build_degen(in, j, out, st);
+    if (e != CM_OK) {
+        memset(out, 0, sizeof *out);
+        out->layout = layout;
+        out->n = n;
+        out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
+        out->exact = 1;
+    }
+    return e;
+}

@@ -1,0 +1,95 @@
+/*
+ * cm_egreg.h - the Gregory patch over exact boundaries (method GREGORY-EXACT,
+ * docs/METHODS.md): a four-sided patch whose sides are the curve mesh's own
+ * edges (or parts of them, or cubics inside the face), not cubic stand-ins.
+ *
+ * Why: the bicubic Gregory patch (cm_gregory.h, spec §6) needs every edge to
+ * be one cubic within a quarter of the tolerance (K7).  Real models are full
+ * of full and half circles and multi-span B-spline edges: 11314 of 12152
+ * kept faces of a corpus run were kept for that reason alone (issue 13).
+ * This patch interpolates the edges exactly, so no edge blocks it, and it
+ * reproduces a surface that is linear in one direction (cylinder, cone
+ * band, extrusion between two arcs and two lines) exactly.
+ *
+ * The surface is Gregory's compatibility-corrected Coons patch (J. A.
+ * Gregory, "Smooth interpolation without twist constraints", 1974) with
+ * cubic Hermite blending:
+ *
+ *   S = P_u S + P_v S - P_u P_v S
+ *   P_u S = H0(u) a0(v) + H1(u) s0(v) + H2(u) s1(v) + H3(u) a1(v)
+ *   P_v S = H0(v) b0(u) + H1(v) t0(u) + H2(v) t2(u) + H3(v) b2(u)
+ *   P_u P_v S = sum_ij H_i(u) H_j(v) M_ij
+ *
+ * with H0 = 1-3s^2+2s^3, H1 = s-2s^2+s^3, H2 = s^3-s^2, H3 = 3s^2-2s^3, the
+ * boundaries a0 = S(0,.), a1 = S(1,.), b0 = S(.,0), b2 = S(.,1), the cross
+ * derivatives s0 = S_u(0,.), s1 = S_u(1,.), t0 = S_v(.,0), t2 = S_v(.,1),
+ * and in M the corners' points, the cross derivatives at the corners (so
+ * that the boundary points are interpolated exactly even where a cross
+ * derivative does not quite match its neighbour side's tangent) and the
+ * rational twists, e.g. at (0,0): (u s0'(0) + v t0'(0)) / (u + v), whose
+ * value follows the side being approached.
+ *
+ * Sides are given in the loop order of cm_gregory (side 0 v=0 along +u,
+ * side 1 u=1 along +v, side 2 v=1 along -u, side 3 u=0 along -v).  Each side
+ * carries its cross-boundary derivative into the patch, per unit of its own
+ * parameter s in [0,1]: X(s) = k(s) A(s) + h(s) B'(s) with k, h, A linear
+ * (spec 6.2 with the exact tangent B' instead of the cubic's), so two
+ * faces of an edge that use opposite bases have cross derivatives in the
+ * same plane span(A(s), B'(s)) and meet G1; or, on a side collapsed into
+ * a vertex, an explicit cubic (Bezier) cross derivative (the fan of 6.5).
+ *
+ * Contract: pure functions of their inputs; no heap, no VLA, no recursion;
+ * + - * / and comparisons only, fixed orders (spec §2 rules 3-4).
+ */
+#ifndef CM_EGREG_H
+#define CM_EGREG_H
+
+#include <stdint.h>
+
+#include "cm/cm_bezier.h"
+#include "cm/cm_bspline.h"
+#include "cm/cm_error.h"
+#include "cm/cm_vec.h"
+
+enum { CM_EGREG_SIDE_EDGE = 0, CM_EGREG_SIDE_CUBIC = 1 };
+
+/** One side of an exact-boundary patch. */
+typedef struct cm_egreg_side {
+    int kind;           /* CM_EGREG_SIDE_* */
+    uint32_t edge;      /* EDGE: the model edge (checksum only) */
+    double t0, t1;      /* EDGE: B(s) = curve(t0 + (t1 - t0) s); t1 < t0 runs it backwards */
+    union {
+        cm_curve curve; /* EDGE: its curve, points into the model */
+        cm_cubic cub;   /* CUBIC: B(s) = cub(s) */
+    };
+    int fan;            /* 1: X(s) is the Bezier cubic fx[] (a collapsed side), not the basis form */
+    cm_vec3 As, Ae;     /* cross basis at s = 0 and 1, into the patch */
+    double k0, h0, k1, h1; /* k(s) = k0 + (k1-k0)s, h(s) likewise */
+    cm_vec3 fx[4];
+} cm_egreg_side;
+
+/** A patch on [0,1]^2; corner data are filled by cm_egreg_finish(). */
+typedef struct cm_egreg {
+    cm_egreg_side side[4];
+    cm_vec3 M[4][4];       /* corner data (positions, cross derivatives); the twists' places unused */
+    cm_vec3 tw_a[2][2];    /* twist at corner (u=a, v=b) along the u-side: s_a'(b) */
+    cm_vec3 tw_b[2][2];    /* twist at corner (a, b) along the v-side: t_b'(a) */
+} cm_egreg;
+
+/**
+ * Side at s (clamped to [0,1]): d[0] = B, d[1] = B', d[2] = B'' (per unit s),
+ * x[0] = X, x[1] = X' (either array may be NULL).
+ */
+CM_NODISCARD cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_vec3 x[2], cm_status *st);
+
+/** Fill the corner data M, tw_a, tw_b from the four sides (after their cross derivatives are set). */
+CM_NODISCARD cm_err cm_egreg_finish(cm_egreg *g, cm_status *st);
+
+/**
+ * Point and first partials at (u,v), clamped to [0,1]^2 (Su, Sv may be NULL).
+ * CM_E_NONFINITE if the result is not finite; curve errors pass through.
+ */
+CM_NODISCARD cm_err cm_egreg_eval(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv,
+                                  cm_status *st);
+
+#endif /* CM_EGREG_H */
