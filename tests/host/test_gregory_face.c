@@ -288,15 +288,28 @@ static void test_gregory_exact_cylinder(void **state)
         if (!(cs >= cos(1e-6 * M_PI / 180)))
             fail_msg("normals differ by %.3g deg along the shared edge", acos(cs) * 180 / M_PI);
     }
-    /* the patches themselves: points of a 9 x 9 grid on the cylinder within the grid step */
+    /* the patches themselves: points of a 9 x 9 grid on the cylinder within the grid step, and where
+       the cylinder puts them: the ruled surface between one pair of opposite sides (a point slid
+       along the cylinder's axis or round it is on the cylinder, but in the wrong place) */
     double q = m->q;
-    for (int f = 0; f < 2; f++)
+    for (int f = 0; f < 2; f++) {
+        double off[2] = {0, 0}; /* from the ruled surface across v, across u */
         for (int i = 0; i <= 8; i++)
             for (int j = 0; j <= 8; j++) {
-                cm_vec3 S;
-                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, i / 8.0, j / 8.0, &S, NULL, NULL));
+                double u = i / 8.0, v = j / 8.0;
+                cm_vec3 S, b0, b2, a0, a1;
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, u, v, &S, NULL, NULL));
                 assert_near(hypot(S.x, S.y), CR, 4 * q);
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, u, 0, &b0, NULL, NULL));
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, u, 1, &b2, NULL, NULL));
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, 0, v, &a0, NULL, NULL));
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, 1, v, &a1, NULL, NULL));
+                off[0] = fmax(off[0], cm_dist(S, cm_add(cm_scale(b0, 1 - v), cm_scale(b2, v))));
+                off[1] = fmax(off[1], cm_dist(S, cm_add(cm_scale(a0, 1 - u), cm_scale(a1, u))));
             }
+        if (!(fmin(off[0], off[1]) <= 4 * q))
+            fail_msg("face %d: %.3g mm from the ruled surface between its arcs", f, fmin(off[0], off[1]));
+    }
     /* the mesh: closed along the shared line, every vertex on the cylinder */
     cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64};
     cm_mesh_clear(&mesh);
