@@ -59,11 +59,33 @@ static const enc_method *enc_method_of(unsigned id)
     return NULL;
 }
 
+/* spec §14: the methods of the table from row `from` on, the first that passes wins (KEEP always does) */
+static int first_passing(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
+                         face_surface *fs, int from)
+{
+    for (int i = from; i < CM_METHOD_COUNT; i++) {
+        const enc_method *E = enc_method_of(cm_method_table[i]->id);
+        if (E && E->trial && E->trial(t, lm, f, o, rep, fs))
+            return cm_method_table[i]->id;
+    }
+    return CM_METHOD_FALLBACK;
+}
+
+static int table_row(int method)
+{
+    for (int i = 0; i < CM_METHOD_COUNT; i++)
+        if (cm_method_table[i]->id == method)
+            return i;
+    return CM_METHOD_COUNT;
+}
+
 /*
  * Spec §14 steps 3-4 on the decoded model (the transmitted edges): per face PLANE, then the
  * GREGORY candidates, else KEEP; then the G1 fix-point: every G1 edge next to a rebuilt face is
  * checked on the final surfaces (§13), and where it fails the rebuilt face with the larger error
- * goes back to KEEP, until nothing changes (faces only move to KEEP: at most #faces rounds).
+ * moves on to the next method of the table that passes (spec: back to KEEP; a GREGORY face next to
+ * a GREGORY-EXACT one meets it G1 when it too takes its edges as they are), until nothing changes.
+ * Faces only move down the table: at most #faces x #methods rounds.
  */
 static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, cm_status *st)
 {
@@ -87,14 +109,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             rep->why = "rebuilt surface did not tessellate";
             continue;
         }
-        /* spec §14: the methods in the table's order, the first that passes wins */
-        for (int i = 0; i < CM_METHOD_COUNT; i++) {
-            const enc_method *E = enc_method_of(cm_method_table[i]->id);
-            if (E && E->trial && E->trial(t, lm, f, o, rep, fs)) {
-                t->method[f] = cm_method_table[i]->id;
-                break;
-            }
-        }
+        t->method[f] = first_passing(t, lm, f, o, rep, fs, 0);
         if (enc_kept(t->method[f]))
             face_surface_free(&fs[f]);
     }
@@ -112,7 +127,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
     memset(dirty, 1, (size_t)m->nedges + 1);
-    for (int round = 0; round <= nf; round++) {
+    for (int round = 0; round <= nf * CM_METHOD_COUNT; round++) {
         int changed = 0;
         for (int f = 0; f < nf; f++)
             r->faces[f].g1_cos = 1.0;
@@ -139,9 +154,13 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             int pick = enc_kept(t->method[a]) ? b : a;
             if (!enc_kept(t->method[a]) && !enc_kept(t->method[b]))
                 pick = eworse[e] ? b : a;
-            t->method[pick] = CM_METHOD_FALLBACK;
             face_surface_free(&fs[pick]);
-            r->faces[pick].why = "G1";
+            face_report *prep = &r->faces[pick];
+            t->method[pick] = first_passing(t, lm, pick, o, prep, fs, table_row(t->method[pick]) + 1);
+            if (enc_kept(t->method[pick])) {
+                face_surface_free(&fs[pick]);
+                prep->why = "G1";
+            }
             changed = 1;
             /* its edges are measured again next round (this one included: now against a KEEP face) */
             const cm_face *F = &m->faces[pick];

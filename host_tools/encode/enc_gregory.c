@@ -110,6 +110,12 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
     if (n == 4) {
         cand_layout[nc] = CM_GREG_LAYOUT_QUAD;
         cand_j[nc++] = 0;
+        if (exact) {
+            /* four quads around a centre follow a surface that bends between the sides (a fillet's
+               corner, a saddle) where one patch cannot: tried second, it costs nothing in the record */
+            cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
+            cand_j[nc++] = 0;
+        }
     } else {
         cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
         cand_j[nc++] = 0;
