@@ -184,14 +184,16 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_inp
             int kv = end ? k1 : k;
             cm_vec3 Ng, N;
             int has_g = partner_geo(m, (uint32_t)g, U->edge, ws->vert[kv], exact ? NULL : &nG, CM_EPS_LEN_REL * bg, &Ng);
-            if (ws->has_geo[kv] && has_g)
+            if (ws->has_geo[kv] && has_g && !(exact && !(cm_dot(ws->geo[kv], Ng) > 0)))
                 N = cm_unit(cm_add(ws->geo[kv], Ng));
-            else if (ws->has_geo[kv])
+            else if (ws->has_geo[kv]) /* (exact: also where the partner's loop runs against ours) */
                 N = ws->geo[kv];
             else if (has_g)
                 N = Ng;
-            else
+            else if (!exact || cm_dot(in->nF, nG) > 0)
                 N = cm_unit(cm_add(in->nF, nG));
+            else
+                N = in->nF;
             if (end)
                 S->Ne = N;
             else

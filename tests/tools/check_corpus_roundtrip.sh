@@ -65,7 +65,8 @@ one() {
     glb_rc=$?
     ev=$("$cmz" eval -q "$f" "$tmp/m.cmz" 2>&1)
     ev_rc=$?
-    read -r np ng <<<"$(sed -n 's/.* faces (\([0-9]*\) plane, \([0-9]*\) gregory.*/\1 \2/p' "$tmp/enc")"
+    # deleted: every face that does not keep its surface (whatever the methods, the summary ends in "N kept")
+    nk=$(sed -n 's/.* faces (.* \([0-9]*\) kept.*/\1/p' "$tmp/enc")
     get() { sed -n "s/^$1 //p" <<<"$dev"; }
     diag=$(get diag) m2m=$(get mesh_to_model_max) mm2=$(get model_to_mesh_max) defl=$(get model_defl)
     faces=$(sed -n 's/.* -> .*: \([0-9]*\) faces .*/\1/p' "$tmp/enc")
@@ -137,7 +138,7 @@ one() {
             verdict="no per-face result from the oracle"
         fi
     fi
-    share=$(awk -v a="${np:-0}" -v b="${ng:-0}" -v n="${faces:-0}" 'BEGIN { printf "%.1f", (n > 0 ? 100 * (a + b) / n : 0) }')
+    share=$(awk -v k="${nk:-x}" -v n="${faces:-0}" 'BEGIN { printf "%.1f", (n > 0 && k != "x" ? 100 * (n - k) / n : 0) }')
     echo "$share" > "$tmp/share"
     summary="$size bytes, $share % of faces deleted, tess $tess mm, mesh->model ${m2m:-?} model->mesh ${mm2:-?} (rebuild max $rebuild)$worst_face$note"
     if [ $topo_rc -ne 0 ]; then
