@@ -163,6 +163,56 @@ static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
     return rb->repr == CM_REPR_PATCHES ? greg_dist(w, p) : dist_to_plane_patch(&rb->frame, rb->rect, p);
 }
 
+/* points of the source grid kept for the other direction (spec §12 grid: 21 x 21 at most) */
+typedef struct grid_pts {
+    cm_vec2 uv[21 * 21];
+    cm_vec3 xyz[21 * 21];
+    int n;
+} grid_pts;
+
+/*
+ * The other direction, past spec §12 (which measures the source against the rebuilt surface only):
+ * each patch at the 5 x 5 points (i/6, j/6), i, j = 1..5, projected on the source surface from the
+ * nearest source point seen (grid or boundary).  A patch that bulges or folds where no source point
+ * is near it passes §12 and shows wrongly; it fails here.  Returns the largest distance.
+ */
+static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs, const grid_pts *g, double again)
+{
+    double worst = 0;
+    for (int k = 0; k < gs->npatch; k++)
+        for (int i = 1; i <= 5; i++)
+            for (int j = 1; j <= 5; j++) {
+                cm_vec3 S;
+                if (cm_greg_surface_eval(gs, k, i / 6.0, j / 6.0, &S, NULL, NULL) != CM_OK)
+                    return HUGE_VAL;
+                double best = HUGE_VAL, u = 0, v = 0, d;
+                for (int q = 0; q < g->n; q++) {
+                    double dq = cm_norm2(cm_sub(g->xyz[q], S));
+                    if (dq < best) {
+                        best = dq;
+                        u = g->uv[q].x;
+                        v = g->uv[q].y;
+                    }
+                }
+                for (int q = 0; q < fd->npts; q++) {
+                    double dq = cm_finite3(fd->xyz[q]) ? cm_norm2(cm_sub(fd->xyz[q], S)) : HUGE_VAL;
+                    if (dq < best) {
+                        best = dq;
+                        u = fd->uv[q].x;
+                        v = fd->uv[q].y;
+                    }
+                }
+                if (!(best < HUGE_VAL) || cm_psurf_project_from(&fd->ps, S, &u, &v, &d, NULL) != CM_OK)
+                    return HUGE_VAL;
+                double dg, ug, vg;
+                /* a foot stuck in a local minimum only overstates the distance: search again */
+                if (!(d < again) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)
+                    d = dg;
+                worst = d > worst ? d : worst;
+            }
+    return worst;
+}
+
 int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol, face_error *out)
 {
     memset(out, 0, sizeof *out);
@@ -174,6 +224,10 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
     greg_walk w = {rb->greg, tol < HUGE_VAL ? 0.1 * tol : 1e-4 * rb->bbox, 0, 0, 0, 0};
     double sum = 0, worst = 0;
     int n = 0;
+    grid_pts *grid = malloc(sizeof *grid); /* (encodes may run in parallel threads: not static) */
+    if (!grid)
+        return 0;
+    grid->n = 0;
     /* 1-2: the source surface on the 21 x 21 grid, points inside the outer loop, row by row in a
        serpentine so that each point starts from its neighbour's foot */
     for (int i = 0; i <= 20; i++) {
@@ -183,9 +237,13 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
             if (!cm_point_in_polygon(fd->uv + fd->loops[0].first, fd->loops[0].n, uv))
                 continue;
             cm_vec3 P;
-            if (face_domain_eval(&lm->brep, fd, uv.x, uv.y, &P, NULL, NULL) != CM_OK)
+            if (face_domain_eval(&lm->brep, fd, uv.x, uv.y, &P, NULL, NULL) != CM_OK) {
+                free(grid);
                 return 0;
+            }
             double d = face_dist(rb, &w, P);
+            grid->uv[grid->n] = uv;
+            grid->xyz[grid->n++] = P;
             sum += d;
             worst = d > worst ? d : worst;
             n++;
@@ -205,8 +263,10 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
             cm_model_edge_curve(m, U->edge, &c);
             for (int k = 0; k <= 20; k++) {
                 cm_vec3 d3[1];
-                if (cm_curve_eval(&c, U->rev ? 1.0 - k / 20.0 : k / 20.0, 0, d3, NULL) != CM_OK)
+                if (cm_curve_eval(&c, U->rev ? 1.0 - k / 20.0 : k / 20.0, 0, d3, NULL) != CM_OK) {
+                    free(grid);
                     return 0;
+                }
                 double d = face_dist(rb, &w, d3[0]);
                 sum += d;
                 worst = d > worst ? d : worst;
@@ -217,12 +277,19 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
             }
         }
     }
+    /* 4: the patches against the source surface (see patches_to_source) */
+    if (rb->repr == CM_REPR_PATCHES) {
+        double back = patches_to_source(fd, rb->greg, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
+        out->back = back;
+        worst = back > worst ? back : worst;
+    }
 done:
     out->complete = worst < tol;
     out->max = worst;
     out->avg = n > 0 ? sum / n : 0;
     out->ratio = rb->bbox > 0 ? worst / rb->bbox : 0;
     out->bbox = rb->bbox;
+    free(grid);
     return 1;
 }
 

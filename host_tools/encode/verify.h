@@ -34,6 +34,7 @@ typedef struct face_error {
     int grid_points;      /* 21 x 21 grid points inside the outer loop */
     int boundary_points;  /* 21 per edge use of every loop */
     int complete;         /* every point measured (0: stopped at the first one over the tolerance) */
+    double back;          /* Gregory patches: their largest distance from the source surface (in max) */
 } face_error;
 
 /** Keep what cm_rebuild_face() gave for face f (copies the Gregory patches). 0 on out of memory. */
@@ -45,7 +46,8 @@ void face_surface_free(face_surface *fs);
  * patches): the source surface on the 21 x 21 grid of its parameter box,
  * points inside the outer loop (holes included, as the papers say), and the
  * transmitted edges of every loop at t = k/20, each projected on the rebuilt
- * surface.  Stops at the first point at or over `tol` mm (the face fails; HUGE_VAL measures all
+ * surface; and, past §12, for Gregory patches the other way: points of each
+ * patch projected on the source surface (a bulge no source point is near).  Stops at the first point at or over `tol` mm (the face fails; HUGE_VAL measures all
  * points).  Returns 0 when the face's domain is unknown (no verdict).
  */
 int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol,

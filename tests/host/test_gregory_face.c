@@ -317,6 +317,23 @@ static void test_gregory_exact_cylinder(void **state)
         assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));
     for (uint32_t i = 0; i < mesh.nverts; i++)
         assert_near(hypot((double)pos[i][0], (double)pos[i][1]), CR, 4 * q + 1e-5);
+    /* the encoder's measure both ways: the source on the patches (spec §12) and, past it, the patches
+       on the source; a patch pushed off the cylinder inside (its twists bent: the boundary and the
+       cross derivatives along it stay) is seen from the patch side */
+    face_error fe;
+    assert_true(verify_face(&lm, m, 0, &rb[0], HUGE_VAL, &fe));
+    if (!(fe.back <= 4 * q))
+        fail_msg("patch points %.3g mm off the cylinder", fe.back);
+    static cm_greg_surface bent;
+    bent = *rb[0].greg;
+    for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2; b++)
+            bent.e[0].tw_a[a][b] = cm_add(bent.e[0].tw_a[a][b], cm_v3(4 * CR, 4 * CR, 0));
+    cm_rebuilt rbent = rb[0];
+    rbent.greg = &bent;
+    assert_true(verify_face(&lm, m, 0, &rbent, HUGE_VAL, &fe));
+    if (!(fe.back > 0.01 * CR && fe.max >= fe.back))
+        fail_msg("a bent patch measured %.3g mm from the source (max %.3g)", fe.back, fe.max);
     /* a corrupted record: refused by checksum */
     dec.model.faces[1].checksum ^= 1u;
     cm_status_init(&st);
