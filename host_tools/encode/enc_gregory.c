@@ -146,10 +146,10 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
             rep->why = "no source domain";
             continue;
         }
-        if (fe.ratio < best_ratio) {
+        if (fe.ratio < best_ratio)
             best_ratio = fe.ratio;
-            rep->greg_ratio = fe.ratio;
-        }
+        if (rep->greg_ratio == 0 || fe.ratio < rep->greg_ratio)
+            rep->greg_ratio = fe.ratio; /* over both methods of the family */
         if (!(fe.max < tol)) {
             rep->why = "error";
             continue;
@@ -167,6 +167,10 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         rep->why = NULL;
         return 1;
     }
+    /* the reason of the candidate that came closest: one built and measured over the tolerance says
+       more than a later layout that could not be built */
+    if (best_ratio < HUGE_VAL)
+        rep->why = "error";
     return 0;
 }
 

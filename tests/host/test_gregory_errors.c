@@ -168,7 +168,7 @@ static void put_faces(const cm_model *m, cm_ac_enc *e)
     for (uint32_t f = 0; f < m->nfaces; f++) {
         const cm_face *F = &m->faces[f];
         cm_ac_enc_uint(e, &c.method, F->method);
-        if (F->method == CM_METHOD_GREGORY) {
+        if (F->method == CM_METHOD_GREGORY || F->method == CM_METHOD_GREGORY_EXACT) { /* the same record */
             cm_ac_enc_uint(e, &c.layout, F->layout);
             cm_ac_enc_uint(e, &c.corner, F->corner);
             cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
@@ -210,8 +210,11 @@ static void put_colours(const cm_model *m, cm_ac_enc *e)
 
 typedef void (*section_writer)(const cm_model *m, cm_ac_enc *e);
 
+/* the minor version write_cmz writes (the tests of format 2.1 set it) */
+static int write_minor;
+
 /**
- * Write model m as a .cmz file of major version `major` (minor 0) with the need table `need`
+ * Write model m as a .cmz file of major version `major` (minor write_minor) with the need table `need`
  * (CM_LIMIT_COUNT entries; NULL: all 0, which every build accepts) and every CRC computed.
  * Returns the malloc'd file; *len its length.
  */
@@ -240,7 +243,7 @@ static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, si
         fail_msg("grid step %.17g is not a power of 2", m->q);
     cm_fmt_header h = {0};
     h.major = (uint8_t)major;
-    h.minor = 0;
+    h.minor = (uint8_t)write_minor;
     h.flags = (uint16_t)(m->npalette ? 1 : 0);
     h.header_len = (uint32_t)H;
     h.file_len = (uint32_t)total;
@@ -560,6 +563,31 @@ static void test_gregory_sides_over_limit(void **state)
     assert_says(&st, want);
 }
 
+/* GREGORY-EXACT (format 2.1): GREGORY's record and loop rules, refused by name, and not in a 2.0 file */
+static void test_gregory_exact_records(void **state)
+{
+    (void)state;
+    cm_status st;
+    write_minor = 1;
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_decodes(2);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, 3, 0);
+    assert_face_refused(2, CM_E_RANGE, "GREGORY layout", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 2);
+    assert_face_refused(2, CM_E_RANGE, "GREGORY corner", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_QUAD, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY sides do not fit the layout", &st);
+    polygon_face(5, 1, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY face with holes", &st);
+    polygon_face(CM_MAX_SIDES + 1, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_LIMIT, "GREGORY sides", &st);
+    assert_int_equal(st.limit, CM_LIMIT_MAX_SIDES);
+    /* the same valid face in a file that says 2.0 */
+    write_minor = 0;
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_UNSUPPORTED, "GREGORY-EXACT face in a file older than format 2.1", &st);
+}
+
 /* a checksum changed in the file (CRCs valid): the file loads, the face's rebuild refuses it */
 static void test_gregory_checksum_in_file(void **state)
 {
@@ -604,6 +632,7 @@ int main(void)
         cmocka_unit_test(test_gregory_loop_malformed),
         cmocka_unit_test(test_gregory_sides_over_limit),
         cmocka_unit_test(test_gregory_checksum_in_file),
+        cmocka_unit_test(test_gregory_exact_records),
     };
     return cmocka_run_group_tests_name("gregory_errors", tests, alloc_decoders, free_decoders);
 }
