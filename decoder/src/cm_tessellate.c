@@ -317,8 +317,12 @@ static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist,
         e = cm_triangulate_folds(ws->tmp, npts, ws->loop_start, nloops, min_dist, 0.25 * tol, ws->tris,
                                  CM_MAX_TESS_TRIS, ntris, NULL, &ws->tri, &again);
     }
-    if (e != CM_OK && st && st->code == CM_OK)
-        *st = first; /* report the first attempt's failure: it names the original geometry */
+    if (e != CM_OK && st && st->code == CM_OK) {
+        /* report the first attempt's failure: it names the original geometry (and return its code:
+           a status and a return that disagree broke the fuzz contract, issue 10) */
+        *st = first;
+        return first.code != CM_OK ? first.code : e;
+    }
     return e;
 }
 
