@@ -147,23 +147,9 @@ static cm_err build_degen(const cm_greg_input *in, int j, cm_greg_surface *out, 
     cm_cubic point = {{Vj, Vj, Vj, Vj}};
     cubic_side(&point, &g->side[3]);
     /* S_u(0, v) turns from e0 = S_u(0,0) (side 0's tangent) to e2 = S_u(0,1) (side 2's, reversed) */
-    cm_vec3 e0 = d0[1], e2 = cm_neg(d2[1]), u0, u2;
-    if (!unit_chk(e0, eps, &u0) || !unit_chk(e2, eps, &u2))
-        return degenerate(st, "egregface: zero edge at the collapsed vertex");
-    double gam = cm_dot(u0, u2);
-    cm_vec3 f1, f2;
-    if (gam > 1.0 - 1e-12) {
-        f1 = cm_add(e0, cm_scale(cm_sub(e2, e0), 1.0 / 3.0));
-        f2 = cm_add(e2, cm_scale(cm_sub(e0, e2), 1.0 / 3.0));
-    } else {
-        cm_vec3 w0, w2;
-        if (!unit_chk(cm_sub(u2, cm_scale(u0, gam)), CM_GREG_EPS_DIR, &w0) ||
-            !unit_chk(cm_sub(u0, cm_scale(u2, gam)), CM_GREG_EPS_DIR, &w2))
-            return degenerate(st, "egregface: flat collapsed corner");
-        double kap = (4.0 / 3.0) * sqrt((1.0 - gam) / 2.0) / (1.0 + sqrt((1.0 + gam) / 2.0));
-        f1 = cm_axpy(e0, kap * cm_norm(e0), w0);
-        f2 = cm_axpy(e2, kap * cm_norm(e2), w2);
-    }
+    cm_vec3 e0 = d0[1], e2 = cm_neg(d2[1]), f1, f2;
+    if ((e = cm_greg_fan(e0, e2, eps, &f1, &f2, st)) != CM_OK)
+        return e;
     /* side 3 runs from (0,1) to (0,0): its cross derivative X3(s) = S_u(0, 1-s) */
     g->side[3].fan = 1;
     g->side[3].fx[0] = e2;
@@ -264,57 +250,18 @@ static cm_err build_split(const cm_greg_input *in, cm_greg_surface *out, cm_stat
     return e;
 }
 
-static int input_finite(const cm_greg_input *in)
-{
-    for (int k = 0; k < in->n; k++) {
-        const cm_greg_side *s = &in->side[k];
-        if (!cm_finite3(s->Ns) || !cm_finite3(s->Ne) || !cm_finite3(in->corner_normal[k]))
-            return 0;
-    }
-    return cm_finite3(in->nF);
-}
-
 cm_err cm_egreg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface *out, cm_status *st)
 {
-    if (!in || !out)
-        return cm_fail(st, CM_E_ARG, __func__);
-    memset(out, 0, sizeof *out);
-    out->layout = layout;
-    out->n = in->n;
-    out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
-    out->exact = 1;
-    int n = in->n;
-    if (!(in->eps_len >= 0.0) || !isfinite(in->eps_len))
-        return cm_fail(st, CM_E_ARG, "egregface: eps_len");
-    if (n > CM_MAX_SIDES)
-        return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, "egregface: sides");
-    if (n < 3)
-        return cm_fail(st, CM_E_RANGE, "egregface: fewer than 3 sides");
-    if (layout == CM_GREG_LAYOUT_QUAD && n != 4)
-        return cm_fail(st, CM_E_RANGE, "egregface: layout 0 needs 4 sides");
-    if (layout == CM_GREG_LAYOUT_SPLIT && n > CM_MAX_GREG)
-        return cm_fail_limit(st, CM_LIMIT_MAX_GREG, (uint64_t)n, CM_MAX_GREG, "egregface: N-split patches");
-    if (layout == CM_GREG_LAYOUT_DEGEN && n != 3)
-        return cm_fail(st, CM_E_RANGE, "egregface: layout 2 needs 3 sides");
-    if (layout == CM_GREG_LAYOUT_DEGEN && (j < 0 || j > 2))
-        return cm_fail(st, CM_E_RANGE, "egregface: layout 2 vertex index");
-    if (layout < CM_GREG_LAYOUT_QUAD || layout > CM_GREG_LAYOUT_DEGEN)
-        return cm_fail(st, CM_E_RANGE, "egregface: unknown layout");
-    if (!input_finite(in))
-        return cm_fail(st, CM_E_NONFINITE, "egregface: input");
-    cm_err e;
+    cm_err e = cm_greg_begin(in, layout, j, 1, out, st);
+    if (e != CM_OK)
+        return e;
     if (layout == CM_GREG_LAYOUT_QUAD)
         e = build_quad(in, out, st);
     else if (layout == CM_GREG_LAYOUT_SPLIT)
         e = build_split(in, out, st);
     else
         e = build_degen(in, j, out, st);
-    if (e != CM_OK) {
-        memset(out, 0, sizeof *out);
-        out->layout = layout;
-        out->n = n;
-        out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
-        out->exact = 1;
-    }
+    if (e != CM_OK)
+        cm_greg_surface_reset(out, layout, in->n, j, 1);
     return e;
 }

@@ -183,6 +183,27 @@ static cm_err build_quad_face(const cm_greg_input *in, cm_greg_surface *out, cm_
     return check_orientation(&out->g[0], in->nF, st);
 }
 
+cm_err cm_greg_fan(cm_vec3 e0, cm_vec3 e2, double eps, cm_vec3 *f1, cm_vec3 *f2, cm_status *st)
+{
+    cm_vec3 u0, u2;
+    if (!unit_chk(e0, eps, &u0) || !unit_chk(e2, eps, &u2))
+        return degenerate(st, "gregface: zero edge at the collapsed vertex");
+    double gam = cm_dot(u0, u2);
+    if (gam > FAN_LINEAR_COS) {
+        *f1 = cm_add(e0, cm_scale(cm_sub(e2, e0), 1.0 / 3.0));
+        *f2 = cm_add(e2, cm_scale(cm_sub(e0, e2), 1.0 / 3.0));
+        return CM_OK;
+    }
+    cm_vec3 w0, w2;
+    if (!unit_chk(cm_sub(u2, cm_scale(u0, gam)), CM_GREG_EPS_DIR, &w0) ||
+        !unit_chk(cm_sub(u0, cm_scale(u2, gam)), CM_GREG_EPS_DIR, &w2))
+        return degenerate(st, "gregface: flat collapsed corner");
+    double kap = (4.0 / 3.0) * sqrt((1.0 - gam) / 2.0) / (1.0 + sqrt((1.0 + gam) / 2.0));
+    *f1 = cm_axpy(e0, kap * cm_norm(e0), w0);
+    *f2 = cm_axpy(e2, kap * cm_norm(e2), w2);
+    return CM_OK;
+}
+
 /* ---- layout 2 (spec 6.5): degenerate quad collapsed at V_j, circular fan on u = 0 ---- */
 static cm_err build_degen_face(const cm_greg_input *in, int j, cm_greg_surface *out, cm_status *st)
 {
@@ -204,24 +225,9 @@ static cm_err build_degen_face(const cm_greg_input *in, int j, cm_greg_surface *
     if (e != CM_OK)
         return e;
     /* the circular fan */
-    cm_vec3 e0 = cm_sub(q[0].c.c[1], Vj), e2 = cm_sub(q[2].c.c[2], Vj);
-    cm_vec3 u0, u2;
-    if (!unit_chk(e0, eps, &u0) || !unit_chk(e2, eps, &u2))
-        return degenerate(st, "gregface: zero edge at the collapsed vertex");
-    double gam = cm_dot(u0, u2);
     cm_vec3 f1, f2;
-    if (gam > FAN_LINEAR_COS) {
-        f1 = cm_add(e0, cm_scale(cm_sub(e2, e0), 1.0 / 3.0));
-        f2 = cm_add(e2, cm_scale(cm_sub(e0, e2), 1.0 / 3.0));
-    } else {
-        cm_vec3 w0, w2;
-        if (!unit_chk(cm_sub(u2, cm_scale(u0, gam)), CM_GREG_EPS_DIR, &w0) ||
-            !unit_chk(cm_sub(u0, cm_scale(u2, gam)), CM_GREG_EPS_DIR, &w2))
-            return degenerate(st, "gregface: flat collapsed corner");
-        double kap = (4.0 / 3.0) * sqrt((1.0 - gam) / 2.0) / (1.0 + sqrt((1.0 + gam) / 2.0));
-        f1 = cm_axpy(e0, kap * cm_norm(e0), w0);
-        f2 = cm_axpy(e2, kap * cm_norm(e2), w2);
-    }
+    if ((e = cm_greg_fan(cm_sub(q[0].c.c[1], Vj), cm_sub(q[2].c.c[2], Vj), eps, &f1, &f2, st)) != CM_OK)
+        return e;
     g->I[0][0][1] = cm_add(Vj, f1);
     g->I[0][1][1] = cm_add(Vj, f2);
     out->npatch = 1;
@@ -372,11 +378,11 @@ static cm_err build_split_face(const cm_greg_input *in, cm_greg_surface *out, cm
     return e;
 }
 
-static int input_finite(const cm_greg_input *in)
+static int input_finite(const cm_greg_input *in, int exact)
 {
     for (int k = 0; k < in->n; k++) {
         const cm_greg_side *s = &in->side[k];
-        for (int i = 0; i < 4; i++)
+        for (int i = 0; i < 4 && !exact; i++)
             if (!cm_finite3(s->c.c[i]))
                 return 0;
         if (!cm_finite3(s->Ns) || !cm_finite3(s->Ne) || !cm_finite3(in->corner_normal[k]))
@@ -385,22 +391,27 @@ static int input_finite(const cm_greg_input *in)
     return cm_finite3(in->nF);
 }
 
-cm_err cm_greg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface *out, cm_status *st)
+void cm_greg_surface_reset(cm_greg_surface *out, int layout, int n, int j, int exact)
+{
+    memset(out, 0, sizeof *out);
+    out->layout = layout;
+    out->n = n;
+    out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
+    out->exact = exact;
+}
+
+cm_err cm_greg_begin(const cm_greg_input *in, int layout, int j, int exact, cm_greg_surface *out, cm_status *st)
 {
     if (!in || !out)
         return cm_fail(st, CM_E_ARG, __func__);
-    memset(out, 0, sizeof *out);
-    out->layout = layout;
-    out->n = in->n;
-    out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
     int n = in->n;
+    cm_greg_surface_reset(out, layout, n, j, exact);
     if (!(in->eps_len >= 0.0) || !isfinite(in->eps_len))
         return cm_fail(st, CM_E_ARG, "gregface: eps_len");
     if (n > CM_MAX_SIDES)
         return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, "gregface: sides");
     if (n < 3)
         return cm_fail(st, CM_E_RANGE, "gregface: fewer than 3 sides");
-    cm_err e;
     switch (layout) {
     case CM_GREG_LAYOUT_QUAD:
         if (n != 4)
@@ -419,20 +430,24 @@ cm_err cm_greg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface
     default:
         return cm_fail(st, CM_E_RANGE, "gregface: unknown layout");
     }
-    if (!input_finite(in))
+    if (!input_finite(in, exact))
         return cm_fail(st, CM_E_NONFINITE, "gregface: input");
+    return CM_OK;
+}
+
+cm_err cm_greg_build(const cm_greg_input *in, int layout, int j, cm_greg_surface *out, cm_status *st)
+{
+    cm_err e = cm_greg_begin(in, layout, j, 0, out, st);
+    if (e != CM_OK)
+        return e;
     if (layout == CM_GREG_LAYOUT_QUAD)
         e = build_quad_face(in, out, st);
     else if (layout == CM_GREG_LAYOUT_SPLIT)
         e = build_split_face(in, out, st);
     else
         e = build_degen_face(in, j, out, st);
-    if (e != CM_OK) {
-        memset(out, 0, sizeof *out);
-        out->layout = layout;
-        out->n = n;
-        out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
-    }
+    if (e != CM_OK)
+        cm_greg_surface_reset(out, layout, in->n, j, 0);
     return e;
 }
 

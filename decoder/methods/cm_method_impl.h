@@ -24,6 +24,10 @@ cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n
                           cm_rebuild_ws *ws, cm_status *st);
 void cm_gregory_needs(const cm_model *m, const cm_face *F, uint32_t *need);
 
+/* GREGORY and GREGORY-EXACT: the rebuild both share (gregory.c), exact 1 over the edges themselves */
+cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int exact, cm_rebuilt *out,
+                                 cm_rebuild_ws *ws, cm_status *st);
+
 /* GREGORY-EXACT (gregory_exact.c): GREGORY's record, loops and needs; its own rebuild */
 cm_err cm_gregory_exact_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws,
                                 cm_status *st);

@@ -71,16 +71,16 @@ int cm_gregory_needs_midpoints(const cm_face *F)
     return F->layout == CM_GREG_LAYOUT_SPLIT;
 }
 
-cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
-                          cm_rebuild_ws *ws, cm_status *st)
+cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int exact, cm_rebuilt *out,
+                                 cm_rebuild_ws *ws, cm_status *st)
 {
-    (void)n;
-    (void)n_outer;
     const cm_face *F = &m->faces[f];
-    cm_err e = cm_greg_input_build(m, f, 0, &ws->gin, &ws->corner, st);
+    cm_err e = cm_greg_input_build(m, f, exact, &ws->gin, &ws->corner, st);
     if (e != CM_OK)
         return e;
-    if ((e = cm_greg_build(&ws->gin, F->layout, F->corner, &ws->greg, st)) != CM_OK)
+    e = exact ? cm_egreg_build(&ws->gin, F->layout, F->corner, &ws->greg, st)
+              : cm_greg_build(&ws->gin, F->layout, F->corner, &ws->greg, st);
+    if (e != CM_OK)
         return e;
     out->repr = CM_REPR_PATCHES;
     out->greg = &ws->greg;
@@ -89,8 +89,17 @@ cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n
     check = 0; /* as with the CRCs: mutated records must reach the tessellation */
 #endif
     if (check && out->checksum != F->checksum)
-        return cm_fail(st, CM_E_CHECKSUM, "GREGORY face rebuilt differently from the encoder");
+        return cm_fail(st, CM_E_CHECKSUM, exact ? "GREGORY-EXACT face rebuilt differently from the encoder"
+                                                : "GREGORY face rebuilt differently from the encoder");
     return CM_OK;
+}
+
+cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
+                          cm_rebuild_ws *ws, cm_status *st)
+{
+    (void)n;
+    (void)n_outer;
+    return cm_gregory_family_rebuild(m, f, check, 0, out, ws, st);
 }
 
 /* sides of the outer loop; N-split: one patch per side */

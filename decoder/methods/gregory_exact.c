@@ -14,21 +14,7 @@
 cm_err cm_gregory_exact_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws,
                                 cm_status *st)
 {
-    const cm_face *F = &m->faces[f];
-    cm_err e = cm_greg_input_build(m, f, 1, &ws->gin, &ws->corner, st);
-    if (e != CM_OK)
-        return e;
-    if ((e = cm_egreg_build(&ws->gin, F->layout, F->corner, &ws->greg, st)) != CM_OK)
-        return e;
-    out->repr = CM_REPR_PATCHES;
-    out->greg = &ws->greg;
-    out->checksum = cm_greg_surface_checksum(&ws->greg);
-#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
-    check = 0; /* as with the CRCs: mutated records must reach the tessellation */
-#endif
-    if (check && out->checksum != F->checksum)
-        return cm_fail(st, CM_E_CHECKSUM, "GREGORY-EXACT face rebuilt differently from the encoder");
-    return CM_OK;
+    return cm_gregory_family_rebuild(m, f, check, 1, out, ws, st);
 }
 
 const cm_method cm_method_gregory_exact = {

@@ -179,6 +179,24 @@ CM_NODISCARD cm_err cm_greg_spoke_centre(int n, const cm_vec3 *M, const cm_vec3 
                                          cm_vec3 *U, cm_greg_surface *out, cm_status *st);
 
 /**
+ * What both constructions do first: *out zeroed but for layout, n, j and exact; the arguments and
+ * the layout checked as cm_greg_build() documents (return codes as there; `exact` 1: the cubics
+ * are not looked at).
+ */
+CM_NODISCARD cm_err cm_greg_begin(const cm_greg_input *in, int layout, int j, int exact, cm_greg_surface *out,
+                                  cm_status *st);
+
+/** *out zeroed but for layout, n, j (layout 2 only) and exact: what a failed construction leaves. */
+void cm_greg_surface_reset(cm_greg_surface *out, int layout, int n, int j, int exact);
+
+/**
+ * Spec 6.5's circular fan at a collapsed vertex: from the edge vectors e0 and e2 leaving it, the
+ * inner vectors f1, f2 (linear when e0, e2 are within 1e-12 of parallel).  CM_E_DEGENERATE for an
+ * edge vector <= eps long or a flat collapsed corner.
+ */
+CM_NODISCARD cm_err cm_greg_fan(cm_vec3 e0, cm_vec3 e2, double eps, cm_vec3 *f1, cm_vec3 *f2, cm_status *st);
+
+/**
  * The same layouts over the exact edges (cm_egreg.h): sides from in->side[k].curve/edge/rev, the
  * basis normals Ns, Ne, the corner normals and nF as for cm_greg_build (the cubics are not used).
  * Same return codes as cm_greg_build.
