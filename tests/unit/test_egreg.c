@@ -167,7 +167,7 @@ static void test_nonfinite(void **state)
     cm_vec3 S, Su, Sv;
     cm_status st;
     /* a NaN reaching a patch that was built: the evaluation says so */
-    g.side[1].fx[1].x = NAN;
+    g.side[1].fx[1].x = nan("");
     cm_status_init(&st);
     assert_int_equal(cm_egreg_eval(&g, 0.9, 0.5, &S, &Su, &Sv, &st), CM_E_NONFINITE);
     assert_int_equal(st.code, CM_E_NONFINITE);
@@ -176,7 +176,7 @@ static void test_nonfinite(void **state)
     assert_int_equal(cm_egreg_finish(&g, &st), CM_E_NONFINITE);
     assert_int_equal(st.code, CM_E_NONFINITE);
     g.side[1].fx[1].x = 0;
-    g.side[1].fx[0].y = INFINITY;
+    g.side[1].fx[0].y = HUGE_VAL;
     cm_status_init(&st);
     assert_int_equal(cm_egreg_finish(&g, &st), CM_E_NONFINITE);
 }
