@@ -70,6 +70,20 @@ static cm_err side_basis(const cm_egreg_side *sd, cm_vec3 Ns, cm_vec3 Ne, double
 }
 
 /*
+ * The cross derivative of side sd from the tangents of the sides beside it (spec 6.2 per unit
+ * parameter): at its start it must give b0 = -prev'(1), the previous side run back from the
+ * corner, at its end b3 = next'(0); c0, c1 are the side's own tangents at its ends.
+ */
+static cm_err fit_side(cm_egreg_side *sd, cm_vec3 c0, cm_vec3 c1, cm_vec3 prev_end, cm_vec3 next_start, double eps,
+                       cm_status *st)
+{
+    cm_err e = cm_greg_fit_kh(sd->As, c0, cm_neg(prev_end), eps, &sd->k0, &sd->h0, st);
+    if (e == CM_OK)
+        e = cm_greg_fit_kh(sd->Ae, c1, next_start, eps, &sd->k1, &sd->h1, st);
+    return e;
+}
+
+/*
  * A patch from four sides whose kinds, ranges and bases (or fan) are set: the cross derivatives
  * fitted at each side's ends to the neighbouring sides' tangents leaving that corner, the corner
  * data, and the orientation check.  Spec 6.3 compares the normal at (1/2,1/2) with n_F; on a face
@@ -90,10 +104,7 @@ static cm_err finish_patch(cm_egreg *g, const cm_vec3 N[4], double eps, cm_statu
         cm_egreg_side *sd = &g->side[k];
         if (sd->fan)
             continue;
-        cm_vec3 b0 = cm_neg(d[(k + 3) & 3][1][1]), b3 = d[(k + 1) & 3][0][1];
-        cm_err e = cm_greg_fit_kh(sd->As, d[k][0][1], b0, eps, &sd->k0, &sd->h0, st);
-        if (e == CM_OK)
-            e = cm_greg_fit_kh(sd->Ae, d[k][1][1], b3, eps, &sd->k1, &sd->h1, st);
+        cm_err e = fit_side(sd, d[k][0][1], d[k][1][1], d[(k + 3) & 3][1][1], d[(k + 1) & 3][0][1], eps, st);
         if (e != CM_OK)
             return e;
     }
@@ -188,9 +199,8 @@ static cm_err esplit_mid(const cm_greg_input *in, esplit_ws *w, cm_status *st)
             return e;
         sd->As = w->A0[k];
         sd->Ae = w->A1[k];
-        cm_vec3 b0 = cm_neg(d[(k + n - 1) % n][1][1]), b3 = d[(k + 1) % n][0][1];
-        if ((e = cm_greg_fit_kh(sd->As, d[k][0][1], b0, eps, &sd->k0, &sd->h0, st)) != CM_OK ||
-            (e = cm_greg_fit_kh(sd->Ae, d[k][1][1], b3, eps, &sd->k1, &sd->h1, st)) != CM_OK)
+        if ((e = fit_side(sd, d[k][0][1], d[k][1][1], d[(k + n - 1) % n][1][1], d[(k + 1) % n][0][1], eps, st)) !=
+            CM_OK)
             return e;
         cm_vec3 m[3], x[2], tmid;
         if ((e = cm_egreg_side_eval(sd, CM_GREG_SPLIT_T, m, x, st)) != CM_OK)

@@ -18,8 +18,7 @@
 #include "cm/cm_face_samples.h"
 #include "cm/cm_geom.h"
 
-/* unit tangent of use U at its start (at_end = 0) or end, in the use's direction; 0 if degenerate */
-static int use_tangent(const cm_model *m, const cm_use *U, int at_end, double eps, cm_vec3 *t)
+int cm_use_tangent(const cm_model *m, const cm_use *U, int at_end, double eps, cm_vec3 *t)
 {
     cm_curve c;
     cm_model_edge_curve(m, U->edge, &c);
@@ -65,7 +64,7 @@ static int geo_normal(const cm_model *m, const cm_use *in, const cm_use *out, co
                       cm_vec3 *N)
 {
     cm_vec3 ta, tb;
-    if (!use_tangent(m, in, 1, eps, &ta) || !use_tangent(m, out, 0, eps, &tb))
+    if (!cm_use_tangent(m, in, 1, eps, &ta) || !cm_use_tangent(m, out, 0, eps, &tb))
         return 0;
     cm_vec3 a = cm_neg(ta), c = cm_cross(tb, a);
     if (!(cm_norm(c) >= CM_SIN_FLAT))

@@ -12,19 +12,6 @@
 /* the K7 acceptance of spec 6 */
 #define K7_ACCEPT 0.25
 
-/* unit tangent of use U at its start or end (at_end), in the face's direction, from the edge itself */
-static int use_tangent(const cm_model *m, const cm_use *U, int at_end, cm_vec3 *t)
-{
-    cm_curve c;
-    cm_model_edge_curve(m, U->edge, &c);
-    cm_vec3 d[2];
-    double s = (at_end != 0) != (U->rev != 0) ? 1.0 : 0.0;
-    if (cm_curve_eval(&c, s, 1, d, NULL) != CM_OK || !(cm_norm(d[1]) > 0))
-        return 0;
-    *t = U->rev ? cm_neg(cm_unit(d[1])) : cm_unit(d[1]);
-    return 1;
-}
-
 /*
  * Spec §6 applicability of GREGORY for face f: an outer loop of 3..CM_MAX_SIDES edges, each
  * cubic-convertible within a quarter of the tolerance (K7; not asked by GREGORY-EXACT, whose
@@ -51,7 +38,7 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
     cm_vec3 t_in[CM_MAX_SIDES], t_out[CM_MAX_SIDES]; /* unit tangents at the end and start of side k */
     for (int k = 0; k < n && exact; k++) {
         const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
-        if (!use_tangent(m, U, 1, &t_in[k]) || !use_tangent(m, U, 0, &t_out[k])) {
+        if (!cm_use_tangent(m, U, 1, 0.0, &t_in[k]) || !cm_use_tangent(m, U, 0, 0.0, &t_out[k])) {
             rep->why = "degenerate edge";
             return 0;
         }

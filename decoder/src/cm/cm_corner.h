@@ -27,6 +27,13 @@ CM_NODISCARD cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *sampl
                                    cm_status *st);
 
 /**
+ * Unit tangent of use U at its start (at_end 0) or end, in the use's direction: the curve's end
+ * derivative, or where that is <= eps long (a doubled control point) the chord to the point at
+ * 1e-3 from that end.  0 if it is still degenerate.
+ */
+int cm_use_tangent(const cm_model *m, const cm_use *U, int at_end, double eps, cm_vec3 *t);
+
+/**
  * The input of cm_greg_build() for face f's outer loop: n sides with their
  * cubics in the face's direction, basis normals, corner normals, n_F and
  * EPS_LEN (1e-12 of the face's bbox).  Hints (spec 15.3) are not part of
