@@ -458,6 +458,8 @@ double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, 
     int np = s->npatch < CM_MAX_GREG ? s->npatch : CM_MAX_GREG;
     for (int k = 0; k < np; k++) {
         cm_patch pa = s->exact ? cm_patch_of_egreg(&s->e[k]) : cm_patch_of_gregory(&s->g[k]);
+        pa.corr = s->corr[k];
+        pa.fit = s->fit;
         double pu, pv, d;
         if (cm_patch_project(&pa, p, &pu, &pv, &d, NULL) != CM_OK)
             continue; /* cannot happen for a Gregory patch */
@@ -483,10 +485,13 @@ cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v,
     if (k >= 0 && k < s->npatch && k < CM_MAX_GREG) {
         if (!s->exact) {
             cm_greg_eval(&s->g[k], u, v, S, Su, Sv);
+            cm_fit_add(s->corr[k], s->fit, u, v, S, Su, Sv);
             return CM_OK;
         }
-        if ((e = cm_egreg_eval(&s->e[k], u, v, S, Su, Sv, NULL)) == CM_OK)
+        if ((e = cm_egreg_eval(&s->e[k], u, v, S, Su, Sv, NULL)) == CM_OK) {
+            cm_fit_add(s->corr[k], s->fit, u, v, S, Su, Sv);
             return CM_OK;
+        }
     }
     *S = zero3;
     if (Su)
@@ -550,6 +555,19 @@ static uint32_t egreg_checksum(uint32_t h, const cm_egreg *g)
     return h;
 }
 
+/* GREGORY-FIT: the corrections as the terminal dequantised them (nothing without: older files' sums stay) */
+static uint32_t fit_checksum(uint32_t h, const cm_greg_surface *s)
+{
+    int np = s->npatch < CM_MAX_GREG ? s->npatch : CM_MAX_GREG;
+    if (s->fit < 1 || s->fit > CM_FIT_MAX_M)
+        return h;
+    h = fnv_double(h, (double)s->fit);
+    for (int k = 0; k < np; k++)
+        for (int i = 0; i < s->fit * s->fit; i++)
+            h = fnv_vec(h, s->corr[k][i]);
+    return h;
+}
+
 uint32_t cm_greg_surface_checksum(const cm_greg_surface *s)
 {
     uint32_t h = FNV_OFFSET;
@@ -557,7 +575,7 @@ uint32_t cm_greg_surface_checksum(const cm_greg_surface *s)
     if (s->exact) {
         for (int k = 0; k < np; k++)
             h = egreg_checksum(h, &s->e[k]);
-        return h;
+        return fit_checksum(h, s);
     }
     for (int k = 0; k < np; k++) {
         const cm_gregory *g = &s->g[k];
@@ -570,5 +588,5 @@ uint32_t cm_greg_surface_checksum(const cm_greg_surface *s)
                 for (int c = 0; c < 2; c++)
                     h = fnv_vec(h, g->I[a][b][c]);
     }
-    return h;
+    return fit_checksum(h, s);
 }

@@ -4,6 +4,7 @@
 #include <stddef.h>
 
 #include "cm/cm_lm.h"
+#include "cm/cm_patchfit.h"
 
 #define CURVE_SAMPLES 33 /* K9: initial guess from 33 uniform samples */
 #define CURVE_ITERS 30
@@ -29,6 +30,8 @@ cm_patch cm_patch_of_surf(const cm_surf *s)
     p.nurbs = s;
     p.greg = NULL;
     p.egreg = NULL;
+    p.corr = NULL;
+    p.fit = 0;
     p.u0 = s->U[s->p];
     p.u1 = s->U[s->nu];
     p.v0 = s->V[s->q];
@@ -43,6 +46,8 @@ cm_patch cm_patch_of_gregory(const cm_gregory *g)
     p.nurbs = NULL;
     p.greg = g;
     p.egreg = NULL;
+    p.corr = NULL;
+    p.fit = 0;
     p.u0 = 0.0;
     p.u1 = 1.0;
     p.v0 = 0.0;
@@ -82,9 +87,14 @@ cm_err cm_patch_eval(const cm_patch *s, double u, double v, cm_vec3 d[3], cm_sta
     }
     case CM_PATCH_GREGORY:
         cm_greg_eval(s->greg, u, v, &d[0], &d[1], &d[2]);
+        cm_fit_add(s->corr, s->fit, u, v, &d[0], &d[1], &d[2]);
         return CM_OK;
-    case CM_PATCH_EGREG:
-        return cm_egreg_eval(s->egreg, u, v, &d[0], &d[1], &d[2], st);
+    case CM_PATCH_EGREG: {
+        cm_err e = cm_egreg_eval(s->egreg, u, v, &d[0], &d[1], &d[2], st);
+        if (e == CM_OK)
+            cm_fit_add(s->corr, s->fit, u, v, &d[0], &d[1], &d[2]);
+        return e;
+    }
     }
     return cm_fail(st, CM_E_ARG, __func__);
 }

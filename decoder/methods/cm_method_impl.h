@@ -24,12 +24,22 @@ cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n
                           cm_rebuild_ws *ws, cm_status *st);
 void cm_gregory_needs(const cm_model *m, const cm_face *F, uint32_t *need);
 
-/* GREGORY and GREGORY-EXACT: the rebuild both share (gregory.c), exact 1 over the edges themselves */
-cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int exact, cm_rebuilt *out,
+/* GREGORY, GREGORY-EXACT and GREGORY-FIT: the rebuild they share (gregory.c), exact 1 over the edges
+   themselves, fit 1 with the record's correction added (cm_gregory_fit_apply) */
+cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int exact, int fit, cm_rebuilt *out,
                                  cm_rebuild_ws *ws, cm_status *st);
 
 /* GREGORY-EXACT (gregory_exact.c): GREGORY's record, loops and needs; its own rebuild */
 cm_err cm_gregory_exact_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws,
                                 cm_status *st);
+
+/* GREGORY-FIT (gregory_fit.c): GREGORY's record and a correction; GREGORY-EXACT's patches plus it */
+cm_err cm_gregory_fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why);
+void cm_gregory_fit_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F, const cm_fit_q *fit);
+cm_err cm_gregory_fit_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why);
+cm_err cm_gregory_fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws,
+                              cm_status *st);
+/* face F's correction from the model's pool into the patches s built for it */
+cm_err cm_gregory_fit_apply(const cm_model *m, const cm_face *F, cm_greg_surface *s, cm_status *st);
 
 #endif /* CM_METHOD_IMPL_H */

@@ -4,9 +4,11 @@
 #include <stddef.h>
 
 /* spec §14: PLANE first (exact and free when it applies), then the GREGORY family (the cubic patches
-   first: files that do without the exact ones stay readable by format 2.0), KEEP last */
+   first: files that do without the exact ones stay readable by format 2.0; a sent correction only
+   where no patch alone passes), KEEP last */
 const cm_method *const cm_method_table[CM_METHOD_COUNT] = {&cm_method_plane, &cm_method_gregory,
-                                                           &cm_method_gregory_exact, &cm_method_keep};
+                                                           &cm_method_gregory_exact, &cm_method_gregory_fit,
+                                                           &cm_method_keep};
 
 const cm_method *cm_method_of(unsigned id)
 {
@@ -24,23 +26,30 @@ const char *cm_method_name(unsigned id)
 
 /* One switch per operation: a method without the operation falls to the default (nothing to do). */
 
-cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_method_fault *why)
+cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F,
+                             cm_method_fault *why)
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
         return cm_gregory_read_record(ac, ctx, F, why);
+    case CM_METHOD_GREGORY_FIT:
+        return cm_gregory_fit_read_record(ac, ctx, m, F, why);
     default:
         return CM_OK;
     }
 }
 
-void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F)
+void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F,
+                            const cm_fit_q *fit)
 {
     switch (M->id) {
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
         cm_gregory_write_record(ac, ctx, F);
+        break;
+    case CM_METHOD_GREGORY_FIT:
+        cm_gregory_fit_write_record(ac, ctx, F, fit);
         break;
     default:
         break;
@@ -53,6 +62,8 @@ cm_err cm_method_check_loops(const cm_method *M, const cm_model *m, const cm_fac
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
         return cm_gregory_check_loops(m, F, why);
+    case CM_METHOD_GREGORY_FIT:
+        return cm_gregory_fit_check_loops(m, F, why);
     default:
         return CM_OK;
     }
@@ -63,6 +74,7 @@ int cm_method_needs_midpoints(const cm_method *M, const cm_face *F)
     switch (M->id) {
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
+    case CM_METHOD_GREGORY_FIT:
         return cm_gregory_needs_midpoints(F);
     default:
         return 0;
@@ -81,6 +93,8 @@ cm_err cm_method_rebuild(const cm_method *M, const cm_model *m, uint32_t f, int 
         return cm_gregory_rebuild(m, f, check, n, n_outer, out, ws, st);
     case CM_METHOD_GREGORY_EXACT:
         return cm_gregory_exact_rebuild(m, f, check, out, ws, st);
+    case CM_METHOD_GREGORY_FIT:
+        return cm_gregory_fit_rebuild(m, f, check, out, ws, st);
     default:
         return cm_fail(st, CM_E_UNSUPPORTED, "face method");
     }
@@ -91,6 +105,7 @@ void cm_method_needs(const cm_method *M, const cm_model *m, const cm_face *F, ui
     switch (M->id) {
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
+    case CM_METHOD_GREGORY_FIT:
         cm_gregory_needs(m, F, need);
         break;
     default:

@@ -71,7 +71,7 @@ int cm_gregory_needs_midpoints(const cm_face *F)
     return F->layout == CM_GREG_LAYOUT_SPLIT;
 }
 
-cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int exact, cm_rebuilt *out,
+cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int exact, int fit, cm_rebuilt *out,
                                  cm_rebuild_ws *ws, cm_status *st)
 {
     const cm_face *F = &m->faces[f];
@@ -82,6 +82,8 @@ cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int e
               : cm_greg_build(&ws->gin, F->layout, F->corner, &ws->greg, st);
     if (e != CM_OK)
         return e;
+    if (fit && (e = cm_gregory_fit_apply(m, F, &ws->greg, st)) != CM_OK)
+        return e;
     out->repr = CM_REPR_PATCHES;
     out->greg = &ws->greg;
     out->checksum = cm_greg_surface_checksum(&ws->greg);
@@ -89,8 +91,9 @@ cm_err cm_gregory_family_rebuild(const cm_model *m, uint32_t f, int check, int e
     check = 0; /* as with the CRCs: mutated records must reach the tessellation */
 #endif
     if (check && out->checksum != F->checksum)
-        return cm_fail(st, CM_E_CHECKSUM, exact ? "GREGORY-EXACT face rebuilt differently from the encoder"
-                                                : "GREGORY face rebuilt differently from the encoder");
+        return cm_fail(st, CM_E_CHECKSUM, fit     ? "GREGORY-FIT face rebuilt differently from the encoder"
+                                          : exact ? "GREGORY-EXACT face rebuilt differently from the encoder"
+                                                  : "GREGORY face rebuilt differently from the encoder");
     return CM_OK;
 }
 
@@ -99,7 +102,7 @@ cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n
 {
     (void)n;
     (void)n_outer;
-    return cm_gregory_family_rebuild(m, f, check, 0, out, ws, st);
+    return cm_gregory_family_rebuild(m, f, check, 0, 0, out, ws, st);
 }
 
 /* sides of the outer loop; N-split: one patch per side */

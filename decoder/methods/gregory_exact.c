@@ -14,7 +14,7 @@
 cm_err cm_gregory_exact_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws,
                                 cm_status *st)
 {
-    return cm_gregory_family_rebuild(m, f, check, 1, out, ws, st);
+    return cm_gregory_family_rebuild(m, f, check, 1, 0, out, ws, st);
 }
 
 const cm_method cm_method_gregory_exact = {

@@ -566,14 +566,16 @@ static cm_err sec_face(reader *r)
             (r->d->version_major == M->since_major && r->d->version_minor < M->since_minor))
             return rfail(r, CM_E_UNSUPPORTED, M->too_new);
         F->method = (uint8_t)meth;
-        F->layout = F->corner = 0;
+        F->layout = F->corner = F->fit = 0;
         F->checksum = 0;
+        F->surf = 0;
         cm_method_fault why = {0};
-        if ((e = cm_method_read_record(M, &r->ac, &ctx, F, &why)) != CM_OK)
+        if ((e = cm_method_read_record(M, &r->ac, &ctx, m, F, &why)) == CM_E_LIMIT)
+            return rlimit_at(r, why.limit, why.need, cm_limit_table[why.limit].value, F->rec_off, why.what);
+        if (e != CM_OK)
             return rfail(r, e, why.what);
         F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.flip);
         F->color = 0;
-        F->surf = 0;
         if (M->kept_surface) {
             if (snext >= m->nsurfs)
                 return rfail(r, CM_E_RANGE, "kept surface");

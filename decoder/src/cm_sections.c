@@ -54,6 +54,10 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_prob_init(&c->is_new);
     cm_ac_prob_init(&c->rev_new);
     cm_ac_prob_init(&c->rev_old);
+    cm_ac_int_init(&c->fit_m);
+    cm_ac_int_init(&c->fit_patches);
+    cm_ac_int_init(&c->fit_exp);
+    cm_ac_int_init(&c->fit_coef);
 }
 
 void cm_colr_ctx_init(cm_colr_ctx *c)

@@ -35,21 +35,42 @@ cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st)
 /* ---- method choice per face ---- */
 
 /* rebuild face f of the decoded model with a trial record (decoder code, no checksum yet) */
-cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, cm_rebuilt *rb)
+cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, const cm_fit_q *fit, cm_rebuilt *rb)
 {
-    cm_face *F = &w->dec.model.faces[f];
+    cm_model *m = &w->dec.model;
+    cm_face *F = &m->faces[f];
     cm_face saved = *F;
+    uint32_t nctrl = m->nctrl;
     F->method = (uint8_t)method;
     F->layout = (uint8_t)layout;
     F->corner = (uint8_t)corner;
-    cm_err e = cm_rebuild_face_ex(&w->dec.model, (uint32_t)f, 0, rb, &w->rbws, NULL);
+    F->fit = 0;
+    if (fit) {
+        /* the correction where the terminal's reader puts it: the control-point pool, here past its
+           end, dequantised as the reader does (cm_fit_dequantise) */
+        uint32_t n = (uint32_t)(fit->patches * fit->m * fit->m);
+        if (fit->m < 1 || fit->m > CM_FIT_MAX_M || fit->patches < 1 || fit->patches > CM_MAX_GREG ||
+            n > CM_MAX_MODEL_CTRL - m->nctrl) {
+            *F = saved;
+            return CM_E_LIMIT;
+        }
+        F->fit = (uint8_t)(fit->m | (fit->patches << 2));
+        F->surf = m->nctrl;
+        for (uint32_t i = 0; i < n; i++)
+            m->ctrl[m->nctrl + i] = cm_v3(cm_fit_dequantise(fit->q[i][0], m->q, fit->exp),
+                                          cm_fit_dequantise(fit->q[i][1], m->q, fit->exp),
+                                          cm_fit_dequantise(fit->q[i][2], m->q, fit->exp));
+        m->nctrl += n;
+    }
+    cm_err e = cm_rebuild_face_ex(m, (uint32_t)f, 0, rb, &w->rbws, NULL);
     *F = saved;
+    m->nctrl = nctrl;
     return e;
 }
 
 /* the encoder's half of each method (enc_method.h), found by the decoder table's number */
 static const enc_method *const enc_methods[] = {&enc_method_plane, &enc_method_gregory, &enc_method_gregory_exact,
-                                                &enc_method_keep};
+                                                &enc_method_gregory_fit, &enc_method_keep};
 
 static const enc_method *enc_method_of(unsigned id)
 {
@@ -105,6 +126,8 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         t->method[f] = CM_METHOD_FALLBACK;
         t->layout[f] = t->corner[f] = 0;
         t->checksum[f] = 0;
+        free(t->fit[f]);
+        t->fit[f] = NULL;
         if (t->keep_only[lm->mesh.faces[f].brep_face]) {
             rep->why = "rebuilt surface did not tessellate";
             continue;

@@ -24,9 +24,13 @@ typedef struct enc_method {
     void (*measure_kept)(enc_work *w, const loaded_model *lm, int f, face_report *rep);
 } enc_method;
 
-extern const enc_method enc_method_plane, enc_method_gregory, enc_method_gregory_exact, enc_method_keep;
+extern const enc_method enc_method_plane, enc_method_gregory, enc_method_gregory_exact, enc_method_gregory_fit,
+    enc_method_keep;
 
-/** Rebuild face f of the decoded model with a trial record (decoder code, no checksum check). */
-cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, cm_rebuilt *rb);
+/**
+ * Rebuild face f of the decoded model with a trial record (decoder code, no checksum check); fit:
+ * GREGORY-FIT's correction (else NULL), placed in the model as the terminal's reader places it.
+ */
+cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, const cm_fit_q *fit, cm_rebuilt *rb);
 
 #endif /* ENC_METHOD_H */

@@ -11,7 +11,7 @@ static int try_plane(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     enc_work *w = t->w;
     cm_model *m = &w->dec.model;
     cm_rebuilt rb;
-    if (enc_trial_rebuild(w, f, CM_METHOD_PLANE, 0, 0, &rb) != CM_OK)
+    if (enc_trial_rebuild(w, f, CM_METHOD_PLANE, 0, 0, NULL, &rb) != CM_OK)
         return 0;
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rb.bbox);
     int n, n_outer;

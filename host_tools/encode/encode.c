@@ -20,6 +20,7 @@ void encode_opts_default(encode_opts *o)
     o->target_name = NULL;
     o->gregory = 1;
     o->gregory_exact = 1;
+    o->gregory_fit = 1;
     o->strict = 0;
     o->abs_tol = 0;
     o->rel_set = 0;
@@ -83,8 +84,9 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *o, c
     t.color = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.surfs = calloc((size_t)t.nfaces + 1, sizeof *t.surfs);
     t.fault = calloc((size_t)t.nfaces + 1, sizeof *t.fault);
+    t.fit = calloc((size_t)t.nfaces + 1, sizeof *t.fit);
     r->faces = calloc((size_t)t.nfaces + 1, sizeof *r->faces);
-    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.color || !t.surfs || !t.fault || !r->faces) {
+    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.color || !t.surfs || !t.fault || !t.fit || !r->faces) {
         tx_free(&t);
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     }

@@ -41,6 +41,7 @@ typedef struct encode_opts {
     int rel_set;                 /* rel_tol was asked for (with abs_tol the smaller one applies) */
     int gregory;                 /* try GREGORY (spec §6) on non-planar faces (default 1) */
     int gregory_exact;           /* then GREGORY-EXACT (with gregory; default 1) */
+    int gregory_fit;             /* then GREGORY-FIT (with gregory_exact; default 1) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;
@@ -63,6 +64,7 @@ typedef struct face_report {
     double rebuild_max;/* largest distance of the original surface to the sent one (§12 grid, mm) */
     double ratio;      /* rebuild_max / bbox */
     int surf_ctrl;     /* control points sent for a kept surface */
+    int fit_m;         /* GREGORY-FIT: coefficients per direction of its correction (else 0) */
 } face_report;
 
 typedef struct encode_result {

@@ -67,6 +67,7 @@ typedef struct tx {
     int *method;        /* per face */
     int *layout, *corner; /* per GREGORY face: its record (spec 15.2) */
     uint32_t *checksum;
+    struct fit_record **fit; /* per GREGORY-FIT face: its correction (malloc'd; NULL otherwise) */
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
     int npalette;
     int *color;         /* per face palette index */

@@ -51,6 +51,9 @@ void tx_free(tx *t)
         free(t->surfs[i].wq);
     }
     free(t->surfs);
+    for (int i = 0; t->fit && i < t->nfaces; i++)
+        free(t->fit[i]);
+    free(t->fit);
     free(t->method);
     free(t->layout);
     free(t->corner);

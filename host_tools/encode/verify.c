@@ -157,6 +157,17 @@ static double greg_dist(greg_walk *w, cm_vec3 p)
     return d;
 }
 
+double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int *have, int *k, double *u, double *v)
+{
+    greg_walk w = {s, accept, *have, *k, *u, *v};
+    double d = greg_dist(&w, p);
+    *have = w.have;
+    *k = w.patch;
+    *u = w.u;
+    *v = w.v;
+    return d;
+}
+
 static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
 {
 

@@ -54,6 +54,13 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
                 face_error *out);
 
 /**
+ * The foot of p on the patches of s: from patch *k at (*u,*v) when *have (a local walk, taken when
+ * within `accept` mm or at rest inside a patch), else or when that fails a search over all patches
+ * (*have then 1).  Returns the distance.
+ */
+double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int *have, int *k, double *u, double *v);
+
+/**
  * Spec §13 for edge e of m: at t = k/10, k = 1..9, the unit normals of the
  * final surfaces of its two faces (rebuilt from `fs`, KEEP faces from the
  * source surface).  Returns min |nF . nG| (1 for an edge without two faces;

@@ -11,6 +11,7 @@
 #include "cm/cm_crc32.h"
 #include "cm/cm_cubic_convert.h"
 #include "cm/cm_method.h"
+#include "fit_correction.h"
 #include "cm/cm_sections.h"
 
 /* ---- writing ---- */
@@ -148,7 +149,10 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
             rec.layout = (uint8_t)t->layout[f];
             rec.corner = (uint8_t)t->corner[f];
             rec.checksum = t->checksum[f];
-            cm_method_write_record(M, e, &ctx, &rec);
+            cm_fit_q fit = {0};
+            if (t->fit[f])
+                fit = fit_record_view(t->fit[f]);
+            cm_method_write_record(M, e, &ctx, &rec, t->fit[f] ? &fit : NULL);
         }
         cm_ac_enc_bit(e, &ctx.flip, (unsigned)lm->brep.faces[cf->brep_face].flip);
         cm_ac_enc_uint(e, &ctx.loops, (uint64_t)cf->nloops);

@@ -449,6 +449,27 @@ void igw_split_half_cylinder_144(igw *w, double r, double h)
     }
 }
 
+void igw_bump_144(igw *w, double a, double h)
+{
+    /* bicubic, 5 x 5 control points on knots 0 0 0 0 .5 1 1 1 1, placed at their Greville abscissae
+       (0, 1/6, 1/2, 5/6, 1) of the square so that the parameters run linearly; only the middle one
+       raised: the surface and its cross slopes are flat on the whole boundary */
+    static const double g[5] = {0.0, 1.0 / 6.0, 0.5, 5.0 / 6.0, 1.0};
+    char buf[8192];
+    int k = snprintf(buf, sizeof buf, "4,4,3,3,0,0,1,0,0,0,0,0,0,0.5,1,1,1,1,0,0,0,0,0.5,1,1,1,1");
+    for (int i = 0; i < 25; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
+    for (int j = 0; j < 5; j++)     /* v index outer */
+        for (int i = 0; i < 5; i++) /* u index runs fastest in the file */
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", a * g[i], a * g[j],
+                          i == 2 && j == 2 ? h : 0.0);
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+    int s = igw_add(w, 128, 0, "%s", buf);
+    igw_set(w, s, 1, 0, 0);
+    v3 p00 = {0, 0, 0}, p10 = {a, 0, 0}, p11 = {a, a, 0}, p01 = {0, a, 0};
+    igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, rect_loop(w, p00, p10, p11, p01)));
+}
+
 /* ---- building blocks for hostile inputs ---- */
 
 int igw_square_144(igw *w, double a, double z, int subord)

@@ -61,6 +61,10 @@ void igw_bicubic_128(igw *w);
 /** Half cylinder (radius r, height h, axis z, angles 0..pi) as two 144 quarter faces, each on a
  *  120 surface of revolution, sharing the line at angle pi/2 (spec §17 T5). */
 void igw_split_half_cylinder_144(igw *w, double r, double h);
+
+/* one face: a bicubic bump of height h over the square [0,a]^2 at z = 0, flat (with its cross
+   slopes) on its four straight edges - the patches from the boundary come out flat */
+void igw_bump_144(igw *w, double a, double h);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 

@@ -25,6 +25,7 @@
 #include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
+#include "cm/cm_patchfit.h"
 #include "cm/cm_rebuild.h"
 #include "cm/cm_sections.h"
 #include "cm_report.h"
@@ -158,6 +159,13 @@ static void put_surfaces(const cm_model *m, cm_ac_enc *e)
     cm_ac_enc_uint(e, &c.count, 0);
 }
 
+/* GREGORY-FIT's correction as put_faces writes it for every such face: the fields as set, every
+   coordinate of every coefficient the same integer q */
+static struct {
+    int m, patches, exp;
+    int64_t q;
+} fit_w = {1, 1, 0, 3};
+
 /* FACE exactly as the format says, whatever the record holds: the fields under test go out as set */
 static void put_faces(const cm_model *m, cm_ac_enc *e)
 {
@@ -168,11 +176,19 @@ static void put_faces(const cm_model *m, cm_ac_enc *e)
     for (uint32_t f = 0; f < m->nfaces; f++) {
         const cm_face *F = &m->faces[f];
         cm_ac_enc_uint(e, &c.method, F->method);
-        if (F->method == CM_METHOD_GREGORY || F->method == CM_METHOD_GREGORY_EXACT) { /* the same record */
+        if (F->method == CM_METHOD_GREGORY || F->method == CM_METHOD_GREGORY_EXACT ||
+            F->method == CM_METHOD_GREGORY_FIT) { /* the same record, FIT's correction after it */
             cm_ac_enc_uint(e, &c.layout, F->layout);
             cm_ac_enc_uint(e, &c.corner, F->corner);
             cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
             cm_ac_enc_direct(e, F->checksum >> 16, 16);
+        }
+        if (F->method == CM_METHOD_GREGORY_FIT) {
+            cm_ac_enc_uint(e, &c.fit_m, (uint64_t)fit_w.m);
+            cm_ac_enc_uint(e, &c.fit_patches, (uint64_t)fit_w.patches);
+            cm_ac_enc_uint(e, &c.fit_exp, (uint64_t)fit_w.exp);
+            for (int i = 0; i < 3 * fit_w.patches * fit_w.m * fit_w.m; i++)
+                cm_ac_enc_sint(e, &c.fit_coef, fit_w.q);
         }
         cm_ac_enc_bit(e, &c.flip, F->flip);
         cm_ac_enc_uint(e, &c.loops, F->nloops);
@@ -588,6 +604,61 @@ static void test_gregory_exact_records(void **state)
     assert_face_refused(2, CM_E_UNSUPPORTED, "GREGORY-EXACT face in a file older than format 2.1", &st);
 }
 
+/* GREGORY-FIT (format 2.2): GREGORY's record, then the correction's fields, each refused by name; the
+   corrections must match the layout's patches; not in a 2.1 file */
+static void test_gregory_fit_records(void **state)
+{
+    (void)state;
+    cm_status st;
+    write_minor = 2;
+    fit_w.m = 2;
+    fit_w.patches = 1;
+    fit_w.exp = 3;
+    fit_w.q = -7;
+    polygon_face(4, 0, CM_METHOD_GREGORY_FIT, CM_GREG_LAYOUT_QUAD, 0);
+    assert_decodes(2);
+    /* the coefficients landed in the pool, dequantised: -7 * 2^3 grid steps */
+    const cm_face *F = &dec->model.faces[0];
+    assert_int_equal(F->fit, 2 | 1 << 2);
+    assert_int_equal(dec->model.nctrl - F->surf, 4);
+    assert_true(dec->model.ctrl[F->surf + 3].y == -7.0 * 8.0 * src->model.q);
+    polygon_face(5, 0, CM_METHOD_GREGORY_FIT, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY-FIT corrections do not fit the layout", &st);
+    fit_w.patches = 5;
+    assert_decodes(2);
+    fit_w.patches = 1;
+    polygon_face(4, 0, CM_METHOD_GREGORY_FIT, CM_GREG_LAYOUT_QUAD, 0);
+    fit_w.m = 0;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY-FIT coefficients per direction", &st);
+    fit_w.m = CM_FIT_MAX_M + 1;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY-FIT coefficients per direction", &st);
+    fit_w.m = 1;
+    fit_w.patches = 0;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY-FIT patches", &st);
+    fit_w.patches = CM_HARD_MAX_GREG + 1;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY-FIT patches", &st);
+#if CM_MAX_GREG < CM_HARD_MAX_GREG
+    fit_w.patches = CM_MAX_GREG + 1;
+    assert_face_refused(2, CM_E_LIMIT, "GREGORY-FIT patches", &st);
+    assert_int_equal(st.limit, CM_LIMIT_MAX_GREG);
+#endif
+    fit_w.patches = 1;
+    fit_w.exp = CM_FIT_MAX_EXP + 1;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY-FIT step", &st);
+    fit_w.exp = CM_FIT_MAX_EXP;
+    fit_w.q = -(int64_t)CM_FIT_MAX_INT - 1;
+    assert_face_refused(2, CM_E_RANGE, "GREGORY-FIT coefficient", &st);
+    fit_w.q = CM_FIT_MAX_INT;
+    assert_decodes(2);
+    /* the same valid face in a file that says 2.1 */
+    write_minor = 1;
+    assert_face_refused(2, CM_E_UNSUPPORTED, "GREGORY-FIT face in a file older than format 2.2", &st);
+    write_minor = 0;
+    fit_w.m = 1;
+    fit_w.exp = 0;
+    fit_w.q = 3;
+}
+
 /* a checksum changed in the file (CRCs valid): the file loads, the face's rebuild refuses it */
 static void test_gregory_checksum_in_file(void **state)
 {
@@ -633,6 +704,7 @@ int main(void)
         cmocka_unit_test(test_gregory_sides_over_limit),
         cmocka_unit_test(test_gregory_checksum_in_file),
         cmocka_unit_test(test_gregory_exact_records),
+        cmocka_unit_test(test_gregory_fit_records),
     };
     return cmocka_run_group_tests_name("gregory_errors", tests, alloc_decoders, free_decoders);
 }

@@ -48,7 +48,8 @@ static void load_split_cylinder(loaded_model *lm)
     assert_int_equal(lm->mesh.nfaces, 2);
 }
 
-/* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT (the default) */
+/* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT, 7 then GREGORY-FIT
+   (the default) */
 static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_result *r)
 {
     encode_opts o;
@@ -57,6 +58,7 @@ static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_re
     o.rel_set = 1;
     o.gregory = gregory & 1;
     o.gregory_exact = (gregory & 2) != 0;
+    o.gregory_fit = (gregory & 4) != 0;
     cm_status st;
     cm_status_init(&st);
     memset(r, 0, sizeof *r);
@@ -386,6 +388,90 @@ static void test_gregory_needs_format_2(void **state)
     model_free(&lm);
 }
 
+#define BUMP_A 10.0 /* the bump's square */
+#define BUMP_H 2.0  /* and height: the flat patch is 0.5 mm off, the tolerance 0.14 mm */
+
+/*
+ * A bump over a square, flat with its cross slopes on its four straight edges: every patch rebuilt
+ * from the boundary alone is the flat square, 3.5 times the tolerance off.  GREGORY-FIT sends a
+ * correction: the terminal's rebuild (its checksum verified) is within the tolerance both ways, its
+ * boundary and cross slopes are the uncorrected patch's, the file says 2.2, a 2.1 reader refuses the
+ * face by name, and a changed coefficient is caught by the checksum.  Without it the face is kept.
+ */
+static void test_gregory_fit_bump(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_bump_144(&w, BUMP_A, BUMP_H);
+    size_t len = 0;
+    char *text = igw_text(&w, &len);
+    igw_free(&w);
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(model_load_data("bump", text, len, &lm, NULL, NULL, &st));
+    free(text);
+    assert_int_equal(lm.mesh.nfaces, 1);
+    encode_with(&lm, 0.01, 3, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+    assert_string_equal(r.faces[0].why, "error");
+    encode_result_free(&r);
+    encode_with(&lm, 0.01, 7, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_FIT], 1);
+    assert_int_equal(r.faces[0].layout, CM_GREG_LAYOUT_QUAD);
+    assert_true(r.faces[0].fit_m >= 1 && r.faces[0].fit_m <= CM_FIT_MAX_M);
+    decode(&r);
+    assert_int_equal(dec.buf[CM_HDR_MINOR], 2);
+    const cm_model *m = &dec.model;
+    cm_rebuilt rb;
+    cm_status_init(&st);
+    assert_ok(cm_rebuild_face(m, 0, &rb, &rbws[0], &st)); /* the checksum matches */
+    assert_int_equal(rb.method, CM_METHOD_GREGORY_FIT);
+    assert_int_equal(rb.greg->fit, r.faces[0].fit_m);
+    double tol = 0.01 * rb.bbox;
+    face_error fe;
+    assert_true(verify_face(&lm, m, 0, &rb, HUGE_VAL, &fe));
+    if (!(fe.max < tol && fe.back < tol))
+        fail_msg("rebuilt %.3g mm (back %.3g mm) from the bump, tolerance %.3g mm", fe.max, fe.back, tol);
+    /* the correction is what does it: the same patches without it are far out ... */
+    static cm_greg_surface bare;
+    bare = *rb.greg;
+    bare.fit = 0;
+    cm_rebuilt rbare = rb;
+    rbare.greg = &bare;
+    assert_true(verify_face(&lm, m, 0, &rbare, HUGE_VAL, &fe));
+    if (!(fe.max > 2 * tol))
+        fail_msg("the patches without their correction only %.3g mm off", fe.max);
+    /* ... and it keeps their sides and cross slopes */
+    for (int i = 0; i <= 10; i++) {
+        double t = i / 10.0, uv[4][2] = {{t, 0}, {1, t}, {t, 1}, {0, t}};
+        for (int sd = 0; sd < 4; sd++) {
+            cm_vec3 S, Su, Sv, B, Bu, Bv;
+            assert_ok(cm_greg_surface_eval(rb.greg, 0, uv[sd][0], uv[sd][1], &S, &Su, &Sv));
+            assert_ok(cm_greg_surface_eval(&bare, 0, uv[sd][0], uv[sd][1], &B, &Bu, &Bv));
+            assert_near(cm_dist(S, B), 0, 1e-12 * BUMP_A);
+            assert_near(cm_dist(Su, Bu), 0, 1e-12 * BUMP_A);
+            assert_near(cm_dist(Sv, Bv), 0, 1e-12 * BUMP_A);
+        }
+    }
+    /* a coefficient changed after the CRCs: refused by checksum */
+    dec.model.ctrl[dec.model.faces[0].surf].z += m->q;
+    cm_status_init(&st);
+    assert_int_equal(cm_rebuild_face(&dec.model, 0, &rb, &rbws[0], &st), CM_E_CHECKSUM);
+    /* a 2.1 reader's view: the same file claiming 2.1 is refused at the face, by name */
+    r.bytes[CM_HDR_MINOR] = 1;
+    reseal(&r);
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    assert_ok(cm_dec_feed(&dec, r.bytes, r.len, &st));
+    assert_int_equal(cm_dec_finish(&dec, &st), CM_E_UNSUPPORTED);
+    assert_string_equal(st.where, "GREGORY-FIT face in a file older than format 2.2");
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -393,6 +479,7 @@ int main(void)
         cmocka_unit_test(test_gregory_falls_back_to_keep),
         cmocka_unit_test(test_gregory_needs_format_2),
         cmocka_unit_test(test_gregory_exact_cylinder),
+        cmocka_unit_test(test_gregory_fit_bump),
     };
     return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
 }

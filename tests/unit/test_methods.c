@@ -8,6 +8,11 @@
 #include "test_util.h"
 
 #include "cm/cm_method.h"
+#include "cm/cm_patchfit.h"
+
+#include <math.h>
+
+static cm_model model; /* where records put what they carry beyond the face's fields */
 
 static void test_every_number_has_one_module(void **state)
 {
@@ -62,24 +67,50 @@ static void test_records_round_trip(void **state)
             in[k].corner = (uint8_t)(in[k].layout == 2 ? k % 3 : 0);
             in[k].checksum = k == 0 ? 0u : k == 1 ? 0xffffffffu : 0x9e3779b9u * (uint32_t)k;
         }
+        /* GREGORY-FIT's corrections: m 1..3, one patch or five, every step, coordinates of both signs
+           up to the largest the reader takes (the other methods ignore them) */
+        static int32_t q[6][CM_FIT_MAX_COEF * 5][3];
+        cm_fit_q fit[6];
+        for (int k = 0; k < 6; k++) {
+            fit[k].m = 1 + k % CM_FIT_MAX_M;
+            fit[k].patches = in[k].layout == 1 ? (CM_MAX_GREG < 5 ? CM_MAX_GREG : 5) : 1;
+            fit[k].exp = k == 5 ? CM_FIT_MAX_EXP : k;
+            fit[k].q = (const int32_t(*)[3])q[k];
+            for (int c = 0; c < fit[k].patches * fit[k].m * fit[k].m; c++)
+                for (int a = 0; a < 3; a++)
+                    q[k][c][a] = c == 0 && a == 0 ? (k % 2 ? -CM_FIT_MAX_INT : CM_FIT_MAX_INT) : (c - 3 * a) * (k + 1);
+        }
         cm_ac_enc e;
         cm_face_ctx ctx;
         cm_face_ctx_init(&ctx);
         cm_ac_enc_init(&e, buf, sizeof buf);
         for (int k = 0; k < 6; k++)
-            cm_method_write_record(M, &e, &ctx, &in[k]);
+            cm_method_write_record(M, &e, &ctx, &in[k], &fit[k]);
         size_t n = cm_ac_enc_finish(&e);
         assert_true(n > 0 && !e.overflow);
         cm_ac_dec d;
         cm_face_ctx_init(&ctx);
         cm_ac_dec_init(&d, buf, n);
+        model.q = 1.0 / 1024.0;
+        model.nctrl = 0;
         for (int k = 0; k < 6; k++) {
             cm_face out = {0};
             cm_method_fault why = {0};
-            assert_int_equal(cm_method_read_record(M, &d, &ctx, &out, &why), CM_OK);
+            assert_int_equal(cm_method_read_record(M, &d, &ctx, &model, &out, &why), CM_OK);
             assert_int_equal(out.layout, in[k].layout);
             assert_int_equal(out.corner, in[k].corner);
             assert_int_equal(out.checksum, in[k].checksum);
+            if (!out.fit)
+                continue;
+            /* the correction, dequantised into the model's pool */
+            assert_int_equal(cm_face_fit_m(&out), fit[k].m);
+            assert_int_equal(cm_face_fit_patches(&out), fit[k].patches);
+            for (int j = 0; j < fit[k].patches * fit[k].m * fit[k].m; j++) {
+                cm_vec3 c = model.ctrl[out.surf + (uint32_t)j];
+                assert_true(c.x == ldexp(q[k][j][0], fit[k].exp) * model.q);
+                assert_true(c.y == ldexp(q[k][j][1], fit[k].exp) * model.q);
+                assert_true(c.z == ldexp(q[k][j][2], fit[k].exp) * model.q);
+            }
         }
         /* cut short: the reader says truncated, naming the record */
         cm_face_ctx_init(&ctx);
@@ -87,8 +118,9 @@ static void test_records_round_trip(void **state)
         cm_face out = {0};
         cm_method_fault why = {0};
         cm_err got = CM_OK;
+        model.nctrl = 0;
         for (int k = 0; k < 6 && got == CM_OK; k++)
-            got = cm_method_read_record(M, &d, &ctx, &out, &why);
+            got = cm_method_read_record(M, &d, &ctx, &model, &out, &why);
         assert_int_equal(got, CM_E_TRUNCATED);
         assert_non_null(why.what);
     }

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 2     /* what this writer emits when a face needs it (GREGORY) */
-#define CM_FMT_VERSION_MINOR 1     /* 1: GREGORY-EXACT */
+#define CM_FMT_VERSION_MINOR 2     /* 1: GREGORY-EXACT, 2: GREGORY-FIT */
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
@@ -100,7 +100,8 @@ enum cm_fmt_method {
     CM_METHOD_PLANE = 1,  /* spec 5A: rebuilt from the boundary */
     CM_METHOD_GREGORY = 2, /* spec §6: Gregory patches from the boundary curves (format 2) */
     CM_METHOD_GREGORY_EXACT = 3, /* GREGORY's layouts over the exact edges (format 2.1) */
-    CM_METHOD_COUNT = 4   /* methods this version knows */
+    CM_METHOD_GREGORY_FIT = 4, /* GREGORY-EXACT's patches plus a sent interior correction (format 2.2) */
+    CM_METHOD_COUNT = 5   /* methods this version knows */
 };
 
 enum cm_fmt_edge_kind {
@@ -137,11 +138,17 @@ typedef struct cm_face {
     uint16_t nloops;
     uint8_t method, flip, color; /* color: palette index, 0 = none */
     uint8_t layout, corner; /* GREGORY record (spec 15.2): layout 0/1/2 and layout 2's vertex j */
-    uint32_t surf;        /* KEEP: index of its kept surface */
+    uint8_t fit;          /* GREGORY-FIT: coefficients per direction m (bits 0-1) and patches (bits
+                             2-6) of its correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
+    uint32_t surf;        /* KEEP: index of its kept surface; GREGORY-FIT: index in ctrl[] of its
+                             first correction coefficient (patch k's (i,j) at surf + (k m + i) m + j) */
     uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */
     uint32_t rec_off;     /* byte offset in the file where the face's record starts (the range
                              coder's read position then): errors about the face name it */
 } cm_face;
+
+static inline unsigned cm_face_fit_m(const cm_face *F) { return F->fit & 3u; }
+static inline unsigned cm_face_fit_patches(const cm_face *F) { return (unsigned)F->fit >> 2; }
 
 #define CM_NO_FACE (-1)   /* edge_face: no face on that side */
 #define CM_MANY_FACES (-2) /* edge_face[e][1]: a third face uses the edge (non-manifold) */

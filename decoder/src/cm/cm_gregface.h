@@ -58,6 +58,7 @@
 #include "cm/cm_egreg.h"
 #include "cm/cm_error.h"
 #include "cm/cm_gregory.h"
+#include "cm/cm_patchfit.h"
 #include "cm/cm_vec.h"
 #include "cm_limits.h"
 
@@ -115,6 +116,10 @@ typedef struct cm_greg_surface {
     cm_cubic inner[CM_MAX_SIDES]; /* layout 1: I_k, M_k -> C (inner[k].c[0] = M_k) */
     cm_vec3 centre;              /* layout 1: C */
     cm_vec3 centre_normal;       /* layout 1: n_C (spec 6.4 step 2) */
+    /* GREGORY-FIT: fit coefficients per direction of each patch's interior correction (0: none) and
+       the coefficients, patch k's corr[k][i*fit + j] (cm_patchfit.h); evaluation adds them */
+    int fit;
+    cm_vec3 corr[CM_MAX_GREG][CM_FIT_MAX_COEF];
 } cm_greg_surface;
 
 /*

@@ -48,14 +48,25 @@ typedef struct cm_method {
  * no function pointers, so that the stack gate sees every call the decoder makes.
  */
 
+/** GREGORY-FIT's correction as the writer sends it: coefficient = q * 2^exp * the model's grid step. */
+typedef struct cm_fit_q {
+    int m;                 /* coefficients per direction, 1..CM_FIT_MAX_M */
+    int patches;           /* patches, 1..CM_MAX_GREG */
+    int exp;               /* 0..CM_FIT_MAX_EXP */
+    const int32_t (*q)[3]; /* patch k's coefficient (i,j): q[(k m + i) m + j] */
+} cm_fit_q;
+
 /**
  * FACE section: the record's fields after the method number, into F (nothing for a method without
- * a record).  CM_E_TRUNCATED when the coder overran; anything else names the field in why->what.
+ * a record); data the record carries beyond F's fields (GREGORY-FIT's correction) goes to the
+ * model's pools.  CM_E_TRUNCATED when the coder overran, CM_E_LIMIT with why->limit and why->need
+ * when a pool is full; anything else names the field in why->what.
  */
-CM_NODISCARD cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F,
-                                          cm_method_fault *why);
-/** The same fields written (the workstation's writer). */
-void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F);
+CM_NODISCARD cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m,
+                                          cm_face *F, cm_method_fault *why);
+/** The same fields written (the workstation's writer); fit: GREGORY-FIT's correction (else NULL). */
+void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F,
+                            const cm_fit_q *fit);
 /** After the face's loops are read: do they fit the method? */
 CM_NODISCARD cm_err cm_method_check_loops(const cm_method *M, const cm_model *m, const cm_face *F,
                                           cm_method_fault *why);
@@ -86,6 +97,7 @@ const cm_method *cm_method_of(unsigned id);
 /** Its name, "?" for an unknown number (reports only). */
 const char *cm_method_name(unsigned id);
 
-extern const cm_method cm_method_keep, cm_method_plane, cm_method_gregory, cm_method_gregory_exact;
+extern const cm_method cm_method_keep, cm_method_plane, cm_method_gregory, cm_method_gregory_exact,
+    cm_method_gregory_fit;
 
 #endif /* CM_METHOD_H */

@@ -28,6 +28,8 @@ typedef struct cm_patch {
     const cm_gregory *greg;   /* kind == CM_PATCH_GREGORY */
     const cm_egreg *egreg;    /* kind == CM_PATCH_EGREG */
     double u0, u1, v0, v1;    /* parameter rectangle */
+    const cm_vec3 *corr;      /* GREGORY and EGREG: an interior correction added (cm_patchfit.h) ... */
+    int fit;                  /* ... of fit x fit coefficients (0: none) */
 } cm_patch;
 
 /** View of a NURBS surface over its whole domain. */

@@ -33,6 +33,7 @@ typedef struct cm_surf_ctx {
 typedef struct cm_face_ctx {
     cm_ac_int count, method, loops, uses, back, layout, corner;
     cm_ac_prob flip, is_new, rev_new, rev_old;
+    cm_ac_int fit_m, fit_patches, fit_exp, fit_coef; /* GREGORY-FIT's correction */
 } cm_face_ctx;
 
 /* COLR: palette size, then a palette index per face */

@@ -1,0 +1,60 @@
+/* cm_patchfit.c - the interior correction of a Gregory patch (see cm_patchfit.h). */
+#include "cm/cm_patchfit.h"
+
+/* Bernstein B^d_k(t) = C(d,k) t^k (1-t)^(d-k), by repeated products (no pow: spec §2 rule 3) */
+static double bernstein(int d, int k, double t)
+{
+    if (k < 0 || k > d)
+        return 0.0;
+    double c = 1.0, s = 1.0 - t, r = 1.0;
+    for (int i = 1; i <= k; i++)
+        c = c * (double)(d - k + i) / (double)i;
+    for (int i = 0; i < k; i++)
+        r *= t;
+    for (int i = 0; i < d - k; i++)
+        r *= s;
+    return c * r;
+}
+
+void cm_fit_basis(int m, double t, double b[CM_FIT_MAX_M], double db[CM_FIT_MAX_M])
+{
+    for (int i = 0; i < CM_FIT_MAX_M; i++) {
+        b[i] = 0.0;
+        if (db)
+            db[i] = 0.0;
+    }
+    if (m < 1 || m > CM_FIT_MAX_M)
+        return;
+    int d = m + 3;
+    for (int i = 0; i < m; i++) {
+        b[i] = bernstein(d, i + 2, t);
+        if (db) /* (B^d_k)' = d (B^(d-1)_(k-1) - B^(d-1)_k) */
+            db[i] = (double)d * (bernstein(d - 1, i + 1, t) - bernstein(d - 1, i + 2, t));
+    }
+}
+
+void cm_fit_add(const cm_vec3 *c, int m, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv)
+{
+    if (m < 1 || m > CM_FIT_MAX_M)
+        return;
+    double bu[CM_FIT_MAX_M], dbu[CM_FIT_MAX_M], bv[CM_FIT_MAX_M], dbv[CM_FIT_MAX_M];
+    cm_fit_basis(m, u, bu, dbu);
+    cm_fit_basis(m, v, bv, dbv);
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+            cm_vec3 cij = c[i * m + j];
+            *S = cm_axpy(*S, bu[i] * bv[j], cij);
+            if (Su)
+                *Su = cm_axpy(*Su, dbu[i] * bv[j], cij);
+            if (Sv)
+                *Sv = cm_axpy(*Sv, bu[i] * dbv[j], cij);
+        }
+}
+
+double cm_fit_dequantise(int32_t qi, double grid, int exp)
+{
+    double step = grid; /* doubled exp times: exact, and no libm call in the decoder */
+    for (int i = 0; i < exp && i < CM_FIT_MAX_EXP; i++)
+        step *= 2.0;
+    return (double)qi * step;
+}

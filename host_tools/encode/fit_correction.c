@@ -1,0 +1,210 @@
+/*
+ * fit_correction.c - least-squares fit of GREGORY-FIT's interior corrections (see fit_correction.h).
+ *
+ * Point pairs tie a point of the patches, (k, u, v), to where the source surface says it should be:
+ * the source surface on a grid over the face, each with its foot on the patches (what spec §12
+ * measures), and each patch on a grid, each with its foot on the source surface (what verify.c's
+ * back measure sees).  Per patch the coefficients minimise the sum of squared misses plus a small
+ * ridge (a patch with few pairs stays near zero instead of swinging); three rounds, each starting
+ * from the feet of the corrected surface, since moving the surface moves the feet.
+ */
+#include "fit_correction.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cm/cm_lsq.h"
+#include "cm/cm_param.h"
+#include "verify.h"
+
+#define SRC_N 21      /* source grid per direction */
+#define BACK_N 8      /* patch grid per direction: (i/BACK_N), i = 1..BACK_N-1 */
+#define ROUNDS 3
+#define RIDGE 1e-3    /* of the mean diagonal of the normal matrix */
+
+typedef struct pair {
+    int k;
+    double u, v;
+    cm_vec3 target;  /* source point */
+    cm_vec2 suv;     /* its source parameters (back pairs: where the foot search starts) */
+    int back;        /* 1: a patch point, its target re-projected each round */
+    int have;        /* source pairs: a foot on the patches is known */
+} pair;
+
+static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k, int m, cm_vec3 *dc)
+{
+    double A[CM_FIT_MAX_COEF * CM_FIT_MAX_COEF];
+    cm_vec3 b[CM_FIT_MAX_COEF];
+    int n = m * m;
+    memset(A, 0, sizeof A);
+    for (int i = 0; i < n; i++)
+        b[i] = cm_v3(0, 0, 0);
+    int used = 0;
+    for (int q = 0; q < np; q++) {
+        if (pr[q].k != k)
+            continue;
+        double bu[CM_FIT_MAX_M], bv[CM_FIT_MAX_M], phi[CM_FIT_MAX_COEF];
+        cm_fit_basis(m, pr[q].u, bu, NULL);
+        cm_fit_basis(m, pr[q].v, bv, NULL);
+        for (int i = 0; i < m; i++)
+            for (int j = 0; j < m; j++)
+                phi[i * m + j] = bu[i] * bv[j];
+        cm_vec3 S;
+        if (cm_greg_surface_eval(gs, k, pr[q].u, pr[q].v, &S, NULL, NULL) != CM_OK)
+            continue;
+        cm_vec3 r = cm_sub(pr[q].target, S);
+        for (int a = 0; a < n; a++) {
+            b[a] = cm_axpy(b[a], phi[a], r);
+            for (int c = 0; c <= a; c++)
+                A[a * n + c] += phi[a] * phi[c];
+        }
+        used++;
+    }
+    for (int i = 0; i < n; i++)
+        dc[i] = cm_v3(0, 0, 0);
+    if (used == 0)
+        return;
+    double tr = 0;
+    for (int i = 0; i < n; i++)
+        tr += A[i * n + i];
+    for (int i = 0; i < n; i++)
+        A[i * n + i] += RIDGE * tr / n + 1e-300;
+    if (cm_chol_dense(A, n, n, NULL) != CM_OK)
+        return;
+    cm_chol_dense_solve3(A, n, n, b);
+    for (int i = 0; i < n; i++)
+        dc[i] = b[i];
+}
+
+int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0, int m, double tol, double grid,
+                   fit_record *out)
+{
+    const face_domain *fd = &lm->fds[bface];
+    if (!fd->uv || m < 1 || m > CM_FIT_MAX_M || gs0->npatch < 1 || gs0->npatch > CM_MAX_GREG)
+        return 0;
+    cm_greg_surface *gs = malloc(sizeof *gs);
+    pair *pr = malloc(sizeof *pr * (SRC_N * SRC_N + CM_MAX_GREG * BACK_N * BACK_N));
+    if (!gs || !pr) {
+        free(gs);
+        free(pr);
+        return 0;
+    }
+    *gs = *gs0;
+    gs->fit = m;
+    memset(gs->corr, 0, sizeof gs->corr);
+    int np = 0, ok = 1;
+    /* the source grid inside the outer loop, in a serpentine so that each foot starts from the last */
+    int have = 0, k = 0;
+    double u = 0, v = 0;
+    for (int i = 0; i < SRC_N && ok; i++)
+        for (int jj = 0; jj < SRC_N; jj++) {
+            int j = i % 2 ? SRC_N - 1 - jj : jj;
+            cm_vec2 uv = cm_v2(fd->umin + (fd->umax - fd->umin) * (i + 0.5) / SRC_N,
+                               fd->vmin + (fd->vmax - fd->vmin) * (j + 0.5) / SRC_N);
+            if (!cm_point_in_polygon(fd->uv + fd->loops[0].first, fd->loops[0].n, uv))
+                continue;
+            cm_vec3 P;
+            if (face_domain_eval(&lm->brep, fd, uv.x, uv.y, &P, NULL, NULL) != CM_OK) {
+                ok = 0;
+                break;
+            }
+            verify_patch_foot(gs, 0.01 * tol, P, &have, &k, &u, &v);
+            pr[np++] = (pair){k, u, v, P, uv, 0, 1};
+        }
+    int nsrc = np;
+    /* each patch's grid, its source parameters from the nearest source pair */
+    for (int kk = 0; kk < gs->npatch && ok; kk++)
+        for (int i = 1; i < BACK_N; i++)
+            for (int j = 1; j < BACK_N; j++) {
+                cm_vec3 S;
+                if (cm_greg_surface_eval(gs, kk, (double)i / BACK_N, (double)j / BACK_N, &S, NULL, NULL) != CM_OK) {
+                    ok = 0;
+                    break;
+                }
+                double best = HUGE_VAL;
+                cm_vec2 suv = cm_v2(0.5 * (fd->umin + fd->umax), 0.5 * (fd->vmin + fd->vmax));
+                for (int q = 0; q < nsrc; q++) {
+                    double d = cm_norm2(cm_sub(pr[q].target, S));
+                    if (d < best) {
+                        best = d;
+                        suv = pr[q].suv;
+                    }
+                }
+                pr[np++] = (pair){kk, (double)i / BACK_N, (double)j / BACK_N, S, suv, 1, 0};
+            }
+    double worst = HUGE_VAL;
+    for (int round = 0; round < ROUNDS && ok; round++) {
+        /* targets of the back pairs: the foot on the source surface of the current patch point */
+        for (int q = nsrc; q < np; q++) {
+            cm_vec3 S;
+            double su = pr[q].suv.x, sv = pr[q].suv.y, d;
+            if (cm_greg_surface_eval(gs, pr[q].k, pr[q].u, pr[q].v, &S, NULL, NULL) != CM_OK ||
+                cm_psurf_project_from(&fd->ps, S, &su, &sv, &d, NULL) != CM_OK) {
+                pr[q].k = -1; /* no target: left out */
+                continue;
+            }
+            /* a foot stuck in a local minimum: search again (as verify.c's back measure does) */
+            double ug, vg, dg;
+            if (!(d < 0.5 * tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d) {
+                su = ug;
+                sv = vg;
+            }
+            cm_vec3 T[3];
+            if (cm_psurf_eval(&fd->ps, su, sv, T, NULL) != CM_OK) {
+                pr[q].k = -1;
+                continue;
+            }
+            pr[q].suv = cm_v2(su, sv);
+            pr[q].target = T[0];
+        }
+        for (int kk = 0; kk < gs->npatch; kk++) {
+            cm_vec3 dc[CM_FIT_MAX_COEF];
+            solve_patch(pr, np, gs, kk, m, dc);
+            for (int i = 0; i < m * m; i++)
+                gs->corr[kk][i] = cm_add(gs->corr[kk][i], dc[i]);
+        }
+        /* the source pairs' feet on the corrected patches; the largest miss, as the fit sees it */
+        worst = 0;
+        for (int q = 0; q < nsrc; q++) {
+            int h = 1, kq = pr[q].k;
+            double uq = pr[q].u, vq = pr[q].v;
+            double d = verify_patch_foot(gs, 0.01 * tol, pr[q].target, &h, &kq, &uq, &vq);
+            worst = d > worst ? d : worst;
+            pr[q].k = kq;
+            pr[q].u = uq;
+            pr[q].v = vq;
+        }
+    }
+    /* the source grid still missed by the tolerance: no use quantising, rebuilding and measuring */
+    if (!(worst < tol))
+        ok = 0;
+    if (ok) {
+        /* the step: the grid's times the largest power of two at most tol / 256 */
+        int e = (int)floor(log2(tol / 256.0 / grid));
+        if (e < 0)
+            e = 0;
+        if (e > CM_FIT_MAX_EXP)
+            e = CM_FIT_MAX_EXP;
+        double step = ldexp(grid, e);
+        out->m = m;
+        out->npatch = gs->npatch;
+        out->exp = e;
+        memset(out->q, 0, sizeof out->q);
+        for (int kk = 0; kk < gs->npatch && ok; kk++)
+            for (int i = 0; i < m * m; i++) {
+                double c[3] = {gs->corr[kk][i].x, gs->corr[kk][i].y, gs->corr[kk][i].z};
+                for (int a = 0; a < 3; a++) {
+                    double r = nearbyint(c[a] / step);
+                    if (!(fabs(r) <= CM_FIT_MAX_INT)) {
+                        ok = 0;
+                        break;
+                    }
+                    out->q[kk * m * m + i][a] = (int32_t)r;
+                }
+            }
+    }
+    free(gs);
+    free(pr);
+    return ok;
+}

@@ -1,0 +1,40 @@
+/*
+ * fit_correction.h - the encoder's half of GREGORY-FIT: the least-squares
+ * fit of each patch's interior correction (decoder/src/cm/cm_patchfit.h)
+ * to the face's source surface, and its quantisation as the record sends it.
+ */
+#ifndef FIT_CORRECTION_H
+#define FIT_CORRECTION_H
+
+#include <stdint.h>
+
+#include "cm/cm_gregface.h"
+#include "cm/cm_method.h"
+#include "model_load.h"
+
+/** A fitted correction as the record carries it: coefficient = q * 2^exp * grid mm. */
+struct fit_record {
+    int m;                                          /* coefficients per direction, 1..CM_FIT_MAX_M */
+    int npatch;                                     /* patches of the surface it was fitted to */
+    int exp;                                        /* the step's power of two above the model grid */
+    int32_t q[CM_MAX_GREG * CM_FIT_MAX_COEF][3];    /* patch k's coefficient (i,j) at (k m + i) m + j */
+};
+typedef struct fit_record fit_record;
+
+/** The record's view for the FACE section writer (cm_method_write_record). */
+static inline cm_fit_q fit_record_view(const fit_record *r)
+{
+    cm_fit_q v = {r->m, r->npatch, r->exp, (const int32_t(*)[3])r->q};
+    return v;
+}
+
+/**
+ * Fit face f's correction with m coefficients per direction to the patches gs (built without one)
+ * and quantise it with a step of the model grid (`grid` mm) times a power of two at most tol/256.
+ * Returns 1 and the record; 0 when the face has no source domain, or the fitted patches still miss
+ * a point of the source grid by tol or more (the measure then fails: not worth a rebuild).
+ */
+int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs, int m, double tol, double grid,
+                   fit_record *out);
+
+#endif /* FIT_CORRECTION_H */
