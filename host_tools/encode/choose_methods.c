@@ -208,6 +208,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             t->layout[f] = t->corner[f] = 0;
             t->checksum[f] = 0;
             rep->layout = -1;
+            rep->fit_m = 0;
             enc_method_of((unsigned)t->method[f])->measure_kept(w, lm, f, rep);
         }
         face_surface_free(&fs[f]);

@@ -84,10 +84,29 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
     return 1;
 }
 
+/* one correction of m per direction fitted, rebuilt by the decoder's code from the quantised record
+   and measured: 1 when it passes (record in *fr, surface in rb, numbers in fe) */
+static int fit_once(enc_work *w, const loaded_model *lm, int f, int layout, int corner, double tol,
+                    const cm_greg_surface *base, int m, fit_record *fr, cm_rebuilt *rb, face_error *fe,
+                    double *best_ratio)
+{
+    if (!fit_correction(lm, lm->mesh.faces[f].brep_face, base, m, tol, w->dec.model.q, fr))
+        return 0;
+    cm_fit_q view = fit_record_view(fr);
+    if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY_FIT, layout, corner, &view, rb) != CM_OK ||
+        !verify_face(lm, &w->dec.model, f, rb, tol, fe))
+        return 0;
+    if (fe->ratio < *best_ratio)
+        *best_ratio = fe->ratio;
+    return fe->max < tol;
+}
+
 /*
- * GREGORY-FIT on one layout: the exact patches, a correction fitted with 1, 2, then 3 coefficients
- * per direction, each rebuilt by the decoder's code from the quantised record and measured; the
- * first that passes wins (its record in *fr).  Returns 1 with rb and fe of the winner.
+ * GREGORY-FIT on one layout: the exact patches plus a correction.  The functions of m = 1 and 2 are
+ * combinations of those of m = 3 (Bernstein degree elevation), so m = 3 fits at least as closely:
+ * it is tried first, and when it fails the face is given up at once (most trials fail: this is the
+ * encoder's time); when it passes, m = 1 and then 2 are tried for a smaller record.  Returns 1 with
+ * the winner's record, surface and numbers.
  */
 static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corner, double tol, fit_record *fr,
                       cm_rebuilt *rb, face_error *fe, double *best_ratio)
@@ -97,23 +116,29 @@ static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corn
     if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY_EXACT, layout, corner, NULL, &base) != CM_OK)
         return 0;
     cm_greg_surface *gs = malloc(sizeof *gs); /* the base patches: the next rebuild reuses the workspace */
-    if (!gs)
+    fit_record *best = malloc(sizeof *best);
+    if (!gs || !best) {
+        free(gs);
+        free(best);
         return 0;
+    }
     *gs = *base.greg;
-    int ok = 0;
-    for (int m = 1; m <= CM_FIT_MAX_M && !ok; m++) {
-        if (!fit_correction(lm, lm->mesh.faces[f].brep_face, gs, m, tol, w->dec.model.q, fr))
-            continue;
-        cm_fit_q view = fit_record_view(fr);
-        if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY_FIT, layout, corner, &view, rb) != CM_OK)
-            continue;
-        if (!verify_face(lm, &w->dec.model, f, rb, tol, fe))
-            continue;
-        if (fe->ratio < *best_ratio)
-            *best_ratio = fe->ratio;
-        ok = fe->max < tol;
+    int ok = fit_once(w, lm, f, layout, corner, tol, gs, CM_FIT_MAX_M, best, rb, fe, best_ratio);
+    if (ok) {
+        face_error best_fe = *fe;
+        int smaller = 0;
+        for (int m = 1; m < CM_FIT_MAX_M && !smaller; m++)
+            smaller = fit_once(w, lm, f, layout, corner, tol, gs, m, fr, rb, fe, best_ratio);
+        if (!smaller) {
+            /* m = 3 after all: rebuilt again (the tries since reused the workspace) */
+            *fr = *best;
+            *fe = best_fe;
+            cm_fit_q view = fit_record_view(fr);
+            ok = enc_trial_rebuild(w, f, CM_METHOD_GREGORY_FIT, layout, corner, &view, rb) == CM_OK;
+        }
     }
     free(gs);
+    free(best);
     return ok;
 }
 

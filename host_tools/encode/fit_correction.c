@@ -109,7 +109,7 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
                 ok = 0;
                 break;
             }
-            verify_patch_foot(gs, 0.01 * tol, P, &have, &k, &u, &v);
+            verify_patch_foot(gs, 0.1 * tol, P, &have, &k, &u, &v);
             pr[np++] = (pair){k, u, v, P, uv, 0, 1};
         }
     int nsrc = np;
@@ -144,9 +144,10 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
                 pr[q].k = -1; /* no target: left out */
                 continue;
             }
-            /* a foot stuck in a local minimum: search again (as verify.c's back measure does) */
+            /* a foot stuck in a local minimum: search again (as verify.c's back measure does), in the
+               first round only (later ones start from that foot, and the surface moved little) */
             double ug, vg, dg;
-            if (!(d < 0.5 * tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d) {
+            if (round == 0 && !(d < 0.5 * tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d) {
                 su = ug;
                 sv = vg;
             }
@@ -169,7 +170,7 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
         for (int q = 0; q < nsrc; q++) {
             int h = 1, kq = pr[q].k;
             double uq = pr[q].u, vq = pr[q].v;
-            double d = verify_patch_foot(gs, 0.01 * tol, pr[q].target, &h, &kq, &uq, &vq);
+            double d = verify_patch_foot(gs, 0.1 * tol, pr[q].target, &h, &kq, &uq, &vq);
             worst = d > worst ? d : worst;
             pr[q].k = kq;
             pr[q].u = uq;
