@@ -187,7 +187,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
     for (int c = 0; c < nc && fit; c++) {
         /* the quad only: on the N-split and the degenerate layouts the error sits along the inner
            curves and at the collapsed corner, where a correction that keeps the patches' sides
-           cannot reach (corpus: 0 of 4709 N-split trials passed, the fit made most worse) */
+           cannot reach (Shelt_channel_5: 0 of 3819 N-split trials passed, the fit made most worse) */
         if (cand_layout[c] != CM_GREG_LAYOUT_QUAD)
             continue;
         cm_rebuilt rb;

@@ -23,13 +23,12 @@
 #define ROUNDS 3
 #define RIDGE 1e-3    /* of the mean diagonal of the normal matrix */
 
+/* a point (k, u, v) of the patches and where it should be; k < 0: left out (no target found) */
 typedef struct pair {
     int k;
     double u, v;
-    cm_vec3 target;  /* source point */
-    cm_vec2 suv;     /* its source parameters (back pairs: where the foot search starts) */
-    int back;        /* 1: a patch point, its target re-projected each round */
-    int have;        /* source pairs: a foot on the patches is known */
+    cm_vec3 target;  /* a point of the source surface */
+    cm_vec2 suv;     /* its source parameters (back pairs: where the next foot search starts) */
 } pair;
 
 static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k, int m, cm_vec3 *dc)
@@ -110,7 +109,7 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
                 break;
             }
             verify_patch_foot(gs, 0.1 * tol, P, &have, &k, &u, &v);
-            pr[np++] = (pair){k, u, v, P, uv, 0, 1};
+            pr[np++] = (pair){k, u, v, P, uv};
         }
     int nsrc = np;
     /* each patch's grid, its source parameters from the nearest source pair */
@@ -131,7 +130,7 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
                         suv = pr[q].suv;
                     }
                 }
-                pr[np++] = (pair){kk, (double)i / BACK_N, (double)j / BACK_N, S, suv, 1, 0};
+                pr[np++] = (pair){kk, (double)i / BACK_N, (double)j / BACK_N, S, suv};
             }
     double worst = HUGE_VAL;
     for (int round = 0; round < ROUNDS && ok; round++) {
@@ -147,7 +146,8 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
             /* a foot stuck in a local minimum: search again (as verify.c's back measure does), in the
                first round only (later ones start from that foot, and the surface moved little) */
             double ug, vg, dg;
-            if (round == 0 && !(d < 0.5 * tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d) {
+            if (round == 0 && !(d < 0.5 * tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK &&
+                dg < d) {
                 su = ug;
                 sv = vg;
             }
