@@ -8,7 +8,7 @@
  * saddles: 2555 of 4826 kept faces of a corpus run were measured over it),
  * and at a tolerance of 0.1 % most curved faces do.  Keeping such a face
  * sends its whole surface (hundreds of bytes and more); a correction of one
- * to nine vectors per patch, quantised at 1/256 of the tolerance, costs tens.
+ * to 25 vectors per patch, quantised at 1/256 of the tolerance, costs tens.
  * The correction vanishes with its first derivatives on every patch side, so
  * the boundary and the G1 conditions are GREGORY-EXACT's.
  *
@@ -60,7 +60,7 @@ cm_err cm_gregory_fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, 
         why->need = (uint64_t)m->nctrl + n;
         return CM_E_LIMIT;
     }
-    F->fit = (uint8_t)(fm | (np << 2));
+    F->fit = cm_face_fit_pack((unsigned)fm, (unsigned)np);
     F->surf = m->nctrl;
     for (uint32_t i = 0; i < n; i++) {
         double c[3];

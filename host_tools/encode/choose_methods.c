@@ -54,7 +54,7 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
             *F = saved;
             return CM_E_LIMIT;
         }
-        F->fit = (uint8_t)(fit->m | (fit->patches << 2));
+        F->fit = cm_face_fit_pack((unsigned)fit->m, (unsigned)fit->patches);
         F->surf = m->nctrl;
         for (uint32_t i = 0; i < n; i++)
             m->ctrl[m->nctrl + i] = cm_v3(cm_fit_dequantise(fit->q[i][0], m->q, fit->exp),

@@ -102,11 +102,11 @@ static int fit_once(enc_work *w, const loaded_model *lm, int f, int layout, int 
 }
 
 /*
- * GREGORY-FIT on one layout: the exact patches plus a correction.  The functions of m = 1 and 2 are
- * combinations of those of m = 3 (Bernstein degree elevation), so m = 3 fits at least as closely:
- * it is tried first, and when it fails the face is given up at once (most trials fail: this is the
- * encoder's time); when it passes, m = 1 and then 2 are tried for a smaller record.  Returns 1 with
- * the winner's record, surface and numbers.
+ * GREGORY-FIT on one layout: the exact patches plus a correction.  The functions of a smaller m are
+ * combinations of those of the largest (Bernstein degree elevation), so the largest fits at least
+ * as closely: it is tried first, and when it fails the face is given up at once (most trials fail:
+ * this is the encoder's time); when it passes, m = 1, 2, ... are tried for a smaller record.
+ * Returns 1 with the winner's record, surface and numbers.
  */
 static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corner, double tol, fit_record *fr,
                       cm_rebuilt *rb, face_error *fe, double *best_ratio)
@@ -130,7 +130,7 @@ static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corn
         for (int m = 1; m < CM_FIT_MAX_M && !smaller; m++)
             smaller = fit_once(w, lm, f, layout, corner, tol, gs, m, fr, rb, fe, best_ratio);
         if (!smaller) {
-            /* m = 3 after all: rebuilt again (the tries since reused the workspace) */
+            /* the largest m after all: rebuilt again (the tries since reused the workspace) */
             *fr = *best;
             *fe = best_fe;
             cm_fit_q view = fit_record_view(fr);

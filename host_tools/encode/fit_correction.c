@@ -31,11 +31,14 @@ typedef struct pair {
     cm_vec2 suv;     /* its source parameters (back pairs: where the next foot search starts) */
 } pair;
 
+/* the normal equations of patch k's coefficients (m^2 unknowns, three right-hand sides), solved with
+   the shared banded Cholesky at full bandwidth (m^2 can exceed the dense solver's CM_MAX_DENSE) */
 static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k, int m, cm_vec3 *dc)
 {
-    double A[CM_FIT_MAX_COEF * CM_FIT_MAX_COEF];
-    cm_vec3 b[CM_FIT_MAX_COEF];
-    int n = m * m;
+    enum { N = CM_FIT_MAX_COEF };
+    double A[N * N]; /* banded lower storage, half bandwidth n - 1: row i at i*n */
+    cm_vec3 b[N];
+    int n = m * m, w = n - 1;
     memset(A, 0, sizeof A);
     for (int i = 0; i < n; i++)
         b[i] = cm_v3(0, 0, 0);
@@ -43,7 +46,7 @@ static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k
     for (int q = 0; q < np; q++) {
         if (pr[q].k != k)
             continue;
-        double bu[CM_FIT_MAX_M], bv[CM_FIT_MAX_M], phi[CM_FIT_MAX_COEF];
+        double bu[CM_FIT_MAX_M], bv[CM_FIT_MAX_M], phi[N];
         cm_fit_basis(m, pr[q].u, bu, NULL);
         cm_fit_basis(m, pr[q].v, bv, NULL);
         for (int i = 0; i < m; i++)
@@ -56,7 +59,7 @@ static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k
         for (int a = 0; a < n; a++) {
             b[a] = cm_axpy(b[a], phi[a], r);
             for (int c = 0; c <= a; c++)
-                A[a * n + c] += phi[a] * phi[c];
+                A[CM_BAND_IDX(a, c, w)] += phi[a] * phi[c];
         }
         used++;
     }
@@ -66,12 +69,12 @@ static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k
         return;
     double tr = 0;
     for (int i = 0; i < n; i++)
-        tr += A[i * n + i];
+        tr += A[CM_BAND_IDX(i, i, w)];
     for (int i = 0; i < n; i++)
-        A[i * n + i] += RIDGE * tr / n + 1e-300;
-    if (cm_chol_dense(A, n, n, NULL) != CM_OK)
+        A[CM_BAND_IDX(i, i, w)] += RIDGE * tr / n + 1e-300;
+    if (cm_chol_band(A, n, w, NULL) != CM_OK)
         return;
-    cm_chol_dense_solve3(A, n, n, b);
+    cm_chol_band_solve3(A, n, w, b);
     for (int i = 0; i < n; i++)
         dc[i] = b[i];
 }

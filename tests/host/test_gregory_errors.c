@@ -619,7 +619,8 @@ static void test_gregory_fit_records(void **state)
     assert_decodes(2);
     /* the coefficients landed in the pool, dequantised: -7 * 2^3 grid steps */
     const cm_face *F = &dec->model.faces[0];
-    assert_int_equal(F->fit, 2 | 1 << 2);
+    assert_int_equal(cm_face_fit_m(F), 2);
+    assert_int_equal(cm_face_fit_patches(F), 1);
     assert_int_equal(dec->model.nctrl - F->surf, 4);
     assert_true(dec->model.ctrl[F->surf + 3].y == -7.0 * 8.0 * src->model.q);
     polygon_face(5, 0, CM_METHOD_GREGORY_FIT, CM_GREG_LAYOUT_SPLIT, 0);

@@ -138,8 +138,8 @@ typedef struct cm_face {
     uint16_t nloops;
     uint8_t method, flip, color; /* color: palette index, 0 = none */
     uint8_t layout, corner; /* GREGORY record (spec 15.2): layout 0/1/2 and layout 2's vertex j */
-    uint8_t fit;          /* GREGORY-FIT: coefficients per direction m (bits 0-1) and patches (bits
-                             2-6) of its correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
+    uint8_t fit;          /* GREGORY-FIT: coefficients per direction m (bits 0-2) and patches (bits
+                             3-7) of its correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
     uint32_t surf;        /* KEEP: index of its kept surface; GREGORY-FIT: index in ctrl[] of its
                              first correction coefficient (patch k's (i,j) at surf + (k m + i) m + j) */
     uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */
@@ -147,8 +147,9 @@ typedef struct cm_face {
                              coder's read position then): errors about the face name it */
 } cm_face;
 
-static inline unsigned cm_face_fit_m(const cm_face *F) { return F->fit & 3u; }
-static inline unsigned cm_face_fit_patches(const cm_face *F) { return (unsigned)F->fit >> 2; }
+static inline uint8_t cm_face_fit_pack(unsigned m, unsigned patches) { return (uint8_t)((m & 7u) | (patches << 3)); }
+static inline unsigned cm_face_fit_m(const cm_face *F) { return F->fit & 7u; }
+static inline unsigned cm_face_fit_patches(const cm_face *F) { return (unsigned)F->fit >> 3; }
 
 #define CM_NO_FACE (-1)   /* edge_face: no face on that side */
 #define CM_MANY_FACES (-2) /* edge_face[e][1]: a third face uses the edge (non-manifold) */

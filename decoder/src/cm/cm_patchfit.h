@@ -30,7 +30,7 @@
 
 #include "cm/cm_vec.h"
 
-#define CM_FIT_MAX_M 3                                /* coefficients per direction */
+#define CM_FIT_MAX_M 5                                /* coefficients per direction */
 #define CM_FIT_MAX_COEF (CM_FIT_MAX_M * CM_FIT_MAX_M) /* per patch */
 #define CM_FIT_MAX_EXP 40                             /* a step at most 2^40 model grid steps */
 #define CM_FIT_MAX_INT (1 << 24)                      /* |quantised coordinate| beyond is refused */
