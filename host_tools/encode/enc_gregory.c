@@ -142,6 +142,21 @@ static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corn
     return ok;
 }
 
+/* candidate (layout, corner) passed: its record in t, its numbers in rep */
+static void take_candidate(tx *t, int f, int layout, int corner, const cm_rebuilt *rb, const face_error *fe,
+                           face_report *rep)
+{
+    t->layout[f] = layout;
+    t->corner[f] = corner;
+    t->checksum[f] = rb->checksum;
+    rep->layout = layout;
+    rep->corner = corner;
+    rep->rebuild_max = fe->max;
+    rep->rebuild_avg = fe->avg;
+    rep->ratio = fe->ratio;
+    rep->why = NULL;
+}
+
 /* spec §14 candidate list of the GREGORY family (method: GREGORY, GREGORY-EXACT or GREGORY-FIT); the
    first that passes §12 wins */
 static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
@@ -202,16 +217,8 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         }
         free(t->fit[f]);
         t->fit[f] = fr;
-        t->layout[f] = cand_layout[c];
-        t->corner[f] = cand_j[c];
-        t->checksum[f] = rb.checksum;
-        rep->layout = cand_layout[c];
-        rep->corner = cand_j[c];
-        rep->rebuild_max = fe.max;
-        rep->rebuild_avg = fe.avg;
-        rep->ratio = fe.ratio;
+        take_candidate(t, f, cand_layout[c], cand_j[c], &rb, &fe, rep);
         rep->fit_m = fr->m;
-        rep->why = NULL;
         return 1;
     }
     for (int c = 0; c < nc && !fit; c++) {
@@ -235,15 +242,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         }
         if (!face_surface_set(&fs[f], &rb))
             return 0;
-        t->layout[f] = cand_layout[c];
-        t->corner[f] = cand_j[c];
-        t->checksum[f] = rb.checksum;
-        rep->layout = cand_layout[c];
-        rep->corner = cand_j[c];
-        rep->rebuild_max = fe.max;
-        rep->rebuild_avg = fe.avg;
-        rep->ratio = fe.ratio;
-        rep->why = NULL;
+        take_candidate(t, f, cand_layout[c], cand_j[c], &rb, &fe, rep);
         return 1;
     }
     /* the reason of the candidate that came closest: one built and measured over the tolerance says

@@ -33,19 +33,25 @@ static cm_mesh_face mfaces[64];
 #define CR 10.0 /* spec T4/T5: radius 10, length 20 */
 #define CH 20.0
 
+/* the model w holds, loaded as `name` (w freed); it must have `faces` faces */
+static void load_igw(igw *w, const char *name, int faces, loaded_model *lm)
+{
+    size_t len = 0;
+    char *text = igw_text(w, &len);
+    igw_free(w);
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(model_load_data(name, text, len, lm, NULL, NULL, &st));
+    free(text);
+    assert_int_equal(lm->mesh.nfaces, faces);
+}
+
 static void load_split_cylinder(loaded_model *lm)
 {
     igw w;
     igw_init(&w);
     igw_split_half_cylinder_144(&w, CR, CH);
-    size_t len = 0;
-    char *text = igw_text(&w, &len);
-    igw_free(&w);
-    cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data("split-cylinder", text, len, lm, NULL, NULL, &st));
-    free(text);
-    assert_int_equal(lm->mesh.nfaces, 2);
+    load_igw(&w, "split-cylinder", 2, lm);
 }
 
 /* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT, 7 then GREGORY-FIT
@@ -240,6 +246,19 @@ static void reseal(encode_result *r)
     cm_put_u32(r->bytes + r->len - 4, cm_crc32(r->bytes, r->len - 4));
 }
 
+/* the file r, its header claiming format 2.`minor`, must decode up to a face refused as `why` */
+static void assert_refused_as_minor(encode_result *r, int minor, const char *why)
+{
+    r->bytes[CM_HDR_MINOR] = (uint8_t)minor;
+    reseal(r);
+    cm_status st;
+    cm_status_init(&st);
+    cm_dec_init(&dec);
+    assert_ok(cm_dec_feed(&dec, r->bytes, r->len, &st));
+    assert_int_equal(cm_dec_finish(&dec, &st), CM_E_UNSUPPORTED);
+    assert_string_equal(st.where, why);
+}
+
 /*
  * The split cylinder at 1e-5 of its size, where K7 refuses its arcs (above): GREGORY-EXACT takes
  * the quarter circles as they are, and a surface linear along its axis between two arcs comes back
@@ -341,13 +360,7 @@ static void test_gregory_exact_cylinder(void **state)
     cm_status_init(&st);
     assert_int_equal(cm_rebuild_face(&dec.model, 1, &rb[1], &rbws[1], &st), CM_E_CHECKSUM);
     /* a 2.0 reader's view: the same file claiming 2.0 is refused at the face, by name */
-    r.bytes[CM_HDR_MINOR] = 0;
-    reseal(&r);
-    cm_status_init(&st);
-    cm_dec_init(&dec);
-    assert_ok(cm_dec_feed(&dec, r.bytes, r.len, &st));
-    assert_int_equal(cm_dec_finish(&dec, &st), CM_E_UNSUPPORTED);
-    assert_string_equal(st.where, "GREGORY-EXACT face in a file older than format 2.1");
+    assert_refused_as_minor(&r, 0, "GREGORY-EXACT face in a file older than format 2.1");
     encode_result_free(&r);
     model_free(&lm);
 }
@@ -406,14 +419,7 @@ static void test_gregory_fit_bump(void **state)
     igw w;
     igw_init(&w);
     igw_bump_144(&w, BUMP_A, BUMP_H);
-    size_t len = 0;
-    char *text = igw_text(&w, &len);
-    igw_free(&w);
-    cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data("bump", text, len, &lm, NULL, NULL, &st));
-    free(text);
-    assert_int_equal(lm.mesh.nfaces, 1);
+    load_igw(&w, "bump", 1, &lm);
     encode_with(&lm, 0.01, 3, &r);
     assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
     assert_string_equal(r.faces[0].why, "error");
@@ -426,6 +432,7 @@ static void test_gregory_fit_bump(void **state)
     assert_int_equal(dec.buf[CM_HDR_MINOR], 2);
     const cm_model *m = &dec.model;
     cm_rebuilt rb;
+    cm_status st;
     cm_status_init(&st);
     assert_ok(cm_rebuild_face(m, 0, &rb, &rbws[0], &st)); /* the checksum matches */
     assert_int_equal(rb.method, CM_METHOD_GREGORY_FIT);
@@ -461,13 +468,7 @@ static void test_gregory_fit_bump(void **state)
     cm_status_init(&st);
     assert_int_equal(cm_rebuild_face(&dec.model, 0, &rb, &rbws[0], &st), CM_E_CHECKSUM);
     /* a 2.1 reader's view: the same file claiming 2.1 is refused at the face, by name */
-    r.bytes[CM_HDR_MINOR] = 1;
-    reseal(&r);
-    cm_status_init(&st);
-    cm_dec_init(&dec);
-    assert_ok(cm_dec_feed(&dec, r.bytes, r.len, &st));
-    assert_int_equal(cm_dec_finish(&dec, &st), CM_E_UNSUPPORTED);
-    assert_string_equal(st.where, "GREGORY-FIT face in a file older than format 2.2");
+    assert_refused_as_minor(&r, 1, "GREGORY-FIT face in a file older than format 2.2");
     encode_result_free(&r);
     model_free(&lm);
 }
