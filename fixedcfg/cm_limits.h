@@ -149,6 +149,15 @@
 #  define CM_MAX_TESS_POINTS 8192
 #endif
 
+/* Slots of each of the two tables in which the tessellation's refinement remembers the triangles
+ * and sides that passed its deviation test in the last round, so that it does not test them again
+ * (the test of a piece depends only on its corners).  A lossy cache: when a table is half full the
+ * rest are tested again, so a smaller size costs speed, never output.  Unit: slots of 8 bytes, two
+ * tables.  A power of two.  Not a limit of the format (cm-limits does not list it). */
+#ifndef CM_TESS_PASS_SLOTS
+#  define CM_TESS_PASS_SLOTS 16384
+#endif
+
 /* Size of one .cmz file.  Unit: bytes.  Hard bound 2^31-1.  The decoder
  * holds the whole compressed file while decoding it. */
 #ifndef CM_MAX_FILE_BYTES

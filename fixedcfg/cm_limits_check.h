@@ -73,6 +73,10 @@ _Static_assert(CM_MAX_MODEL_LOOPS >= CM_MAX_LOOPS && CM_MAX_MODEL_LOOPS <= CM_HA
                "CM_MAX_MODEL_LOOPS must be in [CM_MAX_LOOPS, 16777215]");
 _Static_assert(CM_MAX_MODEL_USES >= CM_MAX_FACE_EDGES && CM_MAX_MODEL_USES <= CM_HARD_MAX_COUNT24,
                "CM_MAX_MODEL_USES must be in [CM_MAX_FACE_EDGES, 16777215]");
+_Static_assert(CM_TESS_PASS_SLOTS >= 2 && CM_TESS_PASS_SLOTS <= (1 << 24) &&
+                   (CM_TESS_PASS_SLOTS & (CM_TESS_PASS_SLOTS - 1)) == 0,
+               "CM_TESS_PASS_SLOTS must be a power of two in [2, 2^24]");
+_Static_assert(CM_MAX_TESS_POINTS < (1 << 21), "the refinement's pass keys hold a point index in 21 bits");
 _Static_assert(CM_MAX_EDGE_SAMPLES >= 2 && CM_MAX_EDGE_SAMPLES <= CM_HARD_MAX_COUNT16,
                "CM_MAX_EDGE_SAMPLES must be in [2, 65535]");
 _Static_assert(CM_STACK_FN_MAX >= 1024 && CM_STACK_FN_MAX <= CM_STACK_BUDGET,

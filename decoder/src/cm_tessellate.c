@@ -453,6 +453,109 @@ static cm_vec3 chart_normal(const chart *c, double u, double v, cm_vec2 toward)
     return cm_v3(0, 0, c->sign);
 }
 
+/* a triangle of the flat mesh tested inside: at its centre, and halfway from it to each corner */
+static cm_err test_triangle(const chart *c, cm_tess_ws *ws, const int *tc, double tol, double su, double sv,
+                            int *npts, cm_status *st)
+{
+    cm_vec2 tuv[4];
+    cm_vec3 txyz[4];
+    for (int q = 0; q < 4; q++) {
+        double w[3] = {1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0};
+        if (q > 0)
+            for (int k = 0; k < 3; k++)
+                w[k] = k == q - 1 ? 2.0 / 3.0 : 1.0 / 6.0;
+        tuv[q] = cm_v2(w[0] * ws->uv[tc[0]].x + w[1] * ws->uv[tc[1]].x + w[2] * ws->uv[tc[2]].x,
+                       w[0] * ws->uv[tc[0]].y + w[1] * ws->uv[tc[1]].y + w[2] * ws->uv[tc[2]].y);
+        txyz[q] = cm_add(cm_add(cm_scale(ws->xyz[tc[0]], w[0]), cm_scale(ws->xyz[tc[1]], w[1])),
+                         cm_scale(ws->xyz[tc[2]], w[2]));
+    }
+    return refine_worst(c, ws, tuv, txyz, 4, tol, su, sv, npts, st);
+}
+
+/* an inner side i -> j tested at its midpoint and quarter points (the surface's error along a long
+   side need not peak in the middle) */
+static cm_err test_side(const chart *c, cm_tess_ws *ws, int i, int j, double tol, double su, double sv, int *npts,
+                        cm_status *st)
+{
+    cm_vec2 suv[3];
+    cm_vec3 sxyz[3];
+    for (int q = 0; q < 3; q++) {
+        double s = q == 0 ? 0.5 : (q == 1 ? 0.25 : 0.75);
+        suv[q] = cm_v2((1 - s) * ws->uv[i].x + s * ws->uv[j].x, (1 - s) * ws->uv[i].y + s * ws->uv[j].y);
+        sxyz[q] = cm_add(cm_scale(ws->xyz[i], 1 - s), cm_scale(ws->xyz[j], s));
+    }
+    return refine_worst(c, ws, suv, sxyz, 3, tol, su, sv, npts, st);
+}
+
+/*
+ * What passed the deviation test in the last round.  The test of a triangle (its corners in the
+ * triangulator's order) or of an inner side (i < j) depends on nothing but its corners, which never
+ * move; the triangulation is rebuilt each round, but far from the points just added it comes out
+ * the same, and such pieces used to be tested again, round after round (27-35 surface evaluations
+ * per output vertex, issue 15).  A piece found in the last round's table is passed again without
+ * a test, so the output is the same as testing it.  Open addressing in a table sized to the round
+ * (at most CM_TESS_PASS_SLOTS), filled to half at most: a piece that finds no room is tested again
+ * next round, which costs only time.
+ */
+typedef struct pass_table {
+    uint64_t *key; /* 0: empty */
+    uint32_t mask; /* slots - 1 */
+    uint32_t n, room;
+} pass_table;
+
+static uint64_t tri_key(const int *tc)
+{
+    return (UINT64_C(1) << 63) | ((uint64_t)tc[0] << 42) | ((uint64_t)tc[1] << 21) | (uint64_t)tc[2];
+}
+
+static uint64_t side_key(int i, int j) { return (UINT64_C(1) << 62) | ((uint64_t)i << 21) | (uint64_t)j; }
+
+static uint32_t pass_slot(uint64_t k, uint32_t mask)
+{
+    k ^= k >> 31;
+    k *= UINT64_C(0x9e3779b97f4a7c15);
+    k ^= k >> 29;
+    return (uint32_t)k & mask;
+}
+
+/* an empty table of at least 4 `pieces` slots (fewer when the build, or ws->pass_slots, has fewer) */
+static void pass_begin(pass_table *t, const cm_tess_ws *ws, uint64_t *key, int pieces)
+{
+    uint32_t cap = ws->pass_slots > 0 && ws->pass_slots < CM_TESS_PASS_SLOTS ? ws->pass_slots : CM_TESS_PASS_SLOTS;
+    uint32_t slots = 1;
+    while (slots < cap && slots < 4u * (uint32_t)pieces)
+        slots *= 2;
+    for (uint32_t s = 0; s < slots; s++)
+        key[s] = 0;
+    t->key = key;
+    t->mask = slots - 1;
+    t->n = 0;
+    t->room = slots / 2;
+}
+
+static int pass_has(const pass_table *t, uint64_t k)
+{
+    for (uint32_t s = pass_slot(k, t->mask), probes = 0; probes <= t->mask; s = (s + 1) & t->mask, probes++) {
+        if (t->key[s] == k)
+            return 1;
+        if (t->key[s] == 0)
+            return 0;
+    }
+    return 0;
+}
+
+static void pass_add(pass_table *t, uint64_t k)
+{
+    if (t->n >= t->room)
+        return;
+    uint32_t s = pass_slot(k, t->mask);
+    while (t->key[s] != 0 && t->key[s] != k)
+        s = (s + 1) & t->mask;
+    if (t->key[s] == 0)
+        t->n++;
+    t->key[s] = k;
+}
+
 /*
  * Refinement of curved charts: an interior grid follows curvature sampled at a few points, which
  * misses peaks (a rational arc's parameter speed varies along it), and triangles reaching from the
@@ -467,49 +570,50 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
 {
     int npts = *npts_io, ntris = *ntris_io, nxyz = 0, nbnd = ws->loop_start[nloops];
     cm_err e = CM_OK;
+    pass_table last = {NULL, 0, 0, 0}, now;
     for (int round = 0; c->kind != CHART_FRAME && round < TESS_REFINE_ROUNDS; round++) {
         for (; nxyz < npts; nxyz++)
             if ((e = point_xyz(c, ws, nxyz, st)) != CM_OK)
                 return e;
+        pass_begin(&now, ws, ws->passed[round & 1], ntris + ntris / 2 * 3);
         int before = npts;
         for (int t = 0; t < ntris && npts < ws->point_cap; t++) {
             const int *tc = ws->tris[t];
-            /* inside: the centre, and halfway from it to each corner */
-            cm_vec2 tuv[4];
-            cm_vec3 txyz[4];
-            for (int q = 0; q < 4; q++) {
-                double w[3] = {1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0};
-                if (q > 0)
-                    for (int k = 0; k < 3; k++)
-                        w[k] = k == q - 1 ? 2.0 / 3.0 : 1.0 / 6.0;
-                tuv[q] = cm_v2(w[0] * ws->uv[tc[0]].x + w[1] * ws->uv[tc[1]].x + w[2] * ws->uv[tc[2]].x,
-                               w[0] * ws->uv[tc[0]].y + w[1] * ws->uv[tc[1]].y + w[2] * ws->uv[tc[2]].y);
-                txyz[q] = cm_add(cm_add(cm_scale(ws->xyz[tc[0]], w[0]), cm_scale(ws->xyz[tc[1]], w[1])),
-                                 cm_scale(ws->xyz[tc[2]], w[2]));
+            uint64_t key = tri_key(tc);
+            if (last.key && pass_has(&last, key)) {
+                pass_add(&now, key);
+                ws->skipped++;
+            } else {
+                int tested = npts;
+                ws->tested++;
+                if ((e = test_triangle(c, ws, tc, tol, su, sv, &npts, st)) != CM_OK)
+                    return e;
+                if (npts == tested && npts < ws->point_cap)
+                    pass_add(&now, key);
             }
-            if ((e = refine_worst(c, ws, tuv, txyz, 4, tol, su, sv, &npts, st)) != CM_OK)
-                return e;
             for (int k = 0; k < 3 && npts < ws->point_cap; k++) {
                 int i = tc[k], j = tc[(k + 1) % 3];
                 if (j < i) /* each inner side once, from the triangle that has it as i -> j, i < j */
                     continue;
                 if (boundary_side(ws->loop_start, nloops, nbnd, i, j))
                     continue;
-                /* a side: its midpoint and quarter points (the surface's error along a long side
-                   need not peak in the middle) */
-                cm_vec2 suv[3];
-                cm_vec3 sxyz[3];
-                for (int q = 0; q < 3; q++) {
-                    double s = q == 0 ? 0.5 : (q == 1 ? 0.25 : 0.75);
-                    suv[q] = cm_v2((1 - s) * ws->uv[i].x + s * ws->uv[j].x, (1 - s) * ws->uv[i].y + s * ws->uv[j].y);
-                    sxyz[q] = cm_add(cm_scale(ws->xyz[i], 1 - s), cm_scale(ws->xyz[j], s));
+                uint64_t skey = side_key(i, j);
+                if (last.key && pass_has(&last, skey)) {
+                    pass_add(&now, skey);
+                    ws->skipped++;
+                    continue;
                 }
-                if ((e = refine_worst(c, ws, suv, sxyz, 3, tol, su, sv, &npts, st)) != CM_OK)
+                int tested = npts;
+                ws->tested++;
+                if ((e = test_side(c, ws, i, j, tol, su, sv, &npts, st)) != CM_OK)
                     return e;
+                if (npts == tested && npts < ws->point_cap)
+                    pass_add(&now, skey);
             }
         }
         if (npts == before)
             break;
+        last = now;
         min_dist *= 0.5;
         if ((e = triangulate(ws, npts, nloops, min_dist, tol, &ntris, st)) != CM_OK)
             return e;
@@ -955,8 +1059,11 @@ cm_err cm_tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *me
         info = &local;
     info->points = info->triangles = info->max_edge_samples = 0;
     info->max_gap = 0;
+    ws->tested = ws->skipped = 0;
     int open = st != NULL && st->code == CM_OK;
     cm_err e = tessellate_face(m, f, tol, mesh, ws, info, st);
+    info->tested = ws->tested;
+    info->skipped = ws->skipped;
     /* whatever failed (the rebuild, a kernel, the mesh's room) failed for this face: the status
        names it and, as its place in the input, the face's record */
     if (e != CM_OK && open)

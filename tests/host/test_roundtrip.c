@@ -271,6 +271,74 @@ static void test_half_cylinder(void **state)
     model_free(&lm);
 }
 
+/* ---- the refinement spares tests of pieces that passed the round before, and gives the same mesh ----
+   Each model (a KEEP B-spline net, an exact Gregory face over two half circles, a GREGORY-FIT bump)
+   is tessellated with the pass cache and with none (ws.pass_slots = 1): the same positions, normals
+   and indices to the bit, and the cache spared tests (else this would compare a path with itself) */
+static uint32_t tessellate_counting(cm_mesh *mesh, long *tested, long *skipped)
+{
+    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024};
+    cm_mesh_clear(mesh);
+    *tested = *skipped = 0;
+    for (uint32_t f = 0; f < dec.model.nfaces; f++) {
+        cm_tess_info info;
+        cm_status st;
+        cm_status_init(&st);
+        assert_ok(cm_tessellate_face(&dec.model, f, dec.model.tess_tol, mesh, &tess, &info, &st));
+        *tested += info.tested;
+        *skipped += info.skipped;
+    }
+    return mesh->nverts;
+}
+
+static void test_refine_skips_passed_pieces(void **state)
+{
+    (void)state;
+    static float pos0[MESH_TRIS + 1024][3], nrm0[MESH_TRIS + 1024][3];
+    static uint32_t idx0[3 * MESH_TRIS];
+    long spared = 0;
+    for (int model = 0; model < 3; model++) {
+        igw w;
+        igw_init(&w);
+        if (model == 0)
+            igw_bicubic_128(&w);
+        else if (model == 1)
+            igw_half_cylinder_120(&w, 5, 12);
+        else
+            igw_bump_144(&w, 10, 2); /* as test_gregory_face: GREGORY-FIT */
+        loaded_model lm;
+        encode_result r;
+        encode_igw_fit(&w, &lm, &r, 1);
+        igw_free(&w);
+        cm_status st;
+        assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+        cm_mesh mesh;
+        long tested, skipped, tested0, skipped0;
+        tess.pass_slots = 1;
+        uint32_t nv0 = tessellate_counting(&mesh, &tested0, &skipped0);
+        uint32_t ni0 = mesh.nindex;
+        memcpy(pos0, pos, sizeof pos0);
+        memcpy(nrm0, nrm, sizeof nrm0);
+        memcpy(idx0, idx, sizeof idx0);
+        tess.pass_slots = 0;
+        uint32_t nv = tessellate_counting(&mesh, &tested, &skipped);
+        assert_int_equal(skipped0, 0);
+        spared += skipped;
+        assert_int_equal(tested + skipped, tested0);
+        assert_int_equal(nv, nv0);
+        assert_int_equal(mesh.nindex, ni0);
+        assert_memory_equal(pos, pos0, (size_t)nv * sizeof pos[0]);
+        assert_memory_equal(nrm, nrm0, (size_t)nv * sizeof nrm[0]);
+        assert_memory_equal(idx, idx0, (size_t)ni0 * sizeof idx[0]);
+        encode_result_free(&r);
+        model_free(&lm);
+    }
+    /* the net and the bump take several rounds (over half their tests spared); the half cylinder's
+       exact patch passes in the first round, so it has nothing to spare */
+    if (!(spared > 0))
+        fail_msg("the refinement spared no test");
+}
+
 /* ---- a free-form patch: the kept net comes back within the grid (GREGORY-FIT, which would send a
    correction instead, left out) ---- */
 static void test_bicubic_net(void **state)
@@ -457,6 +525,7 @@ int main(void)
         cmocka_unit_test(test_inside_out),
         cmocka_unit_test(test_half_cylinder),
         cmocka_unit_test(test_bicubic_net),
+        cmocka_unit_test(test_refine_skips_passed_pieces),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
     };
     return cmocka_run_group_tests_name("roundtrip", tests, NULL, NULL);

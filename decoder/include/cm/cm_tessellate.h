@@ -38,6 +38,11 @@ typedef struct cm_tess_ws {
     int tris[CM_MAX_TESS_TRIS][3];
     uint32_t vmap[CM_MAX_TESS_POINTS];     /* triangulation point -> mesh vertex (or UINT32_MAX) */
     double ts[CM_MAX_EDGE_SAMPLES];
+    uint64_t passed[2][CM_TESS_PASS_SLOTS]; /* refinement: pieces that passed, last round and this */
+    uint32_t pass_slots;                   /* slots of each used at most: 0 = all; 1 = none (tests
+                                              compare the output with and without) */
+    long tested, skipped;                  /* refinement's deviation tests this face: run, and spared
+                                              because the piece passed the round before */
     int point_cap;                         /* the face's budget of points (cm_tess_point_cap), set by
                                               cm_tessellate_face */
 } cm_tess_ws;
@@ -48,6 +53,8 @@ typedef struct cm_tess_info {
     int triangles;
     int max_edge_samples;
     double max_gap;   /* largest distance of a boundary point to a kept surface */
+    long tested;      /* refinement: pieces (triangles, inner sides) tested against the surface */
+    long skipped;     /* ... and passed again untested: they passed in the round before */
 } cm_tess_info;
 
 /**
