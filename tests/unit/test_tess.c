@@ -775,6 +775,30 @@ static void test_wrong_orientation(void **state)
 }
 
 /*
+ * A ring that folds back over itself (a zig-zag, then the same zig-zag shifted half a step, going
+ * back): no triangulation exists.  Its candidate ears keep failing, and the ear clipping used to
+ * test them turn after turn, about n^2 / 16 tests (1,011,992 for 4000 nodes; a ring like it in a
+ * damaged file took 5 s for one face).  It is refused with at most 16 tests per node (+ 256, + one
+ * last turn), which the fallback then gets to try, in a time linear in the ring.
+ */
+static void test_folded_ring_bounded(void **state)
+{
+    (void)state;
+    int nt, nu;
+    int n = CM_MAX_TESS_POINTS < 4000 ? (CM_MAX_TESS_POINTS / 2) & ~1 : 2000; /* tiny: 32 */
+    shape_begin();
+    loop_begin();
+    for (int i = 0; i < n / 2; i++)
+        pt((double)i, (i % 2) ? 1.0 : 0.0);
+    for (int i = n / 2 - 1; i >= 0; i--)
+        pt((double)i + 0.5, (i % 2) ? 0.2 : 0.8);
+    loops_end();
+    assert_err(run(0.0, &nt, &nu), CM_E_DEGENERATE);
+    if (!(WS.ear_tests <= 17L * n + 256))
+        fail_msg("%ld ear tests for a ring of %d nodes", WS.ear_tests, n);
+}
+
+/*
  * What the decoder does: an annulus (circle with a round hole) and a grid of
  * interior points over the whole box, min_dist a quarter of a grid cell.
  * Points in the hole and outside are skipped (most of them found outside by
@@ -2138,6 +2162,7 @@ int main(void)
         cmocka_unit_test(test_thin_sliver),
         cmocka_unit_test(test_repeated_boundary_points),
         cmocka_unit_test(test_wrong_orientation),
+        cmocka_unit_test(test_folded_ring_bounded),
         cmocka_unit_test(test_grid_over_box),
         cmocka_unit_test(test_random_polygons),
         cmocka_unit_test(test_fuzz_cad_like),

@@ -96,6 +96,8 @@ typedef struct cm_tri_ws {
     int znext[CM_TESS_MAX_NODES];           /* live nodes in z-order (for the ear tests) */
     int zprev[CM_TESS_MAX_NODES];
     unsigned char nflag[CM_TESS_MAX_NODES]; /* node flags (cm_tess.c) */
+    long ear_tests;                         /* ear tests the last call spent (cm_tess.c bounds them by
+                                               the ring's length; tests read it) */
 } cm_tri_ws;
 
 /**
