@@ -123,6 +123,48 @@ cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, do
     return cm_psurf_project_from(ps, P, u, v, dist, st);
 }
 
+/*
+ * cm_psurf_project_grid with the grid's surface points kept in ws for the rest of the loop: the same
+ * evaluations in the same order, so the same answer (and the same error, at the same grid point,
+ * when one fails).  Other grid sizes, or a build without the cache, search as before.
+ */
+static cm_err project_grid_cached(const cm_psurf *ps, cm_vec3 P, int n, cm_param_ws *ws, double *u, double *v,
+                                  double *dist, cm_status *st)
+{
+    int which = n == 17 ? 0 : (n == 41 ? 1 : -1);
+    if (!CM_PARAM_GRID_CACHE || which < 0)
+        return cm_psurf_project_grid(ps, P, n, u, v, dist, st);
+    cm_vec3 *g = ws->grid + (which ? 17 * 17 : 0);
+    if (!ws->grid_have[which]) {
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) {
+                double ui = ps->u0 + (ps->u1 - ps->u0) * (double)i / (double)(n - 1);
+                double vj = ps->v0 + (ps->v1 - ps->v0) * (double)j / (double)(n - 1);
+                cm_vec3 d[3];
+                cm_err e = cm_psurf_eval(ps, ui, vj, d, st);
+                if (e != CM_OK)
+                    return e;
+                g[i * n + j] = d[0];
+            }
+        ws->grid_have[which] = 1;
+    }
+    double bu = ps->u0, bv = ps->v0, bf = -1.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double ui = ps->u0 + (ps->u1 - ps->u0) * (double)i / (double)(n - 1);
+            double vj = ps->v0 + (ps->v1 - ps->v0) * (double)j / (double)(n - 1);
+            double fi = cm_norm2(cm_sub(g[i * n + j], P));
+            if (bf < 0 || fi < bf) {
+                bf = fi;
+                bu = ui;
+                bv = vj;
+            }
+        }
+    *u = bu;
+    *v = bv;
+    return cm_psurf_project_from(ps, P, u, v, dist, st);
+}
+
 cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, cm_vec2 *uv_out, int *src, int cap,
                   int *nout, int *wind_u, int *wind_v, double *max_gap, cm_param_ws *ws, cm_status *st)
 {
@@ -131,6 +173,7 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
     if (n < 1)
         return cm_fail(st, CM_E_ARG, __func__);
     double pu = ps->u1 - ps->u0, pv = ps->v1 - ps->v0;
+    ws->grid_have[0] = ws->grid_have[1] = 0; /* a new loop: perhaps a new surface at the same address */
     cm_vec2 *uv = ws->uv;
     unsigned char *pole = ws->pole;
     double u = 0, v = 0;
@@ -153,9 +196,9 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
             double uu = u, vv = v, dist;
             if (k == 0 && pass == 0) {
                 /* the first point: a coarse grid, a fine one only if that lands badly */
-                if ((e = cm_psurf_project_grid(ps, P, 17, &uu, &vv, &dist, st)) != CM_OK)
+                if ((e = project_grid_cached(ps, P, 17, ws, &uu, &vv, &dist, st)) != CM_OK)
                     return e;
-                if (dist > accept && (e = cm_psurf_project_grid(ps, P, 41, &uu, &vv, &dist, st)) != CM_OK)
+                if (dist > accept && (e = project_grid_cached(ps, P, 41, ws, &uu, &vv, &dist, st)) != CM_OK)
                     return e;
             } else {
                 /* (the second pass starts from where the first came back to the start) */
@@ -165,7 +208,7 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
                     global_left--;
                     /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
                     double gu, gv, gd;
-                    if ((e = cm_psurf_project_grid(ps, P, 41, &gu, &gv, &gd, st)) != CM_OK)
+                    if ((e = project_grid_cached(ps, P, 41, ws, &gu, &gv, &gd, st)) != CM_OK)
                         return e;
                     if (gd < dist) {
                         if (ps->closed_u)

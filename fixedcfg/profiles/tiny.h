@@ -22,6 +22,7 @@
 #define CM_MAX_VERTICES 16
 #define CM_MAX_TRIS 512
 #define CM_TESS_PASS_SLOTS 128
+#define CM_PARAM_GRID_CACHE 0 /* the global searches' grids (47 KiB) do not fit the budget: searched as before */
 #define CM_MAX_TESS_POINTS 64
 #define CM_MAX_FILE_BYTES 4096
 #define CM_MAX_MODEL_CTRL 64

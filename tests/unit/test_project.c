@@ -1,6 +1,7 @@
 /* test_project.c - K9: curve and surface point projection. */
 #include "test_util.h"
 
+#include "cm/cm_param.h"
 #include "cm/cm_project.h"
 
 static const double q_U[6] = {0, 0, 0, 1, 1, 1};
@@ -58,6 +59,79 @@ static void test_nurbs_surface_projection(void **state)
         }
 }
 
+/* ---- cm_loop_uv's global searches: the grid's points kept for the loop, and forgotten after it ----
+   A washboard (ridges across u) and the same washboard shifted by half a wave.  A loop of points
+   high above the boards (each one a global search) is walked on the shifted board with a fresh
+   workspace; then, with another fresh one, on the board and then on the shifted board at the same
+   address: the second walk on the shifted board gives the first polygon to the bit, and the grids
+   the workspace holds afterwards are the shifted board's points, not the board's. */
+static cm_param_ws LOOP_WS;
+static cm_vec2 LOOP_UV[2][2 * 64 + 2];
+static int LOOP_SRC[2 * 64 + 2];
+
+enum { WASH_NU = 10 };
+static void washboard(cm_vec3 P[WASH_NU * 4], double phase)
+{
+    for (int i = 0; i < WASH_NU; i++)
+        for (int j = 0; j < 4; j++)
+            P[i * 4 + j] = cm_v3(10.0 * i / (WASH_NU - 1), 10.0 * j / 3.0, 2.0 * cos(M_PI * (i + phase)));
+}
+
+static int walk_loop(cm_psurf *ps, const cm_vec3 *pts, int n, cm_vec2 *out)
+{
+    int nout = 0, wu = 0, wv = 0;
+    double gap = 0;
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_loop_uv(ps, pts, n, 0.01, out, LOOP_SRC, 2 * 64 + 2, &nout, &wu, &wv, &gap, &LOOP_WS, &st));
+    return nout;
+}
+
+static void test_loop_grid_cache_per_loop(void **state)
+{
+    (void)state;
+    static const double U[WASH_NU + 4] = {0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 7, 7, 7};
+    static const double V[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+    cm_vec3 P[WASH_NU * 4], Q[WASH_NU * 4];
+    washboard(P, 0.0);
+    washboard(Q, 1.0);
+    cm_surf board = {3, 3, WASH_NU, 4, U, V, P, NULL}, shifted = {3, 3, WASH_NU, 4, U, V, Q, NULL};
+    cm_psurf ps;
+    cm_status st;
+    cm_status_init(&st);
+    enum { N = 24 };
+    cm_vec3 pts[N];
+    for (int k = 0; k < N; k++) /* a small circle high above the middle of the board */
+        pts[k] = cm_v3(5.0 + 0.5 * cos(2 * M_PI * k / N), 5.0 + 0.5 * sin(2 * M_PI * k / N), 40.0);
+    memset(&LOOP_WS, 0, sizeof LOOP_WS);
+    assert_ok(cm_psurf_init(&ps, &shifted, 1e-9, &st));
+    int n0 = walk_loop(&ps, pts, N, LOOP_UV[0]);
+    memset(&LOOP_WS, 0, sizeof LOOP_WS);
+    assert_ok(cm_psurf_init(&ps, &board, 1e-9, &st));
+    (void)walk_loop(&ps, pts, N, LOOP_UV[1]);
+    assert_ok(cm_psurf_init(&ps, &shifted, 1e-9, &st));
+    int n1 = walk_loop(&ps, pts, N, LOOP_UV[1]);
+    assert_int_equal(n1, n0);
+    assert_memory_equal(LOOP_UV[1], LOOP_UV[0], (size_t)n0 * sizeof LOOP_UV[0][0]);
+#if CM_PARAM_GRID_CACHE
+    /* and the grids the workspace holds now are the shifted board's (the walk's searches used them) */
+    int checked = 0;
+    for (int which = 0; which < 2; which++) {
+        int n = which ? 41 : 17;
+        if (!LOOP_WS.grid_have[which])
+            continue;
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) {
+                cm_vec3 d[3];
+                assert_ok(cm_psurf_eval(&ps, ps.u0 + (ps.u1 - ps.u0) * i / (n - 1), ps.v0 + (ps.v1 - ps.v0) * j / (n - 1), d, &st));
+                assert_memory_equal(&LOOP_WS.grid[(which ? 17 * 17 : 0) + i * n + j], &d[0], sizeof d[0]);
+                checked++;
+            }
+    }
+    assert_int_equal(checked, 17 * 17 + 41 * 41); /* points 40 mm off the board: both grids searched */
+#endif
+}
+
 static cm_gregory test_patch(uint32_t *seed, int collapse)
 {
     cm_gregory g;
@@ -108,6 +182,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_curve_projection),
+        cmocka_unit_test(test_loop_grid_cache_per_loop),
         cmocka_unit_test(test_nurbs_surface_projection),
         cmocka_unit_test(test_gregory_projection),
     };
