@@ -91,6 +91,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cm_mesh_mark mark = cm_mesh_save(&mesh);
         e = cm_tessellate_face(&state.dec.model, f, tol, &mesh, &state.tess, &info, &st);
         check_face_reason(e, &st, f, state.dec.file_len);
+        /* the triangulator's last call stayed within its budgets (cm_tess.c: 16 ear tests per node,
+           256 fallback steps per point, each + a constant and one last turn), whatever the ring */
+        if (state.tess.tri.ear_tests > 17L * CM_TESS_MAX_NODES + 256 ||
+            state.tess.tri.cdt_work > 259L * CM_MAX_TESS_POINTS + 4096)
+            __builtin_trap();
         if (e == CM_E_LIMIT)
             break; /* the mesh is full: the terminal stops here too */
         if (e != CM_OK) {

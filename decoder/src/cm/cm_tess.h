@@ -98,6 +98,8 @@ typedef struct cm_tri_ws {
     unsigned char nflag[CM_TESS_MAX_NODES]; /* node flags (cm_tess.c) */
     long ear_tests;                         /* ear tests the last call spent (cm_tess.c bounds them by
                                                the ring's length; tests read it) */
+    long cdt_work;                          /* the fallback's steps in the last call (flips and fan
+                                               walks; bounded likewise) */
 } cm_tri_ws;
 
 /**
