@@ -98,19 +98,26 @@ cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double *u, double *v
     return CM_OK;
 }
 
-cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, double *v, double *dist, cm_status *st)
+/* parameter i of n grid values over [a, b] */
+static double grid_at(double a, double b, int i, int n) { return a + (b - a) * (double)i / (double)(n - 1); }
+
+/* the grid point nearest P (first of equals, row by row), from the surface's points g (NULL: evaluated
+   here), then refined by cm_psurf_project_from */
+static cm_err grid_search(const cm_psurf *ps, cm_vec3 P, int n, const cm_vec3 *g, double *u, double *v,
+                          double *dist, cm_status *st)
 {
-    if (n < 2 || n > 64)
-        return cm_fail(st, CM_E_ARG, __func__);
     double bu = ps->u0, bv = ps->v0, bf = -1.0;
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
-            double ui = ps->u0 + (ps->u1 - ps->u0) * (double)i / (double)(n - 1);
-            double vj = ps->v0 + (ps->v1 - ps->v0) * (double)j / (double)(n - 1);
+            double ui = grid_at(ps->u0, ps->u1, i, n), vj = grid_at(ps->v0, ps->v1, j, n);
             cm_vec3 d[3];
-            cm_err e = cm_psurf_eval(ps, ui, vj, d, st);
-            if (e != CM_OK)
-                return e;
+            if (g)
+                d[0] = g[i * n + j];
+            else {
+                cm_err e = cm_psurf_eval(ps, ui, vj, d, st);
+                if (e != CM_OK)
+                    return e;
+            }
             double fi = cm_norm2(cm_sub(d[0], P));
             if (bf < 0 || fi < bf) {
                 bf = fi;
@@ -121,6 +128,13 @@ cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, do
     *u = bu;
     *v = bv;
     return cm_psurf_project_from(ps, P, u, v, dist, st);
+}
+
+cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, double *v, double *dist, cm_status *st)
+{
+    if (n < 2 || n > 64)
+        return cm_fail(st, CM_E_ARG, __func__);
+    return grid_search(ps, P, n, NULL, u, v, dist, st);
 }
 
 /*
@@ -138,31 +152,15 @@ static cm_err project_grid_cached(const cm_psurf *ps, cm_vec3 P, int n, cm_param
     if (!ws->grid_have[which]) {
         for (int i = 0; i < n; i++)
             for (int j = 0; j < n; j++) {
-                double ui = ps->u0 + (ps->u1 - ps->u0) * (double)i / (double)(n - 1);
-                double vj = ps->v0 + (ps->v1 - ps->v0) * (double)j / (double)(n - 1);
                 cm_vec3 d[3];
-                cm_err e = cm_psurf_eval(ps, ui, vj, d, st);
+                cm_err e = cm_psurf_eval(ps, grid_at(ps->u0, ps->u1, i, n), grid_at(ps->v0, ps->v1, j, n), d, st);
                 if (e != CM_OK)
                     return e;
                 g[i * n + j] = d[0];
             }
         ws->grid_have[which] = 1;
     }
-    double bu = ps->u0, bv = ps->v0, bf = -1.0;
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            double ui = ps->u0 + (ps->u1 - ps->u0) * (double)i / (double)(n - 1);
-            double vj = ps->v0 + (ps->v1 - ps->v0) * (double)j / (double)(n - 1);
-            double fi = cm_norm2(cm_sub(g[i * n + j], P));
-            if (bf < 0 || fi < bf) {
-                bf = fi;
-                bu = ui;
-                bv = vj;
-            }
-        }
-    *u = bu;
-    *v = bv;
-    return cm_psurf_project_from(ps, P, u, v, dist, st);
+    return grid_search(ps, P, n, g, u, v, dist, st);
 }
 
 cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, cm_vec2 *uv_out, int *src, int cap,
