@@ -145,10 +145,10 @@ cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, do
 static cm_err project_grid_cached(const cm_psurf *ps, cm_vec3 P, int n, cm_param_ws *ws, double *u, double *v,
                                   double *dist, cm_status *st)
 {
-    int which = n == 17 ? 0 : (n == 41 ? 1 : -1);
+    int which = n == CM_PARAM_GRID_COARSE ? 0 : (n == CM_PARAM_GRID_FINE ? 1 : -1);
     if (!CM_PARAM_GRID_CACHE || which < 0)
         return cm_psurf_project_grid(ps, P, n, u, v, dist, st);
-    cm_vec3 *g = ws->grid + (which ? 17 * 17 : 0);
+    cm_vec3 *g = ws->grid + (which ? CM_PARAM_GRID_COARSE * CM_PARAM_GRID_COARSE : 0);
     if (!ws->grid_have[which]) {
         for (int i = 0; i < n; i++)
             for (int j = 0; j < n; j++) {
@@ -194,9 +194,9 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
             double uu = u, vv = v, dist;
             if (k == 0 && pass == 0) {
                 /* the first point: a coarse grid, a fine one only if that lands badly */
-                if ((e = project_grid_cached(ps, P, 17, ws, &uu, &vv, &dist, st)) != CM_OK)
+                if ((e = project_grid_cached(ps, P, CM_PARAM_GRID_COARSE, ws, &uu, &vv, &dist, st)) != CM_OK)
                     return e;
-                if (dist > accept && (e = project_grid_cached(ps, P, 41, ws, &uu, &vv, &dist, st)) != CM_OK)
+                if (dist > accept && (e = project_grid_cached(ps, P, CM_PARAM_GRID_FINE, ws, &uu, &vv, &dist, st)) != CM_OK)
                     return e;
             } else {
                 /* (the second pass starts from where the first came back to the start) */
@@ -206,7 +206,7 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
                     global_left--;
                     /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
                     double gu, gv, gd;
-                    if ((e = project_grid_cached(ps, P, 41, ws, &gu, &gv, &gd, st)) != CM_OK)
+                    if ((e = project_grid_cached(ps, P, CM_PARAM_GRID_FINE, ws, &gu, &gv, &gd, st)) != CM_OK)
                         return e;
                     if (gd < dist) {
                         if (ps->closed_u)

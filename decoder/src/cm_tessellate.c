@@ -556,6 +556,16 @@ static void pass_add(pass_table *t, uint64_t k)
     t->key[s] = k;
 }
 
+/* a piece that passed last round passes again untested (1), counted in ws->skipped */
+static int pass_again(const pass_table *last, pass_table *now, cm_tess_ws *ws, uint64_t key)
+{
+    if (!last->key || !pass_has(last, key))
+        return 0;
+    pass_add(now, key);
+    ws->skipped++;
+    return 1;
+}
+
 /*
  * Refinement of curved charts: an interior grid follows curvature sampled at a few points, which
  * misses peaks (a rational arc's parameter speed varies along it), and triangles reaching from the
@@ -580,10 +590,7 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
         for (int t = 0; t < ntris && npts < ws->point_cap; t++) {
             const int *tc = ws->tris[t];
             uint64_t key = tri_key(tc);
-            if (last.key && pass_has(&last, key)) {
-                pass_add(&now, key);
-                ws->skipped++;
-            } else {
+            if (!pass_again(&last, &now, ws, key)) {
                 int tested = npts;
                 ws->tested++;
                 if ((e = test_triangle(c, ws, tc, tol, su, sv, &npts, st)) != CM_OK)
@@ -598,11 +605,8 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
                 if (boundary_side(ws->loop_start, nloops, nbnd, i, j))
                     continue;
                 uint64_t skey = side_key(i, j);
-                if (last.key && pass_has(&last, skey)) {
-                    pass_add(&now, skey);
-                    ws->skipped++;
+                if (pass_again(&last, &now, ws, skey))
                     continue;
-                }
                 int tested = npts;
                 ws->tested++;
                 if ((e = test_side(c, ws, i, j, tol, su, sv, &npts, st)) != CM_OK)

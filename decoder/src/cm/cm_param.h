@@ -53,18 +53,21 @@ CM_NODISCARD cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, 
                                           cm_status *st);
 
 /** Workspace of cm_loop_uv. */
-/* cm_loop_uv's global searches use two grids, 17 x 17 and 41 x 41 (cm_param.c); with
+/* cm_loop_uv's global searches use two grids, COARSE^2 and FINE^2 points; with
    CM_PARAM_GRID_CACHE the surface's points on them are evaluated once per loop instead of once per
    search (a hostile or garbled loop may need 32 + n/8 searches of 1681 evaluations each) */
 #ifndef CM_PARAM_GRID_CACHE
 #  define CM_PARAM_GRID_CACHE 1
 #endif
-#define CM_PARAM_GRID_POINTS (CM_PARAM_GRID_CACHE ? 17 * 17 + 41 * 41 : 1)
+#define CM_PARAM_GRID_COARSE 17 /* the first point's search, then the fine grid if it lands badly */
+#define CM_PARAM_GRID_FINE 41
+#define CM_PARAM_GRID_POINTS                                                                                \
+    (CM_PARAM_GRID_CACHE ? CM_PARAM_GRID_COARSE * CM_PARAM_GRID_COARSE + CM_PARAM_GRID_FINE * CM_PARAM_GRID_FINE : 1)
 
 typedef struct cm_param_ws {
     cm_vec2 uv[CM_MAX_TESS_POINTS + 1];
     unsigned char pole[CM_MAX_TESS_POINTS + 1];
-    cm_vec3 grid[CM_PARAM_GRID_POINTS];  /* the 17 x 17 grid's points, then the 41 x 41 grid's */
+    cm_vec3 grid[CM_PARAM_GRID_POINTS];  /* the coarse grid's points, then the fine grid's */
     unsigned char grid_have[2];          /* which of the two hold this loop's surface */
 } cm_param_ws;
 
