@@ -385,7 +385,7 @@ $(foreach p,$(PROFILES),$(eval $(call FUZZ_DECODE_CRC_RULES,$(p))))
 .PHONY: fuzz-decode-crc
 fuzz-decode-crc:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz-crc CM_NO_STACK_FLAGS=1 PROFILE=terminal \
-		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all $(FUZZ_DECODE_IGNORE)" \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all $(FUZZ_COVERAGE_IGNORE)" \
 		$(BUILD_ROOT)/fuzz-crc/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode_crc.o \
 		$(BUILD_ROOT)/fuzz-crc/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
 	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz-crc/fuzz_decode_crc \
@@ -424,7 +424,7 @@ fuzz-tess:
 .PHONY: fuzz-decode
 fuzz-decode:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 PROFILE=terminal \
-		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION $(FUZZ_DECODE_IGNORE)" \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION $(FUZZ_COVERAGE_IGNORE)" \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/tests/fuzz/fuzz_decode.o \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
 	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_decode \
@@ -440,12 +440,12 @@ FUZZ_SECONDS ?= 60
 # what every fuzz-* target passes libFuzzer: a time budget, or e.g. FUZZ_ARGS="-runs=1000000"
 FUZZ_ARGS ?= -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1
 FUZZ_TRIPLET = $(shell clang -dumpmachine 2>/dev/null)
-# the decode fuzzers leave the B-spline evaluator uninstrumented for coverage (why: the file itself)
-FUZZ_DECODE_IGNORE = -fsanitize-coverage-ignorelist=$(CURDIR)/tests/fuzz/coverage_ignore.txt
+# the fuzzers leave the B-spline evaluator and the triangulator uninstrumented for coverage (why: the file itself)
+FUZZ_COVERAGE_IGNORE = -fsanitize-coverage-ignorelist=$(CURDIR)/tests/fuzz/coverage_ignore.txt
 .PHONY: fuzz-iges
 fuzz-iges:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 \
-		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all" \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all $(FUZZ_COVERAGE_IGNORE)" \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_iges.o \
 		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a
 	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_iges \
