@@ -79,6 +79,39 @@ static void solve_patch(const pair *pr, int np, const cm_greg_surface *gs, int k
         dc[i] = b[i];
 }
 
+int fit_sides_within(const loaded_model *lm, int bface, const cm_greg_surface *gs, double tol)
+{
+    const face_domain *fd = &lm->fds[bface];
+    if (!fd->uv || fd->npts < 1)
+        return 1;
+    for (int k = 0; k < gs->npatch; k++)
+        for (int side = 0; side < 4; side++)
+            for (int i = 1; i <= 3; i++) {
+                double t = i / 4.0, u = side < 2 ? t : (double)(side - 2), v = side < 2 ? (double)side : t;
+                cm_vec3 S;
+                if (cm_greg_surface_eval(gs, k, u, v, &S, NULL, NULL) != CM_OK)
+                    return 0;
+                /* the foot from the nearest boundary point of the domain, searched again over the
+                   whole surface when that finds the point off (a local minimum only overstates) */
+                double best = HUGE_VAL, su = 0, sv = 0, d = HUGE_VAL, ug, vg, dg;
+                for (int q = 0; q < fd->npts; q++) {
+                    double dq = cm_finite3(fd->xyz[q]) ? cm_norm2(cm_sub(fd->xyz[q], S)) : HUGE_VAL;
+                    if (dq < best) {
+                        best = dq;
+                        su = fd->uv[q].x;
+                        sv = fd->uv[q].y;
+                    }
+                }
+                if (best < HUGE_VAL && cm_psurf_project_from(&fd->ps, S, &su, &sv, &d, NULL) != CM_OK)
+                    d = HUGE_VAL;
+                if (!(d < tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)
+                    d = dg;
+                if (!(d < tol))
+                    return 0;
+            }
+    return 1;
+}
+
 int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0, int m, double tol, double grid,
                    fit_record *out)
 {

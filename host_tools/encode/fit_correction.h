@@ -37,4 +37,13 @@ static inline cm_fit_q fit_record_view(const fit_record *r)
 int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs, int m, double tol, double grid,
                    fit_record *out);
 
+/**
+ * Whether a correction could bring the patches gs of face `bface` within tol at all: it vanishes with
+ * its slopes on every side of every patch, so each side stays where GREGORY-EXACT put it.  Returns 0
+ * when a point of a side (t = 1/4, 1/2, 3/4) is tol or more off the source surface: the N-split's
+ * inner curves cutting across a surface they do not follow (the outer sides are the curve mesh's
+ * edges, on the surface).  1 otherwise, or when the face has no source domain (no verdict).
+ */
+int fit_sides_within(const loaded_model *lm, int bface, const cm_greg_surface *gs, double tol);
+
 #endif /* FIT_CORRECTION_H */

@@ -470,6 +470,35 @@ void igw_bump_144(igw *w, double a, double h)
     igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, rect_loop(w, p00, p10, p11, p01)));
 }
 
+void igw_tri_bump_144(igw *w, double a, double h)
+{
+    /* f(u, v) = 729 h u^2 v^2 (1-u-v)^2, whose largest value is h (at u = v = 1/3), expanded into
+       monomials c[i][j] u^i v^j and written as one biquartic Bezier patch: the Bernstein coefficient
+       (k, l) is sum c[i][j] C(k,i)/C(4,i) C(l,j)/C(4,j); x and y run linearly (a k/4, a l/4) */
+    static const int C[5][5] = {{1}, {1, 1}, {1, 2, 1}, {1, 3, 3, 1}, {1, 4, 6, 4, 1}};
+    double c[5][5] = {{0}};
+    c[2][2] = 1, c[3][2] = -2, c[2][3] = -2, c[4][2] = 1, c[3][3] = 2, c[2][4] = 1;
+    char buf[8192];
+    int k = snprintf(buf, sizeof buf, "4,4,4,4,0,0,1,0,0,0,0,0,0,0,1,1,1,1,1,0,0,0,0,0,1,1,1,1,1");
+    for (int i = 0; i < 25; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
+    for (int l = 0; l < 5; l++)      /* v index outer */
+        for (int kk = 0; kk < 5; kk++) { /* u index runs fastest in the file */
+            double z = 0;
+            for (int i = 0; i <= kk; i++)
+                for (int j = 0; j <= l; j++)
+                    z += c[i][j] * C[kk][i] / C[4][i] * C[l][j] / C[4][j];
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", a * kk / 4.0, a * l / 4.0,
+                          729.0 * h * z);
+        }
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+    int s = igw_add(w, 128, 0, "%s", buf);
+    igw_set(w, s, 1, 0, 0);
+    v3 p0 = {0, 0, 0}, p1 = {a, 0, 0}, p2 = {0, a, 0};
+    int m[3] = {line(w, p0, p1), line(w, p1, p2), line(w, p2, p0)};
+    igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 3)));
+}
+
 /* ---- building blocks for hostile inputs ---- */
 
 int igw_square_144(igw *w, double a, double z, int subord)

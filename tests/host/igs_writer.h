@@ -65,6 +65,9 @@ void igw_split_half_cylinder_144(igw *w, double r, double h);
 /* one face: a bicubic bump of height h over the square [0,a]^2 at z = 0, flat (with its cross
    slopes) on its four straight edges - the patches from the boundary come out flat */
 void igw_bump_144(igw *w, double a, double h);
+/** The bump's three-sided sibling: a biquartic 128 over the right triangle (0,0), (a,0), (0,a), flat
+ *  with its cross slopes on all three straight edges, h high at the centroid; one 144. */
+void igw_tri_bump_144(igw *w, double a, double h);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 

@@ -17,6 +17,7 @@
 #include "cm/cm_rebuild.h"
 #include "cm/cm_tessellate.h"
 #include "encode/encode.h"
+#include "encode/fit_correction.h"
 #include "encode/verify.h"
 #include "igs_writer.h"
 #include "mesh_topo.h"
@@ -473,6 +474,67 @@ static void test_gregory_fit_bump(void **state)
     model_free(&lm);
 }
 
+/*
+ * The bump over a triangle: three straight edges, flat with their cross slopes, so every layout
+ * rebuilt from the boundary alone is the flat triangle, 3.5 times the tolerance off.  The N-split's
+ * inner curves cut across the bump, so no correction can save it (they are checked first); the
+ * degenerate quad's sides are the triangle's edges, and its correction, which vanishes with its
+ * slopes on every side, brings it within the tolerance both ways on the terminal's rebuild.
+ * Without the correction it is kept.
+ */
+static void test_gregory_fit_three_sided(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_tri_bump_144(&w, BUMP_A, 0.5);
+    load_igw(&w, "tri_bump", 1, &lm);
+    encode_with(&lm, 0.01, 3, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+    assert_string_equal(r.faces[0].why, "error");
+    encode_result_free(&r);
+    encode_with(&lm, 0.01, 7, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_FIT], 1);
+    assert_int_equal(r.faces[0].layout, CM_GREG_LAYOUT_DEGEN);
+    decode(&r);
+    cm_rebuilt rb;
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_rebuild_face(&dec.model, 0, &rb, &rbws[0], &st)); /* the checksum matches */
+    assert_int_equal(rb.method, CM_METHOD_GREGORY_FIT);
+    double tol = 0.01 * rb.bbox;
+    face_error fe;
+    assert_true(verify_face(&lm, &dec.model, 0, &rb, HUGE_VAL, &fe));
+    if (!(fe.max < tol && fe.back < tol))
+        fail_msg("rebuilt %.3g mm (back %.3g mm) from the triangle's bump, tolerance %.3g mm", fe.max, fe.back, tol);
+    /* the correction is what does it */
+    static cm_greg_surface bare;
+    bare = *rb.greg;
+    bare.fit = 0;
+    cm_rebuilt rbare = rb;
+    rbare.greg = &bare;
+    assert_true(verify_face(&lm, &dec.model, 0, &rbare, HUGE_VAL, &fe));
+    if (!(fe.max > 2 * tol))
+        fail_msg("the patches without their correction only %.3g mm off", fe.max);
+    /* the check before each fit: the degenerate quad's sides are the triangle's edges; the N-split's
+       inner curves run over the bump, where no correction can move them */
+    int bf = lm.mesh.faces[0].brep_face;
+    assert_int_equal(fit_sides_within(&lm, bf, rb.greg, tol), 1);
+    cm_face *F = &dec.model.faces[0];
+    F->method = CM_METHOD_GREGORY_EXACT;
+    F->layout = CM_GREG_LAYOUT_SPLIT;
+    F->corner = 0;
+    F->fit = 0;
+    cm_rebuilt rsplit;
+    assert_ok(cm_rebuild_face_ex(&dec.model, 0, 0, &rsplit, &rbws[1], NULL));
+    assert_int_equal(rsplit.greg->npatch, 3);
+    assert_int_equal(fit_sides_within(&lm, bf, rsplit.greg, tol), 0);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -481,6 +543,7 @@ int main(void)
         cmocka_unit_test(test_gregory_needs_format_2),
         cmocka_unit_test(test_gregory_exact_cylinder),
         cmocka_unit_test(test_gregory_fit_bump),
+        cmocka_unit_test(test_gregory_fit_three_sided),
     };
     return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
 }
