@@ -93,15 +93,10 @@ int fit_sides_within(const loaded_model *lm, int bface, const cm_greg_surface *g
                     return 0;
                 /* the foot from the nearest boundary point of the domain, searched again over the
                    whole surface when that finds the point off (a local minimum only overstates) */
-                double best = HUGE_VAL, su = 0, sv = 0, d = HUGE_VAL, ug, vg, dg;
-                for (int q = 0; q < fd->npts; q++) {
-                    double dq = cm_finite3(fd->xyz[q]) ? cm_norm2(cm_sub(fd->xyz[q], S)) : HUGE_VAL;
-                    if (dq < best) {
-                        best = dq;
-                        su = fd->uv[q].x;
-                        sv = fd->uv[q].y;
-                    }
-                }
+                double best = HUGE_VAL, d = HUGE_VAL, ug, vg, dg;
+                cm_vec2 start = cm_v2(0, 0);
+                verify_nearest_boundary(fd, S, &best, &start);
+                double su = start.x, sv = start.y;
                 if (best < HUGE_VAL && cm_psurf_project_from(&fd->ps, S, &su, &sv, &d, NULL) != CM_OK)
                     d = HUGE_VAL;
                 if (!(d < tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)

@@ -181,6 +181,17 @@ typedef struct grid_pts {
     int n;
 } grid_pts;
 
+void verify_nearest_boundary(const face_domain *fd, cm_vec3 p, double *best2, cm_vec2 *uv)
+{
+    for (int q = 0; q < fd->npts; q++) {
+        double dq = cm_finite3(fd->xyz[q]) ? cm_norm2(cm_sub(fd->xyz[q], p)) : HUGE_VAL;
+        if (dq < *best2) {
+            *best2 = dq;
+            *uv = fd->uv[q];
+        }
+    }
+}
+
 /*
  * The other direction, past spec §12 (which measures the source against the rebuilt surface only):
  * each patch at the 5 x 5 points (i/6, j/6), i, j = 1..5, projected on the source surface from the
@@ -205,14 +216,10 @@ static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs
                         v = g->uv[q].y;
                     }
                 }
-                for (int q = 0; q < fd->npts; q++) {
-                    double dq = cm_finite3(fd->xyz[q]) ? cm_norm2(cm_sub(fd->xyz[q], S)) : HUGE_VAL;
-                    if (dq < best) {
-                        best = dq;
-                        u = fd->uv[q].x;
-                        v = fd->uv[q].y;
-                    }
-                }
+                cm_vec2 uv = cm_v2(u, v);
+                verify_nearest_boundary(fd, S, &best, &uv);
+                u = uv.x;
+                v = uv.y;
                 if (!(best < HUGE_VAL) || cm_psurf_project_from(&fd->ps, S, &u, &v, &d, NULL) != CM_OK)
                     return HUGE_VAL;
                 double dg, ug, vg;

@@ -37,6 +37,12 @@ typedef struct face_error {
     double back;          /* Gregory patches: their largest distance from the source surface (in max) */
 } face_error;
 
+/**
+ * The boundary sample of fd nearest to p, if nearer than sqrt(*best2): *best2 becomes its squared
+ * distance and *uv its parameters (a start for a foot search on the source surface).
+ */
+void verify_nearest_boundary(const face_domain *fd, cm_vec3 p, double *best2, cm_vec2 *uv);
+
 /** Keep what cm_rebuild_face() gave for face f (copies the Gregory patches). 0 on out of memory. */
 int face_surface_set(face_surface *fs, const cm_rebuilt *rb);
 void face_surface_free(face_surface *fs);

@@ -402,6 +402,37 @@ static void test_gregory_needs_format_2(void **state)
     model_free(&lm);
 }
 
+/* the one face of lm: kept for its error from the boundary alone (GREGORY, GREGORY-EXACT), then sent
+   as GREGORY-FIT when the correction is allowed (its encoding left in r) */
+static void encode_kept_then_fit(loaded_model *lm, encode_result *r)
+{
+    encode_with(lm, 0.01, 3, r);
+    assert_int_equal(r->faces_by_method[CM_METHOD_KEEP], 1);
+    assert_string_equal(r->faces[0].why, "error");
+    encode_result_free(r);
+    encode_with(lm, 0.01, 7, r);
+    assert_int_equal(r->faces_by_method[CM_METHOD_GREGORY_FIT], 1);
+}
+
+/* face 0 rebuilt as rb (GREGORY-FIT) is within 1 % of its size both ways, and the same patches
+   without their correction (left in *bare) are more than twice that off: the correction does it */
+static void assert_correction_needed(const loaded_model *lm, const cm_model *m, const cm_rebuilt *rb,
+                                     const char *what, cm_greg_surface *bare)
+{
+    double tol = 0.01 * rb->bbox;
+    face_error fe;
+    assert_true(verify_face(lm, m, 0, rb, HUGE_VAL, &fe));
+    if (!(fe.max < tol && fe.back < tol))
+        fail_msg("rebuilt %.3g mm (back %.3g mm) from %s, tolerance %.3g mm", fe.max, fe.back, what, tol);
+    *bare = *rb->greg;
+    bare->fit = 0;
+    cm_rebuilt rbare = *rb;
+    rbare.greg = bare;
+    assert_true(verify_face(lm, m, 0, &rbare, HUGE_VAL, &fe));
+    if (!(fe.max > 2 * tol))
+        fail_msg("%s: the patches without their correction only %.3g mm off", what, fe.max);
+}
+
 #define BUMP_A 10.0 /* the bump's square */
 #define BUMP_H 2.0  /* and height: the flat patch is 0.5 mm off, the tolerance 0.14 mm */
 
@@ -421,12 +452,7 @@ static void test_gregory_fit_bump(void **state)
     igw_init(&w);
     igw_bump_144(&w, BUMP_A, BUMP_H);
     load_igw(&w, "bump", 1, &lm);
-    encode_with(&lm, 0.01, 3, &r);
-    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
-    assert_string_equal(r.faces[0].why, "error");
-    encode_result_free(&r);
-    encode_with(&lm, 0.01, 7, &r);
-    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_FIT], 1);
+    encode_kept_then_fit(&lm, &r);
     assert_int_equal(r.faces[0].layout, CM_GREG_LAYOUT_QUAD);
     assert_true(r.faces[0].fit_m >= 1 && r.faces[0].fit_m <= CM_FIT_MAX_M);
     decode(&r);
@@ -438,20 +464,9 @@ static void test_gregory_fit_bump(void **state)
     assert_ok(cm_rebuild_face(m, 0, &rb, &rbws[0], &st)); /* the checksum matches */
     assert_int_equal(rb.method, CM_METHOD_GREGORY_FIT);
     assert_int_equal(rb.greg->fit, r.faces[0].fit_m);
-    double tol = 0.01 * rb.bbox;
-    face_error fe;
-    assert_true(verify_face(&lm, m, 0, &rb, HUGE_VAL, &fe));
-    if (!(fe.max < tol && fe.back < tol))
-        fail_msg("rebuilt %.3g mm (back %.3g mm) from the bump, tolerance %.3g mm", fe.max, fe.back, tol);
-    /* the correction is what does it: the same patches without it are far out ... */
+    /* within the tolerance, and the same patches without the correction far out ... */
     static cm_greg_surface bare;
-    bare = *rb.greg;
-    bare.fit = 0;
-    cm_rebuilt rbare = rb;
-    rbare.greg = &bare;
-    assert_true(verify_face(&lm, m, 0, &rbare, HUGE_VAL, &fe));
-    if (!(fe.max > 2 * tol))
-        fail_msg("the patches without their correction only %.3g mm off", fe.max);
+    assert_correction_needed(&lm, m, &rb, "the bump", &bare);
     /* ... and it keeps their sides and cross slopes */
     for (int i = 0; i <= 10; i++) {
         double t = i / 10.0, uv[4][2] = {{t, 0}, {1, t}, {t, 1}, {0, t}};
@@ -491,12 +506,7 @@ static void test_gregory_fit_three_sided(void **state)
     igw_init(&w);
     igw_tri_bump_144(&w, BUMP_A, 0.5);
     load_igw(&w, "tri_bump", 1, &lm);
-    encode_with(&lm, 0.01, 3, &r);
-    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
-    assert_string_equal(r.faces[0].why, "error");
-    encode_result_free(&r);
-    encode_with(&lm, 0.01, 7, &r);
-    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_FIT], 1);
+    encode_kept_then_fit(&lm, &r);
     assert_int_equal(r.faces[0].layout, CM_GREG_LAYOUT_DEGEN);
     decode(&r);
     cm_rebuilt rb;
@@ -504,20 +514,9 @@ static void test_gregory_fit_three_sided(void **state)
     cm_status_init(&st);
     assert_ok(cm_rebuild_face(&dec.model, 0, &rb, &rbws[0], &st)); /* the checksum matches */
     assert_int_equal(rb.method, CM_METHOD_GREGORY_FIT);
-    double tol = 0.01 * rb.bbox;
-    face_error fe;
-    assert_true(verify_face(&lm, &dec.model, 0, &rb, HUGE_VAL, &fe));
-    if (!(fe.max < tol && fe.back < tol))
-        fail_msg("rebuilt %.3g mm (back %.3g mm) from the triangle's bump, tolerance %.3g mm", fe.max, fe.back, tol);
-    /* the correction is what does it */
     static cm_greg_surface bare;
-    bare = *rb.greg;
-    bare.fit = 0;
-    cm_rebuilt rbare = rb;
-    rbare.greg = &bare;
-    assert_true(verify_face(&lm, &dec.model, 0, &rbare, HUGE_VAL, &fe));
-    if (!(fe.max > 2 * tol))
-        fail_msg("the patches without their correction only %.3g mm off", fe.max);
+    assert_correction_needed(&lm, &dec.model, &rb, "the triangle's bump", &bare);
+    double tol = 0.01 * rb.bbox;
     /* the check before each fit: the degenerate quad's sides are the triangle's edges; the N-split's
        inner curves run over the bump, where no correction can move them */
     int bf = lm.mesh.faces[0].brep_face;
