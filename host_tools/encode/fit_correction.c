@@ -87,6 +87,7 @@ int fit_sides_within(const loaded_model *lm, int bface, const cm_greg_surface *g
     for (int k = 0; k < gs->npatch; k++)
         for (int side = 0; side < 4; side++)
             for (int i = 1; i <= 3; i++) {
+                /* sides 0, 1: v = 0, v = 1 (u = t); sides 2, 3: u = 0, u = 1 (v = t) */
                 double t = i / 4.0, u = side < 2 ? t : (double)(side - 2), v = side < 2 ? (double)side : t;
                 cm_vec3 S;
                 if (cm_greg_surface_eval(gs, k, u, v, &S, NULL, NULL) != CM_OK)
