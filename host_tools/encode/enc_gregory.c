@@ -200,6 +200,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         }
     }
     double best_ratio = HUGE_VAL;
+    int too_large = 0; /* a correction passed but cost more than the surface */
     for (int c = 0; c < nc && fit; c++) {
         /* every layout: the correction vanishes with its slopes on every side of every patch, so a
            rebuilt face still meets its neighbours and its own patches G1.  A fit cannot move a side,
@@ -212,8 +213,18 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         fit_record *fr = malloc(sizeof *fr);
         if (!fr)
             return 0;
-        if (!fit_layout(t, lm, f, cand_layout[c], cand_j[c], tol, fr, &rb, &fe, &best_ratio) ||
-            !face_surface_set(&fs[f], &rb)) {
+        if (!fit_layout(t, lm, f, cand_layout[c], cand_j[c], tol, fr, &rb, &fe, &best_ratio)) {
+            free(fr);
+            continue;
+        }
+        /* spec §14 step 6: a correction that costs more than the surface it replaces is not worth
+           sending (the N-split's several patches on a small B-spline face) */
+        if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f])) {
+            too_large = 1;
+            free(fr);
+            continue;
+        }
+        if (!face_surface_set(&fs[f], &rb)) {
             free(fr);
             continue;
         }
@@ -250,7 +261,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
     /* the reason of the candidate that came closest: one built and measured over the tolerance says
        more than a later layout that could not be built */
     if (best_ratio < HUGE_VAL)
-        rep->why = "error";
+        rep->why = too_large ? "record larger than the surface" : "error";
     return 0;
 }
 

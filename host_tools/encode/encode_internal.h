@@ -110,6 +110,11 @@ cm_err tx_build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_status *s
 cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o, const uint32_t *need,
                          encode_result *r, cm_status *st);
 
+/* Spec §14 step 6, estimated: the bits a kept surface and a GREGORY-FIT record cost in the file
+   (write_sections.c says how; the same estimate for both, so they compare) */
+double enc_kept_surface_bits(const tx_surf *S);
+double enc_fit_record_bits(const struct fit_record *fr);
+
 /* ---- decoding what we wrote, with the terminal's code ---- */
 cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st);
 

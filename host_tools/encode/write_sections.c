@@ -91,6 +91,80 @@ static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     }
 }
 
+/* a kept surface's control point (i, j), coordinate k, less its parallelogram prediction from the
+   points before it in the grid (docs/FORMAT.md, SURF) */
+static int64_t surf_coord_residual(const tx_surf *S, int i, int j, int k)
+{
+    int nv = S->nv, idx = i * nv + j;
+    int64_t pred = i && j ? S->cq[idx - nv][k] + S->cq[idx - 1][k] - S->cq[idx - nv - 1][k]
+                   : i    ? S->cq[idx - nv][k]
+                   : j    ? S->cq[idx - 1][k]
+                          : 0;
+    return S->cq[idx][k] - pred;
+}
+
+/* its weight likewise ((i, j) != (0, 0): the first weight is 1 and not sent) */
+static int64_t surf_weight_residual(const tx_surf *S, int i, int j)
+{
+    int nv = S->nv, idx = i * nv + j;
+    int64_t pred = i && j ? S->wq[idx - nv] + S->wq[idx - 1] - S->wq[idx - nv - 1] : i ? S->wq[idx - nv] : S->wq[idx - 1];
+    return S->wq[idx] - pred;
+}
+
+/* ---- what a face costs, estimated (spec §14 step 6) ----
+   The arithmetic coder's contexts adapt over the whole section, so one face's bytes are not known
+   until the file is written.  The estimate counts what a number costs once the contexts have learnt
+   the usual lengths: about two bits for its length, the bits below its leading one (close to
+   incompressible), one for the sign.  Kept surfaces and records are estimated the same way, so the
+   comparison is fair even where the estimate is not exact. */
+static double est_uint_bits(uint64_t v)
+{
+    unsigned k = 0;
+    while (k < 64 && (v >> k))
+        k++;
+    return 2.0 + (k > 1 ? (double)(k - 1) : 0.0);
+}
+
+static double est_sint_bits(int64_t v)
+{
+    return v == 0 ? est_uint_bits(0) : est_uint_bits(v < 0 ? (uint64_t)(-(v + 1)) + 1u : (uint64_t)v) + 1.0;
+}
+
+static double est_knot_bits(int uniform, const int64_t *kq, int interior)
+{
+    double b = 1.0;
+    int64_t prev = 0;
+    for (int j = 0; !uniform && j < interior; j++) {
+        b += est_uint_bits((uint64_t)(kq[j] - prev));
+        prev = kq[j];
+    }
+    return b;
+}
+
+double enc_kept_surface_bits(const tx_surf *S)
+{
+    double b = 4 * est_uint_bits(3) + 1.0;
+    b += est_knot_bits(S->uniform_u, S->ku, S->nu - S->p - 1) + est_knot_bits(S->uniform_v, S->kv, S->nv - S->q - 1);
+    for (int i = 0; i < S->nu; i++)
+        for (int j = 0; j < S->nv; j++) {
+            for (int k = 0; k < 3; k++)
+                b += est_sint_bits(surf_coord_residual(S, i, j, k));
+            if (S->rational && (i || j))
+                b += est_sint_bits(surf_weight_residual(S, i, j));
+        }
+    return b;
+}
+
+double enc_fit_record_bits(const fit_record *fr)
+{
+    double b = 2 * est_uint_bits(CM_MAX_SIDES) + 32.0; /* layout, corner, checksum */
+    b += est_uint_bits((uint64_t)fr->m) + est_uint_bits((uint64_t)fr->npatch) + est_uint_bits((uint64_t)fr->exp);
+    for (int i = 0; i < fr->npatch * fr->m * fr->m; i++)
+        for (int a = 0; a < 3; a++)
+            b += est_sint_bits(fr->q[i][a]);
+    return b;
+}
+
 static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
@@ -115,19 +189,10 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         for (int i = 0; i < nu; i++)
             for (int j = 0; j < nv; j++) {
                 int idx = i * nv + j;
-                for (int k = 0; k < 3; k++) {
-                    int64_t pred = i && j ? S->cq[idx - nv][k] + S->cq[idx - 1][k] - S->cq[idx - nv - 1][k]
-                                   : i    ? S->cq[idx - nv][k]
-                                   : j    ? S->cq[idx - 1][k]
-                                          : 0;
-                    cm_ac_enc_sint(e, &ctx.coord[k], S->cq[idx][k] - pred);
-                }
-                if (S->rational && idx > 0) {
-                    int64_t pred = i && j ? S->wq[idx - nv] + S->wq[idx - 1] - S->wq[idx - nv - 1]
-                                   : i    ? S->wq[idx - nv]
-                                          : S->wq[idx - 1];
-                    cm_ac_enc_sint(e, &ctx.weight, S->wq[idx] - pred);
-                }
+                for (int k = 0; k < 3; k++)
+                    cm_ac_enc_sint(e, &ctx.coord[k], surf_coord_residual(S, i, j, k));
+                if (S->rational && idx > 0)
+                    cm_ac_enc_sint(e, &ctx.weight, surf_weight_residual(S, i, j));
             }
     }
 }
