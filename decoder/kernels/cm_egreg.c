@@ -18,7 +18,28 @@ cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_ve
 {
     cm_vec3 q[3];
     s = clamp01(s);
-    if (sd->kind == CM_EGREG_SIDE_EDGE) {
+    cm_vec3 As = sd->As, dA = cm_sub(sd->Ae, sd->As); /* the basis at s = 0 and its slope per unit s */
+    double a0 = 0.0;                                 /* where As holds */
+    if (sd->kind == CM_EGREG_SIDE_CHAIN) {
+        /* the last piece that starts at or before s (fixed order: the same piece on every host) */
+        int np = sd->npiece < 1 ? 1 : sd->npiece > CM_EGREG_MAX_PIECES ? CM_EGREG_MAX_PIECES : sd->npiece, j = 0;
+        for (int i = 1; i < np; i++)
+            if (sd->piece[i].s0 <= s)
+                j = i;
+        const cm_egreg_piece *P = &sd->piece[j];
+        double ds = P->s1 - P->s0, dt = P->t1 - P->t0;
+        if (!(ds > 0.0))
+            return cm_fail(st, CM_E_DEGENERATE, "egreg: empty piece");
+        cm_err e = cm_curve_eval(&P->curve, P->t0 + dt * ((s - P->s0) / ds), 2, q, st);
+        if (e != CM_OK)
+            return e;
+        double r = dt / ds;
+        q[1] = cm_scale(q[1], r);
+        q[2] = cm_scale(q[2], r * r);
+        As = P->As;
+        dA = cm_scale(cm_sub(P->Ae, P->As), 1.0 / ds);
+        a0 = P->s0;
+    } else if (sd->kind == CM_EGREG_SIDE_EDGE) {
         double dt = sd->t1 - sd->t0;
         cm_err e = cm_curve_eval(&sd->curve, sd->t0 + dt * s, 2, q, st);
         if (e != CM_OK)
@@ -45,11 +66,11 @@ cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_ve
         }
         return CM_OK;
     }
-    /* X = k A + h B', X' = k' A + k A' + h' B' + h B'' (k, h, A linear in s) */
+    /* X = k A + h B', X' = k' A + k A' + h' B' + h B'' (k, h linear in s; A linear in s, or on each
+       piece of a chain) */
     double dk = sd->k1 - sd->k0, dh = sd->h1 - sd->h0;
     double k = sd->k0 + dk * s, h = sd->h0 + dh * s;
-    cm_vec3 dA = cm_sub(sd->Ae, sd->As);
-    cm_vec3 A = cm_axpy(sd->As, s, dA);
+    cm_vec3 A = cm_axpy(As, s - a0, dA);
     x[0] = cm_add(cm_scale(A, k), cm_scale(q[1], h));
     cm_vec3 xd = cm_scale(A, dk);
     xd = cm_axpy(xd, k, dA);

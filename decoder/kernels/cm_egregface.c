@@ -173,9 +173,86 @@ static cm_err build_degen(const cm_greg_input *in, int j, cm_greg_surface *out, 
     return finish_patch(g, N, eps, st);
 }
 
+/* ---- layout 3: one quad whose sides may be several edges joined at T-vertices ---- */
+
+/*
+ * Side m of the joined quad: the uses first .. first+count-1 (mod n).  One use is an ordinary edge
+ * side.  Several make a CHAIN: each edge keeps its own basis (spec 5.4 with the normals of its own
+ * ends, so a neighbour across it meets it G1), and gets a share of the side's parameter such that
+ * the speed |B'| is the same on both sides of each joint: piece i+1 is w_{i+1} = w_i |B_{i+1}'(0)| /
+ * |B_i'(1)| wide, then all are scaled to 1.  Where the edges meet tangentially (the flat corner of
+ * a T-vertex) the side is then C1 and the patch has no crease running in from the joint.
+ */
+static cm_err joined_side(const cm_greg_input *in, int first, int count, cm_egreg_side *sd, cm_status *st)
+{
+    int n = in->n;
+    double eps = in->eps_len;
+    cm_err e;
+    if (count == 1) {
+        const cm_greg_side *gs = &in->side[first];
+        edge_side(gs, 0.0, 1.0, sd);
+        return side_basis(sd, gs->Ns, gs->Ne, eps, &sd->As, &sd->Ae, st);
+    }
+    if (count < 2 || count > CM_EGREG_MAX_PIECES)
+        return cm_fail(st, CM_E_UNSUPPORTED, "egregface: more edges joined into one side than a patch side holds");
+    memset(sd, 0, sizeof *sd);
+    sd->kind = CM_EGREG_SIDE_CHAIN;
+    sd->npiece = count;
+    double w[CM_EGREG_MAX_PIECES], total = 0.0, prev_end = 0.0;
+    for (int i = 0; i < count; i++) {
+        const cm_greg_side *gs = &in->side[(first + i) % n];
+        cm_egreg_side one;
+        cm_vec3 d0[3], d1[3];
+        edge_side(gs, 0.0, 1.0, &one);
+        if ((e = side_at(&one, 0.0, d0, st)) != CM_OK || (e = side_at(&one, 1.0, d1, st)) != CM_OK)
+            return e;
+        cm_egreg_piece *P = &sd->piece[i];
+        P->curve = one.curve;
+        P->edge = one.edge;
+        P->t0 = one.t0;
+        P->t1 = one.t1;
+        if ((e = side_basis(&one, gs->Ns, gs->Ne, eps, &P->As, &P->Ae, st)) != CM_OK)
+            return e;
+        double sp0 = cm_norm(d0[1]), sp1 = cm_norm(d1[1]);
+        w[i] = i == 0 ? 1.0 : w[i - 1] * (sp0 / prev_end);
+        if (!(w[i] > 1e-6 && w[i] < 1e6))
+            return degenerate(st, "egregface: joined edges' speeds too far apart");
+        prev_end = sp1;
+        total += w[i];
+    }
+    double at = 0.0;
+    for (int i = 0; i < count; i++) {
+        sd->piece[i].s0 = at;
+        at += w[i] / total;
+        sd->piece[i].s1 = i == count - 1 ? 1.0 : at;
+    }
+    sd->As = sd->piece[0].As;
+    sd->Ae = sd->piece[count - 1].Ae;
+    return CM_OK;
+}
+
+static cm_err build_joined(const cm_greg_input *in, int bits, cm_greg_surface *out, cm_status *st)
+{
+    int n = in->n, c[CM_GREG_JOINED_CORNERS], nc = 0;
+    for (int k = 0; k < n; k++)
+        if ((bits >> k) & 1)
+            c[nc++] = k;
+    cm_egreg *g = &out->e[0];
+    for (int m = 0; m < CM_GREG_JOINED_CORNERS; m++) {
+        int next = m + 1 < CM_GREG_JOINED_CORNERS ? c[m + 1] : c[0] + n;
+        cm_err e = joined_side(in, c[m], next - c[m], &g->side[m], st);
+        if (e != CM_OK)
+            return e;
+    }
+    out->npatch = 1;
+    cm_vec3 N[4] = {in->corner_normal[c[0]], in->corner_normal[c[1]], in->corner_normal[c[2]],
+                    in->corner_normal[c[3]]};
+    return finish_patch(g, N, in->eps_len, st);
+}
+
 /* ---- layout 1: N quads around a centre; the loop's sides are halves of the edges ---- */
 typedef struct esplit_ws {
-    cm_egreg_side full[CM_MAX_SIDES];
+    cm_egreg_side full; /* the edge of the side at hand (one at a time: a side is large) */
     cm_vec3 A0[CM_MAX_SIDES], A1[CM_MAX_SIDES];
     cm_vec3 M[CM_MAX_SIDES], V[CM_MAX_SIDES], T[CM_MAX_SIDES], nmid[CM_MAX_SIDES], U[CM_MAX_SIDES];
 } esplit_ws;
@@ -187,14 +264,15 @@ static cm_err esplit_mid(const cm_greg_input *in, esplit_ws *w, cm_status *st)
     cm_vec3 d[CM_MAX_SIDES][2][3];
     cm_err e;
     for (int k = 0; k < n; k++) {
-        edge_side(&in->side[k], 0.0, 1.0, &w->full[k]);
+        edge_side(&in->side[k], 0.0, 1.0, &w->full);
         for (int end = 0; end < 2; end++)
-            if ((e = side_at(&w->full[k], (double)end, d[k][end], st)) != CM_OK)
+            if ((e = side_at(&w->full, (double)end, d[k][end], st)) != CM_OK)
                 return e;
         w->V[k] = d[k][0][0];
     }
     for (int k = 0; k < n; k++) {
-        cm_egreg_side *sd = &w->full[k];
+        cm_egreg_side *sd = &w->full;
+        edge_side(&in->side[k], 0.0, 1.0, sd);
         if ((e = side_basis(sd, in->side[k].Ns, in->side[k].Ne, eps, &w->A0[k], &w->A1[k], st)) != CM_OK)
             return e;
         sd->As = w->A0[k];
@@ -269,6 +347,8 @@ cm_err cm_egreg_build(const cm_greg_input *in, int layout, int j, cm_greg_surfac
         e = build_quad(in, out, st);
     else if (layout == CM_GREG_LAYOUT_SPLIT)
         e = build_split(in, out, st);
+    else if (layout == CM_GREG_LAYOUT_JOINED)
+        e = build_joined(in, j, out, st);
     else
         e = build_degen(in, j, out, st);
     if (e != CM_OK)

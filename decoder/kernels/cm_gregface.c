@@ -396,7 +396,7 @@ void cm_greg_surface_reset(cm_greg_surface *out, int layout, int n, int j, int e
     memset(out, 0, sizeof *out);
     out->layout = layout;
     out->n = n;
-    out->j = layout == CM_GREG_LAYOUT_DEGEN ? j : 0;
+    out->j = layout == CM_GREG_LAYOUT_DEGEN || layout == CM_GREG_LAYOUT_JOINED ? j : 0;
     out->exact = exact;
 }
 
@@ -427,6 +427,18 @@ cm_err cm_greg_begin(const cm_greg_input *in, int layout, int j, int exact, cm_g
         if (j < 0 || j > 2)
             return cm_fail(st, CM_E_RANGE, "gregface: layout 2 vertex index");
         break;
+    case CM_GREG_LAYOUT_JOINED: {
+        if (!exact)
+            return cm_fail(st, CM_E_UNSUPPORTED, "gregface: layout 3 joins exact edges only");
+        if (n < 5)
+            return cm_fail(st, CM_E_RANGE, "gregface: layout 3 needs 5 or more edges");
+        int corners = 0;
+        for (int k = 0; k < n; k++)
+            corners += (j >> k) & 1;
+        if (j < 0 || j >= (1 << n) || corners != CM_GREG_JOINED_CORNERS)
+            return cm_fail(st, CM_E_RANGE, "gregface: layout 3 corners");
+        break;
+    }
     default:
         return cm_fail(st, CM_E_RANGE, "gregface: unknown layout");
     }
@@ -532,6 +544,16 @@ static uint32_t egreg_checksum(uint32_t h, const cm_egreg *g)
         h = fnv_double(h, (double)sd->edge);
         h = fnv_double(h, sd->t0);
         h = fnv_double(h, sd->t1);
+        for (int i = 0; i < sd->npiece && i < CM_EGREG_MAX_PIECES && sd->kind == CM_EGREG_SIDE_CHAIN; i++) {
+            const cm_egreg_piece *P = &sd->piece[i]; /* (layout 3 only: older files' sums stay) */
+            h = fnv_double(h, (double)P->edge);
+            h = fnv_double(h, P->t0);
+            h = fnv_double(h, P->t1);
+            h = fnv_double(h, P->s0);
+            h = fnv_double(h, P->s1);
+            h = fnv_vec(h, P->As);
+            h = fnv_vec(h, P->Ae);
+        }
         for (int i = 0; i < 4 && sd->kind == CM_EGREG_SIDE_CUBIC; i++)
             h = fnv_vec(h, sd->cub.c[i]); /* an edge side's union holds pointers: not hashed */
         h = fnv_double(h, (double)sd->fan);

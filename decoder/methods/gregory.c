@@ -3,7 +3,10 @@
  * to CM_MAX_SIDES edges rebuilt as Gregory patches from its boundary
  * curves and the cross-boundary tangents of its G1 neighbours.  The record
  * holds the layout (0: one four-sided patch, 1: N-split into one patch per
- * side, 2: one patch degenerate at corner `corner` of a three-sided face)
+ * side, 2: one patch degenerate at corner `corner` of a three-sided face,
+ * 3 (format 2.3, GREGORY-EXACT and -FIT only): one four-sided patch whose
+ * corners are the loop vertices named by the bits of `corner`, the edges
+ * between them joined into its sides)
  * and the FNV-1a checksum of the encoder's patches (spec §2 rule 6): a
  * terminal that rebuilds them differently says so instead of showing it.
  */
@@ -20,11 +23,12 @@ cm_err cm_gregory_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_me
         why->what = "face record";
         return CM_E_TRUNCATED;
     }
-    if (layout > 2) {
+    if (layout > CM_GREG_LAYOUT_JOINED) {
         why->what = "GREGORY layout";
         return CM_E_RANGE;
     }
-    if (corner >= CM_MAX_SIDES || (layout != 2 && corner != 0)) {
+    if (layout == CM_GREG_LAYOUT_JOINED ? corner > 0xffu
+                                        : corner >= CM_MAX_SIDES || (layout != CM_GREG_LAYOUT_DEGEN && corner != 0)) {
         why->what = "GREGORY corner";
         return CM_E_RANGE;
     }
@@ -41,7 +45,16 @@ void cm_gregory_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F)
     cm_ac_enc_direct(ac, F->checksum >> 16, 16);
 }
 
-/* one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3 */
+static int popcount8(unsigned x)
+{
+    int c = 0;
+    for (int k = 0; k < 8; k++)
+        c += (int)((x >> k) & 1u);
+    return c;
+}
+
+/* one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3, layout 3 for 5 to 8
+   with four corners named */
 cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
 {
     uint32_t n = m->loops[F->loop0].nuse;
@@ -50,10 +63,14 @@ cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fau
         why->what = "GREGORY face with holes";
     else if (n < 3)
         why->what = "GREGORY face with fewer than 3 sides";
-    else if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3))
+    else if ((F->layout == 0 && n != 4) || (F->layout == 2 && n != 3) || (F->layout == CM_GREG_LAYOUT_JOINED && n < 5))
         why->what = "GREGORY sides do not fit the layout";
     else if (F->layout == 2 && F->corner >= n)
         why->what = "GREGORY corner beyond the loop";
+    else if (F->layout == CM_GREG_LAYOUT_JOINED && F->method == CM_METHOD_GREGORY)
+        why->what = "GREGORY layout 3 on cubic patches"; /* it joins the exact edges */
+    else if (F->layout == CM_GREG_LAYOUT_JOINED && (n > 8 || (F->corner >> n) != 0 || popcount8(F->corner) != 4))
+        why->what = "GREGORY layout 3 corners";
     if (why->what)
         return CM_E_FORMAT;
     if (n > CM_MAX_SIDES) {

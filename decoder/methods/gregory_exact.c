@@ -24,6 +24,6 @@ const cm_method cm_method_gregory_exact = {
     .since_major = 2,
     .since_minor = 1,
     .has_record = 1,
-    .layouts = 3,
+    .layouts = 4,
     .too_new = "GREGORY-EXACT face in a file older than format 2.1",
 };

@@ -135,6 +135,6 @@ const cm_method cm_method_gregory_fit = {
     .since_major = 2,
     .since_minor = 2,
     .has_record = 1,
-    .layouts = 3,
+    .layouts = 4,
     .too_new = "GREGORY-FIT face in a file older than format 2.2",
 };

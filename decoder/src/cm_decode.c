@@ -5,6 +5,7 @@
 
 #include "cm/cm_arith.h"
 #include "cm/cm_crc32.h"
+#include "cm/cm_gregface.h"
 #include "cm/cm_bspline.h"
 #include "cm/cm_limits_info.h"
 #include "cm/cm_method.h"
@@ -574,6 +575,9 @@ static cm_err sec_face(reader *r)
             return rlimit_at(r, why.limit, why.need, cm_limit_table[why.limit].value, F->rec_off, why.what);
         if (e != CM_OK)
             return rfail(r, e, why.what);
+        if (M->layouts && F->layout == CM_GREG_LAYOUT_JOINED &&
+            r->d->version_major == 2 && r->d->version_minor < 3)
+            return rfail(r, CM_E_UNSUPPORTED, "GREGORY layout 3 (joined sides) in a file older than format 2.3");
         F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.flip);
         F->color = 0;
         if (M->kept_surface) {

@@ -841,6 +841,32 @@ static cm_err tess_gregory(const cm_model *m, uint32_t f, const cm_greg_surface 
     cm_err e = CM_OK;
     if (m->faces[f].nloops != 1)
         return cm_fail(st, CM_E_UNSUPPORTED, "Gregory patches on a face with holes");
+    if (gs->layout == CM_GREG_LAYOUT_JOINED && gs->exact) {
+        /* one patch, layout 0's places; side m is the uses from corner m to corner m+1, the i-th on
+           [s0, s1] of the side's parameter (cm_gregface.h) */
+        static const double u0[4] = {0, 1, 1, 0}, v0[4] = {0, 0, 1, 1}, du[4] = {1, 0, -1, 0}, dv[4] = {0, 1, 0, -1};
+        int c[CM_GREG_JOINED_CORNERS], nc = 0;
+        for (int i = 0; i < n && nc < CM_GREG_JOINED_CORNERS; i++)
+            if ((gs->j >> i) & 1)
+                c[nc++] = i;
+        if (nc != CM_GREG_JOINED_CORNERS)
+            return cm_fail(st, CM_E_FORMAT, "joined Gregory patch without its four corners");
+        for (int side = 0; side < 4 && e == CM_OK; side++) {
+            const cm_egreg_side *sd = &gs->e[0].side[side];
+            int count = (side + 1 < 4 ? c[side + 1] : c[0] + n) - c[side];
+            if (count != (sd->kind == CM_EGREG_SIDE_CHAIN ? sd->npiece : 1))
+                return cm_fail(st, CM_E_FORMAT, "joined Gregory side does not match its loop");
+            sn[side] = 0;
+            for (int i = 0; i < count && e == CM_OK; i++) {
+                int use = (c[side] + i) % n;
+                double a = count > 1 ? sd->piece[i].s0 : 0.0, b = count > 1 ? sd->piece[i].s1 : 1.0;
+                sn[side] += ws->use_n[use];
+                e = add_use(ws, &k, use, 0, ws->use_n[use], u0[side] + du[side] * a, v0[side] + dv[side] * a,
+                            du[side] * (b - a), dv[side] * (b - a), st);
+            }
+        }
+        return e != CM_OK ? e : tess_patch(gs, 0, ws, k, sn, tol, mesh, info, st);
+    }
     if (gs->layout != CM_GREG_LAYOUT_SPLIT) {
         /* one patch: sides 0, 1, 2 along v=0, u=1, v=1 (backwards); layout 0's side 3 along u=0,
            layout 2's collapsed into V_j (its corners (0,1) and (0,0) are both V_j) */

@@ -84,6 +84,25 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
     return 1;
 }
 
+/* "straight" for layout 3's order: a corner whose cosine between the edges leaving it is below
+   minus this (within about 10 degrees of a straight line) */
+#define CM_JOINED_STRAIGHT_COS 0.985
+
+/* layout 3's corner bits: the four corners whose edges turn the most (largest cosine between the
+   edges leaving the corner; the lower index first among equals) */
+static int joined_corners(const double *ccos, int n)
+{
+    int bits = 0;
+    for (int c = 0; c < CM_GREG_JOINED_CORNERS; c++) {
+        int best = -1;
+        for (int k = 0; k < n; k++)
+            if (!((bits >> k) & 1) && (best < 0 || ccos[k] > ccos[best]))
+                best = k;
+        bits |= 1 << best;
+    }
+    return bits;
+}
+
 /* one correction of m per direction fitted, rebuilt by the decoder's code from the quantised record
    and measured: 1 when it passes (record in *fr, surface in rb, numbers in fe) */
 static int fit_once(enc_work *w, const loaded_model *lm, int f, int layout, int corner, double tol,
@@ -184,6 +203,27 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
     } else {
         cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
         cand_j[nc++] = 0;
+    }
+    if (exact && n >= 5 && n <= 8) {
+        /* layout 3: the four sharpest corners are the patch's, the edges between them its sides.
+           A quad whose side an exporter cut at a T-vertex (a flat corner, where a neighbour's edge
+           ends) is a pentagon to the N-split, whose centre and five patches follow it badly (24 of
+           as1_pe_203's faces at --tol 0.001).  Tried first where every other corner is within
+           about 10 degrees of straight, else after the N-split. */
+        int joined = joined_corners(ccos, n);
+        int straight = 1;
+        for (int k = 0; k < n; k++)
+            if (!((joined >> k) & 1) && !(ccos[k] < -CM_JOINED_STRAIGHT_COS))
+                straight = 0;
+        cand_layout[nc] = CM_GREG_LAYOUT_JOINED;
+        cand_j[nc] = joined;
+        if (straight) {
+            cand_layout[nc] = cand_layout[0];
+            cand_j[nc] = cand_j[0];
+            cand_layout[0] = CM_GREG_LAYOUT_JOINED;
+            cand_j[0] = joined;
+        }
+        nc++;
     }
     if (n == 3) {
         /* layout 2 with j by increasing corner angle: decreasing cosine of the angle between a, b */

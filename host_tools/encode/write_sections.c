@@ -308,6 +308,9 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
                 major = M->since_major;
                 minor = M->since_minor;
             }
+            /* the joined-side layout came with format 2.3 */
+            if (M->layouts && t->layout[f] == CM_GREG_LAYOUT_JOINED && major == 2 && minor < 3)
+                minor = 3;
         }
         cm_fmt_header h = {0};
         h.major = (uint8_t)major;

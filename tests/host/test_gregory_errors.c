@@ -491,10 +491,14 @@ static void test_gregory_record_out_of_range(void **state)
 {
     (void)state;
     cm_status st;
-    /* layout 3 does not exist (0 quad, 1 N-split, 2 degenerate quad) */
+    /* layout 4 does not exist (0 quad, 1 N-split, 2 degenerate quad, 3 joined sides) */
     load_split_cylinder();
-    src->model.faces[1].layout = 3;
+    src->model.faces[1].layout = 4;
     assert_face_refused(2, CM_E_RANGE, "GREGORY layout", &st);
+    /* layout 3 came with format 2.3 (this file says 2.0) */
+    load_split_cylinder();
+    src->model.faces[1].layout = CM_GREG_LAYOUT_JOINED;
+    assert_face_refused(2, CM_E_UNSUPPORTED, "older than format 2.3", &st);
     /* layout 2's collapsed vertex is an index in a loop of at most MAX_SIDES edges */
     load_split_cylinder();
     src->model.faces[0].layout = CM_GREG_LAYOUT_DEGEN;
@@ -587,8 +591,25 @@ static void test_gregory_exact_records(void **state)
     write_minor = 1;
     polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 0);
     assert_decodes(2);
-    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, 3, 0);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, 4, 0);
     assert_face_refused(2, CM_E_RANGE, "GREGORY layout", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 15);
+    assert_face_refused(2, CM_E_UNSUPPORTED, "GREGORY layout 3 (joined sides) in a file older than format 2.3", &st);
+    /* format 2.3: layout 3 names four corners of a loop of 5 to 8 edges, on exact patches */
+    write_minor = 3;
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 15);
+    assert_decodes(2);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 7);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 32 + 7);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 31);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
+    polygon_face(4, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 15);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY sides do not fit the layout", &st);
+    polygon_face(5, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_JOINED, 15);
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 on cubic patches", &st);
+    write_minor = 1;
     polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 2);
     assert_face_refused(2, CM_E_RANGE, "GREGORY corner", &st);
     polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_QUAD, 0);

@@ -497,6 +497,100 @@ static void test_gregory_fit_bump(void **state)
  * slopes on every side, brings it within the tolerance both ways on the terminal's rebuild.
  * Without the correction it is kept.
  */
+/* layout 3 (format 2.3): a quarter cylinder whose bottom arc is cut in two at a T-vertex is still a
+   quad.  Both quarters (the other's top arc cut) come back as one exact patch each, close to the
+   cylinder; the joint sits where the arc's speed is continuous, near the angle of the cut.  Not on
+   it: a rational arc's parameter is not its angle, so the cut arc's points pair with the whole
+   arc's slightly askew (2.1e-4 of the size off the cylinder, where the uncut quarter is exact);
+   GREGORY-FIT takes the rest at tighter tolerances.  G1 along the shared line; the mesh stays near
+   the cylinder; a 2.2 reader refuses the layout by name */
+static void test_gregory_joined_t_vertex(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_t_vertex_half_cylinder_144(&w, CR, CH);
+    load_igw(&w, "t-vertex-cylinder", 2, &lm);
+    encode_with(&lm, 1e-2, 3, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 2);
+    for (int f = 0; f < 2; f++) {
+        assert_int_equal(r.faces[f].layout, CM_GREG_LAYOUT_JOINED);
+        if (!(r.faces[f].ratio < 3e-4))
+            fail_msg("face %d: %.3g of its size off the cylinder", f, r.faces[f].ratio);
+    }
+    decode(&r);
+    const cm_model *m = &dec.model;
+    assert_int_equal(dec.buf[CM_HDR_MINOR], 3);
+    cm_rebuilt rb[2];
+    cm_status st;
+    cm_status_init(&st);
+    static const double cut[2] = {3.0 / 8.0, 1.0 / 3.0};
+    for (int f = 0; f < 2; f++) {
+        assert_ok(cm_rebuild_face(m, (uint32_t)f, &rb[f], &rbws[f], &st)); /* the checksum matches */
+        assert_int_equal(rb[f].greg->layout, CM_GREG_LAYOUT_JOINED);
+        assert_int_equal(rb[f].greg->npatch, 1);
+        /* the cut arc is one side of two pieces, joined near the cut's angle (from its own end) */
+        int chains = 0;
+        for (int k = 0; k < 4; k++) {
+            const cm_egreg_side *sd = &rb[f].greg->e[0].side[k];
+            if (sd->kind != CM_EGREG_SIDE_CHAIN)
+                continue;
+            chains++;
+            assert_int_equal(sd->npiece, 2);
+            double joint = sd->piece[0].s1;
+            if (!(fabs(joint - cut[f]) < 0.02 || fabs(1 - joint - cut[f]) < 0.02))
+                fail_msg("face %d: joint at %.4f of its side, the cut at %.4f", f, joint, cut[f]);
+        }
+        assert_int_equal(chains, 1);
+    }
+    int shared = -1;
+    for (uint32_t e = 0; e < m->nedges; e++)
+        if (m->edge_face[e][0] >= 0 && m->edge_face[e][1] >= 0)
+            shared = (int)e;
+    assert_true(shared >= 0);
+    cm_curve c;
+    cm_model_edge_curve(m, (uint32_t)shared, &c);
+    for (int k = 1; k <= 9; k++) {
+        cm_vec3 P[1];
+        assert_ok(cm_curve_eval(&c, k / 10.0, 0, P, &st));
+        double cs = fabs(cm_dot(greg_normal(rb[0].greg, P[0]), greg_normal(rb[1].greg, P[0])));
+        if (!(cs >= cos(1e-6 * M_PI / 180)))
+            fail_msg("normals differ by %.3g deg along the shared edge", acos(cs) * 180 / M_PI);
+    }
+    for (int f = 0; f < 2; f++)
+        for (int i = 0; i <= 8; i++)
+            for (int j = 0; j <= 8; j++) {
+                cm_vec3 S;
+                assert_ok(cm_greg_surface_eval(rb[f].greg, 0, i / 8.0, j / 8.0, &S, NULL, NULL));
+                assert_near(hypot(S.x, S.y), CR, 1e-3 * CR);
+            }
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64};
+    cm_mesh_clear(&mesh);
+    for (uint32_t f = 0; f < m->nfaces; f++)
+        assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));
+    assert_true(mesh.nindex > 0);
+    for (uint32_t i = 0; i < mesh.nverts; i++)
+        assert_near(hypot((double)pos[i][0], (double)pos[i][1]), CR, 1e-3 * CR);
+    /* no triangle folded over: the joined side's samples sit at their own parameters (a sample
+       placed at the wrong u pulls the triangles between it and the patch inside out) */
+    for (uint32_t t = 0; t + 2 < mesh.nindex; t += 3) {
+        cm_vec3 P[3], N = {0, 0, 0};
+        for (int a = 0; a < 3; a++) {
+            const uint32_t v = idx[t + (uint32_t)a];
+            P[a] = cm_v3(pos[v][0], pos[v][1], pos[v][2]);
+            N = cm_add(N, cm_v3(nrm[v][0], nrm[v][1], nrm[v][2]));
+        }
+        cm_vec3 x = cm_cross(cm_sub(P[1], P[0]), cm_sub(P[2], P[0]));
+        if (!(cm_dot(x, N) > 0))
+            fail_msg("triangle %u folded over (%.3g)", t / 3, cm_dot(cm_unit(x), cm_unit(N)));
+    }
+    assert_refused_as_minor(&r, 2, "GREGORY layout 3 (joined sides) in a file older than format 2.3");
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 /* spec §14 step 6: at a tighter tolerance the bump needs a finer and larger correction (m = 5 at
    0.06 %, about 120 bytes); the 5 x 5 net with one raised point costs about 64 bytes in the SURF
    section, whose prediction sends the flat rows almost free.  The face keeps its surface. */
@@ -563,6 +657,7 @@ int main(void)
         cmocka_unit_test(test_gregory_fit_bump),
         cmocka_unit_test(test_gregory_fit_three_sided),
         cmocka_unit_test(test_gregory_fit_not_larger_than_surface),
+        cmocka_unit_test(test_gregory_joined_t_vertex),
     };
     return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
 }

@@ -553,7 +553,8 @@ static void test_errors(void **state)
 
     /* layout / j */
     bilinear_face(&in);
-    assert_err(cm_greg_build(&in, 3, 0, &s, NULL), CM_E_RANGE);
+    assert_err(cm_greg_build(&in, 4, 0, &s, NULL), CM_E_RANGE);
+    assert_err(cm_greg_build(&in, CM_GREG_LAYOUT_JOINED, 15, &s, NULL), CM_E_UNSUPPORTED); /* exact edges only */
     assert_err(cm_greg_build(&in, -1, 0, &s, NULL), CM_E_RANGE);
     assert_err(cm_greg_build(&in, CM_GREG_LAYOUT_DEGEN, 0, &s, NULL), CM_E_RANGE); /* n = 4 */
     cm_vec3 V[3];

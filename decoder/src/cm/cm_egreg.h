@@ -37,6 +37,9 @@
  * faces of an edge that use opposite bases have cross derivatives in the
  * same plane span(A(s), B'(s)) and meet G1; or, on a side collapsed into
  * a vertex, an explicit cubic (Bezier) cross derivative (the fan of 6.5).
+ * A CHAIN side is several edges end to end (a quad side split at a
+ * T-vertex): A(s) is then linear on each edge, from that edge's own basis,
+ * while k and h stay linear over the whole side.
  *
  * Contract: pure functions of their inputs; no heap, no VLA, no recursion;
  * + - * / and comparisons only, fixed orders (spec §2 rules 3-4).
@@ -50,12 +53,39 @@
 #include "cm/cm_bspline.h"
 #include "cm/cm_error.h"
 #include "cm/cm_vec.h"
+#include "cm_limits.h"
 
-enum { CM_EGREG_SIDE_EDGE = 0, CM_EGREG_SIDE_CUBIC = 1 };
+enum { CM_EGREG_SIDE_EDGE = 0, CM_EGREG_SIDE_CUBIC = 1, CM_EGREG_SIDE_CHAIN = 2 };
+
+/** Edges one side of a patch may join (layout 3, format 2.3): up to a side of a quad split by 3
+    T-vertices, and no more than a loop of CM_MAX_SIDES edges can put on one side (a profile of four
+    sides never joins any: its decoder state does not pay for it). */
+#if CM_MAX_SIDES >= 7
+#  define CM_EGREG_MAX_PIECES 4
+#elif CM_MAX_SIDES >= 5
+#  define CM_EGREG_MAX_PIECES (CM_MAX_SIDES - 3)
+#else
+#  define CM_EGREG_MAX_PIECES 1
+#endif
+
+/**
+ * One edge of a CHAIN side: on [s0, s1] of the side, B(s) = curve(t0 + (t1 - t0) (s - s0) / (s1 - s0)),
+ * with its own linear cross basis from As (at s0) to Ae (at s1): the basis of that edge alone
+ * (spec 5.4), so a neighbour across it that uses the whole edge sees the same tangent planes.
+ */
+typedef struct cm_egreg_piece {
+    cm_curve curve;
+    uint32_t edge;
+    double t0, t1, s0, s1;
+    cm_vec3 As, Ae;
+} cm_egreg_piece;
 
 /** One side of an exact-boundary patch. */
 typedef struct cm_egreg_side {
     int kind;           /* CM_EGREG_SIDE_* */
+    int npiece;         /* CHAIN: 2..CM_EGREG_MAX_PIECES edges in piece[] (As, Ae below: the first's
+                           start and the last's end, as the corner fits see them) */
+    cm_egreg_piece piece[CM_EGREG_MAX_PIECES];
     uint32_t edge;      /* EDGE: the model edge (checksum only) */
     double t0, t1;      /* EDGE: B(s) = curve(t0 + (t1 - t0) s); t1 < t0 runs it backwards */
     union {

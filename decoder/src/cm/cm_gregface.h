@@ -41,6 +41,19 @@
  *   are de Casteljau splits): a tessellator that must not crack samples the
  *   edge curves and inner[] themselves, and maps parameters as above.
  *
+ * layout 3 (JOINED, n = 5..CM_MAX_SIDES, npatch = 1, exact patches only,
+ *   format 2.3): one four-sided patch whose corners are the four loop
+ *   vertices V_c0 < V_c1 < V_c2 < V_c3 named by the bits of j (bit k: V_k);
+ *   the others are T-vertices inside a side, whose edges are joined into a
+ *   CHAIN side (cm_egreg.h).  Side m runs V_cm -> V_c(m+1) (indices mod 4)
+ *   in layout 0's places: side 0 v=0, side 1 u=1, side 2 v=1 backwards, side
+ *   3 u=0 backwards.  The edge of use u, the i-th of its side, covers
+ *   [piece[i].s0, piece[i].s1] of that side's parameter, linearly in the
+ *   edge's own parameter.  The joints are placed so that the side's speed
+ *   is continuous where its edges meet tangentially: a quad one of whose
+ *   sides an exporter cut in two (a T-vertex where a neighbour's edge ends)
+ *   is rebuilt as the quad it is, not as an N-split pentagon.
+ *
  * ---- checksum (spec §2 rule 6) ----------------------------------------
  * FNV-1a 32 over the bytes of the doubles x, y, z of, for patch
  * k = 0..npatch-1 in turn: the 12 boundary points P[i][j] (i = 0..3 outer,
@@ -62,7 +75,10 @@
 #include "cm/cm_vec.h"
 #include "cm_limits.h"
 
-enum { CM_GREG_LAYOUT_QUAD = 0, CM_GREG_LAYOUT_SPLIT = 1, CM_GREG_LAYOUT_DEGEN = 2 };
+enum { CM_GREG_LAYOUT_QUAD = 0, CM_GREG_LAYOUT_SPLIT = 1, CM_GREG_LAYOUT_DEGEN = 2, CM_GREG_LAYOUT_JOINED = 3 };
+
+/** Layout 3: the patch corners a record may name (a bit per loop vertex). */
+#define CM_GREG_JOINED_CORNERS 4
 
 /** Layout 1 splits every edge at this parameter (spec 6.4 step 1). */
 #define CM_GREG_SPLIT_T 0.5
@@ -104,7 +120,8 @@ typedef struct cm_greg_input {
  */
 typedef struct cm_greg_surface {
     int layout;                  /* CM_GREG_LAYOUT_* */
-    int j;                       /* layout 2: the collapsed vertex V_j (original index); else 0 */
+    int j;                       /* layout 2: the collapsed vertex V_j (original index); layout 3: the
+                                    corner bits; else 0 */
     int n;                       /* sides of the face */
     int npatch;                  /* 1 (layouts 0, 2) or n (layout 1) */
     double t_split;              /* layout 1: CM_GREG_SPLIT_T; else 0 */
