@@ -391,6 +391,20 @@ static int input_finite(const cm_greg_input *in, int exact)
     return cm_finite3(in->nF);
 }
 
+int cm_greg_joined_ok(unsigned bits, int n)
+{
+    int c = 0, run = 0, longest = 0;
+    if (n < 5 || n > CM_GREG_JOINED_MAX_EDGES || (bits >> n) != 0)
+        return 0;
+    for (int k = 0; k < 2 * n; k++) { /* round the loop twice: the side that wraps is counted too */
+        int corner = (int)((bits >> (k % n)) & 1u);
+        c += k < n ? corner : 0;
+        run = corner ? 1 : run + 1;
+        longest = run > longest ? run : longest;
+    }
+    return c == CM_GREG_JOINED_CORNERS && longest <= CM_GREG_JOINED_MAX_PIECES;
+}
+
 void cm_greg_surface_reset(cm_greg_surface *out, int layout, int n, int j, int exact)
 {
     memset(out, 0, sizeof *out);
@@ -408,7 +422,7 @@ cm_err cm_greg_begin(const cm_greg_input *in, int layout, int j, int exact, cm_g
     cm_greg_surface_reset(out, layout, n, j, exact);
     if (!(in->eps_len >= 0.0) || !isfinite(in->eps_len))
         return cm_fail(st, CM_E_ARG, "gregface: eps_len");
-    if (n > CM_MAX_SIDES)
+    if (n > (layout == CM_GREG_LAYOUT_JOINED ? CM_GREG_MAX_INPUT : CM_MAX_SIDES))
         return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, "gregface: sides");
     if (n < 3)
         return cm_fail(st, CM_E_RANGE, "gregface: fewer than 3 sides");
@@ -432,10 +446,7 @@ cm_err cm_greg_begin(const cm_greg_input *in, int layout, int j, int exact, cm_g
             return cm_fail(st, CM_E_UNSUPPORTED, "gregface: layout 3 joins exact edges only");
         if (n < 5)
             return cm_fail(st, CM_E_RANGE, "gregface: layout 3 needs 5 or more edges");
-        int corners = 0;
-        for (int k = 0; k < n; k++)
-            corners += (j >> k) & 1;
-        if (j < 0 || j >= (1 << n) || corners != CM_GREG_JOINED_CORNERS)
+        if (j < 0 || !cm_greg_joined_ok((unsigned)j, n))
             return cm_fail(st, CM_E_RANGE, "gregface: layout 3 corners");
         break;
     }

@@ -27,13 +27,13 @@ cm_err cm_gregory_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_me
         why->what = "GREGORY layout";
         return CM_E_RANGE;
     }
-    if (layout == CM_GREG_LAYOUT_JOINED ? corner > 0xffu
+    if (layout == CM_GREG_LAYOUT_JOINED ? corner >= (1u << CM_GREG_JOINED_MAX_EDGES)
                                         : corner >= CM_MAX_SIDES || (layout != CM_GREG_LAYOUT_DEGEN && corner != 0)) {
         why->what = "GREGORY corner";
         return CM_E_RANGE;
     }
     F->layout = (uint8_t)layout;
-    F->corner = (uint8_t)corner;
+    F->corner = (uint16_t)corner;
     return CM_OK;
 }
 
@@ -45,15 +45,7 @@ void cm_gregory_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F)
     cm_ac_enc_direct(ac, F->checksum >> 16, 16);
 }
 
-static int popcount8(unsigned x)
-{
-    int c = 0;
-    for (int k = 0; k < 8; k++)
-        c += (int)((x >> k) & 1u);
-    return c;
-}
-
-/* one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3, layout 3 for 5 to 8
+/* one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3, layout 3 for 5 to 12
    with four corners named */
 cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
 {
@@ -69,14 +61,16 @@ cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fau
         why->what = "GREGORY corner beyond the loop";
     else if (F->layout == CM_GREG_LAYOUT_JOINED && F->method == CM_METHOD_GREGORY)
         why->what = "GREGORY layout 3 on cubic patches"; /* it joins the exact edges */
-    else if (F->layout == CM_GREG_LAYOUT_JOINED && (n > 8 || (F->corner >> n) != 0 || popcount8(F->corner) != 4))
+    else if (F->layout == CM_GREG_LAYOUT_JOINED && !cm_greg_joined_ok(F->corner, (int)n))
         why->what = "GREGORY layout 3 corners";
     if (why->what)
         return CM_E_FORMAT;
-    if (n > CM_MAX_SIDES) {
+    /* layout 3 takes up to 12 edges in any build that can do it at all (CM_MAX_SIDES >= 5) */
+    uint32_t need = F->layout == CM_GREG_LAYOUT_JOINED ? 5u : n;
+    if (need > CM_MAX_SIDES) {
         why->what = "GREGORY sides";
         why->limit = CM_LIMIT_MAX_SIDES;
-        why->need = n;
+        why->need = need;
         return CM_E_LIMIT;
     }
     return CM_OK;
@@ -127,6 +121,8 @@ void cm_gregory_needs(const cm_model *m, const cm_face *F, uint32_t *need)
 {
     uint32_t sides = m->loops[F->loop0].nuse;
     uint32_t patches = F->layout == CM_GREG_LAYOUT_SPLIT ? sides : 1u;
+    if (F->layout == CM_GREG_LAYOUT_JOINED)
+        sides = 5; /* what a build needs for layout 3 (cm_gregory_check_loops) */
     if (sides > need[CM_LIMIT_MAX_SIDES])
         need[CM_LIMIT_MAX_SIDES] = sides;
     if (patches > need[CM_LIMIT_MAX_GREG])

@@ -118,7 +118,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_inp
     int n = (int)L->nuse;
     if (n < 3)
         return cm_fail(st, CM_E_UNSUPPORTED, "GREGORY needs 3 or more sides");
-    if (n > CM_MAX_SIDES)
+    if (n > CM_GREG_MAX_INPUT)
         return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, __func__);
     double bbox;
     cm_err e = cm_face_normal(m, f, ws->samples, &bbox, &in->nF, st);

@@ -567,7 +567,8 @@ static cm_err sec_face(reader *r)
             (r->d->version_major == M->since_major && r->d->version_minor < M->since_minor))
             return rfail(r, CM_E_UNSUPPORTED, M->too_new);
         F->method = (uint8_t)meth;
-        F->layout = F->corner = F->fit = 0;
+        F->layout = F->fit = 0;
+        F->corner = 0;
         F->checksum = 0;
         F->surf = 0;
         cm_method_fault why = {0};

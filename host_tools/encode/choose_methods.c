@@ -43,7 +43,7 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
     uint32_t nctrl = m->nctrl;
     F->method = (uint8_t)method;
     F->layout = (uint8_t)layout;
-    F->corner = (uint8_t)corner;
+    F->corner = (uint16_t)corner;
     F->fit = 0;
     if (fit) {
         /* the correction where the terminal's reader puts it: the control-point pool, here past its

@@ -33,12 +33,13 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
         rep->why = "holes";
         return 0;
     }
-    if (n < 3 || n > CM_MAX_SIDES) {
+    /* GREGORY-EXACT's layout 3 takes loops of up to 12 edges (four of them corners) */
+    if (n < 3 || n > (exact ? CM_GREG_MAX_INPUT : CM_MAX_SIDES)) {
         rep->why = n < 3 ? "fewer than 3 sides" : "too many sides";
         return 0;
     }
-    cm_cubic cub[CM_MAX_SIDES];
-    cm_vec3 t_in[CM_MAX_SIDES], t_out[CM_MAX_SIDES]; /* unit tangents at the end and start of side k */
+    cm_cubic cub[CM_GREG_MAX_INPUT];
+    cm_vec3 t_in[CM_GREG_MAX_INPUT], t_out[CM_GREG_MAX_INPUT]; /* unit tangents at the end and start of side k */
     for (int k = 0; k < n && exact; k++) {
         const cm_use *U = &m->uses[L->use0 + (uint32_t)k];
         if (!cm_use_tangent(m, U, 1, 0.0, &t_in[k]) || !cm_use_tangent(m, U, 0, 0.0, &t_out[k])) {
@@ -183,7 +184,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
                       face_surface *fs, int method)
 {
     enc_work *w = t->w;
-    double ccos[CM_MAX_SIDES];
+    double ccos[CM_GREG_MAX_INPUT];
     int fit = method == CM_METHOD_GREGORY_FIT;
     int exact = method == CM_METHOD_GREGORY_EXACT || fit;
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
@@ -200,11 +201,11 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
             cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
             cand_j[nc++] = 0;
         }
-    } else {
+    } else if (n <= CM_MAX_SIDES) {
         cand_layout[nc] = CM_GREG_LAYOUT_SPLIT;
         cand_j[nc++] = 0;
     }
-    if (exact && n >= 5 && n <= 8) {
+    if (exact && n >= 5 && cm_greg_joined_ok((unsigned)joined_corners(ccos, n), n)) {
         /* layout 3: the four sharpest corners are the patch's, the edges between them its sides.
            A quad whose side an exporter cut at a T-vertex (a flat corner, where a neighbour's edge
            ends) is a pentagon to the N-split, whose centre and five patches follow it badly (24 of
@@ -217,7 +218,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
                 straight = 0;
         cand_layout[nc] = CM_GREG_LAYOUT_JOINED;
         cand_j[nc] = joined;
-        if (straight) {
+        if (straight && nc > 0) {
             cand_layout[nc] = cand_layout[0];
             cand_j[nc] = cand_j[0];
             cand_layout[0] = CM_GREG_LAYOUT_JOINED;
@@ -238,6 +239,10 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
             cand_layout[nc] = CM_GREG_LAYOUT_DEGEN;
             cand_j[nc++] = order[i];
         }
+    }
+    if (nc == 0) {
+        rep->why = "too many sides"; /* more than CM_MAX_SIDES edges, and not a quad with T-vertices */
+        return 0;
     }
     double best_ratio = HUGE_VAL;
     int too_large = 0; /* a correction passed but cost more than the surface */

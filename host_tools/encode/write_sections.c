@@ -212,7 +212,7 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
             cm_face rec = {0};
             rec.method = (uint8_t)t->method[f];
             rec.layout = (uint8_t)t->layout[f];
-            rec.corner = (uint8_t)t->corner[f];
+            rec.corner = (uint16_t)t->corner[f];
             rec.checksum = t->checksum[f];
             cm_fit_q fit = {0};
             if (t->fit[f])

@@ -449,31 +449,30 @@ void igw_split_half_cylinder_144(igw *w, double r, double h)
     }
 }
 
-void igw_t_vertex_half_cylinder_144(igw *w, double r, double h)
+/* arc (cx, cy, r) in the plane z from a0 to a1 as `pieces` arcs, cut at unequal angles; their DEs
+   appended to m[*k] */
+static void cut_arc(igw *w, double r, double z, double a0, double a1, int pieces, int *m, int *k)
+{
+    static const double f[4][5] = {{0, 1}, {0, 3.0 / 8.0, 1}, {0, 0.2, 0.55, 1}, {0, 0.15, 0.4, 0.7, 1}};
+    for (int i = 0; i < pieces; i++)
+        m[(*k)++] = arc_100(w, 0, 0, z, r, a0 + f[pieces - 1][i] * (a1 - a0), a0 + f[pieces - 1][i + 1] * (a1 - a0));
+}
+
+void igw_t_vertex_half_cylinder_144(igw *w, double r, double h, int pieces, int both)
 {
     int axis = line(w, (v3){0, 0, 0}, (v3){0, 0, 1});
     int gen = line(w, (v3){r, 0, 0}, (v3){r, 0, h});
     for (int q = 0; q < 2; q++) {
-        double a0 = q * M_PI / 2, a1 = (q + 1) * M_PI / 2, cut = a0 + (q ? 1.0 / 3.0 : 3.0 / 8.0) * (a1 - a0);
+        double a0 = q * M_PI / 2, a1 = (q + 1) * M_PI / 2;
         int surf = igw_add(w, 120, 0, "%d,%d,%.17g,%.17g", axis, gen, a0, a1);
         igw_set(w, surf, 1, 0, 0);
         v3 b0 = {r * cos(a0), r * sin(a0), 0}, b1 = {r * cos(a1), r * sin(a1), 0};
         v3 t0 = {b0.x, b0.y, h}, t1 = {b1.x, b1.y, h};
-        /* quarter 0's bottom arc and quarter 1's top arc in two, unequal parts (a flat corner) */
-        int m[5], k = 0;
-        if (q == 0) {
-            m[k++] = arc_100(w, 0, 0, 0, r, a0, cut);
-            m[k++] = arc_100(w, 0, 0, 0, r, cut, a1);
-        } else {
-            m[k++] = arc_100(w, 0, 0, 0, r, a0, a1);
-        }
+        /* quarter 0's bottom arc and quarter 1's top arc (with `both`, both arcs of quarter 0) cut */
+        int m[12], k = 0;
+        cut_arc(w, r, 0, a0, a1, q == 0 ? pieces : 1, m, &k);
         m[k++] = line(w, b1, t1);
-        if (q == 1) {
-            m[k++] = arc_100(w, 0, 0, h, r, a0, cut);
-            m[k++] = arc_100(w, 0, 0, h, r, cut, a1);
-        } else {
-            m[k++] = arc_100(w, 0, 0, h, r, a0, a1);
-        }
+        cut_arc(w, r, h, a0, a1, q == 1 || both ? pieces : 1, m, &k);
         m[k++] = line(w, t0, b0);
         igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, k)));
     }

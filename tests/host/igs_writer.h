@@ -64,9 +64,10 @@ void igw_split_half_cylinder_144(igw *w, double r, double h);
 
 /* one face: a bicubic bump of height h over the square [0,a]^2 at z = 0, flat (with its cross
    slopes) on its four straight edges - the patches from the boundary come out flat */
-/* igw_split_half_cylinder_144 with a T-vertex in each quarter: the first's bottom arc cut at 3/8,
-   the second's top arc at 1/3 (five edges each, one flat corner) */
-void igw_t_vertex_half_cylinder_144(igw *w, double r, double h);
+/* igw_split_half_cylinder_144 with T-vertices: the first quarter's bottom arc and the second's top
+   arc cut into `pieces` (1..4) arcs at unequal angles (pieces 2: at 3/8); `both`: the first
+   quarter's top arc too (pieces 4: ten edges, six flat corners) */
+void igw_t_vertex_half_cylinder_144(igw *w, double r, double h, int pieces, int both);
 void igw_bump_144(igw *w, double a, double h);
 /** The bump's three-sided sibling: a biquartic 128 over the right triangle (0,0), (a,0), (0,a), flat
  *  with its cross slopes on all three straight edges, h high at the centroid; one 144. */

@@ -605,6 +605,12 @@ static void test_gregory_exact_records(void **state)
     assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
     polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 31);
     assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
+    polygon_face(10, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 0x63); /* 1, 4, 1, 4 edges */
+    assert_decodes(2);
+    polygon_face(10, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 0x0f); /* a side of 7 edges */
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
+    polygon_face(13, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 0x249); /* 13 edges: over 12 */
+    assert_face_refused(2, CM_E_FORMAT, "GREGORY layout 3 corners", &st);
     polygon_face(4, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_JOINED, 15);
     assert_face_refused(2, CM_E_FORMAT, "GREGORY sides do not fit the layout", &st);
     polygon_face(5, 0, CM_METHOD_GREGORY, CM_GREG_LAYOUT_JOINED, 15);

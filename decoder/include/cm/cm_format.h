@@ -137,7 +137,8 @@ typedef struct cm_face {
     uint32_t loop0;       /* loop0 is the outer loop */
     uint16_t nloops;
     uint8_t method, flip, color; /* color: palette index, 0 = none */
-    uint8_t layout, corner; /* GREGORY record (spec 15.2): layout 0/1/2 and layout 2's vertex j */
+    uint8_t layout;       /* GREGORY record (spec 15.2): layout 0..3 */
+    uint16_t corner;      /* and layout 2's vertex j, or layout 3's corner bits (up to 12 edges) */
     uint8_t fit;          /* GREGORY-FIT: coefficients per direction m (bits 0-2) and patches (bits
                              3-7) of its correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
     uint32_t surf;        /* KEEP: index of its kept surface; GREGORY-FIT: index in ctrl[] of its

@@ -13,9 +13,9 @@
 typedef struct cm_corner_ws {
     cm_vec3 samples[CM_MAX_FACE_SAMPLES];  /* the face's boundary samples */
     cm_vec3 scratch[CM_MAX_FACE_SAMPLES];  /* a partner face's */
-    cm_vec3 geo[CM_MAX_SIDES];
-    int has_geo[CM_MAX_SIDES];
-    int32_t vert[CM_MAX_SIDES];
+    cm_vec3 geo[CM_GREG_MAX_INPUT];
+    int has_geo[CM_GREG_MAX_INPUT];
+    int32_t vert[CM_GREG_MAX_INPUT];
 } cm_corner_ws;
 
 /**

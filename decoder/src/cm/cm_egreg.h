@@ -57,13 +57,10 @@
 
 enum { CM_EGREG_SIDE_EDGE = 0, CM_EGREG_SIDE_CUBIC = 1, CM_EGREG_SIDE_CHAIN = 2 };
 
-/** Edges one side of a patch may join (layout 3, format 2.3): up to a side of a quad split by 3
-    T-vertices, and no more than a loop of CM_MAX_SIDES edges can put on one side (a profile of four
-    sides never joins any: its decoder state does not pay for it). */
-#if CM_MAX_SIDES >= 7
-#  define CM_EGREG_MAX_PIECES 4
-#elif CM_MAX_SIDES >= 5
-#  define CM_EGREG_MAX_PIECES (CM_MAX_SIDES - 3)
+/** Edges one side of a patch may join (layout 3, format 2.3): a side of a quad split by up to 3
+    T-vertices (a profile of four sides never joins any: its decoder state does not pay for it). */
+#if CM_MAX_SIDES >= 5
+#  define CM_EGREG_MAX_PIECES 4 /* = CM_GREG_JOINED_MAX_PIECES (cm_gregface.h) */
 #else
 #  define CM_EGREG_MAX_PIECES 1
 #endif

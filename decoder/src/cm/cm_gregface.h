@@ -41,7 +41,8 @@
  *   are de Casteljau splits): a tessellator that must not crack samples the
  *   edge curves and inner[] themselves, and maps parameters as above.
  *
- * layout 3 (JOINED, n = 5..CM_MAX_SIDES, npatch = 1, exact patches only,
+ * layout 3 (JOINED, n = 5..CM_GREG_JOINED_MAX_EDGES, at most
+ *   CM_GREG_JOINED_MAX_PIECES edges per side, npatch = 1, exact patches only,
  *   format 2.3): one four-sided patch whose corners are the four loop
  *   vertices V_c0 < V_c1 < V_c2 < V_c3 named by the bits of j (bit k: V_k);
  *   the others are T-vertices inside a side, whose edges are joined into a
@@ -77,8 +78,19 @@
 
 enum { CM_GREG_LAYOUT_QUAD = 0, CM_GREG_LAYOUT_SPLIT = 1, CM_GREG_LAYOUT_DEGEN = 2, CM_GREG_LAYOUT_JOINED = 3 };
 
-/** Layout 3: the patch corners a record may name (a bit per loop vertex). */
+/** Layout 3: the patch corners a record names (a bit per loop vertex). */
 #define CM_GREG_JOINED_CORNERS 4
+/** Layout 3: at most this many edges in the loop, and in one side (format rules, 2.3). */
+#define CM_GREG_JOINED_MAX_EDGES 12
+#define CM_GREG_JOINED_MAX_PIECES 4
+
+/** The sides cm_greg_input holds: a build that can do layout 3 (CM_MAX_SIDES >= 5) takes its loops
+    of up to CM_GREG_JOINED_MAX_EDGES edges; the other layouts stop at CM_MAX_SIDES. */
+#if CM_MAX_SIDES >= 5
+#  define CM_GREG_MAX_INPUT CM_GREG_JOINED_MAX_EDGES
+#else
+#  define CM_GREG_MAX_INPUT CM_MAX_SIDES
+#endif
 
 /** Layout 1 splits every edge at this parameter (spec 6.4 step 1). */
 #define CM_GREG_SPLIT_T 0.5
@@ -106,9 +118,9 @@ typedef struct cm_greg_side {
 } cm_greg_side;
 
 typedef struct cm_greg_input {
-    int n;                               /* number of sides, 3..CM_MAX_SIDES */
-    cm_greg_side side[CM_MAX_SIDES];
-    cm_vec3 corner_normal[CM_MAX_SIDES]; /* N(F, V_k) of spec 5.3 at V_k (start of side k); odd-N spoke rule */
+    int n;                               /* number of sides, 3..CM_MAX_SIDES (layout 3: edges, 5..CM_GREG_MAX_INPUT) */
+    cm_greg_side side[CM_GREG_MAX_INPUT];
+    cm_vec3 corner_normal[CM_GREG_MAX_INPUT]; /* N(F, V_k) of spec 5.3 at V_k (start of side k); odd-N spoke rule */
     cm_vec3 nF;                          /* face reference normal n_F (unit) */
     double eps_len;                      /* spec EPS_LEN: lengths <= this are zero */
 } cm_greg_input;
@@ -207,6 +219,13 @@ CM_NODISCARD cm_err cm_greg_spoke_centre(int n, const cm_vec3 *M, const cm_vec3 
  */
 CM_NODISCARD cm_err cm_greg_begin(const cm_greg_input *in, int layout, int j, int exact, cm_greg_surface *out,
                                   cm_status *st);
+
+/**
+ * Layout 3's corner bits for a loop of n edges: exactly CM_GREG_JOINED_CORNERS of them, none at or
+ * above bit n, no side of more than CM_GREG_JOINED_MAX_PIECES edges, 5 <= n <=
+ * CM_GREG_JOINED_MAX_EDGES.  1 when they are.
+ */
+int cm_greg_joined_ok(unsigned bits, int n);
 
 /** *out zeroed but for layout, n, j (layout 2 only) and exact: what a failed construction leaves. */
 void cm_greg_surface_reset(cm_greg_surface *out, int layout, int n, int j, int exact);
