@@ -433,22 +433,6 @@ static int arc_100(igw *w, double cx, double cy, double z, double r, double a0, 
     return de;
 }
 
-void igw_split_half_cylinder_144(igw *w, double r, double h)
-{
-    int axis = line(w, (v3){0, 0, 0}, (v3){0, 0, 1});
-    int gen = line(w, (v3){r, 0, 0}, (v3){r, 0, h});
-    for (int q = 0; q < 2; q++) {
-        double a0 = q * M_PI / 2, a1 = (q + 1) * M_PI / 2;
-        int surf = igw_add(w, 120, 0, "%d,%d,%.17g,%.17g", axis, gen, a0, a1);
-        igw_set(w, surf, 1, 0, 0);
-        v3 b0 = {r * cos(a0), r * sin(a0), 0}, b1 = {r * cos(a1), r * sin(a1), 0};
-        v3 t0 = {b0.x, b0.y, h}, t1 = {b1.x, b1.y, h};
-        /* bottom arc, up the far line, top arc, down the near line (the importer chains and turns them) */
-        int m[4] = {arc_100(w, 0, 0, 0, r, a0, a1), line(w, b1, t1), arc_100(w, 0, 0, h, r, a0, a1), line(w, t0, b0)};
-        igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, 4)));
-    }
-}
-
 /* arc (cx, cy, r) in the plane z from a0 to a1 as `pieces` arcs, cut at unequal angles; their DEs
    appended to m[*k] */
 static void cut_arc(igw *w, double r, double z, double a0, double a1, int pieces, int *m, int *k)
@@ -476,6 +460,11 @@ void igw_t_vertex_half_cylinder_144(igw *w, double r, double h, int pieces, int 
         m[k++] = line(w, t0, b0);
         igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, k)));
     }
+}
+
+void igw_split_half_cylinder_144(igw *w, double r, double h)
+{
+    igw_t_vertex_half_cylinder_144(w, r, h, 1, 0);
 }
 
 void igw_bump_144(igw *w, double a, double h)

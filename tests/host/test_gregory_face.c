@@ -260,6 +260,39 @@ static void assert_refused_as_minor(encode_result *r, int minor, const char *why
     assert_string_equal(st.where, why);
 }
 
+/* both faces of a two-face cylinder GREGORY-EXACT on `layout`, each within max_ratio of its size */
+static void assert_both_exact(const encode_result *r, int layout, double max_ratio)
+{
+    assert_int_equal(r->faces_by_method[CM_METHOD_GREGORY_EXACT], 2);
+    for (int f = 0; f < 2; f++) {
+        assert_int_equal(r->faces[f].layout, layout);
+        if (!(r->faces[f].ratio < max_ratio))
+            fail_msg("face %d: %.3g of its size off the cylinder", f, r->faces[f].ratio);
+    }
+}
+
+/* G1 along the one edge the two faces share: normals agree within 1e-6 deg at t = 0.1 .. 0.9 (the
+   cross derivatives of both faces lie in span(A, B') of the same edge) */
+static void assert_g1_along_shared_edge(const cm_model *m, const cm_rebuilt rb[2])
+{
+    int shared = -1;
+    for (uint32_t e = 0; e < m->nedges; e++)
+        if (m->edge_face[e][0] >= 0 && m->edge_face[e][1] >= 0)
+            shared = (int)e;
+    assert_true(shared >= 0);
+    cm_curve c;
+    cm_status st;
+    cm_status_init(&st);
+    cm_model_edge_curve(m, (uint32_t)shared, &c);
+    for (int k = 1; k <= 9; k++) {
+        cm_vec3 P[1];
+        assert_ok(cm_curve_eval(&c, k / 10.0, 0, P, &st));
+        double cs = fabs(cm_dot(greg_normal(rb[0].greg, P[0]), greg_normal(rb[1].greg, P[0])));
+        if (!(cs >= cos(1e-6 * M_PI / 180)))
+            fail_msg("normals differ by %.3g deg along the shared edge", acos(cs) * 180 / M_PI);
+    }
+}
+
 /*
  * The split cylinder at 1e-5 of its size, where K7 refuses its arcs (above): GREGORY-EXACT takes
  * the quarter circles as they are, and a surface linear along its axis between two arcs comes back
@@ -275,13 +308,8 @@ static void test_gregory_exact_cylinder(void **state)
     load_split_cylinder(&lm);
     encode_with(&lm, 1e-5, 3, &r);
     assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 0);
-    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 2);
     assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 0);
-    for (int f = 0; f < 2; f++) {
-        assert_int_equal(r.faces[f].layout, CM_GREG_LAYOUT_QUAD);
-        if (!(r.faces[f].ratio < 1e-5))
-            fail_msg("face %d: %.3g of its size off the cylinder", f, r.faces[f].ratio);
-    }
+    assert_both_exact(&r, CM_GREG_LAYOUT_QUAD, 1e-5);
     decode(&r);
     const cm_model *m = &dec.model;
     assert_int_equal(dec.buf[CM_HDR_MAJOR], 2);
@@ -294,22 +322,7 @@ static void test_gregory_exact_cylinder(void **state)
         assert_int_equal(rb[f].method, CM_METHOD_GREGORY_EXACT);
         assert_int_equal(rb[f].greg->exact, 1);
     }
-    /* G1 along the shared line: normals agree within 1e-6 deg (the cross derivatives of both faces
-       lie in span(A, B') of the same edge) */
-    int shared = -1;
-    for (uint32_t e = 0; e < m->nedges; e++)
-        if (m->edge_face[e][0] >= 0 && m->edge_face[e][1] >= 0)
-            shared = (int)e;
-    assert_true(shared >= 0);
-    cm_curve c;
-    cm_model_edge_curve(m, (uint32_t)shared, &c);
-    for (int k = 1; k <= 9; k++) {
-        cm_vec3 P[1];
-        assert_ok(cm_curve_eval(&c, k / 10.0, 0, P, &st));
-        double cs = fabs(cm_dot(greg_normal(rb[0].greg, P[0]), greg_normal(rb[1].greg, P[0])));
-        if (!(cs >= cos(1e-6 * M_PI / 180)))
-            fail_msg("normals differ by %.3g deg along the shared edge", acos(cs) * 180 / M_PI);
-    }
+    assert_g1_along_shared_edge(m, rb);
     /* the patches themselves: points of a 9 x 9 grid on the cylinder within the grid step, and where
        the cylinder puts them: the ruled surface between one pair of opposite sides (a point slid
        along the cylinder's axis or round it is on the cylinder, but in the wrong place) */
@@ -511,12 +524,7 @@ static void check_joined_cylinder(int pieces, int both, const int chains[2], con
     igw_t_vertex_half_cylinder_144(&w, CR, CH, pieces, both);
     load_igw(&w, "t-vertex-cylinder", 2, &lm);
     encode_with(&lm, 1e-2, 3, &r);
-    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 2);
-    for (int f = 0; f < 2; f++) {
-        assert_int_equal(r.faces[f].layout, CM_GREG_LAYOUT_JOINED);
-        if (!(r.faces[f].ratio < max_ratio))
-            fail_msg("face %d: %.3g of its size off the cylinder", f, r.faces[f].ratio);
-    }
+    assert_both_exact(&r, CM_GREG_LAYOUT_JOINED, max_ratio);
     decode(&r);
     const cm_model *m = &dec.model;
     assert_int_equal(dec.buf[CM_HDR_MINOR], 3);
@@ -541,20 +549,7 @@ static void check_joined_cylinder(int pieces, int both, const int chains[2], con
         }
         assert_int_equal(nchain, chains[f]);
     }
-    int shared = -1;
-    for (uint32_t e = 0; e < m->nedges; e++)
-        if (m->edge_face[e][0] >= 0 && m->edge_face[e][1] >= 0)
-            shared = (int)e;
-    assert_true(shared >= 0);
-    cm_curve c;
-    cm_model_edge_curve(m, (uint32_t)shared, &c);
-    for (int k = 1; k <= 9; k++) {
-        cm_vec3 P[1];
-        assert_ok(cm_curve_eval(&c, k / 10.0, 0, P, &st));
-        double cs = fabs(cm_dot(greg_normal(rb[0].greg, P[0]), greg_normal(rb[1].greg, P[0])));
-        if (!(cs >= cos(1e-6 * M_PI / 180)))
-            fail_msg("normals differ by %.3g deg along the shared edge", acos(cs) * 180 / M_PI);
-    }
+    assert_g1_along_shared_edge(m, rb);
     for (int f = 0; f < 2; f++)
         for (int i = 0; i <= 8; i++)
             for (int j = 0; j <= 8; j++) {
