@@ -570,8 +570,8 @@ static void check_joined_cylinder(int pieces, int both, const int chains[2], con
         cm_vec3 P[3], N = {0, 0, 0};
         for (int a = 0; a < 3; a++) {
             const uint32_t v = idx[t + (uint32_t)a];
-            P[a] = cm_v3(pos[v][0], pos[v][1], pos[v][2]);
-            N = cm_add(N, cm_v3(nrm[v][0], nrm[v][1], nrm[v][2]));
+            P[a] = cm_v3((double)pos[v][0], (double)pos[v][1], (double)pos[v][2]);
+            N = cm_add(N, cm_v3((double)nrm[v][0], (double)nrm[v][1], (double)nrm[v][2]));
         }
         cm_vec3 x = cm_cross(cm_sub(P[1], P[0]), cm_sub(P[2], P[0]));
         if (!(cm_dot(x, N) > 0))
