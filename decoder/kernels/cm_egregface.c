@@ -122,22 +122,6 @@ static cm_err finish_patch(cm_egreg *g, const cm_vec3 N[4], double eps, cm_statu
     return CM_OK;
 }
 
-/* ---- layout 0: the four edges ---- */
-static cm_err build_quad(const cm_greg_input *in, cm_greg_surface *out, cm_status *st)
-{
-    cm_egreg *g = &out->e[0];
-    for (int k = 0; k < 4; k++) {
-        cm_egreg_side *sd = &g->side[k];
-        edge_side(&in->side[k], 0.0, 1.0, sd);
-        cm_err e = side_basis(sd, in->side[k].Ns, in->side[k].Ne, in->eps_len, &sd->As, &sd->Ae, st);
-        if (e != CM_OK)
-            return e;
-    }
-    out->npatch = 1;
-    cm_vec3 N[4] = {in->corner_normal[0], in->corner_normal[1], in->corner_normal[2], in->corner_normal[3]};
-    return finish_patch(g, N, in->eps_len, st);
-}
-
 /* ---- layout 2: collapsed at V_j, the circular fan of spec 6.5 as side 3's cross derivative ---- */
 static cm_err build_degen(const cm_greg_input *in, int j, cm_greg_surface *out, cm_status *st)
 {
@@ -248,6 +232,12 @@ static cm_err build_joined(const cm_greg_input *in, int bits, cm_greg_surface *o
     cm_vec3 N[4] = {in->corner_normal[c[0]], in->corner_normal[c[1]], in->corner_normal[c[2]],
                     in->corner_normal[c[3]]};
     return finish_patch(g, N, in->eps_len, st);
+}
+
+/* ---- layout 0: the four edges (layout 3 with every vertex a corner) ---- */
+static cm_err build_quad(const cm_greg_input *in, cm_greg_surface *out, cm_status *st)
+{
+    return build_joined(in, 0xF, out, st);
 }
 
 /* ---- layout 1: N quads around a centre; the loop's sides are halves of the edges ---- */
