@@ -7,6 +7,39 @@
 
 #include "cm/cm_const.h"
 #include "cm/cm_geom.h"
+#include "cm/cm_param.h"
+#include "cm/cm_project.h"
+
+/* fs->nurbs: a copy of s over arrays of its own (fs->nurbs_ctrl, fs->nurbs_num); 0 on out of memory
+   or a surface of no size */
+static int nurbs_copy(face_surface *fs, const cm_surf *s)
+{
+    if (s->p < 1 || s->q < 1 || s->nu < 1 || s->nv < 1 || !s->ctrl || !s->U || !s->V)
+        return 0;
+    size_t nc = (size_t)s->nu * (size_t)s->nv;
+    size_t nU = (size_t)s->nu + (size_t)s->p + 1, nV = (size_t)s->nv + (size_t)s->q + 1;
+    size_t nn = nU + nV + (s->w ? nc : 0);
+    fs->nurbs_ctrl = malloc(nc * sizeof *fs->nurbs_ctrl);
+    fs->nurbs_num = malloc(nn * sizeof *fs->nurbs_num);
+    if (!fs->nurbs_ctrl || !fs->nurbs_num) {
+        free(fs->nurbs_ctrl);
+        free(fs->nurbs_num);
+        fs->nurbs_ctrl = NULL;
+        fs->nurbs_num = NULL;
+        return 0;
+    }
+    memcpy(fs->nurbs_ctrl, s->ctrl, nc * sizeof *fs->nurbs_ctrl);
+    memcpy(fs->nurbs_num, s->U, nU * sizeof *fs->nurbs_num);
+    memcpy(fs->nurbs_num + nU, s->V, nV * sizeof *fs->nurbs_num);
+    if (s->w)
+        memcpy(fs->nurbs_num + nU + nV, s->w, nc * sizeof *fs->nurbs_num);
+    fs->nurbs = *s;
+    fs->nurbs.ctrl = fs->nurbs_ctrl;
+    fs->nurbs.U = fs->nurbs_num;
+    fs->nurbs.V = fs->nurbs_num + nU;
+    fs->nurbs.w = s->w ? fs->nurbs_num + nU + nV : NULL;
+    return 1;
+}
 
 int face_surface_set(face_surface *fs, const cm_rebuilt *rb)
 {
@@ -22,6 +55,11 @@ int face_surface_set(face_surface *fs, const cm_rebuilt *rb)
             return 0;
         *fs->greg = *rb->greg;
     }
+    /* NURBS: rb->surf's arrays are in the rebuild's workspace, which the next rebuild overwrites */
+    if (rb->repr == CM_REPR_NURBS) {
+        fs->sign = rb->sign;
+        return nurbs_copy(fs, &rb->surf);
+    }
     return 1;
 }
 
@@ -29,6 +67,12 @@ void face_surface_free(face_surface *fs)
 {
     free(fs->greg);
     fs->greg = NULL;
+    free(fs->nurbs_ctrl);
+    free(fs->nurbs_num);
+    fs->nurbs_ctrl = NULL;
+    fs->nurbs_num = NULL;
+    memset(&fs->nurbs, 0, sizeof fs->nurbs);
+    fs->sign = 0;
     fs->rebuilt = 0;
 }
 
@@ -168,9 +212,69 @@ double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int
     return d;
 }
 
-static double face_dist(const cm_rebuilt *rb, greg_walk *w, cm_vec3 p)
-{
+/*
+ * The NURBS counterpart of greg_walk: the foot of a point walked from the previous point's by
+ * cm_psurf_project_from over the surface's whole domain (parameters clamped), taken when within
+ * `accept` or at rest inside the domain (a minimum there); else the K9 projection cm_patch_project,
+ * and the nearer of the two.
+ */
+typedef struct surf_walk {
+    cm_psurf ps;    /* the surface over its domain, neither direction closed */
+    cm_patch patch; /* the same for the K9 search (points at the caller's cm_surf) */
+    double accept;
+    int have;
+    double u, v;
+} surf_walk;
 
+static void surf_walk_init(surf_walk *w, const cm_surf *s, double accept)
+{
+    memset(w, 0, sizeof *w);
+    w->ps.s = *s;
+    w->ps.u0 = s->U[s->p];
+    w->ps.u1 = s->U[s->nu];
+    w->ps.v0 = s->V[s->q];
+    w->ps.v1 = s->V[s->nv];
+    w->patch = cm_patch_of_surf(s);
+    w->accept = accept;
+}
+
+static double surf_dist(surf_walk *w, cm_vec3 p)
+{
+    double d = HUGE_VAL;
+    if (w->have) {
+        double u = w->u, v = w->v, dl;
+        cm_vec3 S[3];
+        if (cm_psurf_project_from(&w->ps, p, &u, &v, &dl, NULL) == CM_OK &&
+            cm_psurf_eval(&w->ps, u, v, S, NULL) == CM_OK) {
+            /* at rest inside: away from the domain's sides, the residual orthogonal to both tangents */
+            const cm_psurf *ps = &w->ps;
+            double eu = 1e-6 * (ps->u1 - ps->u0), ev = 1e-6 * (ps->v1 - ps->v0);
+            cm_vec3 r = cm_sub(p, S[0]);
+            double lr = cm_norm(r);
+            int inner = u > ps->u0 + eu && u < ps->u1 - eu && v > ps->v0 + ev && v < ps->v1 - ev &&
+                        fabs(cm_dot(r, S[1])) <= 1e-6 * lr * cm_norm(S[1]) &&
+                        fabs(cm_dot(r, S[2])) <= 1e-6 * lr * cm_norm(S[2]);
+            w->u = u;
+            w->v = v;
+            if (dl <= w->accept || inner)
+                return dl;
+            d = dl;
+        }
+    }
+    double u, v, g;
+    if (cm_patch_project(&w->patch, p, &u, &v, &g, NULL) == CM_OK && g < d) {
+        d = g;
+        w->u = u;
+        w->v = v;
+        w->have = 1;
+    }
+    return d;
+}
+
+static double face_dist(const cm_rebuilt *rb, greg_walk *w, surf_walk *sw, cm_vec3 p)
+{
+    if (rb->repr == CM_REPR_NURBS)
+        return surf_dist(sw, p);
     return rb->repr == CM_REPR_PATCHES ? greg_dist(w, p) : dist_to_plane_patch(&rb->frame, rb->rect, p);
 }
 
@@ -235,11 +339,17 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
 {
     memset(out, 0, sizeof *out);
     const face_domain *fd = &lm->fds[lm->mesh.faces[f].brep_face];
-    if (!fd->uv || (rb->repr == CM_REPR_PATCHES && !rb->greg))
+    if (!fd->uv || (rb->repr == CM_REPR_PATCHES && !rb->greg) ||
+        (rb->repr == CM_REPR_NURBS && !(rb->surf.ctrl && rb->surf.U && rb->surf.V)))
         return 0;
     /* a walk's local answer is a distance to a point of the surface, so never below the true one:
        one within a tenth of the tolerance cannot change the verdict and needs no global search */
     greg_walk w = {rb->greg, tol < HUGE_VAL ? 0.1 * tol : 1e-4 * rb->bbox, 0, 0, 0, 0};
+    surf_walk sw;
+    if (rb->repr == CM_REPR_NURBS)
+        surf_walk_init(&sw, &rb->surf, w.accept);
+    else
+        memset(&sw, 0, sizeof sw);
     double sum = 0, worst = 0;
     int n = 0;
     grid_pts *grid = malloc(sizeof *grid); /* (encodes may run in parallel threads: not static) */
@@ -259,7 +369,7 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
                 free(grid);
                 return 0;
             }
-            double d = face_dist(rb, &w, P);
+            double d = face_dist(rb, &w, &sw, P);
             grid->uv[grid->n] = uv;
             grid->xyz[grid->n++] = P;
             sum += d;
@@ -275,6 +385,7 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
     for (uint32_t l = 0; l < F->nloops; l++) {
         const cm_loop *L = &m->loops[F->loop0 + l];
         w.have = 0; /* a loop starts with a global search, then walks along it */
+        sw.have = 0;
         for (uint32_t u = 0; u < L->nuse; u++) {
             const cm_use *U = &m->uses[L->use0 + u];
             cm_curve c;
@@ -285,7 +396,7 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
                     free(grid);
                     return 0;
                 }
-                double d = face_dist(rb, &w, d3[0]);
+                double d = face_dist(rb, &w, &sw, d3[0]);
                 sum += d;
                 worst = d > worst ? d : worst;
                 n++;
@@ -295,7 +406,9 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
             }
         }
     }
-    /* 4: the patches against the source surface (see patches_to_source) */
+    /* 4: the patches against the source surface (see patches_to_source).  Not a NURBS surface: it
+       extends past the face (NFILL's rectangle contains it), so only its points inside the face's
+       trimmed region would mean anything, and telling those apart needs the loops projected on it */
     if (rb->repr == CM_REPR_PATCHES) {
         double back = patches_to_source(fd, rb->greg, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
         out->back = back;
@@ -338,12 +451,23 @@ static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n
 }
 
 /* unit normal of face f's final surface near P (0 where it cannot be had); a Gregory face's foot
- * point is walked along from the previous point of the same edge (w) */
-static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg_walk *w, cm_vec3 P, cm_vec3 *n)
+ * point is walked along from the previous point of the same edge (w), a NURBS face's too (sw) */
+static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg_walk *w, surf_walk *sw, cm_vec3 P,
+                     cm_vec3 *n)
 {
     const face_surface *S = &fs[f];
     if (S->rebuilt && S->repr == CM_REPR_FRAME) {
         *n = S->frame.ez;
+        return 1;
+    }
+    if (S->rebuilt && S->repr == CM_REPR_NURBS && S->nurbs_ctrl) {
+        cm_vec3 d[3];
+        if (!(surf_dist(sw, P) < HUGE_VAL) || cm_psurf_eval(&sw->ps, sw->u, sw->v, d, NULL) != CM_OK)
+            return 0;
+        cm_vec3 c = cm_cross(d[1], d[2]);
+        if (!(cm_norm(c) > CM_EPS_CROSS_REL * cm_norm(d[1]) * cm_norm(d[2])) || !(cm_norm(c) > 0))
+            return 0;
+        *n = cm_scale(cm_unit(c), S->sign < 0 ? -1.0 : 1.0); /* the face normal is sign * (Su x Sv) */
         return 1;
     }
     if (!S->rebuilt || S->repr != CM_REPR_PATCHES || !S->greg)
@@ -357,6 +481,17 @@ static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg
         return 0;
     *n = cm_unit(c);
     return 1;
+}
+
+int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm_vec3 P, cm_vec3 *n)
+{
+    greg_walk w = {NULL, 0, 0, 0, 0, 0};
+    surf_walk sw;
+    if (fs[f].rebuilt && fs[f].repr == CM_REPR_NURBS && fs[f].nurbs_ctrl)
+        surf_walk_init(&sw, &fs[f].nurbs, 0);
+    else
+        memset(&sw, 0, sizeof sw);
+    return normal_at(lm, f, fs, &w, &sw, P, n);
 }
 
 double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, const face_surface *fs, int *worse)
@@ -374,6 +509,14 @@ double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, con
     greg_walk walk[2] = {{NULL, 0, 0, 0, 0, 0}, {NULL, 0, 0, 0, 0, 0}};
     for (int side = 0; side < 2; side++)
         walk[side].accept = fs[side ? b : a].greg ? 1e-3 * fs[side ? b : a].bbox : 0;
+    surf_walk swalk[2];
+    for (int side = 0; side < 2; side++) {
+        const face_surface *S = &fs[side ? b : a];
+        if (S->rebuilt && S->repr == CM_REPR_NURBS && S->nurbs_ctrl)
+            surf_walk_init(&swalk[side], &S->nurbs, 1e-3 * S->bbox);
+        else
+            memset(&swalk[side], 0, sizeof swalk[side]);
+    }
     for (int k = 1; k <= 9; k++) {
         cm_vec3 n[2], P[2];
         int ok = 1;
@@ -387,7 +530,7 @@ double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, con
                 if (cm_curve_eval(&c, t, 0, d3, NULL) != CM_OK)
                     break;
                 P[side] = d3[0];
-                ok = normal_at(lm, f, fs, &walk[side], d3[0], &n[side]);
+                ok = normal_at(lm, f, fs, &walk[side], &swalk[side], d3[0], &n[side]);
             }
         }
         if (!ok)

@@ -24,6 +24,12 @@ typedef struct face_surface {
     double rect[4];
     cm_greg_surface *greg; /* PATCHES: malloc'd copy (face_surface_free) */
     double bbox;           /* bbox_F */
+    /* NURBS: a deep copy of cm_rebuilt.surf (whose arrays point into a workspace the next rebuild
+       reuses): the view `nurbs` over the malloc'd nurbs_ctrl and nurbs_num (face_surface_free) */
+    cm_surf nurbs;
+    cm_vec3 *nurbs_ctrl;   /* nu * nv control points (NULL: no copy) */
+    double *nurbs_num;     /* U (nu + p + 1), V (nv + q + 1), then the weights (nu * nv) if rational */
+    double sign;           /* NURBS: the face normal is sign * (Su x Sv) (cm_rebuilt.sign) */
 } face_surface;
 
 /** spec §12 numbers of one face */
@@ -43,17 +49,22 @@ typedef struct face_error {
  */
 void verify_nearest_boundary(const face_domain *fd, cm_vec3 p, double *best2, cm_vec2 *uv);
 
-/** Keep what cm_rebuild_face() gave for face f (copies the Gregory patches). 0 on out of memory. */
+/** Keep what cm_rebuild_face() gave for face f (copies the Gregory patches, or the NURBS surface with
+ *  its control points, knots and weights). 0 on out of memory (or a NURBS surface of no size). */
 int face_surface_set(face_surface *fs, const cm_rebuilt *rb);
 void face_surface_free(face_surface *fs);
 
 /**
- * Spec §12 for face f of the decoded model m, rebuilt as rb (a frame or
- * patches): the source surface on the 21 x 21 grid of its parameter box,
+ * Spec §12 for face f of the decoded model m, rebuilt as rb (a frame,
+ * patches or a NURBS surface: each point's foot by the K9 projection
+ * cm_patch_project, or walked from the previous point's foot when that is
+ * near enough or a minimum inside the surface's domain): the source
+ * surface on the 21 x 21 grid of its parameter box,
  * points inside the outer loop (holes included, as the papers say), and the
  * transmitted edges of every loop at t = k/20, each projected on the rebuilt
  * surface; and, past §12, for Gregory patches the other way: points of each
- * patch projected on the source surface (a bulge no source point is near).  Stops at the first point at or over `tol` mm (the face fails; HUGE_VAL measures all
+ * patch projected on the source surface (a bulge no source point is near; not
+ * for a NURBS surface, which extends past the face).  Stops at the first point at or over `tol` mm (the face fails; HUGE_VAL measures all
  * points).  Returns 0 when the face's domain is unknown (no verdict).
  */
 int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebuilt *rb, double tol,
@@ -67,8 +78,16 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
 double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int *have, int *k, double *u, double *v);
 
 /**
+ * The unit normal of face f's final surface at the foot of P, as verify_g1_edge takes it (rebuilt
+ * from fs[f]: a NURBS face's is fs[f].sign * unit(Su x Sv); a kept face's from its source surface),
+ * found by a global search.  0 where it cannot be had.
+ */
+int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm_vec3 P, cm_vec3 *n);
+
+/**
  * Spec §13 for edge e of m: at t = k/10, k = 1..9, the unit normals of the
- * final surfaces of its two faces (rebuilt from `fs`, KEEP faces from the
+ * final surfaces of its two faces (rebuilt from `fs`: a NURBS face's is
+ * sign * unit(Su x Sv) at the edge point's foot on it; KEEP faces from the
  * source surface).  Returns min |nF . nG| (1 for an edge without two faces;
  * 0 where a normal cannot be had).  *worse (may be NULL): at the worst point,
  * 0 if face edge_face[e][0]'s final normal is farther from its source
