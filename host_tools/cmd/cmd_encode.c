@@ -83,6 +83,8 @@ int cmd_encode(int argc, char **argv)
             o.gregory_exact = 0;
         } else if (strcmp(a, "--no-gregory-fit") == 0) {
             o.gregory_fit = 0;
+        } else if (strcmp(a, "--no-nfill") == 0) {
+            o.nfill = 0;
         } else if (strcmp(a, "--strict") == 0) {
             o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {

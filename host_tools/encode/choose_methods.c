@@ -41,9 +41,7 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
     cm_face *F = &m->faces[f];
     cm_face saved = *F;
     uint32_t nctrl = m->nctrl;
-    F->method = (uint8_t)method;
-    F->layout = (uint8_t)layout;
-    F->corner = (uint16_t)corner;
+    enc_record_fields(F, method, layout, corner);
     F->fit = 0;
     if (fit) {
         /* the correction where the terminal's reader puts it: the control-point pool, here past its
@@ -70,7 +68,7 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
 
 /* the encoder's half of each method (enc_method.h), found by the decoder table's number */
 static const enc_method *const enc_methods[] = {&enc_method_plane, &enc_method_gregory, &enc_method_gregory_exact,
-                                                &enc_method_gregory_fit, &enc_method_keep};
+                                                &enc_method_gregory_fit, &enc_method_nfill, &enc_method_keep};
 
 static const enc_method *enc_method_of(unsigned id)
 {

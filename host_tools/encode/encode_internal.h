@@ -65,7 +65,7 @@ typedef struct tx {
     int *vert_tx;       /* cmesh vertex -> transmission number */
     tx_surf *surfs;     /* one per face (used for KEEP faces) */
     int *method;        /* per face */
-    int *layout, *corner; /* per GREGORY face: its record (spec 15.2) */
+    int *layout, *corner; /* per GREGORY or NFILL face: its record (spec 15.2; enc_record_fields) */
     uint32_t *checksum;
     struct fit_record **fit; /* per GREGORY-FIT face: its correction (malloc'd; NULL otherwise) */
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
@@ -76,6 +76,25 @@ typedef struct tx {
     int nfaults;
     enc_work *w;        /* the decoder and tessellation storage this encode works in */
 } tx;
+
+/*
+ * A face's record fields from tx's per-face layout and corner: GREGORY's as they are; NFILL's
+ * nu = layout, nv = corner & 0xff, phi = corner >> 8 (one pair of arrays for every method's record).
+ */
+static inline void enc_record_fields(cm_face *F, int method, int layout, int corner)
+{
+    F->method = (uint8_t)method;
+    F->layout = (uint8_t)layout;
+    F->corner = (uint16_t)corner;
+    F->fill_nu = F->fill_nv = F->fill_phi = 0;
+    if (method == CM_METHOD_NFILL) {
+        F->layout = 0;
+        F->corner = 0;
+        F->fill_nu = (uint8_t)layout;
+        F->fill_nv = (uint8_t)(corner & 0xff);
+        F->fill_phi = (uint8_t)(corner >> 8);
+    }
+}
 
 /* face f cannot be sent as it is; the first reason stays */
 void tx_face_fault(tx *t, int f, const char *why);

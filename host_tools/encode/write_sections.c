@@ -210,9 +210,7 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         const cm_method *M = cm_method_of((unsigned)t->method[f]);
         if (M->has_record) {
             cm_face rec = {0};
-            rec.method = (uint8_t)t->method[f];
-            rec.layout = (uint8_t)t->layout[f];
-            rec.corner = (uint16_t)t->corner[f];
+            enc_record_fields(&rec, t->method[f], t->layout[f], t->corner[f]);
             rec.checksum = t->checksum[f];
             cm_fit_q fit = {0};
             if (t->fit[f])

@@ -584,3 +584,52 @@ int igw_composite_dag_144(igw *w, int levels, int fan)
     return igw_add(w, 144, 0, "%d,1,1,%d,%d", s, on_surface(w, s, rect_loop(w, p00, p10, p11, p01)),
                    on_surface(w, s, c));
 }
+
+/* ---- spec §17 T8: an L-shaped face on a quadratic surface ---- */
+
+/* z of the T8 surface at (x, y) */
+static double t8_z(double x, double y)
+{
+    return 0.02 * (x * x - 0.5 * y * y) + 0.1 * x + 0.01 * x * y;
+}
+
+/* the straight segment a -> b of the plane lifted onto the T8 surface: z is quadratic along it, so
+   the lift is one quadratic Bezier (126), exactly */
+static int t8_lift_126(igw *w, double ax, double ay, double bx, double by)
+{
+    double mx = 0.5 * (ax + bx), my = 0.5 * (ay + by);
+    double za = t8_z(ax, ay), zb = t8_z(bx, by), z1 = 2.0 * t8_z(mx, my) - 0.5 * (za + zb);
+    int de = igw_add(w, 126, 0,
+                     "2,2,0,0,1,0,0,0,0,1,1,1,1,1,1,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0,1,0,0,1",
+                     ax, ay, za, mx, my, z1, bx, by, zb);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+void igw_l_shape_144(igw *w)
+{
+    /* z(20u, 16v) = 2u + 8u^2 + 3.2uv - 2.56v^2: its biquadratic Bernstein coefficients are
+       b_kl = sum c_ij C(k,i)/C(2,i) C(l,j)/C(2,j), with x and y linear (20 k/2, 16 l/2) */
+    static const double c[3][3] = {{0.0, 0.0, -2.56}, {2.0, 3.2, 0.0}, {8.0, 0.0, 0.0}};
+    static const double C[3][3] = {{1, 0, 0}, {1, 1, 0}, {1, 2, 1}};
+    char buf[4096];
+    int k = snprintf(buf, sizeof buf, "2,2,2,2,0,0,1,0,0,0,0,0,1,1,1,0,0,0,1,1,1,1,1,1,1,1,1,1,1,1");
+    for (int l = 0; l < 3; l++)     /* v index outer */
+        for (int kk = 0; kk < 3; kk++) { /* u index runs fastest in the file */
+            double z = 0.0;
+            for (int i = 0; i <= kk; i++)
+                for (int j = 0; j <= l; j++)
+                    z += c[i][j] * C[kk][i] / C[2][i] * C[l][j] / C[2][j];
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", 10.0 * kk, 8.0 * l, z);
+        }
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+    int s = igw_add(w, 128, 0, "%s", buf);
+    igw_set(w, s, 1, 0, 0);
+    static const double px[6] = {0, 20, 20, 8, 8, 0}, py[6] = {0, 0, 8, 8, 16, 16};
+    int m[6];
+    for (int i = 0; i < 6; i++) {
+        int j = (i + 1) % 6;
+        m[i] = t8_lift_126(w, px[i], py[i], px[j], py[j]);
+    }
+    igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 6)));
+}

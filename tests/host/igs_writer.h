@@ -72,6 +72,10 @@ void igw_bump_144(igw *w, double a, double h);
 /** The bump's three-sided sibling: a biquartic 128 over the right triangle (0,0), (a,0), (0,a), flat
  *  with its cross slopes on all three straight edges, h high at the centroid; one 144. */
 void igw_tri_bump_144(igw *w, double a, double h);
+/** Spec §17 T8 without its hole: the L-shaped polygon (0,0), (20,0), (20,8), (8,8), (8,16), (0,16)
+ *  lifted onto z = 0.02 (x^2 - 0.5 y^2) + 0.1 x + 0.01 x y (a biquadratic 128; each edge an exact
+ *  quadratic 126), one 144 with a reflex corner at (8, 8). */
+void igw_l_shape_144(igw *w);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 

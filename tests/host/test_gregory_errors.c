@@ -25,6 +25,7 @@
 #include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
+#include "cm/cm_nfill.h"
 #include "cm/cm_patchfit.h"
 #include "cm/cm_rebuild.h"
 #include "cm/cm_sections.h"
@@ -180,6 +181,13 @@ static void put_faces(const cm_model *m, cm_ac_enc *e)
             F->method == CM_METHOD_GREGORY_FIT) { /* the same record, FIT's correction after it */
             cm_ac_enc_uint(e, &c.layout, F->layout);
             cm_ac_enc_uint(e, &c.corner, F->corner);
+            cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
+            cm_ac_enc_direct(e, F->checksum >> 16, 16);
+        }
+        if (F->method == CM_METHOD_NFILL) { /* nu - 4, nv - 4 (5 bits each), phi (3 bits), checksum */
+            cm_ac_enc_direct(e, (uint32_t)(F->fill_nu - 4), 5);
+            cm_ac_enc_direct(e, (uint32_t)(F->fill_nv - 4), 5);
+            cm_ac_enc_direct(e, F->fill_phi, 3);
             cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
             cm_ac_enc_direct(e, F->checksum >> 16, 16);
         }
@@ -687,6 +695,56 @@ static void test_gregory_fit_records(void **state)
     fit_w.q = 3;
 }
 
+/* the NFILL record of polygon_face's face 0 */
+static void nfill_record(int nu, int nv, int phi)
+{
+    cm_face *F = &src->model.faces[0];
+    F->fill_nu = (uint8_t)nu;
+    F->fill_nv = (uint8_t)nv;
+    F->fill_phi = (uint8_t)phi;
+}
+
+/* NFILL (format 2.4): nu, nv, phi; one loop of 3 to 12 edges; the net within the build's limits,
+   each refused by name; not in a 2.3 file */
+static void test_nfill_records(void **state)
+{
+    (void)state;
+    cm_status st;
+    write_minor = 4;
+    polygon_face(6, 0, CM_METHOD_NFILL, 0, 0);
+    nfill_record(8, 6, 2);
+    assert_decodes(2);
+    assert_int_equal(dec->model.faces[0].fill_nu, 8);
+    assert_int_equal(dec->model.faces[0].fill_nv, 6);
+    assert_int_equal(dec->model.faces[0].fill_phi, 2);
+    nfill_record(8, 6, CM_NFILL_PHI_COUNT);
+    assert_face_refused(2, CM_E_RANGE, "NFILL phi", &st);
+    polygon_face(6, 1, CM_METHOD_NFILL, 0, 0);
+    nfill_record(8, 6, 2);
+    assert_face_refused(2, CM_E_FORMAT, "NFILL face with holes", &st);
+    polygon_face(13, 0, CM_METHOD_NFILL, 0, 0);
+    nfill_record(8, 6, 2);
+    assert_face_refused(2, CM_E_FORMAT, "NFILL loop of more than 12 edges", &st);
+    polygon_face(2, 0, CM_METHOD_NFILL, 0, 0);
+    nfill_record(8, 6, 2);
+    assert_face_refused(2, CM_E_FORMAT, "NFILL face with fewer than 3 edges", &st);
+    /* the largest net the build solves, and one more point per direction (the field goes to 35) */
+    polygon_face(12, 0, CM_METHOD_NFILL, 0, 0);
+    nfill_record(CM_MAX_FIT_CTRL, CM_MAX_FIT_CTRL, 4);
+    assert_decodes(2);
+#if CM_MAX_FIT_CTRL < CM_NFILL_MAX_CTRL_FIELD
+    nfill_record(CM_MAX_FIT_CTRL + 1, 4, 4);
+    assert_face_refused(2, CM_E_LIMIT, "NFILL control points", &st);
+    assert_int_equal(st.limit, CM_LIMIT_MAX_FIT_CTRL);
+    assert_int_equal(st.need, CM_MAX_FIT_CTRL + 1);
+#endif
+    /* the same valid face in a file that says 2.3 */
+    nfill_record(8, 6, 2);
+    write_minor = 3;
+    assert_face_refused(2, CM_E_UNSUPPORTED, "NFILL face in a file older than format 2.4", &st);
+    write_minor = 0;
+}
+
 /* a checksum changed in the file (CRCs valid): the file loads, the face's rebuild refuses it */
 static void test_gregory_checksum_in_file(void **state)
 {
@@ -733,6 +791,7 @@ int main(void)
         cmocka_unit_test(test_gregory_checksum_in_file),
         cmocka_unit_test(test_gregory_exact_records),
         cmocka_unit_test(test_gregory_fit_records),
+        cmocka_unit_test(test_nfill_records),
     };
     return cmocka_run_group_tests_name("gregory_errors", tests, alloc_decoders, free_decoders);
 }

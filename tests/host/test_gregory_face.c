@@ -55,8 +55,8 @@ static void load_split_cylinder(loaded_model *lm)
     load_igw(&w, "split-cylinder", 2, lm);
 }
 
-/* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT, 7 then GREGORY-FIT
-   (the default) */
+/* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT, 7 then GREGORY-FIT,
+   15 then NFILL (the default; the tests here are about the Gregory family: NFILL is test_nfill.c's) */
 static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_result *r)
 {
     encode_opts o;
@@ -66,6 +66,7 @@ static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_re
     o.gregory = gregory & 1;
     o.gregory_exact = (gregory & 2) != 0;
     o.gregory_fit = (gregory & 4) != 0;
+    o.nfill = (gregory & 8) != 0;
     cm_status st;
     cm_status_init(&st);
     memset(r, 0, sizeof *r);

@@ -13,12 +13,19 @@
 #include "cm/cm_format.h"
 #include "cm/cm_geom.h"
 #include "cm/cm_gregface.h"
+#include "cm/cm_nfill.h"
 
 typedef struct cm_rebuild_ws {
     cm_vec3 samples[CM_MAX_FACE_SAMPLES];
     cm_corner_ws corner;
     cm_greg_input gin;
-    cm_greg_surface greg;   /* GREGORY: the rebuilt patches (cm_rebuilt.greg points here) */
+    union {                 /* a face is rebuilt by one method at a time */
+        cm_greg_surface greg; /* GREGORY: the rebuilt patches (cm_rebuilt.greg points here) */
+        struct {
+            cm_nfill_surface nfill; /* NFILL: the rebuilt net (cm_rebuilt.surf views it) */
+            cm_nfill_ws nfill_ws;
+        };
+    };
 } cm_rebuild_ws;
 
 /**

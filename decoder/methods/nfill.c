@@ -1,0 +1,125 @@
+/*
+ * nfill.c - NFILL (spec §8, docs/METHODS.md): a bicubic B-spline fitted to
+ * the face's outer loop and to its tangent planes along outward rays, on a
+ * rectangle that contains the face (kernel: cm_nfill.c).  Its loop may be
+ * concave and of any edges (they are sampled, not converted to cubics), so
+ * it rebuilds faces the Gregory patches cannot: reflex corners, loops of
+ * more sides than the N-split takes.  The record holds what the
+ * compressor searched (nu, nv, phi) and the checksum of the net.
+ * Format 2.4.
+ */
+#include "cm_method_impl.h"
+
+#include "cm/cm_corner.h"
+#include "cm/cm_limits_info.h"
+
+cm_err cm_nfill_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why)
+{
+    uint64_t nu = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
+    uint64_t nv = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
+    uint64_t phi = cm_ac_dec_direct(ac, 3);
+    F->checksum = cm_ac_dec_direct(ac, 16);
+    F->checksum |= cm_ac_dec_direct(ac, 16) << 16;
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    if (phi >= CM_NFILL_PHI_COUNT) {
+        why->what = "NFILL phi";
+        return CM_E_RANGE;
+    }
+    F->fill_nu = (uint8_t)nu;
+    F->fill_nv = (uint8_t)nv;
+    F->fill_phi = (uint8_t)phi;
+    return CM_OK;
+}
+
+void cm_nfill_write_record(cm_ac_enc *ac, const cm_face *F)
+{
+    cm_ac_enc_direct(ac, (uint32_t)(F->fill_nu - CM_NFILL_MIN_CTRL), 5);
+    cm_ac_enc_direct(ac, (uint32_t)(F->fill_nv - CM_NFILL_MIN_CTRL), 5);
+    cm_ac_enc_direct(ac, F->fill_phi, 3);
+    cm_ac_enc_direct(ac, F->checksum & 0xffffu, 16);
+    cm_ac_enc_direct(ac, F->checksum >> 16, 16);
+}
+
+/* what the face's net and loop ask of a build: control points, unknowns, band, loop input */
+static void nfill_need(const cm_model *m, const cm_face *F, uint32_t need[CM_LIMIT_COUNT])
+{
+    uint32_t n = m->loops[F->loop0].nuse, nu = F->fill_nu, nv = F->fill_nv;
+    uint32_t K = (nu - 2u) * (nv - 2u), w = 3u * (nv - 2u) + 3u;
+    need[CM_LIMIT_MAX_FIT_CTRL] = nu > nv ? nu : nv;
+    need[CM_LIMIT_MAX_LSQ_UNKNOWNS] = K;
+    need[CM_LIMIT_MAX_LSQ_BAND] = w < K - 1u ? w : K - 1u;
+    /* a build that can join edges (CM_MAX_SIDES >= 5) takes loops of up to 12 (cm_gregface.h) */
+    need[CM_LIMIT_MAX_SIDES] = n > 4u ? 5u : n;
+}
+
+/* one loop of 3..CM_GREG_JOINED_MAX_EDGES edges; the net within the build's limits */
+cm_err cm_nfill_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
+{
+    uint32_t n = m->loops[F->loop0].nuse;
+    why->what = NULL;
+    if (F->nloops != 1)
+        why->what = "NFILL face with holes";
+    else if (n < 3)
+        why->what = "NFILL face with fewer than 3 edges";
+    else if (n > CM_GREG_JOINED_MAX_EDGES)
+        why->what = "NFILL loop of more than 12 edges";
+    if (why->what)
+        return CM_E_FORMAT;
+    uint32_t need[CM_LIMIT_COUNT] = {0};
+    nfill_need(m, F, need);
+    static const unsigned ids[4] = {CM_LIMIT_MAX_FIT_CTRL, CM_LIMIT_MAX_LSQ_UNKNOWNS, CM_LIMIT_MAX_LSQ_BAND,
+                                    CM_LIMIT_MAX_SIDES};
+    static const uint32_t have[4] = {CM_MAX_FIT_CTRL, CM_MAX_LSQ_UNKNOWNS, CM_MAX_LSQ_BAND, CM_MAX_SIDES};
+    static const char *const what[4] = {"NFILL control points", "NFILL unknowns", "NFILL band", "NFILL edges"};
+    for (int i = 0; i < 4; i++)
+        if (need[ids[i]] > have[i]) {
+            why->what = what[i];
+            why->limit = ids[i];
+            why->need = need[ids[i]];
+            return CM_E_LIMIT;
+        }
+    return CM_OK;
+}
+
+cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st)
+{
+    const cm_face *F = &m->faces[f];
+    cm_err e = cm_greg_input_build(m, f, 1, &ws->gin, &ws->corner, st);
+    if (e != CM_OK)
+        return e;
+    if ((e = cm_nfill_build(&ws->gin, F->fill_nu, F->fill_nv, F->fill_phi, &out->frame, &ws->nfill, &ws->nfill_ws,
+                            st)) != CM_OK)
+        return e;
+    out->repr = CM_REPR_NURBS;
+    out->surf = ws->nfill.surf;
+    out->sign = 1.0; /* u along the frame's x, v along its y: Su x Sv along ez, the face normal */
+    out->checksum = cm_nfill_checksum(&ws->nfill);
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+    check = 0; /* as with the CRCs: mutated records must reach the tessellation */
+#endif
+    if (check && out->checksum != F->checksum)
+        return cm_fail(st, CM_E_CHECKSUM, "NFILL face rebuilt differently from the encoder");
+    return CM_OK;
+}
+
+void cm_nfill_needs(const cm_model *m, const cm_face *F, uint32_t *need)
+{
+    uint32_t mine[CM_LIMIT_COUNT] = {0};
+    nfill_need(m, F, mine);
+    for (int i = 0; i < CM_LIMIT_COUNT; i++)
+        if (mine[i] > need[i])
+            need[i] = mine[i];
+}
+
+const cm_method cm_method_nfill = {
+    .name = "nfill",
+    .counted = "nfill",
+    .id = CM_METHOD_NFILL,
+    .since_major = 2,
+    .since_minor = 4,
+    .has_record = 1,
+    .too_new = "NFILL face in a file older than format 2.4",
+};

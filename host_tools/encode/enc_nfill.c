@@ -1,0 +1,68 @@
+/* enc_nfill.c - the encoder's half of NFILL (spec §8.9; decoder/methods/nfill.c). */
+#include "enc_method.h"
+
+#include "cm/cm_method.h"
+#include "cm/cm_nfill.h"
+
+/* spec 8.9: nets tried, smallest first (while the unknowns are at most half the data) ... */
+static const int nfill_ctrl[] = {4, 5, 6, 8, 10, 12, 16, 20, 24};
+/* ... and for each, the fairing weights in this order (indices into cm_nfill_phi: 1e-3, 1e-2, 1e-4,
+   1e-1) */
+static const int nfill_phi_order[] = {2, 3, 1, 4};
+
+/*
+ * Spec §8.9: the first (c, phi) in that order whose rebuild passes §12 wins; its record (nu = nv = c,
+ * phi) goes to t.  A loop NFILL cannot take, or rays that leave a side of the rectangle with fewer
+ * than 4 hits (no net fits it at all), ends the search at once.
+ */
+static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
+                     face_surface *fs)
+{
+    enc_work *w = t->w;
+    const cm_model *m = &w->dec.model;
+    const cm_face *F = &m->faces[f];
+    uint32_t n = m->loops[F->loop0].nuse;
+    if (!o->nfill || F->nloops != 1 || n < 3 || n > CM_GREG_JOINED_MAX_EDGES)
+        return 0;
+    double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
+    int data = 4 * (int)n * CM_FMT_SEG_PER_EDGE; /* boundary samples and at most 3 ray samples each */
+    double best_ratio = 0.0;
+    for (size_t i = 0; i < sizeof nfill_ctrl / sizeof nfill_ctrl[0]; i++) {
+        int c = nfill_ctrl[i];
+        if (c > CM_MAX_FIT_CTRL || 2 * (c - 2) * (c - 2) > data)
+            break;
+        for (size_t j = 0; j < sizeof nfill_phi_order / sizeof nfill_phi_order[0]; j++) {
+            int phi = nfill_phi_order[j], corner = c | phi << 8;
+            cm_rebuilt rb;
+            cm_err e = enc_trial_rebuild(w, f, CM_METHOD_NFILL, c, corner, NULL, &rb);
+            if (e == CM_E_DEGENERATE || e == CM_E_UNSUPPORTED || e == CM_E_LIMIT) {
+                if (!rep->why)
+                    rep->why = "NFILL: a side of its rectangle gets too few rays";
+                return 0;
+            }
+            if (e != CM_OK)
+                continue;
+            face_error fe;
+            if (!verify_face(lm, m, f, &rb, tol, &fe))
+                return 0;
+            if (best_ratio == 0.0 || fe.ratio < best_ratio)
+                best_ratio = fe.ratio;
+            if (!(fe.max < tol))
+                continue;
+            t->layout[f] = c;
+            t->corner[f] = corner;
+            t->checksum[f] = rb.checksum;
+            rep->layout = c;
+            rep->corner = phi;
+            rep->rebuild_max = fe.max;
+            rep->rebuild_avg = fe.avg;
+            rep->ratio = fe.ratio;
+            rep->why = NULL;
+            return face_surface_set(&fs[f], &rb);
+        }
+    }
+    rep->why = "NFILL over the error at every net";
+    return 0;
+}
+
+const enc_method enc_method_nfill = {CM_METHOD_NFILL, try_nfill, NULL};
