@@ -633,3 +633,14 @@ void igw_l_shape_144(igw *w)
     }
     igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 6)));
 }
+
+cm_err igw_load(igw *w, const char *name, loaded_model *lm, cm_status *st)
+{
+    size_t len = 0;
+    char *text = igw_text(w, &len);
+    igw_free(w);
+    cm_status_init(st);
+    cm_err e = text ? model_load_data(name, text, len, lm, NULL, NULL, st) : cm_fail(st, CM_E_NOMEM, "igw_text");
+    free(text);
+    return e;
+}

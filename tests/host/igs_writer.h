@@ -9,6 +9,9 @@
 
 #include <stddef.h>
 
+#include "cm/cm_error.h"
+#include "model_load.h"
+
 typedef struct igw {
     struct igw_ent {
         int type, form, xform, subord, color;
@@ -72,6 +75,9 @@ void igw_bump_144(igw *w, double a, double h);
 /** The bump's three-sided sibling: a biquartic 128 over the right triangle (0,0), (a,0), (0,a), flat
  *  with its cross slopes on all three straight edges, h high at the centroid; one 144. */
 void igw_tri_bump_144(igw *w, double a, double h);
+/** The model w holds, imported as `name` (w freed): model_load_data's result. */
+cm_err igw_load(igw *w, const char *name, loaded_model *lm, cm_status *st);
+
 /** Spec §17 T8 without its hole: the L-shaped polygon (0,0), (20,0), (20,8), (8,8), (8,16), (0,16)
  *  lifted onto z = 0.02 (x^2 - 0.5 y^2) + 0.1 x + 0.01 x y (a biquadratic 128; each edge an exact
  *  quadratic 126), one 144 with a reflex corner at (8, 8). */

@@ -37,13 +37,8 @@ static cm_mesh_face mfaces[64];
 /* the model w holds, loaded as `name` (w freed); it must have `faces` faces */
 static void load_igw(igw *w, const char *name, int faces, loaded_model *lm)
 {
-    size_t len = 0;
-    char *text = igw_text(w, &len);
-    igw_free(w);
     cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data(name, text, len, lm, NULL, NULL, &st));
-    free(text);
+    assert_ok(igw_load(w, name, lm, &st));
     assert_int_equal(lm->mesh.nfaces, faces);
 }
 
@@ -218,13 +213,7 @@ static void test_gregory_falls_back_to_keep(void **state)
     igw w;
     igw_init(&w);
     igw_bicubic_128(&w);
-    size_t len = 0;
-    char *text = igw_text(&w, &len);
-    igw_free(&w);
-    cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data("bicubic", text, len, &lm, NULL, NULL, &st));
-    free(text);
+    load_igw(&w, "bicubic", 1, &lm);
     encode_with(&lm, 0.01, 1, &r);
     assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
     assert_non_null(r.faces[0].why);

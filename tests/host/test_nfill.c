@@ -42,13 +42,8 @@ static void load_l_shape(loaded_model *lm)
     igw w;
     igw_init(&w);
     igw_l_shape_144(&w);
-    size_t len = 0;
-    char *text = igw_text(&w, &len);
-    igw_free(&w);
     cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data("l_shape", text, len, lm, NULL, NULL, &st));
-    free(text);
+    assert_ok(igw_load(&w, "l_shape", lm, &st));
     assert_int_equal(lm->mesh.nfaces, 1);
 }
 

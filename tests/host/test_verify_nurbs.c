@@ -34,17 +34,12 @@ static cm_rebuild_ws rbws;
    decoded into dec; it must have `faces` faces */
 static void load_encode_decode(igw *w, const char *name, int faces, loaded_model *lm)
 {
-    size_t len = 0;
-    char *text = igw_text(w, &len);
-    igw_free(w);
     cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data(name, text, len, lm, NULL, NULL, &st));
-    free(text);
+    assert_ok(igw_load(w, name, lm, &st));
     assert_int_equal(lm->mesh.nfaces, faces);
     encode_opts o;
     encode_opts_default(&o);
-    o.gregory = o.gregory_exact = o.gregory_fit = 0;
+    o.gregory = o.gregory_exact = o.gregory_fit = o.nfill = 0;
     encode_result r;
     memset(&r, 0, sizeof r);
     assert_ok(encode_model(lm, &o, &r, &st));
