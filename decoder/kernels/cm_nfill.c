@@ -33,9 +33,11 @@ static cm_err degenerate(cm_status *st, const char *where)
  * A sample whose d is still undefined (N along T) gets no ray (d = 0), as 8.3 step 1 does for a
  * tangent plane square to the frame.
  */
-static cm_err loop_samples(const cm_greg_input *in, cm_nfill_ws *ws, int *count, cm_status *st)
+static cm_err loop_samples(const cm_greg_input *in, const cm_nfill_holes *holes, cm_nfill_ws *ws, int *count,
+                           cm_status *st)
 {
     int k = 0;
+    ws->loop_start[0] = 0;
     cm_vec3 zero = cm_v3(0.0, 0.0, 0.0);
     for (int s = 0; s < in->n; s++) {
         const cm_greg_side *gs = &in->side[s];
@@ -62,17 +64,38 @@ static cm_err loop_samples(const cm_greg_input *in, cm_nfill_ws *ws, int *count,
             k++;
         }
     }
+    ws->loop_start[1] = k;
+    /* the holes: their samples, no directions (see cm_nfill.h) */
+    for (int l = 0; holes && l < holes->n; l++) {
+        for (int u = holes->start[l]; u < holes->start[l + 1]; u++) {
+            const cm_nfill_edge *gs = &holes->edge[u];
+            for (int j = 0; j < CM_FMT_SEG_PER_EDGE; j++) {
+                double t = (double)j / (double)CM_FMT_SEG_PER_EDGE;
+                cm_vec3 q[CM_MAX_DERS + 1];
+                cm_err e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - t : t, 0, q, st);
+                if (e != CM_OK)
+                    return e;
+                ws->p[k] = q[0];
+                ws->d[k] = zero;
+                k++;
+            }
+        }
+        ws->loop_start[l + 2] = k;
+    }
     *count = k;
     return CM_OK;
 }
 
-/* 8.3 step 2: the smallest lambda > 0 where the ray from sample k crosses a segment of the loop's
+/* 8.3 step 2: the smallest lambda > 0 where the ray from sample k crosses a segment of any loop's
    polygon not incident to k (HUGE_VAL: none) */
-static double ray_cross(const cm_nfill_ws *ws, int nb, int k, cm_vec2 o, cm_vec2 dir)
+static double ray_cross(const cm_nfill_ws *ws, int nloops, int k, cm_vec2 o, cm_vec2 dir)
 {
     double best = HUGE_VAL;
-    for (int i = 0; i < nb; i++) {
-        int i1 = i + 1 == nb ? 0 : i + 1;
+    int l = 0;
+    for (int i = 0; i < ws->loop_start[nloops]; i++) {
+        while (i >= ws->loop_start[l + 1])
+            l++;
+        int i1 = i + 1 == ws->loop_start[l + 1] ? ws->loop_start[l] : i + 1; /* the loop closes */
         if (i == k || i1 == k)
             continue;
         cm_vec2 a = cm_v2(ws->p[i].x, ws->p[i].y), b = cm_v2(ws->p[i1].x, ws->p[i1].y);
@@ -175,8 +198,8 @@ static cm_err add_point(cm_nfill_ws *ws, const cm_nfill_surface *s, int w, cm_ve
     return CM_OK;
 }
 
-cm_err cm_nfill_build(const cm_greg_input *in, int nu, int nv, int phi, cm_frame *frame, cm_nfill_surface *out,
-                      cm_nfill_ws *ws, cm_status *st)
+cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int nu, int nv, int phi, cm_frame *frame,
+                      cm_nfill_surface *out, cm_nfill_ws *ws, cm_status *st)
 {
     cm_err e;
     if (nu > CM_MAX_FIT_CTRL || nv > CM_MAX_FIT_CTRL)
@@ -191,12 +214,19 @@ cm_err cm_nfill_build(const cm_greg_input *in, int nu, int nv, int phi, cm_frame
         return cm_fail_limit(st, CM_LIMIT_MAX_LSQ_BAND, (uint64_t)w, CM_MAX_LSQ_BAND, __func__);
     if (in->n < 1 || in->n > CM_NFILL_MAX_EDGES)
         return cm_fail(st, CM_E_RANGE, __func__);
+    int nloops = 1 + (holes ? holes->n : 0);
+    if (holes && (holes->n < 0 || holes->n > CM_NFILL_MAX_HOLES || holes->start[0] != 0 ||
+                  in->n + holes->start[holes->n] > CM_NFILL_MAX_ALL_EDGES))
+        return cm_fail(st, CM_E_RANGE, __func__);
+    for (int l = 0; holes && l < holes->n; l++)
+        if (!(holes->start[l + 1] > holes->start[l]))
+            return cm_fail(st, CM_E_RANGE, __func__);
 
-    /* 8.1 samples, K11 frame, local coordinates */
+    /* 8.1 samples, K11 frame (normal from the outer loop), local coordinates */
     int nb;
-    if ((e = loop_samples(in, ws, &nb, st)) != CM_OK)
+    if ((e = loop_samples(in, holes, ws, &nb, st)) != CM_OK)
         return e;
-    if ((e = cm_face_frame(ws->p, nb, ws->p, nb, in->eps_len, frame, st)) != CM_OK)
+    if ((e = cm_face_frame(ws->p, ws->loop_start[1], ws->p, nb, in->eps_len, frame, st)) != CM_OK)
         return e;
     for (int k = 0; k < nb; k++) {
         cm_vec3 d = ws->d[k];
@@ -229,7 +259,7 @@ cm_err cm_nfill_build(const cm_greg_input *in, int nu, int nv, int phi, cm_frame
         double dl = sqrt(cm_dot2(dir, dir));
         if (dl < NFILL_MIN_DELTA)
             continue; /* step 1: the tangent plane is nearly vertical in the frame */
-        double lc = ray_cross(ws, nb, k, o, dir), lp = HUGE_VAL;
+        double lc = ray_cross(ws, nloops, k, o, dir), lp = HUGE_VAL;
         int side = -1;
         const double bound[4] = {Y0, X1, Y1, X0};
         for (int s = 0; s < 4; s++) {

@@ -4,7 +4,7 @@
  * rectangle that contains the face (kernel: cm_nfill.c).  Its loop may be
  * concave and of any edges (they are sampled, not converted to cubics), so
  * it rebuilds faces the Gregory patches cannot: reflex corners, loops of
- * more sides than the N-split takes.  The record holds what the
+ * more sides than the N-split takes, holes.  The record holds what the
  * compressor searched (nu, nv, phi) and the checksum of the net.
  * Format 2.4.
  */
@@ -55,13 +55,16 @@ static void nfill_need(const cm_model *m, const cm_face *F, uint32_t need[CM_LIM
     need[CM_LIMIT_MAX_SIDES] = n > 4u ? 5u : n;
 }
 
-/* one loop of 3..CM_GREG_JOINED_MAX_EDGES edges; the net within the build's limits */
+/* an outer loop of 3..CM_GREG_JOINED_MAX_EDGES edges, at most 64 edges in all its loops; the net
+   within the build's limits */
 cm_err cm_nfill_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
 {
-    uint32_t n = m->loops[F->loop0].nuse;
+    uint32_t n = m->loops[F->loop0].nuse, all = 0;
+    for (uint32_t l = 0; l < F->nloops; l++)
+        all += m->loops[F->loop0 + l].nuse;
     why->what = NULL;
-    if (F->nloops != 1)
-        why->what = "NFILL face with holes";
+    if (all > CM_NFILL_FMT_ALL_EDGES)
+        why->what = "NFILL face of more than 64 edges";
     else if (n < 3)
         why->what = "NFILL face with fewer than 3 edges";
     else if (n > CM_GREG_JOINED_MAX_EDGES)
@@ -90,8 +93,22 @@ cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *ou
     cm_err e = cm_greg_input_build(m, f, 1, &ws->gin, &ws->corner, st);
     if (e != CM_OK)
         return e;
-    if ((e = cm_nfill_build(&ws->gin, F->fill_nu, F->fill_nv, F->fill_phi, &out->frame, &ws->nfill, &ws->nfill_ws,
-                            st)) != CM_OK)
+    /* the holes' edges in loop order (cm_nfill_check_loops bounded their count) */
+    cm_nfill_holes *H = &ws->nfill_holes;
+    H->n = 0;
+    H->start[0] = 0;
+    for (uint32_t l = 1; l < F->nloops && H->n < CM_NFILL_MAX_HOLES; l++) {
+        const cm_loop *L = &m->loops[F->loop0 + l];
+        int k = H->start[H->n];
+        for (uint32_t u = 0; u < L->nuse && k < CM_NFILL_MAX_ALL_EDGES; u++, k++) {
+            const cm_use *U = &m->uses[L->use0 + u];
+            cm_model_edge_curve(m, U->edge, &H->edge[k].curve);
+            H->edge[k].rev = U->rev != 0;
+        }
+        H->start[++H->n] = k;
+    }
+    if ((e = cm_nfill_build(&ws->gin, H, F->fill_nu, F->fill_nv, F->fill_phi, &out->frame, &ws->nfill,
+                            &ws->nfill_ws, st)) != CM_OK)
         return e;
     out->repr = CM_REPR_NURBS;
     out->surf = ws->nfill.surf;

@@ -21,11 +21,14 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     enc_work *w = t->w;
     const cm_model *m = &w->dec.model;
     const cm_face *F = &m->faces[f];
-    uint32_t n = m->loops[F->loop0].nuse;
-    if (!o->nfill || F->nloops != 1 || n < 3 || n > CM_GREG_JOINED_MAX_EDGES)
+    uint32_t n = m->loops[F->loop0].nuse, all = 0;
+    for (uint32_t l = 0; l < F->nloops; l++)
+        all += m->loops[F->loop0 + l].nuse;
+    if (!o->nfill || n < 3 || n > CM_GREG_JOINED_MAX_EDGES || all > CM_NFILL_MAX_ALL_EDGES)
         return 0;
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
-    int data = 4 * (int)n * CM_FMT_SEG_PER_EDGE; /* boundary samples and at most 3 ray samples each */
+    /* boundary samples, and at most 3 ray samples for each of the outer loop's */
+    int data = (int)(all + 3 * n) * CM_FMT_SEG_PER_EDGE;
     double best_ratio = 0.0;
     for (size_t i = 0; i < sizeof nfill_ctrl / sizeof nfill_ctrl[0]; i++) {
         int c = nfill_ctrl[i];

@@ -13,6 +13,7 @@ for f in "$here"/corpus_iges/box_hole_144.igs "$here"/corpus_iges/box_hole_186.i
          "$here"/corpus_iges/half_cylinder_120.igs "$here"/corpus_iges/bicubic_128_inch.igs \
          "$here"/corpus_iges/split_cylinder_144.igs "$here"/corpus_iges/bump_128.igs \
          "$here"/corpus_iges/t_vertex_cylinder_144.igs "$here"/corpus_iges/l_shape_144.igs \
+         "$here"/corpus_iges/dome_square_hole_144.igs \
          "$here"/../data/as1_pe_203.igs "$here"/../data/geo_example.igs; do
     b=$(basename "$f" .igs)
     "$cmz" encode -q "$f" -o "$tmp/$b.cmz"

@@ -593,12 +593,12 @@ static double t8_z(double x, double y)
     return 0.02 * (x * x - 0.5 * y * y) + 0.1 * x + 0.01 * x * y;
 }
 
-/* the straight segment a -> b of the plane lifted onto the T8 surface: z is quadratic along it, so
-   the lift is one quadratic Bezier (126), exactly */
-static int t8_lift_126(igw *w, double ax, double ay, double bx, double by)
+/* the straight segment a -> b of the plane lifted onto a surface z(x, y) of degree 2: z is quadratic
+   along it, so the lift is one quadratic Bezier (126), exactly */
+static int lift_126(igw *w, double (*z)(double, double), double ax, double ay, double bx, double by)
 {
     double mx = 0.5 * (ax + bx), my = 0.5 * (ay + by);
-    double za = t8_z(ax, ay), zb = t8_z(bx, by), z1 = 2.0 * t8_z(mx, my) - 0.5 * (za + zb);
+    double za = z(ax, ay), zb = z(bx, by), z1 = 2.0 * z(mx, my) - 0.5 * (za + zb);
     int de = igw_add(w, 126, 0,
                      "2,2,0,0,1,0,0,0,0,1,1,1,1,1,1,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0,1,0,0,1",
                      ax, ay, za, mx, my, z1, bx, by, zb);
@@ -629,7 +629,7 @@ void igw_l_shape_144(igw *w)
     int m[6];
     for (int i = 0; i < 6; i++) {
         int j = (i + 1) % 6;
-        m[i] = t8_lift_126(w, px[i], py[i], px[j], py[j]);
+        m[i] = lift_126(w, t8_z, px[i], py[i], px[j], py[j]);
     }
     igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 6)));
 }
@@ -643,4 +643,44 @@ cm_err igw_load(igw *w, const char *name, loaded_model *lm, cm_status *st)
     cm_err e = text ? model_load_data(name, text, len, lm, NULL, NULL, st) : cm_fail(st, CM_E_NOMEM, "igw_text");
     free(text);
     return e;
+}
+
+/* ---- a square on a paraboloid with a round hole ---- */
+
+static double dome_z(double x, double y)
+{
+    return 5.0 * (1.0 - (x * x + y * y) / 400.0);
+}
+
+void igw_dome_square_hole_144(igw *w, double a, double r0)
+{
+    /* z = 5 (1 - (x^2 + y^2) / 400) over [-20, 20]^2: with x = 20(2u-1), y = 20(2v-1),
+       z = -5 + 20u - 20u^2 + 20v - 20v^2, in the biquadratic Bernstein basis as igw_l_shape_144 */
+    static const double c[3][3] = {{-5.0, 20.0, -20.0}, {20.0, 0.0, 0.0}, {-20.0, 0.0, 0.0}};
+    static const double C[3][3] = {{1, 0, 0}, {1, 1, 0}, {1, 2, 1}};
+    char buf[4096];
+    int k = snprintf(buf, sizeof buf, "2,2,2,2,0,0,1,0,0,0,0,0,1,1,1,0,0,0,1,1,1,1,1,1,1,1,1,1,1,1");
+    for (int l = 0; l < 3; l++)
+        for (int kk = 0; kk < 3; kk++) {
+            double z = 0.0;
+            for (int i = 0; i <= kk; i++)
+                for (int j = 0; j <= l; j++)
+                    z += c[i][j] * C[kk][i] / C[2][i] * C[l][j] / C[2][j];
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", 20.0 * (kk - 1), 20.0 * (l - 1), z);
+        }
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+    int s = igw_add(w, 128, 0, "%s", buf);
+    igw_set(w, s, 1, 0, 0);
+    static const double px[4] = {-1, 1, 1, -1}, py[4] = {-1, -1, 1, 1};
+    int m[4];
+    for (int i = 0; i < 4; i++) {
+        int j = (i + 1) % 4;
+        m[i] = lift_126(w, dome_z, a * px[i], a * py[i], a * px[j], a * py[j]);
+    }
+    int outer = on_surface(w, s, composite(w, m, 4));
+    /* the circle of radius r0 about the apex lies at one height: two arcs */
+    double z0 = dome_z(r0, 0.0);
+    int h[2] = {arc_100(w, 0, 0, z0, r0, 0.0, M_PI), arc_100(w, 0, 0, z0, r0, M_PI, 2 * M_PI)};
+    int inner = on_surface(w, s, composite(w, h, 2));
+    igw_add(w, 144, 0, "%d,1,1,%d,%d", s, outer, inner);
 }

@@ -82,6 +82,10 @@ cm_err igw_load(igw *w, const char *name, loaded_model *lm, cm_status *st);
  *  lifted onto z = 0.02 (x^2 - 0.5 y^2) + 0.1 x + 0.01 x y (a biquadratic 128; each edge an exact
  *  quadratic 126), one 144 with a reflex corner at (8, 8). */
 void igw_l_shape_144(igw *w);
+/** The square [-a, a]^2 (a < 20) lifted onto the paraboloid z = 5 (1 - (x^2 + y^2) / 400) (a
+ *  biquadratic 128; each side an exact quadratic 126) with a round hole of radius r0 about the apex
+ *  (two arcs at one height): one 144 with one inner loop. */
+void igw_dome_square_hole_144(igw *w, double a, double r0);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 

@@ -388,7 +388,8 @@ static void add_loop(cm_model *m, uint32_t v0, int n)
 
 /*
  * src->model := one planar face whose outer loop is a regular polygon of `sides` line edges (radius
- * 10 mm, counter-clockwise) and, with `hole`, a clockwise triangle inside it, with the given record.
+ * 10 mm, counter-clockwise) and, with `hole`, a clockwise polygon inside it (1: a triangle; 3 or
+ * more: of that many edges), with the given record.
  * The checksum is 0: the decoder does not rebuild, so these models test the reading only.
  */
 static void polygon_face(int sides, int hole, int method, int layout, int corner)
@@ -411,10 +412,11 @@ static void polygon_face(int sides, int hole, int method, int layout, int corner
         add_vertex(m, 10.0 * cos(2 * M_PI * k / sides), 10.0 * sin(2 * M_PI * k / sides));
     add_loop(m, first, sides);
     if (hole) {
+        int hn = hole < 3 ? 3 : hole; /* 1: a triangle; 3 or more: that many edges */
         first = m->nverts;
-        for (int k = 0; k < 3; k++) /* clockwise: the face stays on the left */
-            add_vertex(m, 2.0 * cos(-2 * M_PI * k / 3), 2.0 * sin(-2 * M_PI * k / 3));
-        add_loop(m, first, 3);
+        for (int k = 0; k < hn; k++) /* clockwise: the face stays on the left */
+            add_vertex(m, 2.0 * cos(-2 * M_PI * k / hn), 2.0 * sin(-2 * M_PI * k / hn));
+        add_loop(m, first, hn);
     }
 }
 
@@ -704,7 +706,7 @@ static void nfill_record(int nu, int nv, int phi)
     F->fill_phi = (uint8_t)phi;
 }
 
-/* NFILL (format 2.4): nu, nv, phi; one loop of 3 to 12 edges; the net within the build's limits,
+/* NFILL (format 2.4): nu, nv, phi; an outer loop of 3 to 12 edges, 64 in all its loops; the net within the build's limits,
    each refused by name; not in a 2.3 file */
 static void test_nfill_records(void **state)
 {
@@ -719,9 +721,15 @@ static void test_nfill_records(void **state)
     assert_int_equal(dec->model.faces[0].fill_phi, 2);
     nfill_record(8, 6, CM_NFILL_PHI_COUNT);
     assert_face_refused(2, CM_E_RANGE, "NFILL phi", &st);
-    polygon_face(6, 1, CM_METHOD_NFILL, 0, 0);
+    polygon_face(6, 1, CM_METHOD_NFILL, 0, 0); /* holes are fine ... */
     nfill_record(8, 6, 2);
-    assert_face_refused(2, CM_E_FORMAT, "NFILL face with holes", &st);
+    assert_decodes(2);
+    polygon_face(12, 52, CM_METHOD_NFILL, 0, 0); /* ... up to 64 edges in all */
+    nfill_record(8, 6, 2);
+    assert_decodes(2);
+    polygon_face(12, 53, CM_METHOD_NFILL, 0, 0);
+    nfill_record(8, 6, 2);
+    assert_face_refused(2, CM_E_FORMAT, "NFILL face of more than 64 edges", &st);
     polygon_face(13, 0, CM_METHOD_NFILL, 0, 0);
     nfill_record(8, 6, 2);
     assert_face_refused(2, CM_E_FORMAT, "NFILL loop of more than 12 edges", &st);

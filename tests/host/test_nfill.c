@@ -172,7 +172,7 @@ static void test_t8_kernel_net(void **state)
     cm_status st;
     cm_status_init(&st);
     assert_ok(cm_greg_input_build(m, 0, 1, &in, &cws, &st));
-    assert_ok(cm_nfill_build(&in, 8, 8, 2, &fr, &s, &ws, &st));
+    assert_ok(cm_nfill_build(&in, NULL, 8, 8, 2, &fr, &s, &ws, &st));
     double worst = 0, diag = hypot(20.0, 16.0);
     for (int i = 0; i <= 40; i++)
         for (int j = 0; j <= 32; j++) {
@@ -193,12 +193,58 @@ static void test_t8_kernel_net(void **state)
     model_free(&lm);
 }
 
+/*
+ * A face with a hole (a curved square with a round hole, the case of spec T8's hole): no Gregory
+ * patch takes holes; NFILL fits the outer loop's samples and rays and the hole's samples (no rays:
+ * see cm_nfill.h), within the tolerance, and the terminal's mesh lies on the paraboloid, outside the
+ * hole and inside the square.
+ */
+static void test_square_with_hole(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_dome_square_hole_144(&w, 12.0, 4.0);
+    cm_status st;
+    assert_ok(igw_load(&w, "dome_hole", &lm, &st));
+    assert_int_equal(lm.mesh.nfaces, 1);
+    encode_with(&lm, 0, 0.01, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+    assert_string_equal(r.faces[0].why, "holes");
+    encode_result_free(&r);
+    encode_with(&lm, 1, 0.01, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_NFILL], 1);
+    assert_true(r.faces[0].ratio < 0.01);
+    decode(&r);
+    cm_model *m = &dec.model;
+    assert_int_equal(m->faces[0].nloops, 2);
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8};
+    cm_mesh_clear(&mesh);
+    cm_status_init(&st);
+    assert_ok(cm_tessellate_face(m, 0, m->tess_tol, &mesh, &tess, NULL, &st));
+    double worst = 0, bbox = r.faces[0].bbox, e = 0.01 * bbox;
+    for (uint32_t i = 0; i < mesh.nverts; i++) {
+        double x = (double)pos[i][0], y = (double)pos[i][1];
+        double d = fabs((double)pos[i][2] - 5.0 * (1.0 - (x * x + y * y) / 400.0));
+        worst = d > worst ? d : worst;
+        if (hypot(x, y) < 4.0 - e || fabs(x) > 12.0 + e || fabs(y) > 12.0 + e)
+            fail_msg("vertex %u (%g, %g) in the hole or outside the square", i, x, y);
+    }
+    if (!(worst < 0.01 * bbox))
+        fail_msg("mesh %.4g mm off the paraboloid (%.3g %%)", worst, 100 * worst / bbox);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_l_shape_kept_without_nfill),
         cmocka_unit_test(test_l_shape_nfill),
         cmocka_unit_test(test_t8_kernel_net),
+        cmocka_unit_test(test_square_with_hole),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

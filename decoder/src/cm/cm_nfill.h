@@ -22,9 +22,11 @@
  * spec 8.9), so the decoder runs exactly one solve.
  *
  * Deviations from the spec, and why:
- *   - outer loops only (a face with holes is refused by the method): the
- *     hole rays of 8.3 need the 5.3 corner normals of inner loops, which
- *     this version does not build;
+ *   - holes give boundary samples but no rays (8.3 sends rays half way
+ *     across each hole): a hole's corners are mostly flat (a circle of two
+ *     arcs), where 5.3 falls back to the face's mean normal, and rays in the
+ *     mean plane would pull the surface flat around the hole; the fairing
+ *     fills the hole instead (it is trimmed away);
  *   - the inward direction is unit(N(t) x T(t)) from the interpolated
  *     basis normals, not perp(A(t), T(t)): see loop_samples in cm_nfill.c;
  *   - data parameters are the start values of 8.6 ((x-X0)/(X1-X0),
@@ -54,8 +56,30 @@
 #define CM_NFILL_RAY_SUB 4
 /** Edges of the outer loop NFILL takes (format rule; the loop input's capacity). */
 #define CM_NFILL_MAX_EDGES CM_GREG_MAX_INPUT
-/** Boundary samples of one face. */
-#define CM_NFILL_MAX_BSAMP (CM_NFILL_MAX_EDGES * CM_FMT_SEG_PER_EDGE)
+/** Edges of all its loops (format rule: the spec's MAX_FACE_EDGES, 64, or the build's if smaller). */
+#define CM_NFILL_FMT_ALL_EDGES 64
+#if CM_MAX_FACE_EDGES < CM_NFILL_FMT_ALL_EDGES
+#  define CM_NFILL_MAX_ALL_EDGES CM_MAX_FACE_EDGES
+#else
+#  define CM_NFILL_MAX_ALL_EDGES CM_NFILL_FMT_ALL_EDGES
+#endif
+/** Holes (inner loops) of one face: at most one per edge of it. */
+#define CM_NFILL_MAX_HOLES (CM_NFILL_MAX_ALL_EDGES - 1)
+/** Boundary samples of one face, all loops (spec §3 MAX_BSAMP). */
+#define CM_NFILL_MAX_BSAMP (CM_NFILL_MAX_ALL_EDGES * CM_FMT_SEG_PER_EDGE)
+
+/** An edge of a hole as the face runs it: its curve (into the model), 1 when from t = 1 to t = 0. */
+typedef struct cm_nfill_edge {
+    cm_curve curve;
+    int rev;
+} cm_nfill_edge;
+
+/** The face's inner loops: hole l is edge[start[l] .. start[l+1]) in loop order. */
+typedef struct cm_nfill_holes {
+    int n;
+    int start[CM_NFILL_MAX_HOLES + 1];
+    cm_nfill_edge edge[CM_NFILL_MAX_ALL_EDGES];
+} cm_nfill_holes;
 /** Control points per direction the record can name: 4 + a 5-bit field. */
 #define CM_NFILL_MIN_CTRL 4
 #define CM_NFILL_MAX_CTRL_FIELD 35
@@ -73,7 +97,8 @@ typedef struct cm_nfill_surface {
 
 /** Scratch of one build: samples, rays' ends, hits, the side fits and the normal equations. */
 typedef struct cm_nfill_ws {
-    cm_vec3 p[CM_NFILL_MAX_BSAMP];   /* boundary samples (local) */
+    cm_vec3 p[CM_NFILL_MAX_BSAMP];   /* boundary samples (local), outer loop first */
+    int loop_start[CM_NFILL_MAX_HOLES + 2]; /* loop l's samples: p[loop_start[l] .. loop_start[l+1]) */
     cm_vec3 d[CM_NFILL_MAX_BSAMP];   /* unit inward directions (local) */
     double lam[CM_NFILL_MAX_BSAMP];  /* each ray's end (0: no ray) */
     cm_vec3 hit[CM_NFILL_MAX_BSAMP]; /* hit points ... */
@@ -91,15 +116,16 @@ typedef struct cm_nfill_ws {
 } cm_nfill_ws;
 
 /**
- * Spec §8 for the outer loop `in` (cm_greg_input_build with exact = 1: edges, rev, basis normals).
+ * Spec §8 for the outer loop `in` (cm_greg_input_build with exact = 1: edges, rev, basis normals)
+ * and the holes (NULL: none).
  * @param nu, nv  control points per direction, CM_NFILL_MIN_CTRL..CM_MAX_FIT_CTRL
  * @param phi     index into cm_nfill_phi
  * @param frame   out: the K11 frame the surface was built in (its ez is the face normal)
  * @return CM_E_LIMIT over fixedcfg's limits, CM_E_DEGENERATE when a side of the rectangle gets fewer
  *         than 4 hits or the loop is degenerate, CM_E_SINGULAR when the solve fails
  */
-CM_NODISCARD cm_err cm_nfill_build(const cm_greg_input *in, int nu, int nv, int phi, cm_frame *frame,
-                                   cm_nfill_surface *out, cm_nfill_ws *ws, cm_status *st);
+CM_NODISCARD cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int nu, int nv, int phi,
+                                   cm_frame *frame, cm_nfill_surface *out, cm_nfill_ws *ws, cm_status *st);
 
 /** FNV-1a 32 over the net's doubles x, y, z in row-major order, each as its IEEE-754 bytes, least
     significant first (spec §2 rule 6). */

@@ -23,6 +23,7 @@ typedef struct cm_rebuild_ws {
         cm_greg_surface greg; /* GREGORY: the rebuilt patches (cm_rebuilt.greg points here) */
         struct {
             cm_nfill_surface nfill; /* NFILL: the rebuilt net (cm_rebuilt.surf views it) */
+            cm_nfill_holes nfill_holes;
             cm_nfill_ws nfill_ws;
         };
     };
