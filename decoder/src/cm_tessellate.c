@@ -5,6 +5,7 @@
 
 #include "cm/cm_const.h"
 #include "cm/cm_limits_info.h"
+#include "cm/cm_method.h"
 
 #define MAX_DOUBLINGS 12
 
@@ -340,6 +341,8 @@ typedef struct chart {
     const cm_greg_surface *gs; /* GREGORY family: the patches ... */
     int patch;              /* ... and which */
     double sign;            /* the face normal is sign * (Su x Sv) */
+    int off_surface;        /* NURBS rebuilt to a tolerance (NFILL): the loop's points lie up to it off
+                               the surface, so the refinement measures from the surface's own points */
 } chart;
 
 /* point and first partials at (u,v) */
@@ -359,10 +362,16 @@ static cm_err chart_eval(const chart *c, double u, double v, cm_vec3 d[3], cm_st
     return CM_OK;
 }
 
-/* 3D position of triangulation point i: a boundary point is its curve's own point */
-static cm_err point_xyz(const chart *c, cm_tess_ws *ws, int i, cm_status *st)
+/*
+ * 3D position of triangulation point i: a boundary point is its curve's own point, except, for the
+ * refinement's flatness tests (`test`) on a surface the loop is not on (off_surface), the surface's
+ * point at its (u,v): there the loop is up to the rebuild tolerance off the surface, and measured
+ * from it the triangles along the loop would never pass (C1G0B0O: 36 NFILL faces doubled the
+ * model's triangles).  The emitted mesh always takes the curve's point (watertight).
+ */
+static cm_err point_xyz(const chart *c, cm_tess_ws *ws, int i, int test, cm_status *st)
 {
-    if (ws->src[i] >= 0) {
+    if (ws->src[i] >= 0 && !(test && c->off_surface)) {
         ws->xyz[i] = ws->bpts[ws->src[i]];
         return CM_OK;
     }
@@ -583,7 +592,7 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
     pass_table last = {NULL, 0, 0, 0}, now;
     for (int round = 0; c->kind != CHART_FRAME && round < TESS_REFINE_ROUNDS; round++) {
         for (; nxyz < npts; nxyz++)
-            if ((e = point_xyz(c, ws, nxyz, st)) != CM_OK)
+            if ((e = point_xyz(c, ws, nxyz, 1, st)) != CM_OK)
                 return e;
         pass_begin(&now, ws, ws->passed[round & 1], ntris + ntris / 2 * 3);
         int before = npts;
@@ -645,7 +654,7 @@ static cm_err emit_region(const chart *c, cm_tess_ws *ws, int npts, int ntris, c
         for (int k = 0; k < 3; k++)
             ws->vmap[ws->tris[t][k]] = 0;
     for (int i = 0; i < npts; i++)
-        if (ws->vmap[i] != UINT32_MAX && (e = point_xyz(c, ws, i, st)) != CM_OK)
+        if (ws->vmap[i] != UINT32_MAX && (e = point_xyz(c, ws, i, 0, st)) != CM_OK)
             return e;
     int kept_tris = 0;
     for (int t = 0; t < ntris; t++) {
@@ -777,7 +786,7 @@ static cm_err add_use(cm_tess_ws *ws, int *k, int use, int a, int b, double u0, 
 static cm_err tess_patch(const cm_greg_surface *gs, int patch, cm_tess_ws *ws, int npts, int side_n[4], double tol, cm_mesh *mesh,
                          cm_tess_info *info, cm_status *st)
 {
-    chart c = {CHART_GREGORY, NULL, NULL, gs, patch, 1.0};
+    chart c = {CHART_GREGORY, NULL, NULL, gs, patch, 1.0, 0};
     cm_err e;
     ws->loop_start[0] = 0;
     ws->loop_start[1] = npts;
@@ -955,7 +964,8 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     int npts = 0, nloops = (int)F->nloops;
     cm_psurf ps;
     int keep = rb.repr == CM_REPR_NURBS;
-    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign};
+    const cm_method *M = cm_method_of(F->method);
+    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign, keep && M && !M->kept_surface};
     if (keep) {
         if ((e = cm_psurf_init(&ps, &rb.surf, 1e-9 * rb.bbox, st)) != CM_OK)
             return e;
