@@ -67,18 +67,10 @@ static cm_err loop_samples(const cm_greg_input *in, const cm_nfill_holes *holes,
     ws->loop_start[1] = k;
     /* the holes: their samples, no directions (see cm_nfill.h) */
     for (int l = 0; holes && l < holes->n; l++) {
-        for (int u = holes->start[l]; u < holes->start[l + 1]; u++) {
-            const cm_nfill_edge *gs = &holes->edge[u];
-            for (int j = 0; j < CM_FMT_SEG_PER_EDGE; j++) {
-                double t = (double)j / (double)CM_FMT_SEG_PER_EDGE;
-                cm_vec3 q[CM_MAX_DERS + 1];
-                cm_err e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - t : t, 0, q, st);
-                if (e != CM_OK)
-                    return e;
-                ws->p[k] = q[0];
-                ws->d[k] = zero;
-                k++;
-            }
+        for (int i = holes->start[l]; i < holes->start[l + 1]; i++) {
+            ws->p[k] = holes->pts[i];
+            ws->d[k] = zero;
+            k++;
         }
         ws->loop_start[l + 2] = k;
     }
@@ -216,7 +208,7 @@ cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int 
         return cm_fail(st, CM_E_RANGE, __func__);
     int nloops = 1 + (holes ? holes->n : 0);
     if (holes && (holes->n < 0 || holes->n > CM_NFILL_MAX_HOLES || holes->start[0] != 0 ||
-                  in->n + holes->start[holes->n] > CM_NFILL_MAX_ALL_EDGES))
+                  in->n * CM_FMT_SEG_PER_EDGE + holes->start[holes->n] > CM_NFILL_MAX_BSAMP))
         return cm_fail(st, CM_E_RANGE, __func__);
     for (int l = 0; holes && l < holes->n; l++)
         if (!(holes->start[l + 1] > holes->start[l]))

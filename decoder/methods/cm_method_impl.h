@@ -46,7 +46,8 @@ cm_err cm_gregory_fit_apply(const cm_model *m, const cm_face *F, cm_greg_surface
 cm_err cm_nfill_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why);
 void cm_nfill_write_record(cm_ac_enc *ac, const cm_face *F);
 cm_err cm_nfill_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why);
-cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st);
+cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
+                        cm_rebuild_ws *ws, cm_status *st);
 void cm_nfill_needs(const cm_model *m, const cm_face *F, uint32_t *need);
 
 #endif /* CM_METHOD_IMPL_H */

@@ -103,7 +103,7 @@ cm_err cm_method_rebuild(const cm_method *M, const cm_model *m, uint32_t f, int 
     case CM_METHOD_GREGORY_FIT:
         return cm_gregory_fit_rebuild(m, f, check, out, ws, st);
     case CM_METHOD_NFILL:
-        return cm_nfill_rebuild(m, f, check, out, ws, st);
+        return cm_nfill_rebuild(m, f, check, n, n_outer, out, ws, st);
     default:
         return cm_fail(st, CM_E_UNSUPPORTED, "face method");
     }

@@ -87,25 +87,23 @@ cm_err cm_nfill_check_loops(const cm_model *m, const cm_face *F, cm_method_fault
     return CM_OK;
 }
 
-cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st)
+cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
+                        cm_rebuild_ws *ws, cm_status *st)
 {
+    (void)n;
     const cm_face *F = &m->faces[f];
     cm_err e = cm_greg_input_build(m, f, 1, &ws->gin, &ws->corner, st);
     if (e != CM_OK)
         return e;
-    /* the holes' edges in loop order (cm_nfill_check_loops bounded their count) */
+    /* the holes: the samples the caller took after the outer loop's (cm_rebuild_face_ex: 10 per edge,
+       n - n_outer in all), loop by loop (cm_nfill_check_loops bounded their count) */
     cm_nfill_holes *H = &ws->nfill_holes;
     H->n = 0;
     H->start[0] = 0;
+    H->pts = ws->samples + n_outer;
     for (uint32_t l = 1; l < F->nloops && H->n < CM_NFILL_MAX_HOLES; l++) {
-        const cm_loop *L = &m->loops[F->loop0 + l];
-        int k = H->start[H->n];
-        for (uint32_t u = 0; u < L->nuse && k < CM_NFILL_MAX_ALL_EDGES; u++, k++) {
-            const cm_use *U = &m->uses[L->use0 + u];
-            cm_model_edge_curve(m, U->edge, &H->edge[k].curve);
-            H->edge[k].rev = U->rev != 0;
-        }
-        H->start[++H->n] = k;
+        H->start[H->n + 1] = H->start[H->n] + (int)m->loops[F->loop0 + l].nuse * CM_FMT_SEG_PER_EDGE;
+        H->n++;
     }
     if ((e = cm_nfill_build(&ws->gin, H, F->fill_nu, F->fill_nv, F->fill_phi, &out->frame, &ws->nfill,
                             &ws->nfill_ws, st)) != CM_OK)

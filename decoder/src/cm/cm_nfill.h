@@ -68,17 +68,12 @@
 /** Boundary samples of one face, all loops (spec §3 MAX_BSAMP). */
 #define CM_NFILL_MAX_BSAMP (CM_NFILL_MAX_ALL_EDGES * CM_FMT_SEG_PER_EDGE)
 
-/** An edge of a hole as the face runs it: its curve (into the model), 1 when from t = 1 to t = 0. */
-typedef struct cm_nfill_edge {
-    cm_curve curve;
-    int rev;
-} cm_nfill_edge;
-
-/** The face's inner loops: hole l is edge[start[l] .. start[l+1]) in loop order. */
+/** The face's inner loops as the caller sampled them (cm_face_samples: CM_FMT_SEG_PER_EDGE per edge,
+    spec 8.1): hole l is pts[start[l] .. start[l+1]). */
 typedef struct cm_nfill_holes {
     int n;
     int start[CM_NFILL_MAX_HOLES + 1];
-    cm_nfill_edge edge[CM_NFILL_MAX_ALL_EDGES];
+    const cm_vec3 *pts;
 } cm_nfill_holes;
 /** Control points per direction the record can name: 4 + a 5-bit field. */
 #define CM_NFILL_MIN_CTRL 4
