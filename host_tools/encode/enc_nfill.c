@@ -29,7 +29,6 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
     /* boundary samples, and at most 3 ray samples for each of the outer loop's */
     int data = (int)(all + 3 * n) * CM_FMT_SEG_PER_EDGE;
-    double best_ratio = 0.0;
     for (size_t i = 0; i < sizeof nfill_ctrl / sizeof nfill_ctrl[0]; i++) {
         int c = nfill_ctrl[i];
         if (c > CM_MAX_FIT_CTRL || 2 * (c - 2) * (c - 2) > data)
@@ -48,8 +47,6 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
             face_error fe;
             if (!verify_face(lm, m, f, &rb, tol, &fe))
                 return 0;
-            if (best_ratio == 0.0 || fe.ratio < best_ratio)
-                best_ratio = fe.ratio;
             if (!(fe.max < tol))
                 continue;
             t->layout[f] = c;
