@@ -137,42 +137,60 @@ static cm_err side_extend(const cm_nfill_ws *ws, int s, double tau, cm_vec3 *out
     return CM_OK;
 }
 
-/* unknown number of net point (i, j), -1 for the border */
-static int unknown_of(int nu, int nv, int i, int j)
+int cm_net_unknown(const cm_net_lsq *L, int i, int j)
 {
-    if (i < 1 || i > nu - 2 || j < 1 || j > nv - 2)
+    int m = L->margin;
+    if (i < m || i > L->nu - 1 - m || j < m || j > L->nv - 1 - m)
         return -1;
-    return (i - 1) * (nv - 2) + (j - 1);
+    return (i - m) * (L->nv - 2 * m) + (j - m);
 }
 
-/*
- * Add weight * (sum_t c_t P_t - Q)^2 to the normal equations: pts[t] = i * nv + j of the net, the
- * border points (known) go to the right-hand side.  Q may be NULL (a fairing stencil: Q = 0).
- */
-static void accumulate(cm_nfill_ws *ws, const cm_nfill_surface *s, int w, const int *pts, const double *c, int np,
-                       double weight, const cm_vec3 *Q)
+void cm_net_accumulate(cm_net_lsq *L, const int *pts, const double *c, int np, double weight, const cm_vec3 *Q)
 {
-    int nu = s->nu, nv = s->nv;
+    int nv = L->nv, w = L->w;
     for (int a = 0; a < np; a++) {
-        int ra = unknown_of(nu, nv, pts[a] / nv, pts[a] % nv);
+        int ra = cm_net_unknown(L, pts[a] / nv, pts[a] % nv);
         if (ra < 0 || c[a] == 0.0)
             continue;
         double wa = weight * c[a];
         if (Q)
-            ws->rhs[ra] = cm_add(ws->rhs[ra], cm_scale(*Q, wa));
+            L->rhs[ra] = cm_add(L->rhs[ra], cm_scale(*Q, wa));
         for (int b = 0; b < np; b++) {
-            int rb = unknown_of(nu, nv, pts[b] / nv, pts[b] % nv);
+            int rb = cm_net_unknown(L, pts[b] / nv, pts[b] % nv);
             if (rb < 0)
-                ws->rhs[ra] = cm_sub(ws->rhs[ra], cm_scale(s->ctrl[pts[b]], wa * c[b]));
+                L->rhs[ra] = cm_sub(L->rhs[ra], cm_scale(L->ctrl[pts[b]], wa * c[b]));
             else if (rb <= ra)
-                ws->band[CM_BAND_IDX(ra, rb, w)] += wa * c[b];
+                L->band[CM_BAND_IDX(ra, rb, w)] += wa * c[b];
         }
     }
 }
 
+void cm_net_fairing(cm_net_lsq *L, double lf)
+{
+    int nu = L->nu, nv = L->nv;
+    static const double c2[3] = {1.0, -2.0, 1.0}, ctw[4] = {1.0, -1.0, -1.0, 1.0};
+    for (int i = 0; i < nu; i++)
+        for (int j = 0; j < nv; j++) {
+            int pts[4];
+            if (i + 2 < nu) {
+                pts[0] = i * nv + j, pts[1] = (i + 1) * nv + j, pts[2] = (i + 2) * nv + j;
+                cm_net_accumulate(L, pts, c2, 3, lf, NULL);
+            }
+            if (j + 2 < nv) {
+                pts[0] = i * nv + j, pts[1] = i * nv + j + 1, pts[2] = i * nv + j + 2;
+                cm_net_accumulate(L, pts, c2, 3, lf, NULL);
+            }
+            if (i + 1 < nu && j + 1 < nv) {
+                pts[0] = (i + 1) * nv + j + 1, pts[1] = (i + 1) * nv + j, pts[2] = i * nv + j + 1;
+                pts[3] = i * nv + j;
+                cm_net_accumulate(L, pts, ctw, 4, 2.0 * lf, NULL);
+            }
+        }
+}
+
 /* one data point (local Q at parameters u, v) into the normal equations */
-static cm_err add_point(cm_nfill_ws *ws, const cm_nfill_surface *s, int w, cm_vec3 Q, double u, double v,
-                        double weight, cm_status *st)
+static cm_err add_point(cm_net_lsq *L, const cm_nfill_surface *s, cm_vec3 Q, double u, double v, double weight,
+                        cm_status *st)
 {
     double Nu[CM_MAX_ORDER], Nv[CM_MAX_ORDER];
     int su = cm_bspl_find_span(s->nu, 3, s->U, u), sv = cm_bspl_find_span(s->nv, 3, s->V, v);
@@ -186,7 +204,7 @@ static cm_err add_point(cm_nfill_ws *ws, const cm_nfill_surface *s, int w, cm_ve
             pts[a * 4 + b] = (su - 3 + a) * s->nv + (sv - 3 + b);
             c[a * 4 + b] = Nu[a] * Nv[b];
         }
-    accumulate(ws, s, w, pts, c, 16, weight, &Q);
+    cm_net_accumulate(L, pts, c, 16, weight, &Q);
     return CM_OK;
 }
 
@@ -344,9 +362,10 @@ cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int 
     /* 8.7 least squares: boundary samples, then each ray's samples, then the fairing */
     memset(ws->band, 0, sizeof ws->band[0] * (size_t)K * (size_t)(w + 1));
     memset(ws->rhs, 0, sizeof ws->rhs[0] * (size_t)K);
+    cm_net_lsq L = {nu, nv, 1, w, ws->band, ws->rhs, out->ctrl};
     double sx = 1.0 / (X1 - X0), sy = 1.0 / (Y1 - Y0);
     for (int k = 0; k < nb; k++)
-        if ((e = add_point(ws, out, w, ws->p[k], (ws->p[k].x - X0) * sx, (ws->p[k].y - Y0) * sy, NFILL_W_BOUNDARY,
+        if ((e = add_point(&L, out, ws->p[k], (ws->p[k].x - X0) * sx, (ws->p[k].y - Y0) * sy, NFILL_W_BOUNDARY,
                            st)) != CM_OK)
             return e;
     for (int k = 0; k < nb; k++) {
@@ -359,7 +378,7 @@ cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int 
             double u = (q.x - X0) * sx, v = (q.y - Y0) * sy;
             u = u < 0.0 ? 0.0 : (u > 1.0 ? 1.0 : u);
             v = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
-            if ((e = add_point(ws, out, w, q, u, v, 1.0 / (1.0 + r * r), st)) != CM_OK)
+            if ((e = add_point(&L, out, q, u, v, 1.0 / (1.0 + r * r), st)) != CM_OK)
                 return e;
         }
     }
@@ -368,31 +387,14 @@ cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int 
         for (int r = 0; r < K; r++)
             trace += ws->band[CM_BAND_IDX(r, r, w)];
         double lf = cm_nfill_phi[phi] * trace / (double)K;
-        static const double c2[3] = {1.0, -2.0, 1.0}, ctw[4] = {1.0, -1.0, -1.0, 1.0};
-        for (int i = 0; i < nu; i++)
-            for (int j = 0; j < nv; j++) {
-                int pts[4];
-                if (i + 2 < nu) {
-                    pts[0] = i * nv + j, pts[1] = (i + 1) * nv + j, pts[2] = (i + 2) * nv + j;
-                    accumulate(ws, out, w, pts, c2, 3, lf, NULL);
-                }
-                if (j + 2 < nv) {
-                    pts[0] = i * nv + j, pts[1] = i * nv + j + 1, pts[2] = i * nv + j + 2;
-                    accumulate(ws, out, w, pts, c2, 3, lf, NULL);
-                }
-                if (i + 1 < nu && j + 1 < nv) {
-                    pts[0] = (i + 1) * nv + j + 1, pts[1] = (i + 1) * nv + j, pts[2] = i * nv + j + 1;
-                    pts[3] = i * nv + j;
-                    accumulate(ws, out, w, pts, ctw, 4, 2.0 * lf, NULL);
-                }
-            }
+        cm_net_fairing(&L, lf);
     }
     if ((e = cm_chol_band(ws->band, K, w, st)) != CM_OK)
         return e;
     cm_chol_band_solve3(ws->band, K, w, ws->rhs);
     for (int i = 1; i < nu - 1; i++)
         for (int j = 1; j < nv - 1; j++)
-            out->ctrl[i * nv + j] = ws->rhs[unknown_of(nu, nv, i, j)];
+            out->ctrl[i * nv + j] = ws->rhs[cm_net_unknown(&L, i, j)];
     for (int i = 0; i < nu * nv; i++) {
         if (!cm_finite3(out->ctrl[i]))
             return cm_fail(st, CM_E_NONFINITE, "nfill: control point");

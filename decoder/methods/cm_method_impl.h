@@ -50,4 +50,11 @@ cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_o
                         cm_rebuild_ws *ws, cm_status *st);
 void cm_nfill_needs(const cm_model *m, const cm_face *F, uint32_t *need);
 
+/* G1FIT (g1fit.c): nu, nv, mode and a checksum; a B-spline over the face's four edge chains (cm_g1fit.h) */
+cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why);
+void cm_g1fit_write_record(cm_ac_enc *ac, const cm_face *F);
+cm_err cm_g1fit_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why);
+cm_err cm_g1fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st);
+void cm_g1fit_needs(const cm_model *m, const cm_face *F, uint32_t *need);
+
 #endif /* CM_METHOD_IMPL_H */

@@ -5,10 +5,12 @@
 
 /* spec §14: PLANE first (exact and free when it applies), then the GREGORY family (the cubic patches
    first: files that do without the exact ones stay readable by format 2.0; a sent correction only
-   where no patch alone passes), then NFILL (sampled edges, any loop shape), KEEP last */
-const cm_method *const cm_method_table[CM_METHOD_COUNT] = {&cm_method_plane, &cm_method_gregory,
+   where no patch alone passes), then G1FIT (the edges as borders, their tangent planes kept), NFILL
+   (sampled edges, any loop shape), KEEP last */
+const cm_method *const cm_method_table[CM_METHOD_COUNT] = {&cm_method_plane,        &cm_method_gregory,
                                                            &cm_method_gregory_exact, &cm_method_gregory_fit,
-                                                           &cm_method_nfill, &cm_method_keep};
+                                                           &cm_method_g1fit,        &cm_method_nfill,
+                                                           &cm_method_keep};
 
 const cm_method *cm_method_of(unsigned id)
 {
@@ -37,6 +39,8 @@ cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx
         return cm_gregory_fit_read_record(ac, ctx, m, F, why);
     case CM_METHOD_NFILL:
         return cm_nfill_read_record(ac, F, why);
+    case CM_METHOD_G1FIT:
+        return cm_g1fit_read_record(ac, F, why);
     default:
         return CM_OK;
     }
@@ -56,6 +60,9 @@ void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx,
     case CM_METHOD_NFILL:
         cm_nfill_write_record(ac, F);
         break;
+    case CM_METHOD_G1FIT:
+        cm_g1fit_write_record(ac, F);
+        break;
     default:
         break;
     }
@@ -71,6 +78,8 @@ cm_err cm_method_check_loops(const cm_method *M, const cm_model *m, const cm_fac
         return cm_gregory_fit_check_loops(m, F, why);
     case CM_METHOD_NFILL:
         return cm_nfill_check_loops(m, F, why);
+    case CM_METHOD_G1FIT:
+        return cm_g1fit_check_loops(m, F, why);
     default:
         return CM_OK;
     }
@@ -104,6 +113,8 @@ cm_err cm_method_rebuild(const cm_method *M, const cm_model *m, uint32_t f, int 
         return cm_gregory_fit_rebuild(m, f, check, out, ws, st);
     case CM_METHOD_NFILL:
         return cm_nfill_rebuild(m, f, check, n, n_outer, out, ws, st);
+    case CM_METHOD_G1FIT:
+        return cm_g1fit_rebuild(m, f, check, out, ws, st);
     default:
         return cm_fail(st, CM_E_UNSUPPORTED, "face method");
     }
@@ -119,6 +130,9 @@ void cm_method_needs(const cm_method *M, const cm_model *m, const cm_face *F, ui
         break;
     case CM_METHOD_NFILL:
         cm_nfill_needs(m, F, need);
+        break;
+    case CM_METHOD_G1FIT:
+        cm_g1fit_needs(m, F, need);
         break;
     default:
         break;

@@ -78,13 +78,17 @@ int cmd_encode(int argc, char **argv)
                 return EXIT_USAGE;
             i++;
         } else if (strcmp(a, "--no-gregory") == 0) {
-            o.gregory = 0;
+            o.gregory = 0; /* planes only (cmz --help): no fitted surface either */
+            o.g1fit = 0;
+            o.nfill = 0;
         } else if (strcmp(a, "--no-gregory-exact") == 0) {
             o.gregory_exact = 0;
         } else if (strcmp(a, "--no-gregory-fit") == 0) {
             o.gregory_fit = 0;
         } else if (strcmp(a, "--no-nfill") == 0) {
             o.nfill = 0;
+        } else if (strcmp(a, "--no-g1fit") == 0) {
+            o.g1fit = 0;
         } else if (strcmp(a, "--strict") == 0) {
             o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {

@@ -68,7 +68,8 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
 
 /* the encoder's half of each method (enc_method.h), found by the decoder table's number */
 static const enc_method *const enc_methods[] = {&enc_method_plane, &enc_method_gregory, &enc_method_gregory_exact,
-                                                &enc_method_gregory_fit, &enc_method_nfill, &enc_method_keep};
+                                                &enc_method_gregory_fit, &enc_method_g1fit, &enc_method_nfill,
+                                                &enc_method_keep};
 
 static const enc_method *enc_method_of(unsigned id)
 {

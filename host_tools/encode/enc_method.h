@@ -25,7 +25,7 @@ typedef struct enc_method {
 } enc_method;
 
 extern const enc_method enc_method_plane, enc_method_gregory, enc_method_gregory_exact, enc_method_gregory_fit,
-    enc_method_nfill, enc_method_keep;
+    enc_method_g1fit, enc_method_nfill, enc_method_keep;
 
 /**
  * Rebuild face f of the decoded model with a trial record (decoder code, no checksum check); fit:

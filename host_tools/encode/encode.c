@@ -21,6 +21,7 @@ void encode_opts_default(encode_opts *o)
     o->gregory = 1;
     o->gregory_exact = 1;
     o->gregory_fit = 1;
+    o->g1fit = 1;
     o->nfill = 1;
     o->strict = 0;
     o->abs_tol = 0;

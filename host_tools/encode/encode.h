@@ -42,6 +42,7 @@ typedef struct encode_opts {
     int gregory;                 /* try GREGORY (spec §6) on non-planar faces (default 1) */
     int gregory_exact;           /* then GREGORY-EXACT (with gregory; default 1) */
     int gregory_fit;             /* then GREGORY-FIT (with gregory_exact; default 1) */
+    int g1fit;                   /* then G1FIT (spec §9 over the face's edges; default 1) */
     int nfill;                   /* then NFILL (spec §8; default 1) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */

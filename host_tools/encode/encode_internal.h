@@ -78,8 +78,9 @@ typedef struct tx {
 } tx;
 
 /*
- * A face's record fields from tx's per-face layout and corner: GREGORY's as they are; NFILL's
- * nu = layout, nv = corner & 0xff, phi = corner >> 8 (one pair of arrays for every method's record).
+ * A face's record fields from tx's per-face layout and corner: GREGORY's as they are; NFILL's and
+ * G1FIT's nu = layout, nv = corner & 0xff, phi or mode = corner >> 8 (one pair of arrays for every
+ * method's record).
  */
 static inline void enc_record_fields(cm_face *F, int method, int layout, int corner)
 {
@@ -87,7 +88,7 @@ static inline void enc_record_fields(cm_face *F, int method, int layout, int cor
     F->layout = (uint8_t)layout;
     F->corner = (uint16_t)corner;
     F->fill_nu = F->fill_nv = F->fill_phi = 0;
-    if (method == CM_METHOD_NFILL) {
+    if (method == CM_METHOD_NFILL || method == CM_METHOD_G1FIT) {
         F->layout = 0;
         F->corner = 0;
         F->fill_nu = (uint8_t)layout;

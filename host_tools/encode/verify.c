@@ -494,6 +494,40 @@ int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm
     return normal_at(lm, f, fs, &w, &sw, P, n);
 }
 
+double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs)
+{
+    double worst = 1.0;
+    const cm_face *F = &m->faces[f];
+    const face_surface *S = &fs[f];
+    for (uint32_t l = 0; l < F->nloops; l++) {
+        const cm_loop *L = &m->loops[F->loop0 + l];
+        for (uint32_t k = 0; k < L->nuse; k++) {
+            uint32_t e = m->uses[L->use0 + k].edge;
+            int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
+            if (!m->edges[e].g1 || a < 0 || b < 0 || a == b)
+                continue;
+            cm_curve c;
+            cm_model_edge_curve(m, e, &c);
+            greg_walk walk = {NULL, S->greg ? 1e-3 * S->bbox : 0, 0, 0, 0, 0};
+            surf_walk swalk;
+            if (S->rebuilt && S->repr == CM_REPR_NURBS && S->nurbs_ctrl)
+                surf_walk_init(&swalk, &S->nurbs, 1e-3 * S->bbox);
+            else
+                memset(&swalk, 0, sizeof swalk);
+            for (int j = 1; j <= 9; j++) {
+                cm_vec3 d3[1], n, ns;
+                if (cm_curve_eval(&c, j / 10.0, 0, d3, NULL) != CM_OK)
+                    return 0.0;
+                if (!normal_at(lm, f, fs, &walk, &swalk, d3[0], &n) || !source_normal_at(lm, f, d3[0], &ns))
+                    continue; /* a pole or collapsed corner: verify_g1_edge decides */
+                double cs = fabs(cm_dot(n, ns));
+                worst = cs < worst ? cs : worst;
+            }
+        }
+    }
+    return worst;
+}
+
 double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, const face_surface *fs, int *worse)
 {
     int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];

@@ -85,6 +85,13 @@ double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int
 int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm_vec3 P, cm_vec3 *n);
 
 /**
+ * The worst |cos| between face f's final surface (fs[f]) and its own source surface, at the points of
+ * verify_g1_edge along each of its G1 edges: a face within half the G1 limit of its source there meets
+ * any neighbour that is too (the angles add).  1 without G1 edges.
+ */
+double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs);
+
+/**
  * Spec §13 for edge e of m: at t = k/10, k = 1..9, the unit normals of the
  * final surfaces of its two faces (rebuilt from `fs`: a NURBS face's is
  * sign * unit(Su x Sv) at the edge point's foot on it; KEEP faces from the

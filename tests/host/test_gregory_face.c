@@ -51,7 +51,8 @@ static void load_split_cylinder(loaded_model *lm)
 }
 
 /* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT, 7 then GREGORY-FIT,
-   15 then NFILL (the default; the tests here are about the Gregory family: NFILL is test_nfill.c's) */
+   15 then NFILL, 31 then G1FIT (the default; the tests here are about the Gregory family: NFILL is
+   test_nfill.c's, G1FIT test_g1fit.c's) */
 static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_result *r)
 {
     encode_opts o;
@@ -62,6 +63,7 @@ static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_re
     o.gregory_exact = (gregory & 2) != 0;
     o.gregory_fit = (gregory & 4) != 0;
     o.nfill = (gregory & 8) != 0;
+    o.g1fit = (gregory & 16) != 0;
     cm_status st;
     cm_status_init(&st);
     memset(r, 0, sizeof *r);

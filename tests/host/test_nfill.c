@@ -52,6 +52,7 @@ static void encode_with(loaded_model *lm, int nfill, double rel_tol, encode_resu
     encode_opts o;
     encode_opts_default(&o);
     o.nfill = nfill;
+    o.g1fit = 0; /* NFILL's faces alone (G1FIT: test_g1fit.c) */
     o.rel_tol = rel_tol;
     o.rel_set = 1;
     cm_status st;

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 2     /* what this writer emits when a face needs it (GREGORY) */
-#define CM_FMT_VERSION_MINOR 2     /* 1: GREGORY-EXACT, 2: GREGORY-FIT */
+#define CM_FMT_VERSION_MINOR 5     /* 1: GREGORY-EXACT, 2: GREGORY-FIT, 3: layout 3, 4: NFILL, 5: G1FIT */
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
@@ -102,7 +102,8 @@ enum cm_fmt_method {
     CM_METHOD_GREGORY_EXACT = 3, /* GREGORY's layouts over the exact edges (format 2.1) */
     CM_METHOD_GREGORY_FIT = 4, /* GREGORY-EXACT's patches plus a sent interior correction (format 2.2) */
     CM_METHOD_NFILL = 5,  /* spec §8: a B-spline fitted to the boundary and its tangent planes (format 2.4) */
-    CM_METHOD_COUNT = 6   /* methods this version knows */
+    CM_METHOD_G1FIT = 6,  /* spec §9 over the face's own edges: their tangent planes kept (format 2.5) */
+    CM_METHOD_COUNT = 7   /* methods this version knows */
 };
 
 enum cm_fmt_edge_kind {
@@ -142,8 +143,8 @@ typedef struct cm_face {
     uint16_t corner;      /* and layout 2's vertex j, or layout 3's corner bits (up to 12 edges) */
     uint8_t fit;          /* GREGORY-FIT: coefficients per direction m (bits 0-2) and patches (bits
                              3-7) of its correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
-    uint8_t fill_nu, fill_nv, fill_phi; /* NFILL record (spec 15.2): control points per direction and
-                             the fairing weight's index (cm_nfill_phi); else 0 */
+    uint8_t fill_nu, fill_nv, fill_phi; /* NFILL, G1FIT record (spec 15.2): control points per direction
+                             and NFILL's fairing weight's index (cm_nfill_phi) or G1FIT's mode; else 0 */
     uint32_t surf;        /* KEEP: index of its kept surface; GREGORY-FIT: index in ctrl[] of its
                              first correction coefficient (patch k's (i,j) at surf + (k m + i) m + j) */
     uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */

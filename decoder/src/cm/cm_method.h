@@ -98,6 +98,6 @@ const cm_method *cm_method_of(unsigned id);
 const char *cm_method_name(unsigned id);
 
 extern const cm_method cm_method_keep, cm_method_plane, cm_method_gregory, cm_method_gregory_exact,
-    cm_method_gregory_fit, cm_method_nfill;
+    cm_method_gregory_fit, cm_method_nfill, cm_method_g1fit;
 
 #endif /* CM_METHOD_H */

@@ -110,6 +110,26 @@ typedef struct cm_nfill_ws {
     cm_vec3 rhs[CM_MAX_LSQ_UNKNOWNS];
 } cm_nfill_ws;
 
+/** The normal equations of a net's free points: those at least `margin` rows from its border (the
+    rest are fixed: ctrl), banded with half bandwidth w; shared by NFILL and G1FIT. */
+typedef struct cm_net_lsq {
+    int nu, nv, margin, w;
+    double *band;
+    cm_vec3 *rhs;
+    const cm_vec3 *ctrl; /* row-major in u: ctrl[i * nv + j] */
+} cm_net_lsq;
+
+/** The unknown number of net point (i, j), -1 when it is fixed. */
+int cm_net_unknown(const cm_net_lsq *L, int i, int j);
+
+/** Add weight * (sum_t c_t P_t - Q)^2 (pts[t] = i * nv + j; Q NULL: 0) to the normal equations; fixed
+    points go to the right-hand side. */
+void cm_net_accumulate(cm_net_lsq *L, const int *pts, const double *c, int np, double weight, const cm_vec3 *Q);
+
+/** lf times the net's thin-plate energy (spec 8.7: every stencil inside the net, row-major, second
+    differences in u, in v, then 2 lf times the twist). */
+void cm_net_fairing(cm_net_lsq *L, double lf);
+
 /**
  * Spec §8 for the outer loop `in` (cm_greg_input_build with exact = 1: edges, rev, basis normals)
  * and the holes (NULL: none).

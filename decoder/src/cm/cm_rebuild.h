@@ -13,6 +13,7 @@
 #include "cm/cm_format.h"
 #include "cm/cm_geom.h"
 #include "cm/cm_gregface.h"
+#include "cm/cm_g1fit.h"
 #include "cm/cm_nfill.h"
 
 typedef struct cm_rebuild_ws {
@@ -22,9 +23,14 @@ typedef struct cm_rebuild_ws {
     union {                 /* a face is rebuilt by one method at a time */
         cm_greg_surface greg; /* GREGORY: the rebuilt patches (cm_rebuilt.greg points here) */
         struct {
-            cm_nfill_surface nfill; /* NFILL: the rebuilt net (cm_rebuilt.surf views it) */
-            cm_nfill_holes nfill_holes;
-            cm_nfill_ws nfill_ws;
+            cm_nfill_surface nfill; /* NFILL, G1FIT: the rebuilt net (cm_rebuilt.surf views it) */
+            union {
+                struct {
+                    cm_nfill_holes nfill_holes;
+                    cm_nfill_ws nfill_ws;
+                };
+                cm_g1fit_ws g1fit_ws;
+            };
         };
     };
 } cm_rebuild_ws;

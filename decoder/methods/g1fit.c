@@ -1,0 +1,124 @@
+/*
+ * g1fit.c - G1FIT (spec §9 as built here, docs/METHODS.md): a bicubic
+ * B-spline whose borders are the face's four edge chains, its second row in
+ * their tangent planes, its interior the Coons net's or faired (kernel:
+ * cm_g1fit.c).  Edges are sampled, so arcs and multi-span edges are fine;
+ * it rebuilds four- to twelve-sided faces whose Gregory patch strays from
+ * the tangent planes along edges that turn.  The record holds what the
+ * compressor searched (nu, nv, mode) and the checksum of the net.
+ * Format 2.5.
+ */
+#include "cm_method_impl.h"
+
+#include "cm/cm_corner.h"
+#include "cm/cm_g1fit.h"
+#include "cm/cm_limits_info.h"
+
+cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why)
+{
+    uint64_t nu = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
+    uint64_t nv = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
+    uint64_t mode = cm_ac_dec_direct(ac, 1);
+    F->checksum = cm_ac_dec_direct(ac, 16);
+    F->checksum |= cm_ac_dec_direct(ac, 16) << 16;
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    F->fill_nu = (uint8_t)nu;
+    F->fill_nv = (uint8_t)nv;
+    F->fill_phi = (uint8_t)mode;
+    return CM_OK;
+}
+
+void cm_g1fit_write_record(cm_ac_enc *ac, const cm_face *F)
+{
+    cm_ac_enc_direct(ac, (uint32_t)(F->fill_nu - CM_NFILL_MIN_CTRL), 5);
+    cm_ac_enc_direct(ac, (uint32_t)(F->fill_nv - CM_NFILL_MIN_CTRL), 5);
+    cm_ac_enc_direct(ac, F->fill_phi & 1u, 1);
+    cm_ac_enc_direct(ac, F->checksum & 0xffffu, 16);
+    cm_ac_enc_direct(ac, F->checksum >> 16, 16);
+}
+
+/* what the face's net and loop ask of a build: control points, the faired interior, loop input */
+static void g1fit_need(const cm_model *m, const cm_face *F, uint32_t need[CM_LIMIT_COUNT])
+{
+    uint32_t n = m->loops[F->loop0].nuse, nu = F->fill_nu, nv = F->fill_nv;
+    need[CM_LIMIT_MAX_FIT_CTRL] = nu > nv ? nu : nv;
+    if (F->fill_phi == 1) {
+        uint32_t K = (nu - 4u) * (nv - 4u), w = 2u * (nv - 4u);
+        need[CM_LIMIT_MAX_LSQ_UNKNOWNS] = K;
+        need[CM_LIMIT_MAX_LSQ_BAND] = K == 0 ? 0 : (w < K - 1u ? w : K - 1u);
+    }
+    /* a build that can join edges (CM_MAX_SIDES >= 5) takes loops of up to 12 (cm_gregface.h) */
+    need[CM_LIMIT_MAX_SIDES] = n > 4u ? 5u : n;
+}
+
+/* an outer loop of 4..12 edges (holes are trimmed away, not built: the error check decides); the
+   net within the build's limits */
+cm_err cm_g1fit_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
+{
+    uint32_t n = m->loops[F->loop0].nuse;
+    why->what = NULL;
+    if (n < CM_G1FIT_MIN_EDGES)
+        why->what = "G1FIT face with fewer than 4 edges";
+    else if (n > CM_GREG_JOINED_MAX_EDGES)
+        why->what = "G1FIT loop of more than 12 edges";
+    if (why->what)
+        return CM_E_FORMAT;
+    uint32_t need[CM_LIMIT_COUNT] = {0};
+    g1fit_need(m, F, need);
+    static const unsigned ids[4] = {CM_LIMIT_MAX_FIT_CTRL, CM_LIMIT_MAX_LSQ_UNKNOWNS, CM_LIMIT_MAX_LSQ_BAND,
+                                    CM_LIMIT_MAX_SIDES};
+    static const uint32_t have[4] = {CM_MAX_FIT_CTRL, CM_MAX_LSQ_UNKNOWNS, CM_MAX_LSQ_BAND, CM_MAX_SIDES};
+    static const char *const what[4] = {"G1FIT control points", "G1FIT unknowns", "G1FIT band", "G1FIT edges"};
+    for (int i = 0; i < 4; i++)
+        if (need[ids[i]] > have[i]) {
+            why->what = what[i];
+            why->limit = ids[i];
+            why->need = need[ids[i]];
+            return CM_E_LIMIT;
+        }
+    return CM_OK;
+}
+
+cm_err cm_g1fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st)
+{
+    const cm_face *F = &m->faces[f];
+    cm_err e = cm_greg_input_build(m, f, 1, &ws->gin, &ws->corner, st);
+    if (e != CM_OK)
+        return e;
+    if ((e = cm_g1fit_build(&ws->gin, F->fill_nu, F->fill_nv, F->fill_phi, &ws->nfill, &ws->g1fit_ws, st)) != CM_OK)
+        return e;
+    out->repr = CM_REPR_NURBS;
+    out->surf = ws->nfill.surf;
+    /* Su x Sv is the loop's turning direction at its corners (side 0 leaves corner 0 along the loop,
+       side 3 leaves it against): the face normal n_F when the loop runs counter-clockwise about it */
+    out->sign = 1.0;
+    out->checksum = cm_nfill_checksum(&ws->nfill);
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+    check = 0; /* as with the CRCs: mutated records must reach the tessellation */
+#endif
+    if (check && out->checksum != F->checksum)
+        return cm_fail(st, CM_E_CHECKSUM, "G1FIT face rebuilt differently from the encoder");
+    return CM_OK;
+}
+
+void cm_g1fit_needs(const cm_model *m, const cm_face *F, uint32_t *need)
+{
+    uint32_t mine[CM_LIMIT_COUNT] = {0};
+    g1fit_need(m, F, mine);
+    for (int i = 0; i < CM_LIMIT_COUNT; i++)
+        if (mine[i] > need[i])
+            need[i] = mine[i];
+}
+
+const cm_method cm_method_g1fit = {
+    .name = "g1fit",
+    .counted = "g1fit",
+    .id = CM_METHOD_G1FIT,
+    .since_major = 2,
+    .since_minor = 5,
+    .has_record = 1,
+    .too_new = "G1FIT face in a file older than format 2.5",
+};
