@@ -191,6 +191,13 @@ static void put_faces(const cm_model *m, cm_ac_enc *e)
             cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
             cm_ac_enc_direct(e, F->checksum >> 16, 16);
         }
+        if (F->method == CM_METHOD_G1FIT) { /* nu - 4, nv - 4 (5 bits each), mode (1 bit), checksum */
+            cm_ac_enc_direct(e, (uint32_t)(F->fill_nu - 4), 5);
+            cm_ac_enc_direct(e, (uint32_t)(F->fill_nv - 4), 5);
+            cm_ac_enc_direct(e, F->fill_phi, 1);
+            cm_ac_enc_direct(e, F->checksum & 0xffffu, 16);
+            cm_ac_enc_direct(e, F->checksum >> 16, 16);
+        }
         if (F->method == CM_METHOD_GREGORY_FIT) {
             cm_ac_enc_uint(e, &c.fit_m, (uint64_t)fit_w.m);
             cm_ac_enc_uint(e, &c.fit_patches, (uint64_t)fit_w.patches);
@@ -753,6 +760,45 @@ static void test_nfill_records(void **state)
     write_minor = 0;
 }
 
+/* G1FIT (format 2.5): nu, nv, mode; an outer loop of 4 to 12 edges (holes trimmed); the net within the
+   build's limits, each refused by name; not in a 2.4 file */
+static void test_g1fit_records(void **state)
+{
+    (void)state;
+    cm_status st;
+    write_minor = 5;
+    polygon_face(6, 0, CM_METHOD_G1FIT, 0, 0);
+    nfill_record(8, 6, 1);
+    assert_decodes(2);
+    assert_int_equal(dec->model.faces[0].method, CM_METHOD_G1FIT);
+    assert_int_equal(dec->model.faces[0].fill_nu, 8);
+    assert_int_equal(dec->model.faces[0].fill_nv, 6);
+    assert_int_equal(dec->model.faces[0].fill_phi, 1);
+    polygon_face(4, 1, CM_METHOD_G1FIT, 0, 0); /* holes are fine */
+    nfill_record(8, 6, 0);
+    assert_decodes(2);
+    polygon_face(3, 0, CM_METHOD_G1FIT, 0, 0);
+    nfill_record(8, 6, 0);
+    assert_face_refused(2, CM_E_FORMAT, "G1FIT face with fewer than 4 edges", &st);
+    polygon_face(13, 0, CM_METHOD_G1FIT, 0, 0);
+    nfill_record(8, 6, 0);
+    assert_face_refused(2, CM_E_FORMAT, "G1FIT loop of more than 12 edges", &st);
+    polygon_face(12, 0, CM_METHOD_G1FIT, 0, 0);
+    nfill_record(CM_MAX_FIT_CTRL, CM_MAX_FIT_CTRL, 1);
+    assert_decodes(2);
+#if CM_MAX_FIT_CTRL < CM_NFILL_MAX_CTRL_FIELD
+    nfill_record(4, CM_MAX_FIT_CTRL + 1, 0);
+    assert_face_refused(2, CM_E_LIMIT, "G1FIT control points", &st);
+    assert_int_equal(st.limit, CM_LIMIT_MAX_FIT_CTRL);
+    assert_int_equal(st.need, CM_MAX_FIT_CTRL + 1);
+#endif
+    /* the same valid face in a file that says 2.4 */
+    nfill_record(8, 6, 1);
+    write_minor = 4;
+    assert_face_refused(2, CM_E_UNSUPPORTED, "G1FIT face in a file older than format 2.5", &st);
+    write_minor = 0;
+}
+
 /* a checksum changed in the file (CRCs valid): the file loads, the face's rebuild refuses it */
 static void test_gregory_checksum_in_file(void **state)
 {
@@ -800,6 +846,7 @@ int main(void)
         cmocka_unit_test(test_gregory_exact_records),
         cmocka_unit_test(test_gregory_fit_records),
         cmocka_unit_test(test_nfill_records),
+        cmocka_unit_test(test_g1fit_records),
     };
     return cmocka_run_group_tests_name("gregory_errors", tests, alloc_decoders, free_decoders);
 }
