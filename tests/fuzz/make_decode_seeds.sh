@@ -17,7 +17,12 @@ for f in "$here"/corpus_iges/box_hole_144.igs "$here"/corpus_iges/box_hole_186.i
          "$here"/../data/as1_pe_203.igs "$here"/../data/geo_example.igs; do
     b=$(basename "$f" .igs)
     "$cmz" encode -q "$f" -o "$tmp/$b.cmz"
-    for sel in 0 200; do
-        { printf "\\x$(printf %02x $sel)"; cat "$tmp/$b.cmz"; } > "$out/${b}_chunk$sel.cmzf"
+    # the two sampled methods: these faces are G1FIT by default, NFILL without it
+    case $b in l_shape_144|dome_square_hole_144) "$cmz" encode -q --no-g1fit "$f" -o "$tmp/${b}_nfill.cmz" ;; esac
+    for c in "$tmp/$b.cmz" "$tmp/${b}_nfill.cmz"; do
+        [ -f "$c" ] || continue
+        for sel in 0 200; do
+            { printf "\\x$(printf %02x $sel)"; cat "$c"; } > "$out/$(basename "$c" .cmz)_chunk$sel.cmzf"
+        done
     done
 done
