@@ -2,7 +2,7 @@
 # bench.sh CMZ CMZ_DECODE OUTDIR MODEL... - size, speed and memory of the whole job per model.
 #
 # For every model: the IGES size, what gzip -9 and xz -9 make of it, the .cmz size and the
-# ratios; faces by method (plane / gregory / gregory-exact / gregory-fit / nfill / kept) and the share whose surface was deleted; the
+# ratios; faces by method (plane / gregory / gregory-exact / gregory-fit / g1fit / nfill / kept) and the share whose surface was deleted; the
 # largest §12 error ratio over rebuilt faces and the worst G1 angle on their tangent edges (from
 # the encoder's --report, which measures with the decoder's code); encode time (workstation, host profile); decode time of the
 # terminal's decoder (terminal profile, to .glb; best of 3 runs); its peak resident memory;
@@ -14,7 +14,7 @@ cmz=$1 dec=$2 out=$3
 shift 3
 mkdir -p "$out"
 tsv=$out/bench.tsv
-printf 'model\tiges_bytes\tgzip9\txz9\tcmz_bytes\tx_iges\tx_gzip\tx_xz\tfaces\tplane\tkeep\tenc_s\tdec_s\tdec_rss_kib\ttriangles\tdec_instr\tterminal\tgregory\tdeleted_pct\tmax_ratio_pct\tg1_worst_deg\tgregory_exact\tgregory_fit\tnfill\n' > "$tsv"
+printf 'model\tiges_bytes\tgzip9\txz9\tcmz_bytes\tx_iges\tx_gzip\tx_xz\tfaces\tplane\tkeep\tenc_s\tdec_s\tdec_rss_kib\ttriangles\tdec_instr\tterminal\tgregory\tdeleted_pct\tmax_ratio_pct\tg1_worst_deg\tgregory_exact\tgregory_fit\tnfill\tg1fit\n' > "$tsv"
 now() { date +%s.%N; }
 for m in "$@"; do
     name=$(basename "${m%.*}")
@@ -58,29 +58,29 @@ for m in "$@"; do
         [ -n "$instr" ] || instr=-
     fi
     igs=$(stat -c %s "$m") gz=$(gzip -9 -c "$m" | wc -c) xz=$(xz -9 -c "$m" | wc -c) cz=$(stat -c %s "$c")
-    faces=$(sed -n 's/.*: \([0-9]*\) faces (\([0-9]*\) plane, \([0-9]*\) gregory, \([0-9]*\) gregory-exact, \([0-9]*\) gregory-fit, \([0-9]*\) nfill, \([0-9]*\) kept.*/\1 \2 \7 \3 \4 \5 \6/p' <<<"$enc")
+    faces=$(sed -n 's/.*: \([0-9]*\) faces (\([0-9]*\) plane, \([0-9]*\) gregory, \([0-9]*\) gregory-exact, \([0-9]*\) gregory-fit, \([0-9]*\) g1fit, \([0-9]*\) nfill, \([0-9]*\) kept.*/\1 \2 \8 \3 \4 \5 \7 \6/p' <<<"$enc")
     # over the rebuilt faces: the largest ratio (column 9) and the worst G1 angle (column 13)
     read -r mr g1 < <(awk -F'\t' 'NR > 1 && $5 != "keep" { if ($9 > r) r = $9; if ($13 > g) g = $13 }
                                   END { printf "%.4g %.3g\n", 100 * r, g }' "$out/$name.faces.tsv")
     tris=$(sed -n 's/.*faces\( ([^)]*)\)\{0,1\}, \([0-9]*\) triangles.*/\2/p' <<<"$decout")
-    read -r nf np nk ng ne nfit nfill <<<"$faces"
+    read -r nf np nk ng ne nfit nfill ng1 <<<"$faces"
     [ -n "$nf" ] || { echo "bench: cannot read the summary of $name: $enc" >&2; exit 1; }
-    awk -v n="$name" -v i="$igs" -v g="$gz" -v x="$xz" -v c="$cz" -v nf="$nf" -v np="$np" -v nk="$nk" -v ng="$ng" -v ne="$ne" -v nfit="$nfit" -v nfill="$nfill" \
+    awk -v n="$name" -v i="$igs" -v g="$gz" -v x="$xz" -v c="$cz" -v nf="$nf" -v np="$np" -v nk="$nk" -v ng="$ng" -v ne="$ne" -v nfit="$nfit" -v nfill="$nfill" -v ng1="$ng1" \
         -v mr="$mr" -v g1="$g1" \
         -v te="$(echo "$t1 - $t0" | bc)" -v td="$best" -v rss="$rss" -v tr="$tris" -v ins="$instr" -v term="$term" 'BEGIN {
-        printf "%s\t%d\t%d\t%d\t%d\t%.1f\t%.1f\t%.1f\t%d\t%d\t%d\t%.3f\t%.3f\t%s\t%d\t%s\t%s\t%d\t%.1f\t%s\t%s\t%d\t%d\t%d\n",
+        printf "%s\t%d\t%d\t%d\t%d\t%.1f\t%.1f\t%.1f\t%d\t%d\t%d\t%.3f\t%.3f\t%s\t%d\t%s\t%s\t%d\t%.1f\t%s\t%s\t%d\t%d\t%d\t%d\n",
                n, i, g, x, c, i / c, g / c, x / c, nf, np, nk, te, td, rss, tr, ins, term, ng,
-               (nf > 0 ? 100 * (nf - nk) / nf : 0), mr, g1, ne, nfit, nfill }' >> "$tsv"
+               (nf > 0 ? 100 * (nf - nk) / nf : 0), mr, g1, ne, nfit, nfill, ng1 }' >> "$tsv"
 done
 # the Markdown table
 awk -F'\t' 'NR == 1 {
-        print "| model | IGES | gzip -9 | xz -9 | .cmz | ×IGES | ×gzip | ×xz | faces (plane/gregory/exact/fit/nfill/kept) | deleted | max ratio | worst G1 | encode s | decode s | decode RSS MiB | triangles | terminal profile |" (ENVIRON["BENCH_CALLGRIND"] == 1 ? " decode Minstr |" : "")
+        print "| model | IGES | gzip -9 | xz -9 | .cmz | ×IGES | ×gzip | ×xz | faces (plane/gregory/exact/fit/g1fit/nfill/kept) | deleted | max ratio | worst G1 | encode s | decode s | decode RSS MiB | triangles | terminal profile |" (ENVIRON["BENCH_CALLGRIND"] == 1 ? " decode Minstr |" : "")
         print "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|" (ENVIRON["BENCH_CALLGRIND"] == 1 ? "---:|" : "")
         next }
     { rss = $14 == "-" ? "-" : sprintf("%.1f", $14 / 1024)
       ins = $16 == "-" ? "" : sprintf(" %.1f |", $16 / 1e6)
-      printf "| %s | %d | %d | %d | %d | %.1f | %.1f | %.1f | %d (%d/%d/%d/%d/%d/%d) | %.0f %% | %s %% | %s° | %.2f | %.3f | %s | %d | %s |%s\n",
-             $1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $18, $22, $23, $24, $11, $19, $20, $21, $12, $13, rss, $15, ($17 == "ok" ? "loads" : "refused: " $17 " (host decoder timed)"), ins
+      printf "| %s | %d | %d | %d | %d | %.1f | %.1f | %.1f | %d (%d/%d/%d/%d/%d/%d/%d) | %.0f %% | %s %% | %s° | %.2f | %.3f | %s | %d | %s |%s\n",
+             $1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $18, $22, $23, $25, $24, $11, $19, $20, $21, $12, $13, rss, $15, ($17 == "ok" ? "loads" : "refused: " $17 " (host decoder timed)"), ins
       si += $2; sg += $3; sx += $4; sc += $5; d[++n] = $19 }
     END { for (a = 2; a <= n; a++) for (b = a; b > 1 && d[b] < d[b - 1]; b--) { t = d[b]; d[b] = d[b - 1]; d[b - 1] = t }
           med = n % 2 ? d[(n + 1) / 2] : (d[n / 2] + d[n / 2 + 1]) / 2
