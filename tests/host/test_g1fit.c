@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "cm/cm_const.h"
 #include "cm/cm_corner.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_g1fit.h"
@@ -215,12 +216,45 @@ static void test_half_cylinder_end_to_end(void **state)
     model_free(&lm);
 }
 
+/*
+ * Spec T5's split half cylinder (two quarters sharing a tangent line): both quarters G1FIT, within
+ * the tolerance, and the shared edge G1 on the final surfaces (spec §13, as the encoder's fix-point
+ * measures it), the file decoding with both checksums.
+ */
+static void test_split_cylinder_g1(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_split_half_cylinder_144(&w, R, H);
+    cm_status st;
+    assert_ok(igw_load(&w, "split_cylinder", &lm, &st));
+    assert_int_equal(lm.mesh.nfaces, 2);
+    encode_g1fit_only(&lm, 1, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_G1FIT], 2);
+    for (int f = 0; f < 2; f++) {
+        assert_true(r.faces[f].ratio < 0.01);
+        if (!(r.faces[f].g1_cos >= CM_COS_G1))
+            fail_msg("face %d: %.3f deg across its tangent edge", f, acos(r.faces[f].g1_cos) * 180 / M_PI);
+    }
+    assert_true(r.faces[0].g1_cos < 1.0); /* the tangent edge was measured */
+    decode(&r);
+    cm_rebuilt rb;
+    for (uint32_t f = 0; f < 2; f++)
+        assert_ok(cm_rebuild_face(&dec.model, f, &rb, &rbws, &st));
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_edge_normals_half_circle),
         cmocka_unit_test(test_kernel_half_cylinder),
         cmocka_unit_test(test_half_cylinder_end_to_end),
+        cmocka_unit_test(test_split_cylinder_g1),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
