@@ -58,7 +58,10 @@ for m in "$@"; do
         [ -n "$instr" ] || instr=-
     fi
     igs=$(stat -c %s "$m") gz=$(gzip -9 -c "$m" | wc -c) xz=$(xz -9 -c "$m" | wc -c) cz=$(stat -c %s "$c")
-    faces=$(sed -n 's/.*: \([0-9]*\) faces (\([0-9]*\) plane, \([0-9]*\) gregory, \([0-9]*\) gregory-exact, \([0-9]*\) gregory-fit, \([0-9]*\) g1fit, \([0-9]*\) nfill, \([0-9]*\) kept.*/\1 \2 \8 \3 \4 \5 \7 \6/p' <<<"$enc")
+    # the summary line counts faces by method in the table's order: read each by its name
+    count() { sed -n "s/.*[(,] *\([0-9]*\) $1[,)].*/\1/p" <<<"$enc"; }
+    faces=$(sed -n 's/.*: \([0-9]*\) faces (.*/\1/p' <<<"$enc")
+    [ -z "$faces" ] || faces="$faces $(count plane) $(count kept) $(count gregory) $(count gregory-exact) $(count gregory-fit) $(count nfill) $(count g1fit)"
     # over the rebuilt faces: the largest ratio (column 9) and the worst G1 angle (column 13)
     read -r mr g1 < <(awk -F'\t' 'NR > 1 && $5 != "keep" { if ($9 > r) r = $9; if ($13 > g) g = $13 }
                                   END { printf "%.4g %.3g\n", 100 * r, g }' "$out/$name.faces.tsv")
