@@ -287,12 +287,6 @@ cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, cm_nfil
     for (int i = 0; i < nu * nv; i++)
         if (!cm_finite3(out->ctrl[i]))
             return cm_fail(st, CM_E_NONFINITE, "g1fit: control point");
-    out->surf.p = out->surf.q = 3;
-    out->surf.nu = nu;
-    out->surf.nv = nv;
-    out->surf.U = out->U;
-    out->surf.V = out->V;
-    out->surf.ctrl = out->ctrl;
-    out->surf.w = NULL;
+    cm_nfill_surface_view(out);
     return CM_OK;
 }

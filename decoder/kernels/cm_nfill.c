@@ -400,14 +400,19 @@ cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int 
             return cm_fail(st, CM_E_NONFINITE, "nfill: control point");
         out->ctrl[i] = cm_frame_world(frame, out->ctrl[i]);
     }
-    out->surf.p = out->surf.q = 3;
-    out->surf.nu = nu;
-    out->surf.nv = nv;
-    out->surf.U = out->U;
-    out->surf.V = out->V;
-    out->surf.ctrl = out->ctrl;
-    out->surf.w = NULL;
+    cm_nfill_surface_view(out);
     return CM_OK;
+}
+
+void cm_nfill_surface_view(cm_nfill_surface *s)
+{
+    s->surf.p = s->surf.q = 3;
+    s->surf.nu = s->nu;
+    s->surf.nv = s->nv;
+    s->surf.U = s->U;
+    s->surf.V = s->V;
+    s->surf.ctrl = s->ctrl;
+    s->surf.w = NULL;
 }
 
 static uint32_t fnv_double(uint32_t h, double x)

@@ -5,6 +5,7 @@
 #ifndef CM_METHOD_IMPL_H
 #define CM_METHOD_IMPL_H
 
+#include "cm/cm_limits_info.h"
 #include "cm/cm_method.h"
 
 /* KEEP (keep.c) */
@@ -49,6 +50,15 @@ cm_err cm_nfill_check_loops(const cm_model *m, const cm_face *F, cm_method_fault
 cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
                         cm_rebuild_ws *ws, cm_status *st);
 void cm_nfill_needs(const cm_model *m, const cm_face *F, uint32_t *need);
+
+/* the fitted nets' shared parts (nfill.c): the four limits a net asks of a build (need[] by limit id,
+   what[] names them in the order MAX_FIT_CTRL, MAX_LSQ_UNKNOWNS, MAX_LSQ_BAND, MAX_SIDES); the
+   rebuilt net as the face's surface, its checksum compared with the record's (`mismatch` names it);
+   a method's needs folded into the model's */
+cm_err cm_fit_net_check_needs(const uint32_t need[CM_LIMIT_COUNT], const char *const what[4], cm_method_fault *why);
+cm_err cm_fit_net_result(const cm_nfill_surface *net, const cm_face *F, int check, cm_rebuilt *out,
+                         const char *mismatch, cm_status *st);
+void cm_needs_merge(const uint32_t mine[CM_LIMIT_COUNT], uint32_t *need);
 
 /* G1FIT (g1fit.c): nu, nv, mode and a checksum; a B-spline over the face's four edge chains (cm_g1fit.h) */
 cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why);

@@ -68,18 +68,8 @@ cm_err cm_g1fit_check_loops(const cm_model *m, const cm_face *F, cm_method_fault
         return CM_E_FORMAT;
     uint32_t need[CM_LIMIT_COUNT] = {0};
     g1fit_need(m, F, need);
-    static const unsigned ids[4] = {CM_LIMIT_MAX_FIT_CTRL, CM_LIMIT_MAX_LSQ_UNKNOWNS, CM_LIMIT_MAX_LSQ_BAND,
-                                    CM_LIMIT_MAX_SIDES};
-    static const uint32_t have[4] = {CM_MAX_FIT_CTRL, CM_MAX_LSQ_UNKNOWNS, CM_MAX_LSQ_BAND, CM_MAX_SIDES};
     static const char *const what[4] = {"G1FIT control points", "G1FIT unknowns", "G1FIT band", "G1FIT edges"};
-    for (int i = 0; i < 4; i++)
-        if (need[ids[i]] > have[i]) {
-            why->what = what[i];
-            why->limit = ids[i];
-            why->need = need[ids[i]];
-            return CM_E_LIMIT;
-        }
-    return CM_OK;
+    return cm_fit_net_check_needs(need, what, why);
 }
 
 cm_err cm_g1fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *out, cm_rebuild_ws *ws, cm_status *st)
@@ -90,27 +80,16 @@ cm_err cm_g1fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *ou
         return e;
     if ((e = cm_g1fit_build(&ws->gin, F->fill_nu, F->fill_nv, F->fill_phi, &ws->nfill, &ws->g1fit_ws, st)) != CM_OK)
         return e;
-    out->repr = CM_REPR_NURBS;
-    out->surf = ws->nfill.surf;
     /* Su x Sv is the loop's turning direction at its corners (side 0 leaves corner 0 along the loop,
        side 3 leaves it against): the face normal n_F when the loop runs counter-clockwise about it */
-    out->sign = 1.0;
-    out->checksum = cm_nfill_checksum(&ws->nfill);
-#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
-    check = 0; /* as with the CRCs: mutated records must reach the tessellation */
-#endif
-    if (check && out->checksum != F->checksum)
-        return cm_fail(st, CM_E_CHECKSUM, "G1FIT face rebuilt differently from the encoder");
-    return CM_OK;
+    return cm_fit_net_result(&ws->nfill, F, check, out, "G1FIT face rebuilt differently from the encoder", st);
 }
 
 void cm_g1fit_needs(const cm_model *m, const cm_face *F, uint32_t *need)
 {
     uint32_t mine[CM_LIMIT_COUNT] = {0};
     g1fit_need(m, F, mine);
-    for (int i = 0; i < CM_LIMIT_COUNT; i++)
-        if (mine[i] > need[i])
-            need[i] = mine[i];
+    cm_needs_merge(mine, need);
 }
 
 const cm_method cm_method_g1fit = {

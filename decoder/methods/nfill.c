@@ -73,10 +73,15 @@ cm_err cm_nfill_check_loops(const cm_model *m, const cm_face *F, cm_method_fault
         return CM_E_FORMAT;
     uint32_t need[CM_LIMIT_COUNT] = {0};
     nfill_need(m, F, need);
+    static const char *const what[4] = {"NFILL control points", "NFILL unknowns", "NFILL band", "NFILL edges"};
+    return cm_fit_net_check_needs(need, what, why);
+}
+
+cm_err cm_fit_net_check_needs(const uint32_t need[CM_LIMIT_COUNT], const char *const what[4], cm_method_fault *why)
+{
     static const unsigned ids[4] = {CM_LIMIT_MAX_FIT_CTRL, CM_LIMIT_MAX_LSQ_UNKNOWNS, CM_LIMIT_MAX_LSQ_BAND,
                                     CM_LIMIT_MAX_SIDES};
     static const uint32_t have[4] = {CM_MAX_FIT_CTRL, CM_MAX_LSQ_UNKNOWNS, CM_MAX_LSQ_BAND, CM_MAX_SIDES};
-    static const char *const what[4] = {"NFILL control points", "NFILL unknowns", "NFILL band", "NFILL edges"};
     for (int i = 0; i < 4; i++)
         if (need[ids[i]] > have[i]) {
             why->what = what[i];
@@ -108,15 +113,22 @@ cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_o
     if ((e = cm_nfill_build(&ws->gin, H, F->fill_nu, F->fill_nv, F->fill_phi, &out->frame, &ws->nfill,
                             &ws->nfill_ws, st)) != CM_OK)
         return e;
+    /* u along the frame's x, v along its y: Su x Sv along ez, the face normal */
+    return cm_fit_net_result(&ws->nfill, F, check, out, "NFILL face rebuilt differently from the encoder", st);
+}
+
+cm_err cm_fit_net_result(const cm_nfill_surface *net, const cm_face *F, int check, cm_rebuilt *out,
+                         const char *mismatch, cm_status *st)
+{
     out->repr = CM_REPR_NURBS;
-    out->surf = ws->nfill.surf;
-    out->sign = 1.0; /* u along the frame's x, v along its y: Su x Sv along ez, the face normal */
-    out->checksum = cm_nfill_checksum(&ws->nfill);
+    out->surf = net->surf;
+    out->sign = 1.0;
+    out->checksum = cm_nfill_checksum(net);
 #ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
     check = 0; /* as with the CRCs: mutated records must reach the tessellation */
 #endif
     if (check && out->checksum != F->checksum)
-        return cm_fail(st, CM_E_CHECKSUM, "NFILL face rebuilt differently from the encoder");
+        return cm_fail(st, CM_E_CHECKSUM, mismatch);
     return CM_OK;
 }
 
@@ -124,6 +136,11 @@ void cm_nfill_needs(const cm_model *m, const cm_face *F, uint32_t *need)
 {
     uint32_t mine[CM_LIMIT_COUNT] = {0};
     nfill_need(m, F, mine);
+    cm_needs_merge(mine, need);
+}
+
+void cm_needs_merge(const uint32_t mine[CM_LIMIT_COUNT], uint32_t *need)
+{
     for (int i = 0; i < CM_LIMIT_COUNT; i++)
         if (mine[i] > need[i])
             need[i] = mine[i];

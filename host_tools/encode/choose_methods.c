@@ -66,6 +66,20 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
     return e;
 }
 
+void enc_fit_accept(tx *t, int f, int layout, int corner, int shown, const cm_rebuilt *rb, const face_error *fe,
+                    face_report *rep)
+{
+    t->layout[f] = layout;
+    t->corner[f] = corner;
+    t->checksum[f] = rb->checksum;
+    rep->layout = layout;
+    rep->corner = shown;
+    rep->rebuild_max = fe->max;
+    rep->rebuild_avg = fe->avg;
+    rep->ratio = fe->ratio;
+    rep->why = NULL;
+}
+
 /* the encoder's half of each method (enc_method.h), found by the decoder table's number */
 static const enc_method *const enc_methods[] = {&enc_method_plane, &enc_method_gregory, &enc_method_gregory_exact,
                                                 &enc_method_gregory_fit, &enc_method_g1fit, &enc_method_nfill,

@@ -58,15 +58,7 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
                 why = "G1FIT off its neighbours' tangent planes at every net";
                 continue;
             }
-            t->layout[f] = c;
-            t->corner[f] = corner;
-            t->checksum[f] = rb.checksum;
-            rep->layout = c;
-            rep->corner = mode;
-            rep->rebuild_max = fe.max;
-            rep->rebuild_avg = fe.avg;
-            rep->ratio = fe.ratio;
-            rep->why = NULL;
+            enc_fit_accept(t, f, c, corner, mode, &rb, &fe, rep);
             return 1;
         }
     }

@@ -49,15 +49,7 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
                 return 0;
             if (!(fe.max < tol))
                 continue;
-            t->layout[f] = c;
-            t->corner[f] = corner;
-            t->checksum[f] = rb.checksum;
-            rep->layout = c;
-            rep->corner = phi;
-            rep->rebuild_max = fe.max;
-            rep->rebuild_avg = fe.avg;
-            rep->ratio = fe.ratio;
-            rep->why = NULL;
+            enc_fit_accept(t, f, c, corner, phi, &rb, &fe, rep);
             return face_surface_set(&fs[f], &rb);
         }
     }

@@ -142,6 +142,9 @@ void cm_net_fairing(cm_net_lsq *L, double lf);
 CM_NODISCARD cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int nu, int nv, int phi,
                                    cm_frame *frame, cm_nfill_surface *out, cm_nfill_ws *ws, cm_status *st);
 
+/** s->surf made the view of s's net (bicubic, non-rational). */
+void cm_nfill_surface_view(cm_nfill_surface *s);
+
 /** FNV-1a 32 over the net's doubles x, y, z in row-major order, each as its IEEE-754 bytes, least
     significant first (spec §2 rule 6). */
 uint32_t cm_nfill_checksum(const cm_nfill_surface *s);
