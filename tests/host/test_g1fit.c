@@ -248,6 +248,46 @@ static void test_split_cylinder_g1(void **state)
     model_free(&lm);
 }
 
+/*
+ * A periodic face - the hole's full cylinder in a box, its loop a circle, the seam, the other circle
+ * and the seam again - has sides that close on themselves: G1FIT refuses it (its tube's trimming
+ * refined without end: occt__OCC8842_cylinder_Ideas 288 -> 4612 triangles), and the encoder sends
+ * it by another method.
+ */
+static void test_periodic_face_refused(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_box_with_hole_144(&w, 40, 30, 20, 5);
+    cm_status st;
+    assert_ok(igw_load(&w, "box_hole", &lm, &st));
+    encode_g1fit_only(&lm, 1, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_G1FIT], 0);
+    decode(&r);
+    static cm_greg_input in;
+    static cm_corner_ws cws;
+    static cm_nfill_surface s;
+    static cm_g1fit_ws ws;
+    int tried = 0;
+    for (uint32_t f = 0; f < dec.model.nfaces; f++) {
+        if (dec.model.faces[f].method != CM_METHOD_KEEP)
+            continue;
+        cm_status_init(&st);
+        assert_ok(cm_greg_input_build(&dec.model, f, 1, &in, &cws, &st));
+        if (in.n != 4)
+            continue;
+        assert_int_equal(cm_g1fit_build(&in, 8, 8, 0, &s, &ws, &st), CM_E_DEGENERATE);
+        assert_non_null(strstr(st.where, "closes on itself"));
+        tried++;
+    }
+    assert_int_equal(tried, 1);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -255,6 +295,7 @@ int main(void)
         cmocka_unit_test(test_kernel_half_cylinder),
         cmocka_unit_test(test_half_cylinder_end_to_end),
         cmocka_unit_test(test_split_cylinder_g1),
+        cmocka_unit_test(test_periodic_face_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
