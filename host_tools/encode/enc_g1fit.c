@@ -25,7 +25,12 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     const cm_model *m = &w->dec.model;
     const cm_face *F = &m->faces[f];
     uint32_t n = m->loops[F->loop0].nuse;
-    if (!o->g1fit || n < CM_G1FIT_MIN_EDGES || n > CM_GREG_JOINED_MAX_EDGES)
+    /* four edges only, though the format takes 4..12: on faces of more edges the net passed §12
+       folded over their extra corners, and the terminal's trimmed mesh strayed 2.5 to 3.7 % of the
+       face's size off the model (asitus___C1G0B0O's ten-sided faces of revolution, ovt__asmo's
+       twelve-sided one, whose joints are all within 20 degrees of flat: the Open CASCADE round trip
+       of make check); the encoder's §12 does not see a trimmed mesh */
+    if (!o->g1fit || n != 4)
         return 0;
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
     /* half the G1 limit: cos(acos(CM_COS_G1) / 2) */

@@ -302,6 +302,32 @@ void verify_nearest_boundary(const face_domain *fd, cm_vec3 p, double *best2, cm
  * nearest source point seen (grid or boundary).  A patch that bulges or folds where no source point
  * is near it passes §12 and shows wrongly; it fails here.  Returns the largest distance.
  */
+/* the distance of S from the source surface, the foot started from the nearest grid or boundary
+   point (HUGE_VAL where it cannot be had) */
+static double point_to_source(const face_domain *fd, const grid_pts *g, cm_vec3 S, double again)
+{
+    double best = HUGE_VAL, u = 0, v = 0, d;
+    for (int q = 0; q < g->n; q++) {
+        double dq = cm_norm2(cm_sub(g->xyz[q], S));
+        if (dq < best) {
+            best = dq;
+            u = g->uv[q].x;
+            v = g->uv[q].y;
+        }
+    }
+    cm_vec2 uv = cm_v2(u, v);
+    verify_nearest_boundary(fd, S, &best, &uv);
+    u = uv.x;
+    v = uv.y;
+    if (!(best < HUGE_VAL) || cm_psurf_project_from(&fd->ps, S, &u, &v, &d, NULL) != CM_OK)
+        return HUGE_VAL;
+    double dg, ug, vg;
+    /* a foot stuck in a local minimum only overstates the distance: search again */
+    if (!(d < again) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)
+        d = dg;
+    return d;
+}
+
 static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs, const grid_pts *g, double again)
 {
     double worst = 0;
@@ -311,27 +337,25 @@ static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs
                 cm_vec3 S;
                 if (cm_greg_surface_eval(gs, k, i / 6.0, j / 6.0, &S, NULL, NULL) != CM_OK)
                     return HUGE_VAL;
-                double best = HUGE_VAL, u = 0, v = 0, d;
-                for (int q = 0; q < g->n; q++) {
-                    double dq = cm_norm2(cm_sub(g->xyz[q], S));
-                    if (dq < best) {
-                        best = dq;
-                        u = g->uv[q].x;
-                        v = g->uv[q].y;
-                    }
-                }
-                cm_vec2 uv = cm_v2(u, v);
-                verify_nearest_boundary(fd, S, &best, &uv);
-                u = uv.x;
-                v = uv.y;
-                if (!(best < HUGE_VAL) || cm_psurf_project_from(&fd->ps, S, &u, &v, &d, NULL) != CM_OK)
-                    return HUGE_VAL;
-                double dg, ug, vg;
-                /* a foot stuck in a local minimum only overstates the distance: search again */
-                if (!(d < again) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)
-                    d = dg;
+                double d = point_to_source(fd, g, S, again);
                 worst = d > worst ? d : worst;
             }
+    return worst;
+}
+
+/* a G1FIT net against the source surface: the whole net is the face (its loop is the border), so
+   every point of it must lie near the source (the grid of step 2 only measures the other way) */
+static double net_to_source(const face_domain *fd, const cm_surf *s, const grid_pts *g, double again)
+{
+    double worst = 0;
+    for (int i = 0; i <= 10; i++)
+        for (int j = 0; j <= 10; j++) {
+            cm_vec3 D[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+            if (cm_surf_eval(s, i / 10.0, j / 10.0, 0, D, NULL) != CM_OK)
+                return HUGE_VAL;
+            double d = point_to_source(fd, g, D[0][0], again);
+            worst = d > worst ? d : worst;
+        }
     return worst;
 }
 
@@ -411,6 +435,10 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
        trimmed region would mean anything, and telling those apart needs the loops projected on it */
     if (rb->repr == CM_REPR_PATCHES) {
         double back = patches_to_source(fd, rb->greg, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
+        out->back = back;
+        worst = back > worst ? back : worst;
+    } else if (rb->method == CM_METHOD_G1FIT) {
+        double back = net_to_source(fd, &rb->surf, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
         out->back = back;
         worst = back > worst ? back : worst;
     }
