@@ -6,6 +6,9 @@
 #include "cm/cm_limits_info.h"
 #include "cm/cm_lm.h"
 
+/* turns of a loop round a closed direction beyond which it is no loop of a face (a real one makes 0 or 1) */
+#define CM_PARAM_MAX_WINDING 1e6
+
 #define CM_PARAM_MAX_TIES 16   /* chords over a pole considered per loop */
 #define CM_PARAM_POLE_PROBES 8 /* evaluations round a side to tell a pole */
 
@@ -382,8 +385,14 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
         }
     }
     *nout = k;
-    *wind_u = ps->closed_u ? (int)floor((uv[n].x - uv[0].x) / pu + 0.5) : 0;
-    *wind_v = ps->closed_v ? (int)floor((uv[n].y - uv[0].y) / pv + 0.5) : 0;
+    /* the turns round each closed direction, as an int only when it is one: a hostile surface's
+       projection can run off by 7e10 periods (fuzz-decode-crc, a float-to-int overflow under UBSan) */
+    double wu = ps->closed_u ? floor((uv[n].x - uv[0].x) / pu + 0.5) : 0.0;
+    double wv = ps->closed_v ? floor((uv[n].y - uv[0].y) / pv + 0.5) : 0.0;
+    if (!(fabs(wu) <= CM_PARAM_MAX_WINDING) || !(fabs(wv) <= CM_PARAM_MAX_WINDING))
+        return cm_fail(st, CM_E_RANGE, "a loop that winds round a closed surface beyond any count");
+    *wind_u = (int)wu;
+    *wind_v = (int)wv;
     return CM_OK;
 }
 
