@@ -163,21 +163,6 @@ static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corn
     return ok;
 }
 
-/* candidate (layout, corner) passed: its record in t, its numbers in rep */
-static void take_candidate(tx *t, int f, int layout, int corner, const cm_rebuilt *rb, const face_error *fe,
-                           face_report *rep)
-{
-    t->layout[f] = layout;
-    t->corner[f] = corner;
-    t->checksum[f] = rb->checksum;
-    rep->layout = layout;
-    rep->corner = corner;
-    rep->rebuild_max = fe->max;
-    rep->rebuild_avg = fe->avg;
-    rep->ratio = fe->ratio;
-    rep->why = NULL;
-}
-
 /* spec §14 candidate list of the GREGORY family (method: GREGORY, GREGORY-EXACT or GREGORY-FIT); the
    first that passes §12 wins */
 static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
@@ -275,7 +260,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         }
         free(t->fit[f]);
         t->fit[f] = fr;
-        take_candidate(t, f, cand_layout[c], cand_j[c], &rb, &fe, rep);
+        enc_fit_accept(t, f, cand_layout[c], cand_j[c], cand_j[c], &rb, &fe, rep);
         rep->fit_m = fr->m;
         return 1;
     }
@@ -300,7 +285,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         }
         if (!face_surface_set(&fs[f], &rb))
             return 0;
-        take_candidate(t, f, cand_layout[c], cand_j[c], &rb, &fe, rep);
+        enc_fit_accept(t, f, cand_layout[c], cand_j[c], cand_j[c], &rb, &fe, rep);
         return 1;
     }
     /* the reason of the candidate that came closest: one built and measured over the tolerance says

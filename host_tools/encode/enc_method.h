@@ -34,8 +34,9 @@ extern const enc_method enc_method_plane, enc_method_gregory, enc_method_gregory
 cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, const cm_fit_q *fit, cm_rebuilt *rb);
 
 /**
- * A fitted net's trial passed (NFILL, G1FIT): its record fields (layout, corner: enc_record_fields)
- * and checksum to t, its measures to rep (rep->corner shows `shown`, the fairing or mode index).
+ * A candidate passed (GREGORY family, NFILL, G1FIT): its record fields (layout, corner:
+ * enc_record_fields) and checksum to t, its measures to rep (rep->corner shows `shown`: the corner,
+ * or the fairing or mode index).
  */
 void enc_fit_accept(tx *t, int f, int layout, int corner, int shown, const cm_rebuilt *rb, const face_error *fe,
                     face_report *rep);
