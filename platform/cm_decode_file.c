@@ -88,6 +88,7 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
     cm_mesh_clear(mesh);
     memset(sum, 0, sizeof *sum);
     sum->tess_tol = tol > 0 ? tol : m->tess_tol;
+    const uint32_t tri_cap = (uint32_t)cm_tess_triangle_cap(m, sum->tess_tol);
     for (uint32_t f = 0; f < m->nfaces; f++) {
         cm_tess_info info;
         cm_status fst;
@@ -110,6 +111,18 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
                 sum->left_out[sum->faces_left_out] = fst;
             sum->faces_left_out++;
             continue;
+        }
+        if (mesh->nindex / 3 > tri_cap) {
+            /* a valid file never gets here (the encoder counted the triangles with this code):
+               a damaged header, whose tolerance no longer matches its needs, stops here */
+            if (st && st->code == CM_OK) {
+                st->need = mesh->nindex / 3;
+                st->have = (uint64_t)tri_cap;
+            }
+            cm_err over = cm_fail(st, CM_E_RANGE, "tessellation: the model needs more triangles than the header "
+                                                  "declares (MAX_TRIS)");
+            cm_status_at_face(st, f, m->faces[f].rec_off);
+            return over;
         }
         if (info.max_gap > sum->max_gap)
             sum->max_gap = info.max_gap;

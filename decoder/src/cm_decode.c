@@ -147,6 +147,7 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
         return fail(d, st, CM_E_RANGE, CM_HDR_REL_TOL, "rebuild tolerance (must be >= 0)");
     d->model.need_tess_points = d->need[CM_LIMIT_MAX_TESS_POINTS];
     d->model.need_edge_samples = d->need[CM_LIMIT_MAX_EDGE_SAMPLES];
+    d->model.need_tris = d->need[CM_LIMIT_MAX_TRIS];
     /* the section table: tags 1..5 in order, each once, back to back after the header, filling the
        file up to its trailer (offsets and lengths checked before cm_dec_finish addresses bytes) */
     uint32_t prev_end = H;

@@ -104,6 +104,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 __builtin_trap();
         } else if (info.points > cm_tess_point_cap(&state.dec.model, tol)) {
             __builtin_trap(); /* the face's work stayed within what the header declares */
+        } else if (mesh.nindex / 3 > (uint32_t)cm_tess_triangle_cap(&state.dec.model, tol)) {
+            break; /* the model's too: cm_decode_mesh stops here */
         }
     }
     /* every index the tessellator wrote points at a vertex it wrote */

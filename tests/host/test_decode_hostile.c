@@ -865,6 +865,65 @@ static void test_face_work_bounded_by_declared_needs(void **state)
     assert_int_equal(sum.triangles, tris_declared);
 }
 
+/* and the work on the model: a header whose tolerance no longer matches its needs (a damaged or
+   hostile one, 1e-300 mm) makes every face finer; the model stops at twice the declared MAX_TRIS
+   plus a margin, naming the face where it stopped, instead of decoding for seconds */
+static void test_model_work_bounded_by_declared_triangles(void **state)
+{
+    (void)state;
+    memset(&M, 0, sizeof M);
+    for (int k = 0; k < 6; k++)
+        add_ngon(&M, 500, 100000 * k, 0, 40000.0); /* PLANE faces of about 498 triangles each */
+    spec sp;
+    spec_of(&M, &sp);
+    sp.need[CM_LIMIT_MAX_TESS_POINTS] = 500;
+    sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = 2;
+    size_t n;
+    uint8_t *b = assemble(&sp, &n);
+    cm_status st;
+    assert_ok(decode(b, n, &st));
+    free(b);
+    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64};
+    cm_decode_summary sum;
+    cm_status_init(&st);
+    assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st)); /* MAX_TRIS not declared: no bound */
+    uint32_t per_face = sum.triangles / 6;
+    assert_int_equal(sum.triangles, 6 * per_face);
+    assert_true(per_face > 400);
+
+    /* declared as the encoder counts it: the same mesh */
+    sp.need[CM_LIMIT_MAX_TRIS] = sum.triangles;
+    b = assemble(&sp, &n);
+    assert_ok(decode(b, n, &st));
+    free(b);
+    assert_int_equal(cm_tess_triangle_cap(&dec->model, dec->model.tess_tol), 2 * 6 * per_face + 1024);
+    cm_status_init(&st);
+    assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
+    assert_int_equal(sum.triangles, 6 * per_face);
+
+    /* the header declares one face's: the model stops at the face whose total passes 2 x + 1024 */
+    sp.need[CM_LIMIT_MAX_TRIS] = per_face;
+    b = assemble(&sp, &n);
+    assert_ok(decode(b, n, &st));
+    free(b);
+    uint32_t cap = (uint32_t)cm_tess_triangle_cap(&dec->model, dec->model.tess_tol);
+    assert_int_equal(cap, 2 * per_face + 1024);
+    assert_true(cap / per_face < 5);
+    cm_status_init(&st);
+    cm_err e = cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st);
+    assert_int_equal(e, CM_E_RANGE);
+    assert_int_equal(st.code, CM_E_RANGE);
+    uint32_t stop = (cap / per_face); /* faces 0..stop: the first total beyond the cap */
+    assert_int_equal(st.face, stop);
+    assert_int_equal(st.offset, dec->model.faces[stop].rec_off);
+    assert_int_equal(st.have, cap);
+    assert_int_equal(st.need, (stop + 1) * per_face);
+    assert_says(&st, "more triangles than the header declares");
+
+    /* a viewer's finer tolerance (r = 2) scales the bound by 4 r^2 */
+    assert_int_equal(cm_tess_triangle_cap(&dec->model, dec->model.tess_tol / 2), 16 * (2 * per_face + 1024));
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -894,6 +953,7 @@ int main(void)
         cmocka_unit_test(test_tessellation_error_names_face_and_offset),
         cmocka_unit_test(test_bad_face_left_out),
         cmocka_unit_test(test_face_work_bounded_by_declared_needs),
+        cmocka_unit_test(test_model_work_bounded_by_declared_triangles),
     };
     return cmocka_run_group_tests_name("decode_hostile", tests, setup, teardown);
 }

@@ -165,9 +165,10 @@ typedef struct cm_model {
     double tess_tol;      /* chordal tolerance recommended by the encoder (mm) */
     double rel_tol;       /* the encoder's rebuild tolerance (fraction of a face's size) */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
-       face (MAX_TESS_POINTS) and samples of one edge (MAX_EDGE_SAMPLES).  The tessellation's work
-       on a face is bounded by these (cm_tessellate.h), not only by the build's limits */
-    uint32_t need_tess_points, need_edge_samples;
+       face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
+       model (MAX_TRIS).  The tessellation's work on a face, and on the model, is bounded by these
+       (cm_tessellate.h), not only by the build's limits */
+    uint32_t need_tess_points, need_edge_samples, need_tris;
     uint32_t nverts, nedges, nfaces, nloops, nuses, nsurfs, nctrl, nknots, npalette;
     cm_vec3 verts[CM_MAX_VERTICES];
     cm_edge edges[CM_MAX_EDGES];

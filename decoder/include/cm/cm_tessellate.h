@@ -71,6 +71,9 @@ typedef struct cm_tess_info {
  */
 int cm_tess_point_cap(const cm_model *m, double tol);
 int cm_tess_edge_sample_cap(const cm_model *m, double tol);
+/** The same bound on the triangles of the whole model (the declared MAX_TRIS, a
+    margin of 1024): cm_decode_mesh() stops the model there (CM_E_RANGE). */
+int cm_tess_triangle_cap(const cm_model *m, double tol);
 
 /**
  * Parameters t in [0,1] sampling edge e so that every chord is within
