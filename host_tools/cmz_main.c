@@ -82,6 +82,11 @@ static void usage(FILE *f)
             "  --help      this text        --version   the version\n"
             "  --limits    the compile-time limits of this build (profile %s)\n"
             "  -q          no progress on stderr\n"
+            "  --include-blanked\n"
+            "              (info, encode, eval, sample) import blanked IGES entities too: hidden\n"
+            "              in the CAD system, they are left out by default, each named in a\n"
+            "              warning and counted by info (an IGES file of nothing but blanked\n"
+            "              faces is imported whole, with a warning)\n"
             "\n"
             "exit status: 0 success, 1 malformed or unsupported input, 2 usage error,\n"
             "             3 I/O error, 4 out of memory.\n",

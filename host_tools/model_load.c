@@ -25,11 +25,11 @@ static cm_err note_left_out(loaded_model *lm, int w)
 }
 
 /* everything after the IGES file is in lm->iges */
-static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm_status *st)
+static cm_err load_rest(loaded_model *lm, int include_blanked, model_progress progress, void *ctx, cm_status *st)
 {
     double t = now();
     cm_err e;
-    e = iges_to_brep(&lm->iges, &lm->brep, &lm->stats, st);
+    e = iges_to_brep(&lm->iges, &lm->brep, &lm->stats, include_blanked, st);
     lm->seconds_brep = now() - t;
     if (e != CM_OK)
         return e;
@@ -77,13 +77,19 @@ static cm_err load_rest(loaded_model *lm, model_progress progress, void *ctx, cm
 
 cm_err model_load(const char *path, loaded_model *lm, model_progress progress, void *ctx, cm_status *st)
 {
+    return model_load_ex(path, lm, 0, progress, ctx, st);
+}
+
+cm_err model_load_ex(const char *path, loaded_model *lm, int include_blanked, model_progress progress, void *ctx,
+                     cm_status *st)
+{
     memset(lm, 0, sizeof *lm);
     double t = now();
     cm_err e = iges_read(path, &lm->iges, st);
     lm->seconds_read = now() - t;
     if (e != CM_OK)
         return e;
-    return load_rest(lm, progress, ctx, st);
+    return load_rest(lm, include_blanked, progress, ctx, st);
 }
 
 cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm, model_progress progress,
@@ -96,7 +102,7 @@ cm_err model_load_data(const char *name, const char *data, size_t len, loaded_mo
     lm->seconds_read = now() - t;
     if (e != CM_OK)
         return e;
-    return load_rest(lm, progress, ctx, st);
+    return load_rest(lm, 0, progress, ctx, st);
 }
 
 cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status *st)

@@ -37,6 +37,9 @@ typedef void (*model_progress)(const char *stage, int done, int total, void *ctx
  */
 CM_NODISCARD cm_err model_load(const char *path, loaded_model *lm, model_progress progress, void *ctx,
                                cm_status *st);
+/** The same, blanked (hidden) entities imported too when include_blanked (model_load leaves them out). */
+CM_NODISCARD cm_err model_load_ex(const char *path, loaded_model *lm, int include_blanked, model_progress progress,
+                                  void *ctx, cm_status *st);
 
 /** The same from an IGES file already in memory (`name` is used in messages; the fuzzer uses this). */
 CM_NODISCARD cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm,

@@ -21,6 +21,8 @@ extern const char cmd_prog[];
 
 /** -q: no progress and no summary on stderr (set by cmd_common_arg, or a command's own parser). */
 extern int cmd_quiet;
+/** --include-blanked: import blanked (hidden) IGES entities too (cmd_load). */
+extern int cmd_include_blanked;
 
 int cmd_info(int argc, char **argv);
 int cmd_sample(int argc, char **argv);

@@ -17,6 +17,7 @@
 const char cmd_prog[] = "cmz";
 
 int cmd_quiet;
+int cmd_include_blanked;
 
 void cmd_progress(const char *stage, int done, int total, void *ctx)
 {
@@ -39,7 +40,7 @@ int cmd_load(const char *path, loaded_model *lm)
 {
     cm_status st;
     cm_status_init(&st);
-    if (model_load(path, lm, cmd_progress, NULL, &st) == CM_OK)
+    if (model_load_ex(path, lm, cmd_include_blanked, cmd_progress, NULL, &st) == CM_OK)
         return EXIT_OK;
     if (lm->iges.err[0])
         fprintf(stderr, "%s: %s:%s%s\n", cmd_prog, path, lm->iges.err_line ? "" : " ", lm->iges.err);
@@ -53,6 +54,10 @@ int cmd_common_arg(const char *cmd, const char *a, const char **path)
 {
     if (strcmp(a, "-q") == 0) {
         cmd_quiet = 1;
+        return 0;
+    }
+    if (strcmp(a, "--include-blanked") == 0) {
+        cmd_include_blanked = 1;
         return 0;
     }
     if (a[0] == '-' && a[1]) {

@@ -158,9 +158,11 @@ int cmd_info(int argc, char **argv)
             printf("%s\n    {\"type\": %d, \"name\": \"%s\", \"read\": %d, \"used\": %d}", k ? "," : "", tc[k].type,
                    iges_type_name(tc[k].type), tc[k].read - tc[k].bad, tc[k].used);
         printf("]},\n  \"faces\": {\"total\": %d, \"trimmed_144\": %d, \"bounded_143\": %d, \"brep_510\": %d, "
-               "\"untrimmed\": %d, \"failed\": %d, \"instances\": %d, \"face_entities\": %d, \"by_surface\": [",
+               "\"untrimmed\": %d, \"failed\": %d, \"instances\": %d, \"face_entities\": %d, "
+               "\"blanked_entities\": %d, \"blanked_faces\": %lld, \"by_surface\": [",
                m->nfaces, lm.stats.faces_144, lm.stats.faces_143, lm.stats.faces_510, lm.stats.faces_untrimmed,
-               m->faces_failed, lm.stats.instances, lm.stats.face_entities);
+               m->faces_failed, lm.stats.instances, lm.stats.face_entities, lm.stats.blanked_entities,
+               lm.stats.blanked_faces);
         for (int k = 0; k < nsc; k++)
             printf("%s{\"type\": %d, \"name\": \"%s\", \"faces\": %d}", k ? ", " : "", sc[k].type,
                    iges_type_name(sc[k].type), sc[k].read);
@@ -224,6 +226,9 @@ int cmd_info(int argc, char **argv)
             printf("; %d could not be read (see warnings)", m->faces_failed);
         if (m->entities_failed)
             printf("; %d solids, shells or instances left out (see warnings)", m->entities_failed);
+        if (lm.stats.blanked_entities)
+            printf("; %lld more in %d blanked (hidden) entities not imported (--include-blanked)",
+                   lm.stats.blanked_faces, lm.stats.blanked_entities);
         printf("\n  by surface:");
         for (int k = 0; k < nsc; k++)
             printf(" %d %s (%d)%s", sc[k].read, iges_type_name(sc[k].type), sc[k].type, k + 1 < nsc ? "," : "");

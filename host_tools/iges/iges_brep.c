@@ -43,7 +43,22 @@ typedef struct importer {
     int capf;
     int first_fail_line;  /* the first skipped face's warning, for the error when none is left */
     char first_fail[400];
+    int include_blanked;  /* import blanked (hidden) entities too (--include-blanked) */
+    long long placed_faces; /* faces the top-level entities place (check_face_budget) */
 } importer;
+
+/*
+ * Blanked entities (status blank = 01) are hidden: a CAD system does not show them, so they are
+ * not part of the model a terminal is to show (ovt__asmo carries 6 blanked planes 3.6 m off the
+ * part; Shelt_channel_5's 30 blanked subfigure instances place 24 000 of its 27 734 faces).  The
+ * rule applies to what the import places as such: top-level entities and the members and nested
+ * instances of a subfigure definition; a trimmed surface's base surface or a curve it uses is
+ * reached through its owner and is routinely blanked by exporters, so its status is not read.
+ */
+static int hidden(const importer *im, const iges_entity *e)
+{
+    return !im->include_blanked && e->blank == 1;
+}
 
 static int ent_index(const iges_file *f, const iges_entity *e)
 {
@@ -1020,7 +1035,16 @@ static long long add_sat(long long a, long long b)
  * level, is counted in a few hundred steps instead of expanded into 8^15 instances.  Structures
  * the import refuses (cycles, nesting deeper than MAX_INSTANCE_DEPTH) count as far as they go.
  */
+static long long own_faces(importer *im, const iges_entity *e, int depth);
 static long long count_faces(importer *im, const iges_entity *e, int depth)
+{
+    if (!e || e->bad || depth > MAX_INSTANCE_DEPTH + 1 || hidden(im, e))
+        return 0;
+    return own_faces(im, e, depth);
+}
+
+/* ... and those it would place if it were not blanked itself (its members' blanking counts) */
+static long long own_faces(importer *im, const iges_entity *e, int depth)
 {
     if (!e || e->bad || depth > MAX_INSTANCE_DEPTH + 1)
         return 0;
@@ -1072,12 +1096,13 @@ static long long count_faces(importer *im, const iges_entity *e, int depth)
 static cm_err check_face_budget(importer *im)
 {
     iges_file *f = im->f;
-    im->nfaces_of = malloc((size_t)(f->nents > 0 ? f->nents : 1) * sizeof *im->nfaces_of);
+    if (!im->nfaces_of)
+        im->nfaces_of = malloc((size_t)(f->nents > 0 ? f->nents : 1) * sizeof *im->nfaces_of);
     if (!im->nfaces_of)
         return iges_nomem(f, f->nents > 0 ? f->ents[0].line : 0, "counting the faces of %d entities", f->nents),
                cm_fail(im->st, CM_E_NOMEM, "out of memory");
     for (int k = 0; k < f->nents; k++)
-        im->nfaces_of[k] = -1;
+        im->nfaces_of[k] = -1; /* (again when include_blanked changes: members' blanking counts) */
     long long total = 0;
     for (int k = 0; k < f->nents; k++) {
         if (im->ref[k])
@@ -1101,6 +1126,7 @@ static cm_err check_face_budget(importer *im)
                                  IGES_MAX_PLACED_FACES, IGES_MAX_PLACED_FACES),
                cm_fail(im->st, CM_E_LIMIT, "placed faces");
     }
+    im->placed_faces = total;
     return CM_OK;
 }
 
@@ -1109,6 +1135,17 @@ static cm_err import_entity(importer *im, const iges_entity *e, const haffine *p
 {
     if (e->bad)
         return CM_OK;
+    if (hidden(im, e)) {
+        long long n = own_faces(im, e, depth);
+        if (n > 0) {
+            im->stats->blanked_entities++;
+            im->stats->blanked_faces = add_sat(im->stats->blanked_faces, n);
+            iges_warn(im->f, e->pd_line,
+                      "entity %d (%s, DE %d) not imported: blanked (hidden in the CAD system), %lld face%s; "
+                      "--include-blanked imports it", e->type, iges_type_name(e->type), e->de, n, n == 1 ? "" : "s");
+        }
+        return CM_OK;
+    }
     switch (e->type) {
     case 144: case 143: case 510:
         return import_face(im, e, parent, -1, 0);
@@ -1213,7 +1250,7 @@ static cm_err drop_far_faces(importer *im)
     return err;
 }
 
-cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_status *st)
+cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, int include_blanked, cm_status *st)
 {
     importer im;
     memset(&im, 0, sizeof im);
@@ -1229,7 +1266,17 @@ cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, cm_st
     if (!im.ref)
         return iges_nomem(f, 0, "importing %d entities", f->nents), cm_fail(st, CM_E_NOMEM, "out of memory");
     mark_references(&im);
+    im.include_blanked = include_blanked;
     cm_err err = check_face_budget(&im);
+    if (err == CM_OK && im.placed_faces == 0 && !im.include_blanked) {
+        /* nothing visible: a file whose every face is blanked is still a model someone wants */
+        im.include_blanked = 1;
+        err = check_face_budget(&im);
+        if (err == CM_OK && im.placed_faces > 0)
+            iges_warn(f, 0, "every face of the file is blanked (hidden in the CAD system): imported anyway");
+        else
+            im.include_blanked = 0;
+    }
     haffine to_mm = haffine_identity();
     for (int i = 0; i < 3; i++)
         to_mm.R[i][i] = f->to_mm;

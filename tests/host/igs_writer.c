@@ -47,6 +47,11 @@ int igw_add(igw *w, int type, int form, const char *fmt, ...)
     return 2 * w->n++ + 1;
 }
 
+void igw_blank(igw *w, int de)
+{
+    w->e[(de - 1) / 2].blank = 1;
+}
+
 void igw_set(igw *w, int de, int subord, int xform, int color)
 {
     struct igw_ent *e = &w->e[(de - 1) / 2];
@@ -134,8 +139,9 @@ char *igw_text(const igw *w, size_t *len_out)
     for (int i = 0; i < w->n; i++) {
         const struct igw_ent *e = &w->e[i];
         char l1[160], l2[160];
-        snprintf(l1, sizeof l1, "%8d%8d%8d%8d%8d%8d%8d%8d    %02d00", e->type, pstart[i], 0, 1, 0, 0, e->xform, 0,
-                 e->subord);
+        /* status: blank, subordinate switch, use flag, hierarchy (2 digits each) */
+        snprintf(l1, sizeof l1, "%8d%8d%8d%8d%8d%8d%8d%8d%02d%02d0000", e->type, pstart[i], 0, 1, 0, 0, e->xform, 0,
+                 e->blank, e->subord);
         snprintf(l2, sizeof l2, "%8d%8d%8d%8d%8d%8s%8s%8s%8d", e->type, 0, e->color, pcount[i], e->form, "", "", "", 0);
         put_line(&out, &len, &cap, l1, 72, NULL, 'D', 2 * i + 1);
         put_line(&out, &len, &cap, l2, 72, NULL, 'D', 2 * i + 2);

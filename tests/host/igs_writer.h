@@ -14,7 +14,7 @@
 
 typedef struct igw {
     struct igw_ent {
-        int type, form, xform, subord, color;
+        int type, form, xform, subord, color, blank;
         char *params; /* "1.,2.,3" without the type number and terminator */
     } *e;
     int n, cap;
@@ -31,6 +31,8 @@ int igw_add(igw *w, int type, int form, const char *fmt, ...) __attribute__((for
 
 /** Mark entity `de` subordinate (physically dependent) and/or give it a transformation or colour. */
 void igw_set(igw *w, int de, int subord, int xform, int color);
+/** Mark entity `de` blanked (hidden: status blank = 01). */
+void igw_blank(igw *w, int de);
 
 /** The whole file (malloc'd, NUL-terminated); *len its length. */
 char *igw_text(const igw *w, size_t *len);

@@ -20,6 +20,7 @@
 
 #include "geom/hnurbs.h"
 #include "igs_writer.h"
+#include "iges/iges_brep.h"
 #include "model_load.h"
 
 /* a prompt answer: generous for sanitizer builds on a busy 2-core machine, far below the
@@ -327,6 +328,91 @@ static void test_huge_coordinates(void **state)
 }
 
 /* ---- 3. DAG explosions ---- */
+
+/* a warning of lm's that names DE `de` and says `what` */
+static int warned(const iges_file *f, int de, const char *what)
+{
+    char dename[32];
+    snprintf(dename, sizeof dename, "DE %d)", de);
+    for (int i = 0; i < f->nwarn; i++)
+        if (strstr(f->warn[i].msg, dename) && strstr(f->warn[i].msg, what))
+            return 1;
+    return 0;
+}
+
+/*
+ * Blanked (hidden) entities are not part of the model a CAD system shows (issue 14: ovt__asmo's six
+ * blanked planes 3.6 m off the part, Shelt_channel_5's 30 blanked subfigure instances placing 24 000
+ * of its 27 734 faces): left out by default, each named in a warning and counted; imported with
+ * include_blanked; imported anyway, with a warning, when they are all the file has.
+ */
+static void test_blanked_left_out(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    BOX(&w);                                          /* 7 visible faces */
+    int far = igw_square_144(&w, 10.0, 5000.0, 0);    /* a blanked face far away */
+    igw_blank(&w, far);
+    int dag = igw_subfigure_dag(&w, 3, 2);            /* a blanked instance placing 2^3 faces */
+    igw_blank(&w, dag);
+    /* a visible instance of a definition holding a face and a blanked nested instance */
+    int inner_face = igw_square_144(&w, 10.0, 100.0, 1);
+    int inner_def = igw_add(&w, 308, 0, "0,3HIN1,1,%d", inner_face);
+    igw_set(&w, inner_def, 1, 0, 0);
+    int nested = igw_add(&w, 408, 0, "%d,0,0,0,1", inner_def);
+    igw_set(&w, nested, 1, 0, 0);
+    igw_blank(&w, nested);
+    int outer_face = igw_square_144(&w, 10.0, 200.0, 1);
+    int outer_def = igw_add(&w, 308, 0, "0,3HOUT,2,%d,%d", outer_face, nested);
+    igw_set(&w, outer_def, 1, 0, 0);
+    igw_add(&w, 408, 0, "%d,0,0,0,1", outer_def);
+    size_t len;
+    char *text = igw_text(&w, &len);
+    loaded_model lm;
+    cm_status st;
+    assert_ok(load_text(text, len, &lm, &st));
+    assert_int_equal(lm.brep.nfaces, 7 + 1);          /* the box and the outer definition's face */
+    assert_int_equal(lm.stats.blanked_entities, 3);
+    assert_int_equal(lm.stats.blanked_faces, 1 + 8 + 1);
+    if (!warned(&lm.iges, far, "not imported: blanked") || !warned(&lm.iges, dag, "8 faces") ||
+        !warned(&lm.iges, nested, "not imported: blanked"))
+        fail_msg("the blanked entities are not named in the warnings");
+    assert_true(lm.brep.box.hi.z < 1000.0);           /* the far face took no part in the model */
+    assert_int_equal(lm.nleft_out, 0);                /* not faults: nothing is "left out" */
+    model_free(&lm);
+
+    /* include_blanked: all of them */
+    iges_file f;
+    brep_model m;
+    brep_import_stats stats;
+    cm_status_init(&st);
+    memset(&f, 0, sizeof f);
+    assert_ok(iges_parse(text, len, &f, &st));
+    assert_ok(iges_to_brep(&f, &m, &stats, 1, &st));
+    assert_int_equal(m.nfaces, 7 + 1 + 8 + 1 + 1);
+    assert_int_equal(stats.blanked_entities, 0);
+    brep_free(&m);
+    iges_free(&f);
+    free(text);
+    igw_free(&w);
+
+    /* a file of nothing but blanked faces: imported anyway, and said so */
+    igw_init(&w);
+    igw_blank(&w, igw_square_144(&w, 10.0, 0.0, 0));
+    igw_blank(&w, igw_square_144(&w, 10.0, 50.0, 0));
+    text = igw_text(&w, &len);
+    assert_ok(load_text(text, len, &lm, &st));
+    assert_int_equal(lm.brep.nfaces, 2);
+    assert_int_equal(lm.stats.blanked_entities, 0);
+    int said = 0;
+    for (int i = 0; i < lm.iges.nwarn; i++)
+        said |= strstr(lm.iges.warn[i].msg, "every face of the file is blanked") != NULL;
+    assert_true(said);
+    model_free(&lm);
+    free(text);
+    igw_free(&w);
+}
 
 /* 308/408 nested 15 levels x 8 instances: 8^15 = 3.5e13 placed faces.  Before: a hang. */
 static void test_subfigure_dag_refused_by_name(void **state)
@@ -656,6 +742,7 @@ int main(void)
         cmocka_unit_test(test_far_away_face_is_skipped),
         cmocka_unit_test(test_huge_coordinates),
         cmocka_unit_test(test_subfigure_dag_refused_by_name),
+        cmocka_unit_test(test_blanked_left_out),
         cmocka_unit_test(test_composite_dag_refused_by_name),
         cmocka_unit_test(test_loop_and_face_piece_budgets),
         cmocka_unit_test(test_allocation_failure_is_nomem),
