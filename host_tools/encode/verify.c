@@ -76,12 +76,14 @@ void face_surface_free(face_surface *fs)
     fs->rebuilt = 0;
 }
 
-static double dist_to_plane_patch(const cm_frame *fr, const double rect[4], cm_vec3 p)
+/* A PLANE face is the plane trimmed by its own boundary curves (the terminal tessellates it in the
+   frame, cm_tessellate.c CHART_FRAME), not the method's bilinear rectangle: the distance is the
+   height over the plane.  Clamped to the rectangle (the rectangle of the boundary samples, 1 %
+   larger), a curved boundary bulging past it between samples counted its in-plane gap: exactly flat
+   faces with arcs measured 0.8-0.9 % and were kept at --tol 0.001 (issue 14.7) */
+static double dist_to_plane(const cm_frame *fr, cm_vec3 p)
 {
-    cm_vec3 l = cm_frame_local(fr, p);
-    double x = l.x < rect[0] ? rect[0] : (l.x > rect[1] ? rect[1] : l.x);
-    double y = l.y < rect[2] ? rect[2] : (l.y > rect[3] ? rect[3] : l.y);
-    return sqrt((l.x - x) * (l.x - x) + (l.y - y) * (l.y - y) + l.z * l.z);
+    return fabs(cm_frame_local(fr, p).z);
 }
 
 static double clamp01(double t) { return t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t); }
@@ -275,7 +277,7 @@ static double face_dist(const cm_rebuilt *rb, greg_walk *w, surf_walk *sw, cm_ve
 {
     if (rb->repr == CM_REPR_NURBS)
         return surf_dist(sw, p);
-    return rb->repr == CM_REPR_PATCHES ? greg_dist(w, p) : dist_to_plane_patch(&rb->frame, rb->rect, p);
+    return rb->repr == CM_REPR_PATCHES ? greg_dist(w, p) : dist_to_plane(&rb->frame, p);
 }
 
 /* points of the source grid kept for the other direction (spec §12 grid: 21 x 21 at most) */

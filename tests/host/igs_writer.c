@@ -523,6 +523,15 @@ void igw_tri_bump_144(igw *w, double a, double h)
     igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 3)));
 }
 
+/* ---- a flat disc ---- */
+
+int igw_disc_144(igw *w, double r, double z)
+{
+    v3 p00 = {-r, -r, z}, p10 = {r, -r, z}, p01 = {-r, r, z}, p11 = {r, r, z};
+    int s = bilinear_128(w, p00, p10, p01, p11);
+    return igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, circle_100(w, 0, 0, z, r)));
+}
+
 /* ---- building blocks for hostile inputs ---- */
 
 int igw_square_144(igw *w, double a, double z, int subord)

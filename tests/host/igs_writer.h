@@ -91,6 +91,9 @@ void igw_dome_square_hole_144(igw *w, double a, double r0);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 
+/** A flat disc of radius r at height z: a 144 on a bilinear 128, its outer loop one full circle (100). */
+int igw_disc_144(igw *w, double r, double z);
+
 /* ---- building blocks for hostile inputs (tests/host/test_import_hostile.c) ---- */
 
 /** A planar square [0,a]^2 at height z as a 144 (bilinear 128, composite of 4 lines); returns the
