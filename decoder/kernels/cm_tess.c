@@ -810,13 +810,6 @@ static int cut(tess_ctx *c, int b, int *rem, int len)
  * by fuzz_decode, every segment crossing most others, took 4 G instructions (17 s) for one face.  Past
  * the budget the region is refused (CM_E_DEGENERATE), which leaves the face out. */
 #define CDT_WORK_PER_POINT 256L
-/* Boundaries of this many points or more are triangulated by cdt_region first.  Ear clipping cuts
- * a long ring into fans, which the Lawson flips then turn into the Delaunay triangulation one flip
- * at a time: quadratic in the ring (a face of 4092 boundary points, refined at a hostile tolerance
- * of 1e-300 mm: 1.4 M flips, 1.3 G instructions per triangulation, 4 s for a model of 8 faces);
- * cdt_region inserts the ring coarse to fine, 2 600 flips.  Every ring of the 24 corpus models is
- * below it (the largest, 520 points, 2026-12-03), so their meshes are as before. */
-#define CDT_FIRST_POINTS 1024
 #define CDT_WORK_MIN 4096L
 /* triangulate the ring through `start` (`len` nodes) */
 static cm_err ear_clip(tess_ctx *c, int start, int len, cm_status *st)
@@ -1006,7 +999,6 @@ static int try_flip(tess_ctx *c, int t, int s)
             return 0;
     }
     force_flip(ws, t, s); /* t = (c, a, d), u = (d, b, c) */
-    ws->flips++;
     push_side(c, t, 0);
     push_side(c, t, 1);
     push_side(c, u, 0);
@@ -1665,20 +1657,8 @@ static cm_err cdt_region(tess_ctx *c, const int *loop_start, int nloops, int nb,
     if (new_tri(c, SUPER_V, SUPER_V + 1, SUPER_V + 2) < 0)
         return cm_fail(st, CM_E_RANGE, __func__);
     int last = 0;
-    /* coarse to fine along the loops: every top-th point (top the largest power of two below nb),
-       then the odd multiples of top/2, of top/4, ... of 1.  In loop order, each point lands beside
-       the last and the ring's Delaunay triangulation is rebuilt as it grows: a ring of 4092 points
-       (a face refined at a hostile tolerance) took 859 000 flips, 1.3 G instructions; in this order
-       2 600 flips, and each walk starts next to its point (the last one inserted at that level) */
-    int top = 1;
-    while (top < nb / 2)
-        top *= 2;
-    for (int step = top; step >= 1; step /= 2)
-        for (int i = step == top ? 0 : step, l = 0; i < nb; i += step == top ? step : 2 * step) {
-            while (i >= loop_start[l + 1])
-                l++;
-            if (!lsign[l])
-                continue;
+    for (int l = 0; l < nloops; l++)
+        for (int i = loop_start[l]; lsign[l] && i < loop_start[l + 1]; i++) {
             int r = cdt_insert(c, i, &last);
             if (r < 0 || c->overflow)
                 return cm_fail(st, r == -1 || c->overflow ? CM_E_RANGE : CM_E_DEGENERATE, __func__);
@@ -2085,7 +2065,6 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
     memset(&c, 0, sizeof c);
     ws->ear_tests = 0;
     ws->cdt_work = 0;
-    ws->flips = 0;
     c.cdt_budget = CDT_WORK_PER_POINT * (long)nb + CDT_WORK_MIN;
     double scale = normalise(pts, npts, nb, ws, c.box);
     if (!(scale > 0.0))
@@ -2094,37 +2073,21 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
     c.nn = nb;
     c.fold = fold_tol > 0.0 ? fold_tol * scale : 0.0;
     /* ear clipping; where it cannot finish, or leaves a flat triangle the input does not force, the
-       fallback (cdt_region); its failure is the one reported.  A boundary of CDT_FIRST_POINTS or
-       more goes the other way round: cdt_region first, ear clipping where it fails */
+       fallback (cdt_region); its failure is the one reported */
     int start = 0, len = 0;
     cm_status first;
     cm_status_init(&first);
-    int cdt_first = nb >= CDT_FIRST_POINTS;
-    err = CM_E_DEGENERATE;
-    if (cdt_first) {
-        snap_touching(ws, loop_start, nloops, nb); /* as build_ring does (it is idempotent) */
-        err = cdt_region(&c, loop_start, nloops, nb, &first);
-        if (err == CM_OK)
-            flip_all(&c);
-        else if (err == CM_E_DEGENERATE) {
-            c.ntri = c.sp = c.overflow = 0;
-            c.nn = nb;
-        }
+    err = build_ring(&c, loop_start, nloops, &start, &len, &first);
+    if (err == CM_OK)
+        err = ear_clip(&c, start, len, &first);
+    if (err == CM_OK && c.ntri > 0) {
+        flip_all(&c);
+        if (flat_unforced(&c, loop_start, nloops))
+            err = CM_E_DEGENERATE;
+    } else if (err == CM_OK) {
+        err = CM_E_DEGENERATE;
     }
     if (err == CM_E_DEGENERATE) {
-        cm_status_init(&first);
-        err = build_ring(&c, loop_start, nloops, &start, &len, &first);
-        if (err == CM_OK)
-            err = ear_clip(&c, start, len, &first);
-        if (err == CM_OK && c.ntri > 0) {
-            flip_all(&c);
-            if (flat_unforced(&c, loop_start, nloops))
-                err = CM_E_DEGENERATE;
-        } else if (err == CM_OK) {
-            err = CM_E_DEGENERATE;
-        }
-    }
-    if (err == CM_E_DEGENERATE && !cdt_first) {
         cm_status_init(&first);
         err = cdt_region(&c, loop_start, nloops, nb, &first);
         if (err == CM_OK)

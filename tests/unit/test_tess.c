@@ -775,45 +775,6 @@ static void test_wrong_orientation(void **state)
 }
 
 /*
- * A long boundary costs a number of Delaunay flips about linear in it, not quadratic.  A face
- * refined at a hostile tolerance (a header saying 1e-300 mm) gives rings of 4092 points, dense along
- * a few sides; ear clipping cut them into fans, and the flips that made the fans Delaunay numbered
- * 1.4 M per ring (1.3 G instructions, 4 s for a model of 8 faces).  A ring of 1024 points or more
- * now goes to the fallback's coarse-to-fine insertion first.  Two shapes: a long rectangle with
- * its sides densely sampled, and the same with an arc for one side.
- */
-static void test_long_boundary_flips_bounded(void **state)
-{
-    (void)state;
-    int nt, nu;
-    int m = CM_MAX_TESS_POINTS >= 8192 ? 1000 : CM_MAX_TESS_POINTS / 8; /* points per side */
-    for (int shape = 0; shape < 2; shape++) {
-        shape_begin();
-        loop_begin();
-        for (int i = 0; i < m; i++)
-            pt((double)i / m, 0.0);
-        for (int i = 0; i < m; i++)
-            pt(1.0, 0.3 * i / m);
-        for (int i = 0; i < m; i++) {
-            double a = M_PI * i / m, x = 1.0 - (double)i / m, y = 0.3;
-            if (shape == 1) { /* the top an arc bulging up */
-                x = 0.5 + 0.5 * tcos(a);
-                y = 0.3 + 0.2 * tsin(a);
-            }
-            pt(x, y);
-        }
-        for (int i = 0; i < m; i++)
-            pt(0.0, 0.3 - 0.3 * i / m);
-        loops_end();
-        snprintf(CTX, sizeof CTX, "long boundary, shape %d, %d points", shape, NP);
-        assert_ok(run(0.0, &nt, &nu));
-        validate(T, nt, 0, nu);
-        if (!(WS.flips <= 16L * NP))
-            fail_msg("shape %d: %ld flips for a boundary of %d points", shape, WS.flips, NP);
-    }
-}
-
-/*
  * A ring that folds back over itself (a zig-zag, then the same zig-zag shifted half a step, going
  * back): no triangulation exists.  Its candidate ears keep failing, and the ear clipping used to
  * test them turn after turn, about n^2 / 16 tests (1,011,992 for 4000 nodes; a ring like it in a
@@ -1223,13 +1184,10 @@ static void test_determinism(void **state)
  * algorithm changes the value; print it with TESS_PRINT_PIN=1.  Changed for
  * issue 10 (was 0x7ddb05bf, 0x2cb63fa2): 4 of the 110 inputs (kind 3,
  * collinear sides with rounding noise) had 1 to 5 flat triangles along a
- * side; they now go to the fallback, which leaves none.  Changed again
- * (was 0xd6fbb325, 0xf90b002b): the fallback inserts the boundary coarse
- * to fine (ties between cocircular points fall differently), and
- * boundaries of 1024 points or more take it first (CDT_FIRST_POINTS).
+ * side; they now go to the fallback, which leaves none.
  */
-#define TESS_PIN 0x2fe49d29u
-#define TESS_PIN_BIG 0x5552ee39u
+#define TESS_PIN 0xd6fbb325u
+#define TESS_PIN_BIG 0xf90b002bu
 static void test_pinned_output(void **state)
 {
     (void)state;
@@ -2205,7 +2163,6 @@ int main(void)
         cmocka_unit_test(test_repeated_boundary_points),
         cmocka_unit_test(test_wrong_orientation),
         cmocka_unit_test(test_folded_ring_bounded),
-        cmocka_unit_test(test_long_boundary_flips_bounded),
         cmocka_unit_test(test_grid_over_box),
         cmocka_unit_test(test_random_polygons),
         cmocka_unit_test(test_fuzz_cad_like),
