@@ -350,6 +350,16 @@ static cm_err decode(const uint8_t *b, size_t n, cm_status *st)
     return decode_chunked(b, n, 0, st);
 }
 
+/* the file sp describes, decoded into dec: it must be accepted */
+static void decode_spec(const spec *sp)
+{
+    size_t n;
+    uint8_t *b = assemble(sp, &n);
+    cm_status st;
+    assert_ok(decode(b, n, &st));
+    free(b);
+}
+
 /* the status as the programs print it must contain `cause` */
 static void assert_says(const cm_status *st, const char *cause)
 {
@@ -818,11 +828,8 @@ static void test_face_work_bounded_by_declared_needs(void **state)
     /* as the encoder declares it: the most points a face uses */
     sp.need[CM_LIMIT_MAX_TESS_POINTS] = 500;
     sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = 2;
-    size_t n;
-    uint8_t *b = assemble(&sp, &n);
+    decode_spec(&sp);
     cm_status st;
-    assert_ok(decode(b, n, &st));
-    free(b);
     const cm_model *m = &dec->model;
     assert_int_equal(cm_tess_point_cap(m, m->tess_tol), 2 * 500 + 256);
     assert_int_equal(cm_tess_point_cap(m, m->tess_tol / 2), CM_MAX_TESS_POINTS < 16 * 1256 ? CM_MAX_TESS_POINTS : 16 * 1256);
@@ -837,9 +844,7 @@ static void test_face_work_bounded_by_declared_needs(void **state)
 
     /* the header says a face needs at most 100 points: the 500-gon is beyond what it declares */
     sp.need[CM_LIMIT_MAX_TESS_POINTS] = 100;
-    b = assemble(&sp, &n);
-    assert_ok(decode(b, n, &st));
-    free(b);
+    decode_spec(&sp);
     assert_int_equal(cm_tess_point_cap(&dec->model, dec->model.tess_tol), 456);
     cm_status_init(&st);
     assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
@@ -854,9 +859,7 @@ static void test_face_work_bounded_by_declared_needs(void **state)
     /* not declared (0, as in files of writers that do not measure): the build's limit */
     sp.need[CM_LIMIT_MAX_TESS_POINTS] = 0;
     sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = 0;
-    b = assemble(&sp, &n);
-    assert_ok(decode(b, n, &st));
-    free(b);
+    decode_spec(&sp);
     assert_int_equal(cm_tess_point_cap(&dec->model, dec->model.tess_tol), CM_MAX_TESS_POINTS);
     assert_int_equal(cm_tess_edge_sample_cap(&dec->model, dec->model.tess_tol), CM_MAX_EDGE_SAMPLES);
     cm_status_init(&st);
@@ -878,11 +881,8 @@ static void test_model_work_bounded_by_declared_triangles(void **state)
     spec_of(&M, &sp);
     sp.need[CM_LIMIT_MAX_TESS_POINTS] = 500;
     sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = 2;
-    size_t n;
-    uint8_t *b = assemble(&sp, &n);
+    decode_spec(&sp);
     cm_status st;
-    assert_ok(decode(b, n, &st));
-    free(b);
     cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64};
     cm_decode_summary sum;
     cm_status_init(&st);
@@ -893,9 +893,7 @@ static void test_model_work_bounded_by_declared_triangles(void **state)
 
     /* declared as the encoder counts it: the same mesh */
     sp.need[CM_LIMIT_MAX_TRIS] = sum.triangles;
-    b = assemble(&sp, &n);
-    assert_ok(decode(b, n, &st));
-    free(b);
+    decode_spec(&sp);
     assert_int_equal(cm_tess_triangle_cap(&dec->model, dec->model.tess_tol), 2 * 6 * per_face + 1024);
     cm_status_init(&st);
     assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
@@ -903,9 +901,7 @@ static void test_model_work_bounded_by_declared_triangles(void **state)
 
     /* the header declares one face's: the model stops at the face whose total passes 2 x + 1024 */
     sp.need[CM_LIMIT_MAX_TRIS] = per_face;
-    b = assemble(&sp, &n);
-    assert_ok(decode(b, n, &st));
-    free(b);
+    decode_spec(&sp);
     uint32_t cap = (uint32_t)cm_tess_triangle_cap(&dec->model, dec->model.tess_tol);
     assert_int_equal(cap, 2 * per_face + 1024);
     assert_true(cap / per_face < 5);

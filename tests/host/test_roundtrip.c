@@ -32,8 +32,8 @@ static cm_mesh_face mfaces[1024];
 
 /* ---- helpers ---- */
 
-/* the default options, GREGORY-FIT left out when `fit` is 0 */
-static void encode_igw_fit(igw *w, loaded_model *lm, encode_result *r, int fit)
+/* load the model w describes and encode it with options o */
+static void encode_igw_opts(igw *w, loaded_model *lm, encode_result *r, const encode_opts *o)
 {
     size_t len = 0;
     char *text = igw_text(w, &len);
@@ -41,13 +41,19 @@ static void encode_igw_fit(igw *w, loaded_model *lm, encode_result *r, int fit)
     cm_status_init(&st);
     assert_ok(model_load_data("synthetic", text, len, lm, NULL, NULL, &st));
     free(text);
+    memset(r, 0, sizeof *r);
+    cm_status_init(&st);
+    assert_ok(encode_model(lm, o, r, &st));
+    assert_non_null(r->bytes);
+}
+
+/* the default options, GREGORY-FIT left out when `fit` is 0 */
+static void encode_igw_fit(igw *w, loaded_model *lm, encode_result *r, int fit)
+{
     encode_opts o;
     encode_opts_default(&o);
     o.gregory_fit = fit;
-    memset(r, 0, sizeof *r);
-    cm_status_init(&st);
-    assert_ok(encode_model(lm, &o, r, &st));
-    assert_non_null(r->bytes);
+    encode_igw_opts(w, lm, r, &o);
 }
 
 static void encode_igw(igw *w, loaded_model *lm, encode_result *r)
@@ -238,22 +244,14 @@ static void test_flat_disc_plane(void **state)
     igw w;
     igw_init(&w);
     igw_disc_144(&w, 20.0, 3.0);
-    size_t len = 0;
-    char *text = igw_text(&w, &len);
-    igw_free(&w);
-    loaded_model lm;
-    cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data("disc", text, len, &lm, NULL, NULL, &st));
-    free(text);
     encode_opts o;
     encode_opts_default(&o);
     o.rel_tol = 0.001;
     o.rel_set = 1;
+    loaded_model lm;
     encode_result r;
-    memset(&r, 0, sizeof r);
-    cm_status_init(&st);
-    assert_ok(encode_model(&lm, &o, &r, &st));
+    encode_igw_opts(&w, &lm, &r, &o);
+    igw_free(&w);
     assert_int_equal(r.faces_by_method[CM_METHOD_PLANE], 1);
     if (!(r.faces[0].rebuild_max < 1e-9 * r.faces[0].bbox))
         fail_msg("the disc's PLANE error is %g mm of a %g mm face", r.faces[0].rebuild_max, r.faces[0].bbox);
