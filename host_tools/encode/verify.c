@@ -48,7 +48,6 @@ int face_surface_set(face_surface *fs, const cm_rebuilt *rb)
     fs->repr = rb->repr;
     fs->bbox = rb->bbox;
     fs->frame = rb->frame;
-    memcpy(fs->rect, rb->rect, sizeof fs->rect);
     if (rb->repr == CM_REPR_PATCHES && rb->greg) {
         fs->greg = malloc(sizeof *fs->greg);
         if (!fs->greg)

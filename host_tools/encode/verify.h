@@ -21,7 +21,6 @@ typedef struct face_surface {
     int rebuilt;          /* 0: the face keeps its surface (measured on the source surface) */
     cm_repr repr;         /* rebuilt: what the rebuild made (cm_rebuilt.repr) */
     cm_frame frame;       /* FRAME */
-    double rect[4];
     cm_greg_surface *greg; /* PATCHES: malloc'd copy (face_surface_free) */
     double bbox;           /* bbox_F */
     /* NURBS: a deep copy of cm_rebuilt.surf (whose arrays point into a workspace the next rebuild
