@@ -76,6 +76,10 @@ static cm_err header_limit(cm_decoder *d, cm_status *st, unsigned id, uint64_t n
  * has room for CM_SEC_COUNT entries: a file declaring another number of sections is refused here,
  * before the table is read), lengths and offsets before any byte is addressed through them.
  */
+_Static_assert(CM_LIMIT_COUNT >= CM_FMT_MIN_NEEDS, "the limit list only grows (its position is the id on the wire)");
+
+static uint32_t declared(uint32_t need) { return need > 0 ? need : 1u; }
+
 static cm_err check_header(cm_decoder *d, cm_status *st)
 {
     const uint8_t *b = d->buf;
@@ -99,6 +103,11 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     if (nsec != CM_SEC_COUNT)
         return fail(d, st, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count (a .cmz has 5 sections)");
     d->nsec = nsec;
+    /* every writer declares the 25 needs of format 1.0; without MAX_TRIS, MAX_TESS_POINTS and
+       MAX_EDGE_SAMPLES the tessellation would be bounded only by this build's limits (on the
+       workstation: minutes for a 4 KB file whose tolerance says 1e-300 mm) */
+    if (d->nlimits < CM_FMT_MIN_NEEDS)
+        return fail(d, st, CM_E_FORMAT, CM_HDR_NLIMITS, "need table shorter than the 25 needs of format 1.0");
     if (d->file_len > (uint32_t)CM_MAX_FILE_BYTES)
         return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->file_len, CM_MAX_FILE_BYTES, CM_HDR_FILE_LENGTH,
                             "file length");
@@ -145,9 +154,11 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
         return fail(d, st, CM_E_NONFINITE, CM_HDR_REL_TOL, "rebuild tolerance");
     if (!(d->model.rel_tol >= 0))
         return fail(d, st, CM_E_RANGE, CM_HDR_REL_TOL, "rebuild tolerance (must be >= 0)");
-    d->model.need_tess_points = d->need[CM_LIMIT_MAX_TESS_POINTS];
-    d->model.need_edge_samples = d->need[CM_LIMIT_MAX_EDGE_SAMPLES];
-    d->model.need_tris = d->need[CM_LIMIT_MAX_TRIS];
+    /* what bounds the tessellation's work (cm_tessellate.c); a file declares them, so a need of 0
+       is the model's figure, kept apart from 0 = "not declared" (the build's limit) */
+    d->model.need_tess_points = declared(d->need[CM_LIMIT_MAX_TESS_POINTS]);
+    d->model.need_edge_samples = declared(d->need[CM_LIMIT_MAX_EDGE_SAMPLES]);
+    d->model.need_tris = declared(d->need[CM_LIMIT_MAX_TRIS]);
     /* the section table: tags 1..5 in order, each once, back to back after the header, filling the
        file up to its trailer (offsets and lengths checked before cm_dec_finish addresses bytes) */
     uint32_t prev_end = H;

@@ -19,7 +19,8 @@
  * the same with or without the bound; a damaged face stops there.  A finer tolerance than the
  * file's (r times finer) scales the bound by 4 r^2: the points grow about as r, but refinement
  * doubles them in steps (a Gregory face of as1_pe_203 goes from 500 to 5420 points at r = 3); a
- * need of 0 (not declared) leaves the build's limit.
+ * need of 0 (not declared: a model the encoder builds in memory) leaves the build's limit; a file
+ * always declares them (cm_decode.c).
  */
 static int declared_cap(uint32_t need, int slack, int limit, const cm_model *m, double tol)
 {

@@ -24,6 +24,9 @@ cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st)
     cm_err e = cm_dec_feed(&w->dec, r->bytes, r->len, st);
     if (e == CM_OK)
         e = cm_dec_finish(&w->dec, st);
+    /* the encoder measures the tessellation's needs (needs.c): nothing declared bounds it, whatever
+       the header it wrote so far says (a declared 0 would cap every face at the slack) */
+    w->dec.model.need_tess_points = w->dec.model.need_edge_samples = w->dec.model.need_tris = 0;
     if (e != CM_OK && st && e != CM_E_NOMEM) {
         /* a byte of a file the user never sees names nothing: the fault is the encoder's */
         st->offset = CM_NO_OFFSET;

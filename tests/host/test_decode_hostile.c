@@ -268,6 +268,11 @@ static void spec_of(const tmodel *m, spec *sp)
     h->tess_tol = 0.01;
     h->rel_tol = 0.01;
     sp->nneeds = CM_LIMIT_COUNT;
+    /* the tessellation's needs as large as this build allows (the tests that bound the work by them
+       set them); the encoder measures them */
+    sp->need[CM_LIMIT_MAX_TESS_POINTS] = CM_MAX_TESS_POINTS;
+    sp->need[CM_LIMIT_MAX_EDGE_SAMPLES] = CM_MAX_EDGE_SAMPLES;
+    sp->need[CM_LIMIT_MAX_TRIS] = CM_MAX_TRIS;
     void (*writers[CM_SEC_COUNT])(const tmodel *, section *) = {put_vert, put_edge, put_surf, put_face, put_colr};
     sp->nsec = CM_SEC_COUNT;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
@@ -536,7 +541,19 @@ static void test_section_table_entries(void **state)
 static void test_need_counts(void **state)
 {
     (void)state;
-    static const uint32_t counts[] = {0, 1, CM_LIMIT_COUNT - 1, CM_LIMIT_COUNT + 1, 100, 255};
+    /* a table shorter than format 1.0's 25 needs leaves the tessellation unbounded by the file:
+       refused at the count, before any need is used */
+    static const uint32_t short_counts[] = {0, 1, 15, CM_FMT_MIN_NEEDS - 1};
+    for (size_t i = 0; i < sizeof short_counts / sizeof short_counts[0]; i++) {
+        spec sp;
+        size_t n;
+        free(reference_file(&sp, &n));
+        sp.nneeds = short_counts[i];
+        uint8_t *b = assemble(&sp, &n);
+        assert_refused(b, n, CM_E_FORMAT, CM_HDR_NLIMITS, "need table shorter");
+        free(b);
+    }
+    static const uint32_t counts[] = {CM_FMT_MIN_NEEDS, CM_LIMIT_COUNT, CM_LIMIT_COUNT + 1, 100, 255};
     for (size_t i = 0; i < sizeof counts / sizeof counts[0]; i++) {
         spec sp;
         size_t n;
@@ -856,12 +873,24 @@ static void test_face_work_bounded_by_declared_needs(void **state)
     assert_says(&sum.left_out[0], "more points than the header declares");
     assert_int_equal(sum.triangles, 2);
 
-    /* not declared (0, as in files of writers that do not measure): the build's limit */
+    /* declared 0: a file's need is never "not declared" (that would leave the build's limit, and
+       the workstation's are large enough for minutes of work on a 4 KB file): the slack alone */
     sp.need[CM_LIMIT_MAX_TESS_POINTS] = 0;
     sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = 0;
     decode_spec(&sp);
+    assert_int_equal(cm_tess_point_cap(&dec->model, dec->model.tess_tol), 2 * 1 + 256);
+    assert_int_equal(cm_tess_edge_sample_cap(&dec->model, dec->model.tess_tol), 2 * 1 + 16);
+    cm_status_init(&st);
+    assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
+    assert_int_equal(sum.faces_left_out, 1);
+    assert_int_equal(sum.left_out[0].face, 1);
+    assert_int_equal(sum.triangles, 2);
+
+    /* as large as the build allows: the whole model */
+    sp.need[CM_LIMIT_MAX_TESS_POINTS] = CM_MAX_TESS_POINTS;
+    sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = CM_MAX_EDGE_SAMPLES;
+    decode_spec(&sp);
     assert_int_equal(cm_tess_point_cap(&dec->model, dec->model.tess_tol), CM_MAX_TESS_POINTS);
-    assert_int_equal(cm_tess_edge_sample_cap(&dec->model, dec->model.tess_tol), CM_MAX_EDGE_SAMPLES);
     cm_status_init(&st);
     assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
     assert_int_equal(sum.faces_left_out, 0);
@@ -886,7 +915,7 @@ static void test_model_work_bounded_by_declared_triangles(void **state)
     cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64};
     cm_decode_summary sum;
     cm_status_init(&st);
-    assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st)); /* MAX_TRIS not declared: no bound */
+    assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st)); /* MAX_TRIS the build's: no bound */
     uint32_t per_face = sum.triangles / 6;
     assert_int_equal(sum.triangles, 6 * per_face);
     assert_true(per_face > 400);

@@ -2,8 +2,10 @@
 # check_bundled_roundtrip.sh CMZ CMZ_DECODE MESH_CHECK MODEL.igs... - the product end to end on the
 # models bundled in tests/data (make test's quick round trip; the shared corpus is make check's):
 # cmz encode -> the terminal build's cmz-decode -> GLB and STL, the mesh welded and closed where
-# the model is (mesh_check), every rebuilt face within its tolerance (cmz eval).  One TAP line per
-# model; stands alone without ../shared.
+# the model is (mesh_check), every rebuilt face within its tolerance (cmz eval), and the triangles
+# the terminal made exactly those the header declares (the MAX_TRIS need the encoder measured with
+# the same code: a decoder bounds a model's work by it).  One TAP line per model; stands alone
+# without ../shared.
 set -u
 cmz=$1 decode=$2 mesh_check=$3
 shift 3
@@ -11,6 +13,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 n=0 fail=0
 size() { stat -c %s "$1" 2>/dev/null || echo 0; }
+# MAX_TRIS's id: its line in --limits (the need table's order); its need is the u32 at byte
+# 60 + 4 id (CM_HDR_NEEDS + 4 i, decoder/include/cm/cm_format.h)
+tris_id=$("$cmz" --limits | awk 'NR > 2 && $1 == "MAX_TRIS" { print NR - 3; exit }')
+declared_tris() { od -An -tu4 -j $((60 + 4 * tris_id)) -N4 "$1" | tr -d ' '; }
 for f in "$@"; do
     n=$((n + 1))
     b=$(basename "$f")
@@ -20,6 +26,9 @@ for f in "$@"; do
     elif ! "$decode" "$tmp/m.cmz" -o "$tmp/m.glb" > "$tmp/dec" 2>&1 ||
          ! "$decode" "$tmp/m.cmz" -o "$tmp/m.stl" >> "$tmp/dec" 2>&1; then
         why="cmz-decode: $(tail -n 1 "$tmp/dec")"
+    elif made=$(sed -n 's/.* \([0-9]*\) triangles.*/\1/p' "$tmp/dec" | head -n 1) &&
+         [ "$made" != "$(declared_tris "$tmp/m.cmz")" ]; then
+        why="the terminal made ${made:-no} triangles, the header declares $(declared_tris "$tmp/m.cmz") (MAX_TRIS)"
     elif [ "$(size "$tmp/m.glb")" -eq 0 ] || [ "$(size "$tmp/m.stl")" -lt 284 ]; then
         why="empty output (glb $(size "$tmp/m.glb") bytes, stl $(size "$tmp/m.stl"))"
     elif ! topo=$("$mesh_check" "$tmp/m.cmz" 2>&1); then

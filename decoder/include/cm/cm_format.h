@@ -26,6 +26,9 @@
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
+/* need-table entries every writer since format 1.0 emits (the limit list of 1.0 had 25): a shorter
+   table is malformed, since the decoder bounds its tessellation work by what the file declares */
+#define CM_FMT_MIN_NEEDS 25u
 #define CM_FMT_SECTION_ENTRY 16u  /* tag, 3 reserved, offset, length, crc */
 
 /* Byte offsets of the fixed header's fields (docs/FORMAT.md), named once for the reader, the writer
