@@ -36,6 +36,7 @@
 
 static cm_tri_ws WS;
 static cm_vec2 P[PBUF];
+static cm_vec2 G[PBUF]; /* the input on its integer grid (run_both_ways) */
 static int LS[PBUF];
 static int NP, NL;
 static int T[TBUF][3];
@@ -775,6 +776,121 @@ static void test_wrong_orientation(void **state)
 }
 
 /*
+ * A long boundary costs a number of Delaunay flips about linear in it, not quadratic.  A face
+ * refined at a hostile tolerance (a header saying 1e-300 mm) gives rings of 4092 points, dense along
+ * a few sides; ear clipping cut them into fans, and the flips that made the fans Delaunay numbered
+ * 1.4 M per ring (1.3 G instructions, 2.6 s for a model of 8 faces).  A ring of 1024 points or more
+ * now goes to the fallback's coarse-to-fine insertion first.  Three shapes: a long rectangle with
+ * its sides densely sampled, the same with an arc for one side, and with a square hole.
+ */
+static void test_long_boundary_flips_bounded(void **state)
+{
+    (void)state;
+    int nt, nu;
+    int m = CM_MAX_TESS_POINTS >= 8192 ? 1000 : CM_MAX_TESS_POINTS / 8; /* points per side */
+    for (int shape = 0; shape < 3; shape++) {
+        shape_begin();
+        loop_begin();
+        for (int i = 0; i < m; i++)
+            pt((double)i / m, 0.0);
+        for (int i = 0; i < m; i++)
+            pt(1.0, 0.3 * i / m);
+        for (int i = 0; i < m; i++) {
+            double a = M_PI * i / m, x = 1.0 - (double)i / m, y = 0.3;
+            if (shape == 1) { /* the top an arc bulging up */
+                x = 0.5 + 0.5 * tcos(a);
+                y = 0.3 + 0.2 * tsin(a);
+            }
+            pt(x, y);
+        }
+        for (int i = 0; i < m; i++)
+            pt(0.0, 0.3 - 0.3 * i / m);
+        if (shape == 2) { /* a hole, clockwise */
+            loop_begin();
+            pt(0.4, 0.1);
+            pt(0.4, 0.2);
+            pt(0.6, 0.2);
+            pt(0.6, 0.1);
+        }
+        loops_end();
+        snprintf(CTX, sizeof CTX, "long boundary, shape %d, %d points", shape, NP);
+        assert_ok(run(0.0, &nt, &nu));
+        validate(T, nt, 0, nu);
+        if (!(WS.flips <= 16L * NP))
+            fail_msg("shape %d: %ld flips for a boundary of %d points", shape, WS.flips, NP);
+    }
+}
+
+/*
+ * A long ring that runs back along itself (a slit into the region, and the same slit with its way
+ * back a rounding away from its way out, as a seam seen from both sides is on
+ * occt__bug22869_Spring's kept faces): the coarse-to-fine insertion splits such segments where ear
+ * clipping zips the slit, so its result is taken only when it is a plain triangulation of the ring
+ * (cdt_plain); here the ear clipping decides, as for a short ring, and leaves no flat triangle.
+ */
+static int run_both_ways(const char *what);
+static cm_err run_folds(double fold, int *nt);
+static void test_long_slit(void **state)
+{
+    (void)state;
+    int m = 300; /* points per side: 1501 in all (a smaller build checks its limit error) */
+    shape_begin();
+    loop_begin();
+    for (int i = 0; i < m; i++)
+        pt(4 * i, 0);
+    for (int i = 0; i < m / 2; i++)
+        pt(4 * m, 4 * i);
+    for (int i = 0; i <= m / 2; i++) /* the slit from its mouth (4 m, 2 m) in along y = 2 m */
+        pt(4 * m - 2 * i, 2 * m);
+    for (int i = m / 2 - 1; i >= 0; i--) /* and back out to the mouth */
+        pt(4 * m - 2 * i, 2 * m);
+    for (int i = m / 2 + 1; i < m; i++)
+        pt(4 * m, 4 * i);
+    for (int i = 0; i < m; i++)
+        pt(4 * (m - i), 4 * m);
+    for (int i = 0; i < m; i++)
+        pt(0, 4 * (m - i));
+    loops_end();
+    REQUIRE_POINTS(NP);
+    assert_int_equal(run_both_ways("a slit into a long ring"), 0);
+    /* the way back a little above the way out, its points between theirs, with folds of 1e-3
+       allowed (the decoder's quarter of its tolerance, cm_tessellate.c): 1e-2 above, a sliver of
+       the region that stays, every segment a side; 1e-4 above, a sliver below the fold that the
+       ear clipping zips, no more triangles than the ring has points (cdt_region, taken as it was,
+       split the segments there into 600 flat triangles, and left two open at 1e-2) */
+    for (int pass = 0; pass < 2; pass++) {
+        double dy = pass == 0 ? 1e-2 : 1e-4;
+        for (int i = 0, k = 0; i < NP; i++)
+            if (G[i].y == 2 * m && G[i].x < 4 * m && k++ >= m / 2) /* the way back, past the tip */
+                P[i] = cm_v2(G[i].x - 1.0, G[i].y + dy);
+            else
+                P[i] = G[i];
+        int nt, open = 0, missing = 0;
+        snprintf(CTX, sizeof CTX, "a near slit %g into a long ring", dy);
+        assert_ok(run_folds(1e-3, &nt));
+        for (int k = 0; k < nt; k++)
+            for (int j = 0; j < 3; j++) {
+                int a = T[k][j], b = T[k][(j + 1) % 3], twin = 0;
+                for (int q = 0; q < nt && !twin; q++)
+                    for (int i = 0; i < 3; i++)
+                        twin |= T[q][i] == b && T[q][(i + 1) % 3] == a;
+                open += !twin && b != (a + 1 == NP ? 0 : a + 1);
+            }
+        for (int i = 0; i < NP; i++) {
+            int b = i + 1 == NP ? 0 : i + 1, found = 0;
+            for (int k = 0; k < nt && !found; k++)
+                for (int j = 0; j < 3; j++)
+                    found |= T[k][j] == i && T[k][(j + 1) % 3] == b;
+            missing += !found;
+        }
+        if (pass == 0 && (open || missing))
+            fail_msg("%s: %d sides open, %d segments missing", CTX, open, missing);
+        if (pass == 1 && nt > NP - 2)
+            fail_msg("%s: %d triangles for a ring of %d points", CTX, nt, NP);
+    }
+}
+
+/*
  * A ring that folds back over itself (a zig-zag, then the same zig-zag shifted half a step, going
  * back): no triangulation exists.  Its candidate ears keep failing, and the ear clipping used to
  * test them turn after turn, about n^2 / 16 tests (1,011,992 for 4000 nodes; a ring like it in a
@@ -1474,7 +1590,6 @@ static void test_performance(void **state)
  * Returns the number of flat triangles.  No two boundary segments may
  * cross (the inputs here do not).
  */
-static cm_vec2 G[PBUF];
 static int GREP[PBUF], GBYX[PBUF], NGREP, GON[PBUF];
 static double GONT[PBUF];
 typedef struct gsub {
@@ -2163,6 +2278,8 @@ int main(void)
         cmocka_unit_test(test_repeated_boundary_points),
         cmocka_unit_test(test_wrong_orientation),
         cmocka_unit_test(test_folded_ring_bounded),
+        cmocka_unit_test(test_long_boundary_flips_bounded),
+        cmocka_unit_test(test_long_slit),
         cmocka_unit_test(test_grid_over_box),
         cmocka_unit_test(test_random_polygons),
         cmocka_unit_test(test_fuzz_cad_like),

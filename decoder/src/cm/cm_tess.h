@@ -100,6 +100,8 @@ typedef struct cm_tri_ws {
                                                the ring's length; tests read it) */
     long cdt_work;                          /* the fallback's steps in the last call (flips and fan
                                                walks; bounded likewise) */
+    long flips;                             /* Delaunay flips the last call made (tests read it: a
+                                               long boundary must not cost a quadratic number) */
 } cm_tri_ws;
 
 /**
