@@ -117,6 +117,15 @@ int cmd_eval(int argc, char **argv)
     const cm_model *m = &decoder->model;
     if (!rel_set)
         rel = m->rel_tol > 0 ? m->rel_tol : 0.01;
+    /* the encoder's default (encode_opts_for_model): with neither --tol nor --tol-abs, a face's
+       tolerance is also at most 1e-3 of the model's diagonal */
+    if (!rel_set && !(abs_tol > 0)) {
+        encode_opts d;
+        encode_opts_default(&d);
+        encode_opts_for_model(&d, brep_diag(&lm.brep));
+        abs_tol = d.abs_tol;
+        rel_set = d.rel_set;
+    }
     int left_out = 0;
     if ((int)m->nfaces < lm.mesh.nfaces && (e = match_left_out(paths[0], m, &lm, &left_out, &st)) != CM_OK) {
         cm_report_status(stderr, cmd_prog, paths[0], &st);

@@ -26,6 +26,9 @@ void encode_opts_default(encode_opts *o)
     o->strict = 0;
     o->abs_tol = 0;
     o->rel_set = 0;
+    /* model-level accuracy: 1 % of a large face's box lets it drift far (as1_pe_203's 5 m face was
+       rebuilt 48 mm off, 0.75 % of the diagonal, where a mesh at 1e-3 of it stays within 0.1 %) */
+    o->model_tol_rel = 1e-3;
     o->progress = NULL;
     o->progress_ctx = NULL;
 }
@@ -35,6 +38,14 @@ double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox)
     if (!(abs_tol > 0))
         return rel_tol * bbox;
     return rel_set && rel_tol * bbox < abs_tol ? rel_tol * bbox : abs_tol;
+}
+
+void encode_opts_for_model(encode_opts *o, double diag)
+{
+    if (o->model_tol_rel > 0 && !o->rel_set && !(o->abs_tol > 0) && diag > 0) {
+        o->abs_tol = o->model_tol_rel * diag;
+        o->rel_set = 1;
+    }
 }
 
 void encode_result_free(encode_result *r)
@@ -48,9 +59,22 @@ void encode_result_free(encode_result *r)
  * One try at the whole file.  Faces that cannot be sent as they are come back in fault[] (per curve
  * mesh face, *nfaults of them) with CM_OK and no file; anything else that fails is the model's.
  */
-static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *o, const unsigned char *keep_only,
+/* a tessellation need over the target's limit */
+static int tess_over(const cm_limit_info *target, const uint32_t *need)
+{
+    static const int ids[] = {CM_LIMIT_MAX_TESS_POINTS, CM_LIMIT_MAX_EDGE_SAMPLES, CM_LIMIT_MAX_TRIS};
+    for (int i = 0; i < 3; i++)
+        if (need[ids[i]] > target[ids[i]].value)
+            return 1;
+    return 0;
+}
+
+static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *asked, const unsigned char *keep_only,
                           const char **fault, int *nfaults, encode_result *r, cm_status *st)
 {
+    encode_opts model_opts = *asked;
+    const encode_opts *o = &model_opts;
+    encode_opts_for_model(&model_opts, brep_diag(&lm->brep));
     memset(r, 0, sizeof *r);
     *nfaults = 0;
     tx t;
@@ -129,6 +153,19 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *o, c
     }
     if (e == CM_OK && t.nfaults == 0) {
         enc_compute_needs(t.w, r, r->need);
+        e = enc_tessellation_needs(&t, r->need, o, st);
+    }
+    /* fit the board (issue 14.5): what the tessellation needs (points of a face, samples of an edge,
+       triangles) follows the recommended chordal tolerance, the one setting the encoder may change
+       without changing the model.  Past a target profile's tessellation limits it is made coarser,
+       twice at a time, at most 16 times (occt__bug22869_Spring: a face of 16329 points, where the
+       terminal has 8192); the summary says so.  Beyond that the profile refuses, as before */
+    r->tess_asked = r->tess_used = o->tess_rel * diag;
+    for (int k = 0; e == CM_OK && t.nfaults == 0 && o->target && k < 4 && tess_over(o->target, r->need); k++) {
+        model_opts.tess_rel *= 2;
+        t.w->dec.model.tess_tol = model_opts.tess_rel * diag;
+        r->tess_used = t.w->dec.model.tess_tol;
+        r->need[CM_LIMIT_MAX_TESS_POINTS] = r->need[CM_LIMIT_MAX_EDGE_SAMPLES] = r->need[CM_LIMIT_MAX_TRIS] = 0;
         e = enc_tessellation_needs(&t, r->need, o, st);
     }
     if (e == CM_OK && t.nfaults > 0) {

@@ -39,6 +39,9 @@ typedef struct encode_opts {
     const char *target_name;
     double abs_tol;              /* > 0: a face's tolerance in mm (with rel_tol too when rel_set) */
     int rel_set;                 /* rel_tol was asked for (with abs_tol the smaller one applies) */
+    double model_tol_rel;        /* unless rel_tol or abs_tol was asked for: a face's tolerance is
+                                    also at most this fraction of the model's diagonal (default 1e-3;
+                                    0: rel_tol alone) */
     int gregory;                 /* try GREGORY (spec §6) on non-planar faces (default 1) */
     int gregory_exact;           /* then GREGORY-EXACT (with gregory; default 1) */
     int gregory_fit;             /* then GREGORY-FIT (with gregory_exact; default 1) */
@@ -53,6 +56,10 @@ void encode_opts_default(encode_opts *o);
 
 /** A face's rebuild tolerance in mm (spec §1 tol_F): rel_tol x bbox_F, or abs_tol, or the smaller. */
 double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox);
+
+/** The options as they apply to a model of diagonal `diag` (mm): with neither --tol nor --tol-abs,
+    abs_tol = model_tol_rel x diag and the smaller of it and rel_tol x bbox_F applies (issue 14.6). */
+void encode_opts_for_model(encode_opts *o, double diag);
 
 typedef struct face_report {
     int method;        /* CM_METHOD_* */
@@ -78,6 +85,8 @@ typedef struct encode_result {
     int faces_flipped; /* faces turned to make every part consistently oriented */
     int faces_left_out; /* faces the encoder left out (model_leave_out_face: warned, in lm->left_out) */
     double q;          /* grid step (mm) */
+    double tess_asked, tess_used; /* recommended chordal tolerance (mm): asked (--tess), written (coarser
+                                     when a target profile's tessellation limits needed it, issue 14.5) */
     size_t section_bytes[6];
     face_report *faces; /* one per face (malloc'd) */
     char refusal[512]; /* non-empty: the target profile cannot load the file (why) */

@@ -11,12 +11,14 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "cm/cm_decode.h"
 #include "cm/cm_tessellate.h"
 #include "cm/cm_arith.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_method.h"
+#include "cm/cm_limits_info.h"
 #include "encode/encode.h"
 #include "igs_writer.h"
 #include "mesh_topo.h"
@@ -257,6 +259,103 @@ static void test_flat_disc_plane(void **state)
         fail_msg("the disc's PLANE error is %g mm of a %g mm face", r.faces[0].rebuild_max, r.faces[0].bbox);
     encode_result_free(&r);
     model_free(&lm);
+}
+
+/*
+ * Model-level accuracy by default (issue 14.6): a rebuilt face is within the smaller of 1 % of its
+ * own box and 1e-3 of the model's diagonal.  With 1 % of the face alone, a face as large as its
+ * model could drift ten times further than a mesh at 1e-3 of the diagonal would (as1_pe_203's 5 m
+ * face was rebuilt 48 mm off, 0.75 % of the diagonal).  Curved one-face models, default options.
+ */
+static void test_default_tolerance_model_level(void **state)
+{
+    (void)state;
+    for (int shape = 0; shape < 4; shape++) {
+        igw w;
+        igw_init(&w);
+        if (shape == 0)
+            igw_bump_144(&w, 10, 2);
+        else if (shape == 1)
+            igw_tri_bump_144(&w, 10, 2);
+        else if (shape == 2)
+            igw_dome_square_hole_144(&w, 12.0, 4.0);
+        else
+            igw_bicubic_128(&w);
+        encode_opts o;
+        encode_opts_default(&o);
+        loaded_model lm;
+        encode_result r;
+        encode_igw_opts(&w, &lm, &r, &o);
+        igw_free(&w);
+        double diag = brep_diag(&lm.brep);
+        int rebuilt = 0;
+        for (int f = 0; f < lm.mesh.nfaces; f++) {
+            if (r.faces[f].method == CM_METHOD_KEEP)
+                continue;
+            rebuilt++;
+            if (!(r.faces[f].rebuild_max <= 1e-3 * diag))
+                fail_msg("shape %d, face %d (method %d): %g mm off, over 1e-3 of the %g mm diagonal", shape, f,
+                         r.faces[f].method, r.faces[f].rebuild_max, diag);
+        }
+        if (shape == 0)
+            assert_true(rebuilt > 0); /* the bump is still rebuilt, only closer */
+        encode_result_free(&r);
+        model_free(&lm);
+    }
+}
+
+/*
+ * Fit the board (issue 14.5): a profile whose tessellation limits the model passes at the asked
+ * chordal tolerance gets a coarser recommended one (twice at a time, at most 16 times), stated in
+ * the header and in the result, instead of a refusal; past 16 times it is still refused.
+ */
+static void test_profile_coarsens_tessellation(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    igw_bump_144(&w, 10, 2);
+    encode_opts o;
+    encode_opts_default(&o);
+    loaded_model lm;
+    encode_result r;
+    encode_igw_opts(&w, &lm, &r, &o);
+    uint32_t points = r.need[CM_LIMIT_MAX_TESS_POINTS];
+    assert_true(points > 100);
+    assert_true(r.tess_used == r.tess_asked);
+    encode_result_free(&r);
+    model_free(&lm);
+
+    static cm_limit_info board[CM_LIMIT_COUNT];
+    for (int i = 0; i < CM_LIMIT_COUNT; i++)
+        board[i] = cm_limit_table[i];
+    board[CM_LIMIT_MAX_TESS_POINTS].value = points / 3;
+    o.target = board;
+    o.target_name = "test";
+    encode_igw_opts(&w, &lm, &r, &o);
+    assert_true(r.need[CM_LIMIT_MAX_TESS_POINTS] <= points / 3);
+    assert_true(r.tess_used >= 2 * r.tess_asked && r.tess_used <= 16 * r.tess_asked);
+    cm_status st;
+    assert_ok(decode_bytes(r.bytes, r.len, 7, &st));
+    assert_true(dec.model.tess_tol == r.tess_used);
+    encode_result_free(&r);
+    model_free(&lm);
+
+    /* a limit no coarser tolerance within 16 times meets: refused, by name */
+    board[CM_LIMIT_MAX_TESS_POINTS].value = 4;
+    char *text = NULL;
+    size_t len = 0;
+    text = igw_text(&w, &len);
+    assert_ok(model_load_data("synthetic", text, len, &lm, NULL, NULL, &st));
+    free(text);
+    memset(&r, 0, sizeof r);
+    cm_status_init(&st);
+    assert_int_equal(encode_model(&lm, &o, &r, &st), CM_E_LIMIT);
+    assert_int_equal(st.limit, CM_LIMIT_MAX_TESS_POINTS);
+    assert_non_null(strstr(r.refusal, "MAX_TESS_POINTS"));
+    encode_result_free(&r);
+    model_free(&lm);
+    igw_free(&w);
 }
 
 static void test_half_cylinder(void **state)
@@ -557,6 +656,8 @@ int main(void)
         cmocka_unit_test(test_box_hole_186),
         cmocka_unit_test(test_inside_out),
         cmocka_unit_test(test_flat_disc_plane),
+        cmocka_unit_test(test_default_tolerance_model_level),
+        cmocka_unit_test(test_profile_coarsens_tessellation),
         cmocka_unit_test(test_half_cylinder),
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test(test_refine_skips_passed_pieces),
