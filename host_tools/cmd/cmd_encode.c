@@ -210,6 +210,10 @@ int cmd_encode(int argc, char **argv)
         printf("%s -> %s: %d faces (%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the IGES (%ld bytes)\n",
                path, out, lm.mesh.nfaces, methods, left,
                r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0, isize);
+        if (r.edges_refit + r.surfs_refit > 0)
+            fprintf(stderr, "%s: %s: note: %d edge curves and %d kept surfaces re-approximated within a quarter of "
+                    "their tolerance to fit profile %s\n", cmd_prog, path, r.edges_refit, r.surfs_refit,
+                    o.target_name ? o.target_name : "?");
         if (r.tess_used > r.tess_asked)
             fprintf(stderr, "%s: %s: note: recommended chordal tolerance %.3g mm, not %.3g mm (%.0fx coarser), so that "
                     "profile %s can tessellate the model (a viewer may ask for finer: --tess)\n", cmd_prog, path,

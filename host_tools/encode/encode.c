@@ -116,6 +116,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         tx_free(&t);
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
+    t.o = o;
     if ((e = tx_build_edges(lm, &t, st)) != CM_OK) {
         tx_free(&t);
         return e;
@@ -161,6 +162,8 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
        twice at a time, at most 16 times (occt__bug22869_Spring: a face of 16329 points, where the
        terminal has 8192); the summary says so.  Beyond that the profile refuses, as before */
     r->tess_asked = r->tess_used = o->tess_rel * diag;
+    r->edges_refit = t.edges_refit;
+    r->surfs_refit = t.surfs_refit;
     for (int k = 0; e == CM_OK && t.nfaults == 0 && o->target && k < 4 && tess_over(o->target, r->need); k++) {
         model_opts.tess_rel *= 2;
         t.w->dec.model.tess_tol = model_opts.tess_rel * diag;

@@ -85,6 +85,7 @@ typedef struct encode_result {
     int faces_flipped; /* faces turned to make every part consistently oriented */
     int faces_left_out; /* faces the encoder left out (model_leave_out_face: warned, in lm->left_out) */
     double q;          /* grid step (mm) */
+    int edges_refit, surfs_refit; /* edges and kept surfaces re-approximated to fit the target profile */
     double tess_asked, tess_used; /* recommended chordal tolerance (mm): asked (--tess), written (coarser
                                      when a target profile's tessellation limits needed it, issue 14.5) */
     size_t section_bytes[6];

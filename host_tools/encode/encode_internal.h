@@ -75,7 +75,24 @@ typedef struct tx {
     const char **fault; /* per face: why it cannot be sent (NULL: it can); see encode_model */
     int nfaults;
     enc_work *w;        /* the decoder and tessellation storage this encode works in */
+    const encode_opts *o; /* the options, as they apply to this model (encode_opts_for_model) */
+    int edges_refit;    /* edges re-approximated to fit the target profile (fit_board.c) */
+    int surfs_refit;    /* kept surfaces likewise */
 } tx;
+
+/*
+ * Replace curve c by a clamped B-spline of degree min(3, max_degree) with max_ctrl control points,
+ * its ends kept, fitted to the original by least squares; only when it stays within tol (mm) of it
+ * (fit_board.c).  Returns 1 if c was replaced, 0 if not (c unchanged).
+ */
+int enc_edge_refit(hcurve *c, int max_degree, int max_ctrl, double tol, cm_status *st);
+
+/*
+ * Replace polynomial surface s by one of degree at most min(3, max_degree) per direction, at most
+ * max_dir control points per direction and max_total in all, within tol (mm) of it (fit_board.c).
+ * Returns 1 if s was replaced, 0 if not (s unchanged).
+ */
+int enc_surf_refit(hsurf *s, int max_degree, int max_dir, int max_total, double tol, cm_status *st);
 
 /*
  * A face's record fields from tx's per-face layout and corner: GREGORY's as they are; NFILL's and
@@ -124,7 +141,7 @@ int enc_outward_parts(loaded_model *lm);
 
 cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 
-cm_err tx_build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_status *st);
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st);
 
 /* assemble header + sections + trailer; needs may be NULL (all zero) */
 cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o, const uint32_t *need,

@@ -231,6 +231,23 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
             c.n = nn;
             free(keep);
         }
+        /* fit the board: an edge over the target profile's degree or control points is
+           re-approximated within a quarter of its own tolerance (fit_board.c), else left as it
+           is (and the profile refuses the model, naming the limit) */
+        const cm_limit_info *L = t->o ? t->o->target : NULL;
+        if (L && (c.n > (int)L[CM_LIMIT_MAX_EDGE_CTRL].value || c.p > (int)L[CM_LIMIT_MAX_DEGREE].value)) {
+            cm_vec3 lo = c.ctrl[0], hi = c.ctrl[0];
+            for (int j = 1; j < c.n; j++) {
+                lo = cm_v3(fmin(lo.x, c.ctrl[j].x), fmin(lo.y, c.ctrl[j].y), fmin(lo.z, c.ctrl[j].z));
+                hi = cm_v3(fmax(hi.x, c.ctrl[j].x), fmax(hi.y, c.ctrl[j].y), fmax(hi.z, c.ctrl[j].z));
+            }
+            double tol = 0.25 * encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+            int max_ctrl = c.n < (int)L[CM_LIMIT_MAX_EDGE_CTRL].value ? c.n : (int)L[CM_LIMIT_MAX_EDGE_CTRL].value;
+            cm_status rst;
+            cm_status_init(&rst);
+            if (enc_edge_refit(&c, (int)L[CM_LIMIT_MAX_DEGREE].value, max_ctrl, tol, &rst))
+                t->edges_refit++;
+        }
         if (X->v0 != X->v1 && (c.n == 2 || is_segment(&c, t->q))) {
             X->kind = CM_EDGE_LINE;
             X->p = 1;
@@ -290,7 +307,7 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
     return err;
 }
 
-cm_err tx_build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
 {
     hsurf s = {0};
     double u0, u1, v0, v1;
@@ -323,6 +340,24 @@ cm_err tx_build_surface(const tx *t, const hsurf *orig, tx_surf *S, cm_status *s
     s.nv = nv;
     free(ku);
     free(kv);
+    /* fit the board: a surface over the target profile's degree or control points is
+       re-approximated within a quarter of the tolerance of a face its size (fit_board.c) */
+    const cm_limit_info *L = t->o ? t->o->target : NULL;
+    if (L && (s.p > (int)L[CM_LIMIT_MAX_DEGREE].value || s.q > (int)L[CM_LIMIT_MAX_DEGREE].value ||
+              s.nu > (int)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value || s.nv > (int)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value ||
+              (long)s.nu * s.nv > (long)L[CM_LIMIT_MAX_SURF_CTRL].value)) {
+        cm_vec3 lo = s.ctrl[0], hi = s.ctrl[0];
+        for (long j = 1; j < (long)s.nu * s.nv; j++) {
+            lo = cm_v3(fmin(lo.x, s.ctrl[j].x), fmin(lo.y, s.ctrl[j].y), fmin(lo.z, s.ctrl[j].z));
+            hi = cm_v3(fmax(hi.x, s.ctrl[j].x), fmax(hi.y, s.ctrl[j].y), fmax(hi.z, s.ctrl[j].z));
+        }
+        double tol = 0.25 * encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+        cm_status rst;
+        cm_status_init(&rst);
+        if (enc_surf_refit(&s, (int)L[CM_LIMIT_MAX_DEGREE].value, (int)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value,
+                           (int)L[CM_LIMIT_MAX_SURF_CTRL].value, tol, &rst))
+            t->surfs_refit++;
+    }
     S->p = s.p;
     S->q = s.q;
     S->nu = s.nu;
