@@ -518,13 +518,16 @@ demo:
 	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode
 	$(Q)host_tools/scripts/demo.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(DEMO_MODEL) out
 
-# size, speed and memory on the bundled models and the shared corpus (not part of check);
-# BENCH_CALLGRIND=1 adds the decoder's instruction counts (valgrind)
+# size, speed and memory on the bundled models and the shared corpus (not part of check), then the
+# same models against xz -9e, Open CASCADE's mesh + Draco and Open CASCADE's read + mesh (one run);
+# BENCH_CALLGRIND=1 adds the decoders' instruction counts (valgrind)
 BENCH_MODELS ?= $(wildcard tests/data/*.igs) $(wildcard $(SHARED_MODELS)/iges/*)
 bench:
-	$(Q)DEPS_ARCHS= tests/tools/deps.sh $(DEMO_PKGS) time bc valgrind
-	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode
+	$(Q)DEPS_ARCHS= tests/tools/deps.sh $(DEMO_PKGS) time bc valgrind draco \
+		libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev
+	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode $(ORACLE_BIN)
 	$(Q)host_tools/scripts/bench.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(BUILD_ROOT)/bench $(BENCH_MODELS)
+	$(Q)host_tools/scripts/bench_peers.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(ORACLE_BIN) $(BUILD_ROOT)/bench $(BENCH_MODELS)
 	$(Q)$(MAKE) --no-print-directory -s bench-link
 
 # the link's speed: cmz send -> cmz-terminal over ptys, unpaced, paced at 115200 baud, and noisy

@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# bench_peers.sh CMZ CMZ_DECODE OCCT_ORACLE OUTDIR MODEL... - curvemesh against the peers a user
+# would pick instead, measured side by side in one run, per model (issue 14, issue 15):
+#
+#   - size: the .cmz that bench.sh wrote to OUTDIR against `xz -9e` of the IGES, and against Open
+#     CASCADE's mesh of the same IGES at a chordal deflection of 1e-3 of the model's diagonal
+#     (`occt_oracle write-stl --defl-rel 1e-3`: OCCT reads the IGES, visible entities only, and
+#     meshes it with BRepMesh), compressed by Draco (`draco_encoder -cl 10`, default quantisation:
+#     positions on 11 bits of the box's largest side, a step of 5e-4 of it, within the deflection);
+#   - decode: the terminal's cmz-decode at the same deflection (--tess) against `draco_decoder` on
+#     that Draco file (best of 3 wall times; with BENCH_CALLGRIND=1 also instruction counts, stable
+#     where wall time is noisy), and against Open CASCADE reading the IGES and meshing it (one run:
+#     what a terminal running OCCT would do instead);
+#   - triangles each makes at that deflection.
+#
+# A model the terminal's profile refuses is decoded by the workstation's `cmz decode` (same code),
+# and the table says so.  Ratios above 1 favour curvemesh.  Writes OUTDIR/peers.tsv and prints a
+# Markdown table (README's) with the medians.  Needs draco (Debian package `draco`), xz, bc.
+set -u
+cmz=$1 dec=$2 oracle=$3 out=$4
+shift 4
+for tool in draco_encoder draco_decoder xz bc; do
+    command -v "$tool" > /dev/null || { echo "bench_peers: $tool not found (make bench installs it)" >&2; exit 2; }
+done
+[ -x "$oracle" ] || { echo "bench_peers: $oracle not built (make oracle)" >&2; exit 2; }
+tsv=$out/peers.tsv
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+printf 'model\tiges_bytes\txz9e\tcmz_bytes\tdraco_bytes\tdefl_mm\tocct_tris\tcmz_tris\tocct_s\tcmz_s\tdraco_s\tcmz_instr\tdraco_instr\tterminal\n' > "$tsv"
+now() { date +%s.%N; }
+# best of 3 wall times of a command (its output thrown away); empty if it fails
+best3() {
+    local best= s e d
+    for _ in 1 2 3; do
+        s=$(now)
+        "$@" > /dev/null 2>&1 || return 1
+        e=$(now)
+        d=$(echo "$e - $s" | bc)
+        if [ -z "$best" ] || [ "$(echo "$d < $best" | bc)" = 1 ]; then best=$d; fi
+    done
+    echo "$best"
+}
+instr() {
+    if [ "${BENCH_CALLGRIND:-0}" = 1 ] && command -v valgrind > /dev/null; then
+        valgrind --tool=callgrind --callgrind-out-file=/dev/null "$@" 2>&1 | sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
+    fi
+}
+for m in "$@"; do
+    name=$(basename "${m%.*}")
+    c=$out/$name.cmz
+    [ -s "$c" ] || { echo "# $name: no $c (bench.sh did not encode it): skipped" >&2; continue; }
+    # Open CASCADE: read + mesh (+ a binary STL, small next to the meshing), timed once
+    s=$(now)
+    if ! occ=$("$oracle" write-stl "$m" "$work/m.stl" --defl-rel 1e-3 2>&1); then
+        echo "# $name: Open CASCADE failed: $(tail -n 1 <<<"$occ")" >&2
+        continue
+    fi
+    e=$(now)
+    occt_s=$(echo "$e - $s" | bc)
+    defl=$(sed -n 's/^defl \([0-9.eE+-]*\)$/\1/p' <<<"$occ")
+    occt_tris=$(sed -n 's/^triangles \([0-9]*\)$/\1/p' <<<"$occ")
+    [ -n "$defl" ] && [ -n "$occt_tris" ] || { echo "# $name: cannot read occt_oracle's output: $occ" >&2; continue; }
+    if ! draco_encoder -i "$work/m.stl" -o "$work/m.drc" -cl 10 > "$work/drc.log" 2>&1; then
+        echo "# $name: draco_encoder failed: $(tail -n 1 "$work/drc.log")" >&2
+        continue
+    fi
+    # curvemesh at the same deflection; the terminal's decoder, else the workstation's
+    term=ok
+    run=("$dec")
+    if ! d=$("$dec" "$c" -o "$work/c.glb" --tess "$defl" 2>&1); then
+        term=$(sed -n 's/.*needs \([A-Z_]*=[0-9]*\), this build (profile terminal) has \([0-9]*\).*/\1 > \2/p' <<<"$d")
+        [ -n "$term" ] || term=failed
+        run=("$cmz" decode)
+        d=$("$cmz" decode "$c" -o "$work/c.glb" --tess "$defl" 2>&1) || { echo "# $name: decode failed: $d" >&2; continue; }
+    fi
+    cmz_tris=$(sed -n 's/.* \([0-9]*\) triangles.*/\1/p' <<<"$d" | head -n 1)
+    cmz_s=$(best3 "${run[@]}" "$c" -o "$work/c.glb" --tess "$defl") || { echo "# $name: decode failed" >&2; continue; }
+    draco_s=$(best3 draco_decoder -i "$work/m.drc" -o "$work/m.ply") || { echo "# $name: draco_decoder failed" >&2; continue; }
+    ci=$(instr "${run[@]}" "$c" -o "$work/c.glb" --tess "$defl")
+    di=$(instr draco_decoder -i "$work/m.drc" -o "$work/m.ply")
+    printf '%s\t%d\t%d\t%d\t%d\t%s\t%d\t%d\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$(stat -c %s "$m")" \
+        "$(xz -9e -c "$m" | wc -c)" "$(stat -c %s "$c")" "$(stat -c %s "$work/m.drc")" "$defl" "$occt_tris" \
+        "$cmz_tris" "$occt_s" "$cmz_s" "$draco_s" "${ci:--}" "${di:--}" "$term" >> "$tsv"
+done
+# the Markdown table; ratios > 1 favour curvemesh; medians over the models
+awk -F'\t' 'function med(a, n,   i, j, t) { for (i = 2; i <= n; i++) for (j = i; j > 1 && a[j] < a[j - 1]; j--) { t = a[j]; a[j] = a[j - 1]; a[j - 1] = t }
+                                        return n == 0 ? 0 : (n % 2 ? a[(n + 1) / 2] : (a[n / 2] + a[n / 2 + 1]) / 2) }
+    NR == 1 { cg = 0; next }
+    { n++; name[n] = $1; row[n] = $0
+      xr[n] = $3 / $4; dr[n] = $5 / $4; sr[n] = $11 > 0 ? $10 / $11 : 0; orr[n] = $10 > 0 ? $9 / $10 : 0
+      if ($12 != "-" && $13 != "-" && $13 > 0) { cg = 1; ir[n] = $12 / $13; ni++ ; irs[ni] = ir[n] } else ir[n] = -1
+      xs[n] = xr[n]; ds[n] = dr[n]; ss[n] = sr[n]; os[n] = orr[n] }
+    END {
+      print "| model | .cmz | xz -9e | ×xz | Draco (OCCT mesh) | Draco/.cmz | deflection mm | triangles OCCT / cmz | decode cmz s | draco_decoder s | cmz/draco time | OCCT read+mesh s | OCCT/cmz time |" (cg ? " cmz/draco instr |" : "")
+      print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|" (cg ? "---:|" : "")
+      for (i = 1; i <= n; i++) { split(row[i], f, "\t")
+          printf "| %s%s | %d | %d | %.2f | %d | %.2f | %.3g | %d / %d | %.3f | %.3f | %.1f | %.2f | %.1f |%s\n", f[1], (f[14] == "ok" ? "" : " (host decoder: " f[14] ")"),
+                 f[4], f[3], xr[i], f[5], dr[i], f[6], f[7], f[8], f[10], f[11], sr[i], f[9], orr[i], (cg ? (ir[i] < 0 ? " - |" : sprintf(" %.1f |", ir[i])) : "") }
+      printf "| **median** (%d models) | | | %.2f | | %.2f | | | | | %.1f | | %.1f |%s\n", n, med(xs, n), med(ds, n), med(ss, n), med(os, n), (cg ? sprintf(" %.1f |", med(irs, ni)) : "")
+    }' "$tsv"
+echo "(written to $tsv)"
