@@ -537,29 +537,32 @@ static void test_section_table_entries(void **state)
 
 /* ---- the other header fields ---- */
 
-/* the need table may be shorter or longer than this build's list (a newer writer's extra needs 0) */
+/* the reference file with a need table of `count` entries (the spec in *sp, the length in *n) */
+static uint8_t *with_need_count(uint32_t count, spec *sp, size_t *n)
+{
+    free(reference_file(sp, n));
+    sp->nneeds = count;
+    return assemble(sp, n);
+}
+
+/* the need table may be longer than this build's list (a newer writer's extra needs 0), never
+   shorter than format 1.0's 25 */
 static void test_need_counts(void **state)
 {
     (void)state;
+    spec sp;
+    size_t n;
     /* a table shorter than format 1.0's 25 needs leaves the tessellation unbounded by the file:
        refused at the count, before any need is used */
     static const uint32_t short_counts[] = {0, 1, 15, CM_FMT_MIN_NEEDS - 1};
     for (size_t i = 0; i < sizeof short_counts / sizeof short_counts[0]; i++) {
-        spec sp;
-        size_t n;
-        free(reference_file(&sp, &n));
-        sp.nneeds = short_counts[i];
-        uint8_t *b = assemble(&sp, &n);
+        uint8_t *b = with_need_count(short_counts[i], &sp, &n);
         assert_refused(b, n, CM_E_FORMAT, CM_HDR_NLIMITS, "need table shorter");
         free(b);
     }
     static const uint32_t counts[] = {CM_FMT_MIN_NEEDS, CM_LIMIT_COUNT, CM_LIMIT_COUNT + 1, 100, 255};
     for (size_t i = 0; i < sizeof counts / sizeof counts[0]; i++) {
-        spec sp;
-        size_t n;
-        free(reference_file(&sp, &n));
-        sp.nneeds = counts[i];
-        uint8_t *b = assemble(&sp, &n);
+        uint8_t *b = with_need_count(counts[i], &sp, &n);
         assert_decodes(b, n);
         free(b);
         if (counts[i] <= CM_LIMIT_COUNT)
@@ -571,8 +574,6 @@ static void test_need_counts(void **state)
         free(b);
     }
     /* a need over this build's limit: named, at its entry */
-    spec sp;
-    size_t n;
     free(reference_file(&sp, &n));
     sp.need[CM_LIMIT_MAX_FACES] = CM_MAX_FACES + 1u;
     uint8_t *b = assemble(&sp, &n);
