@@ -211,7 +211,7 @@ int cmd_encode(int argc, char **argv)
                path, out, lm.mesh.nfaces, methods, left,
                r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0, isize);
         if (r.edges_refit + r.surfs_refit > 0)
-            fprintf(stderr, "%s: %s: note: %d edge curves and %d kept surfaces re-approximated within a quarter of "
+            fprintf(stderr, "%s: %s: note: %d edge curves and %d surfaces re-approximated within a quarter of "
                     "their tolerance to fit profile %s\n", cmd_prog, path, r.edges_refit, r.surfs_refit,
                     o.target_name ? o.target_name : "?");
         if (r.tess_used > r.tess_asked)
