@@ -11,7 +11,9 @@
 #     that Draco file (best of 3 wall times; with BENCH_CALLGRIND=1 also instruction counts, stable
 #     where wall time is noisy), and against Open CASCADE reading the IGES and meshing it (one run:
 #     what a terminal running OCCT would do instead);
-#   - triangles each makes at that deflection.
+#   - triangles each makes at that deflection, and the two-sided deviation (Hausdorff distance) of
+#     each decoded mesh from the B-rep as Open CASCADE reads it (`occt_oracle mesh-dev --curves 3d`:
+#     the larger of mesh -> model and model -> mesh), so that sizes compare at measured accuracy.
 #
 # A model the terminal's profile refuses is decoded by the workstation's `cmz decode` (same code),
 # and the table says so.  Ratios above 1 favour curvemesh.  Writes OUTDIR/peers.tsv and prints a
@@ -26,7 +28,13 @@ done
 tsv=$out/peers.tsv
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-printf 'model\tiges_bytes\txz9e\tcmz_bytes\tdraco_bytes\tdefl_mm\tocct_tris\tcmz_tris\tocct_s\tcmz_s\tdraco_s\tcmz_instr\tdraco_instr\tterminal\n' > "$tsv"
+printf 'model\tiges_bytes\txz9e\tcmz_bytes\tdraco_bytes\tdefl_mm\tocct_tris\tcmz_tris\tocct_s\tcmz_s\tdraco_s\tcmz_instr\tdraco_instr\tterminal\tcmz_dev_mm\tdraco_dev_mm\n' > "$tsv"
+# the two-sided deviation of mesh STL from model IGES (mm), or - if the oracle cannot tell
+hausdorff() {
+    "$oracle" mesh-dev "$1" "$2" --curves 3d 2>/dev/null |
+        awk '$1 == "mesh_to_model_max" || $1 == "model_to_mesh_max" { if ($2 > m) m = $2; n++ }
+             END { if (n == 2) printf "%.4g\n", m; else print "-" }'
+}
 now() { date +%s.%N; }
 # best of 3 wall times of a command (its output thrown away); empty if it fails
 best3() {
@@ -76,11 +84,15 @@ for m in "$@"; do
     cmz_tris=$(sed -n 's/.* \([0-9]*\) triangles.*/\1/p' <<<"$d" | head -n 1)
     cmz_s=$(best3 "${run[@]}" "$c" -o "$work/c.glb" --tess "$defl") || { echo "# $name: decode failed" >&2; continue; }
     draco_s=$(best3 draco_decoder -i "$work/m.drc" -o "$work/m.ply") || { echo "# $name: draco_decoder failed" >&2; continue; }
+    "$cmz" decode "$c" -o "$work/c.stl" --tess "$defl" > /dev/null 2>&1 || rm -f "$work/c.stl"
+    draco_decoder -i "$work/m.drc" -o "$work/d.stl" > /dev/null 2>&1 || rm -f "$work/d.stl"
+    cdev=$([ -s "$work/c.stl" ] && hausdorff "$m" "$work/c.stl" || echo -)
+    ddev=$([ -s "$work/d.stl" ] && hausdorff "$m" "$work/d.stl" || echo -)
     ci=$(instr "${run[@]}" "$c" -o "$work/c.glb" --tess "$defl")
     di=$(instr draco_decoder -i "$work/m.drc" -o "$work/m.ply")
-    printf '%s\t%d\t%d\t%d\t%d\t%s\t%d\t%d\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$(stat -c %s "$m")" \
+    printf '%s\t%d\t%d\t%d\t%d\t%s\t%d\t%d\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$(stat -c %s "$m")" \
         "$(xz -9e -c "$m" | wc -c)" "$(stat -c %s "$c")" "$(stat -c %s "$work/m.drc")" "$defl" "$occt_tris" \
-        "$cmz_tris" "$occt_s" "$cmz_s" "$draco_s" "${ci:--}" "${di:--}" "$term" >> "$tsv"
+        "$cmz_tris" "$occt_s" "$cmz_s" "$draco_s" "${ci:--}" "${di:--}" "$term" "$cdev" "$ddev" >> "$tsv"
 done
 # the Markdown table; ratios > 1 favour curvemesh; medians over the models
 awk -F'\t' 'function med(a, n,   i, j, t) { for (i = 2; i <= n; i++) for (j = i; j > 1 && a[j] < a[j - 1]; j--) { t = a[j]; a[j] = a[j - 1]; a[j - 1] = t }
@@ -91,11 +103,11 @@ awk -F'\t' 'function med(a, n,   i, j, t) { for (i = 2; i <= n; i++) for (j = i;
       if ($12 != "-" && $13 != "-" && $13 > 0) { cg = 1; ir[n] = $12 / $13; ni++ ; irs[ni] = ir[n] } else ir[n] = -1
       xs[n] = xr[n]; ds[n] = dr[n]; ss[n] = sr[n]; os[n] = orr[n] }
     END {
-      print "| model | .cmz | xz -9e | ×xz | Draco (OCCT mesh) | Draco/.cmz | deflection mm | triangles OCCT / cmz | decode cmz s | draco_decoder s | cmz/draco time | OCCT read+mesh s | OCCT/cmz time |" (cg ? " cmz/draco instr |" : "")
-      print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|" (cg ? "---:|" : "")
+      print "| model | .cmz | xz -9e | ×xz | Draco (OCCT mesh) | Draco/.cmz | deflection mm | triangles OCCT / cmz | deviation mm cmz / Draco | decode cmz s | draco_decoder s | cmz/draco time | OCCT read+mesh s | OCCT/cmz time |" (cg ? " cmz/draco instr |" : "")
+      print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|" (cg ? "---:|" : "")
       for (i = 1; i <= n; i++) { split(row[i], f, "\t")
-          printf "| %s%s | %d | %d | %.2f | %d | %.2f | %.3g | %d / %d | %.3f | %.3f | %.1f | %.2f | %.1f |%s\n", f[1], (f[14] == "ok" ? "" : " (host decoder: " f[14] ")"),
-                 f[4], f[3], xr[i], f[5], dr[i], f[6], f[7], f[8], f[10], f[11], sr[i], f[9], orr[i], (cg ? (ir[i] < 0 ? " - |" : sprintf(" %.1f |", ir[i])) : "") }
-      printf "| **median** (%d models) | | | %.2f | | %.2f | | | | | %.1f | | %.1f |%s\n", n, med(xs, n), med(ds, n), med(ss, n), med(os, n), (cg ? sprintf(" %.1f |", med(irs, ni)) : "")
+          printf "| %s%s | %d | %d | %.2f | %d | %.2f | %.3g | %d / %d | %s / %s | %.3f | %.3f | %.1f | %.2f | %.1f |%s\n", f[1], (f[14] == "ok" ? "" : " (host decoder: " f[14] ")"),
+                 f[4], f[3], xr[i], f[5], dr[i], f[6], f[7], f[8], f[15], f[16], f[10], f[11], sr[i], f[9], orr[i], (cg ? (ir[i] < 0 ? " - |" : sprintf(" %.1f |", ir[i])) : "") }
+      printf "| **median** (%d models) | | | %.2f | | %.2f | | | | | | %.1f | | %.1f |%s\n", n, med(xs, n), med(ds, n), med(ss, n), med(os, n), (cg ? sprintf(" %.1f |", med(irs, ni)) : "")
     }' "$tsv"
 echo "(written to $tsv)"
