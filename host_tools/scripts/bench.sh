@@ -33,6 +33,14 @@ for m in "$@"; do
         term=$(sed -n 's/.*needs \([A-Z_]*=[0-9]*\), this build (profile terminal) has \([0-9]*\).*/\1 > \2/p' <<<"$decout")
         [ -n "$term" ] || term="failed"
         run=("$cmz" decode)
+        # encoded for the terminal instead (--profile: curves and surfaces re-fitted, a coarser
+        # recommended tolerance): does the terminal load that file?
+        tc=$out/$name.terminal.cmz
+        if "$cmz" encode -q "$m" -o "$tc" --profile terminal > /dev/null 2>&1 && "$dec" "$tc" -o "$out/$name.terminal.glb" > /dev/null 2>&1; then
+            term="$term; --profile terminal: loads, $(stat -c %s "$tc") bytes"
+        else
+            term="$term; --profile terminal: refused"
+        fi
     fi
     best=
     for r in 1 2 3; do
