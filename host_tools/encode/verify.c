@@ -350,7 +350,7 @@ static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs
    geo_example measured 0.178 mm where Open CASCADE found the decoded face 0.325 mm off its B-rep,
    past the 0.199 mm tolerance (1e-3 of the diagonal): a narrow ridge between the samples */
 #define NET_SAMPLES 40
-static double net_to_source(const face_domain *fd, const cm_surf *s, const grid_pts *g, double again)
+static double net_to_source(const face_domain *fd, const cm_surf *s, const grid_pts *g, double again, double tol)
 {
     double worst = 0;
     for (int i = 0; i <= NET_SAMPLES; i++)
@@ -360,6 +360,8 @@ static double net_to_source(const face_domain *fd, const cm_surf *s, const grid_
                 return HUGE_VAL;
             double d = point_to_source(fd, g, D[0][0], again);
             worst = d > worst ? d : worst;
+            if (!(worst < tol))
+                return worst; /* failed: the rest cannot save it */
         }
     return worst;
 }
@@ -443,7 +445,7 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
         out->back = back;
         worst = back > worst ? back : worst;
     } else if (rb->method == CM_METHOD_G1FIT) {
-        double back = net_to_source(fd, &rb->surf, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
+        double back = net_to_source(fd, &rb->surf, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox, tol);
         out->back = back;
         worst = back > worst ? back : worst;
     }
