@@ -811,6 +811,14 @@ static int cut(tess_ctx *c, int b, int *rem, int len)
  * the budget the region is refused (CM_E_DEGENERATE), which leaves the face out. */
 #define CDT_WORK_PER_POINT 256L
 #define CDT_WORK_MIN 4096L
+/* And a share quadratic in the points, up to a cap: a segment forced past a run of n boundary points
+ * crosses up to n sides, and Sloan's flips take up to about n^2 / 2 steps for it.  Rings that
+ * fuzz_tess found (2026-12-04: a straight run of 200 points, a spike at its end going out and back
+ * over itself, and one long segment back beside the run) need 46 000 to 64 000 steps for 206 to 212
+ * points, over the linear budget; they do not cross and are now taken.  The cap keeps a hostile
+ * ring to 1 M steps more (about 60 ns a step under ASan, 0.06 s), reached at 724 points. */
+#define CDT_WORK_QUAD_PER_POINT2 2L
+#define CDT_WORK_QUAD_MAX (1L << 20)
 /* Boundaries of this many points or more are triangulated by cdt_region first (coarse to fine).
  * Ear clipping cuts a long ring into fans, which the Lawson flips then turn into the Delaunay
  * triangulation one flip at a time, quadratic in the ring: a 4092-point rectangle (a face refined
@@ -1418,22 +1426,49 @@ static void fix_edge(cm_tri_ws *ws, int t, int s)
 }
 
 
-/* the side u -> w of a triangle at u (vt[u] a triangle there): 3 t + s, or -1 */
-static int find_side(const tess_ctx *c, const int *vt, int u, int w)
+/* one step of the walk round u (from t0) looking for the side u -> w: 3 t + s when found, -1 not
+   yet (*t moved on), -2 the walk is over (round, or off the triangulation) */
+static int walk_step(const tess_ctx *c, int *t, int t0, int u, int w)
 {
     const cm_tri_ws *ws = c->ws;
-    int t0 = vt[u], t = t0;
-    for (int g = 0; g <= c->ntri && t >= 0; g++) {
-        c->ws->cdt_work++;
-        int i = corner_of(ws, t, u);
-        if (i < 0)
-            return -1;
-        if (ws->tri[t][n3(i)] == w)
-            return 3 * t + i;
-        int S = ws->adj[t][p3(i)];
-        t = S >= 0 ? S / 3 : -1;
-        if (t == t0)
-            break;
+    c->ws->cdt_work++;
+    int i = corner_of(ws, *t, u);
+    if (i < 0)
+        return -2;
+    if (ws->tri[*t][n3(i)] == w)
+        return 3 * *t + i;
+    int S = ws->adj[*t][p3(i)];
+    *t = S >= 0 ? S / 3 : -1;
+    return *t < 0 || *t == t0 ? -2 : -1;
+}
+
+/*
+ * The side u -> w (3 t + s), or -1: walked round u and round w (as the twin
+ * w -> u) a step each in turn, from vt[] (which knows no corner of the
+ * enclosing triangle), so that the cost is the smaller degree of the two:
+ * a segment forced past a long run of points (a fan: one end of each side
+ * crossed has them all) would otherwise pay the fan's degree per side, the
+ * fallback's whole budget on a ring of 200 points.  A directed side is
+ * unique, so the side found is the one either walk alone would find.
+ */
+static int find_side(const tess_ctx *c, const int *vt, int u, int w)
+{
+    int tu = u < SUPER_V ? vt[u] : -1, tw = w < SUPER_V ? vt[w] : -1, u0 = tu, w0 = tw;
+    for (int g = 0; g <= c->ntri && (tu >= 0 || tw >= 0); g++) {
+        if (tu >= 0) {
+            int r = walk_step(c, &tu, u0, u, w);
+            if (r >= 0)
+                return r;
+            if (r == -2)
+                tu = -1;
+        }
+        if (tw >= 0) {
+            int r = walk_step(c, &tw, w0, w, u);
+            if (r >= 0)
+                return c->ws->adj[r / 3][r % 3]; /* its twin, u -> w (-1 on the hull) */
+            if (r == -2)
+                tw = -1;
+        }
     }
     return -1;
 }
@@ -1558,9 +1593,7 @@ static int cdt_segment(tess_ctx *c, int a0, int a, int b, int *vt)
         int u = ex[head], w = ey[head];
         head = head + 1 < cap ? head + 1 : 0;
         n--;
-        int S = u < SUPER_V ? find_side(c, vt, u, w) : -1; /* vt knows no corner of the enclosing one */
-        if (u >= SUPER_V && w < SUPER_V && (S = find_side(c, vt, w, u)) >= 0)
-            S = ws->adj[S / 3][S % 3]; /* its twin */
+        int S = find_side(c, vt, u, w);
         if (S < 0)
             return CDT_FAIL;
         int ts = S / 3, ss = S % 3, T2 = ws->adj[ts][ss];
@@ -2140,7 +2173,8 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
     ws->ear_tests = 0;
     ws->cdt_work = 0;
     ws->flips = 0;
-    c.cdt_budget = CDT_WORK_PER_POINT * (long)nb + CDT_WORK_MIN;
+    long quad = nb > 1024 ? CDT_WORK_QUAD_MAX : CDT_WORK_QUAD_PER_POINT2 * (long)nb * (long)nb; /* no 32-bit overflow */
+    c.cdt_budget = CDT_WORK_PER_POINT * (long)nb + CDT_WORK_MIN + (quad < CDT_WORK_QUAD_MAX ? quad : CDT_WORK_QUAD_MAX);
     double scale = normalise(pts, npts, nb, ws, c.box);
     if (!(scale > 0.0))
         return cm_fail(st, CM_E_DEGENERATE, __func__);
