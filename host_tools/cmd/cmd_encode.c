@@ -64,6 +64,7 @@ int cmd_encode(int argc, char **argv)
             i++;
         } else if (strcmp(a, "--report") == 0 && v) {
             report = v;
+            o.measure_mesh = 1; /* the report's mesh_dev_mm column */
             i++;
         } else if (strcmp(a, "--profile") == 0 && v) {
             profile = v;
@@ -174,18 +175,21 @@ int cmd_encode(int argc, char **argv)
         } else {
             fprintf(f, "face\tde\tentity\tsurface\tmethod\tbbox_mm\tplane_dev_mm\tmax_err_mm\tratio\tsurf_ctrl"
                        "\tlayout\tavg_err_mm\tg1_worst_deg\tgregory_ratio\twhy_kept\tfit_m"
-                       "\tsides\tholes\n");
+                       "\tsides\tholes\tmesh_dev_mm\n");
             for (int i = 0; i < lm.mesh.nfaces; i++) {
                 const face_report *fr = &r.faces[i];
                 const brep_face *bf = &lm.brep.faces[lm.mesh.faces[i].brep_face];
                 const cmesh_face *cf = &lm.mesh.faces[i];
                 double c = fr->g1_cos > 1.0 ? 1.0 : fr->g1_cos;
-                fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\t%d\t%.6g\t%.4g\t%.6g\t%s\t%d\t%d\t%d\n", i,
+                char dev[32] = "-";
+                if (fr->mesh_dev >= 0)
+                    snprintf(dev, sizeof dev, "%.6g", fr->mesh_dev);
+                fprintf(f, "%d\t%d\t%d\t%d\t%s\t%.6g\t%.6g\t%.6g\t%.6g\t%d\t%d\t%.6g\t%.4g\t%.6g\t%s\t%d\t%d\t%d\t%s\n", i,
                         bf->src_de, bf->src_type, bf->surf_type,
                         cm_method_name((unsigned)fr->method), fr->bbox, fr->plane_dev, fr->rebuild_max, fr->ratio, fr->surf_ctrl,
                         fr->layout, fr->rebuild_avg, acos(c) * 57.29577951308232, fr->greg_ratio,
                         cm_method_of((unsigned)fr->method)->kept_surface && fr->why ? fr->why : "-", fr->fit_m,
-                        lm.mesh.loops[cf->first_loop].n, cf->nloops - 1);
+                        lm.mesh.loops[cf->first_loop].n, cf->nloops - 1, dev);
             }
             if (fclose(f) != 0)
                 rc = EXIT_IO;

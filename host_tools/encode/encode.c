@@ -24,6 +24,7 @@ void encode_opts_default(encode_opts *o)
     o->g1fit = 1;
     o->nfill = 1;
     o->strict = 0;
+    o->measure_mesh = 0;
     o->abs_tol = 0;
     o->rel_set = 0;
     /* model-level accuracy: 1 % of a large face's box lets it drift far (as1_pe_203's 5 m face was
@@ -171,6 +172,8 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         r->need[CM_LIMIT_MAX_TESS_POINTS] = r->need[CM_LIMIT_MAX_EDGE_SAMPLES] = r->need[CM_LIMIT_MAX_TRIS] = 0;
         e = enc_tessellation_needs(&t, r->need, o, st);
     }
+    if (e == CM_OK && t.nfaults == 0 && o->measure_mesh)
+        e = enc_measure_mesh(&t, lm, r, o, st);
     if (e == CM_OK && t.nfaults > 0) {
         /* faces that cannot be sent: encode_model settles them and calls again */
         for (int f = 0; f < t.nfaces; f++)

@@ -48,6 +48,8 @@ typedef struct encode_opts {
     int g1fit;                   /* then G1FIT (spec §9 over the face's edges; default 1) */
     int nfill;                   /* then NFILL (spec §8; default 1) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
+    int measure_mesh;            /* measure each face's triangles against its source (face_report.mesh_dev;
+                                    default 0: it costs a second tessellation and many projections) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;
 } encode_opts;
@@ -74,6 +76,8 @@ typedef struct face_report {
     double ratio;      /* rebuild_max / bbox */
     int surf_ctrl;     /* control points sent for a kept surface */
     int fit_m;         /* GREGORY-FIT: coefficients per direction of its correction (else 0) */
+    double mesh_dev;   /* the face as the terminal shows it against its source, both ways (mm; -1: not
+                          measured; encode_opts.measure_mesh) */
 } face_report;
 
 typedef struct encode_result {

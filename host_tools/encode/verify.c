@@ -459,6 +459,97 @@ done:
     return 1;
 }
 
+/* ---- the decoded mesh against the source (issue 14.6) ---- */
+
+/* distance from p to the triangle abc: the nearest point by the region of the triangle's plane that
+   p falls in (a corner, a side or the inside) */
+static double point_triangle_dist(cm_vec3 p, cm_vec3 a, cm_vec3 b, cm_vec3 c)
+{
+    cm_vec3 ab = cm_sub(b, a), ac = cm_sub(c, a), ap = cm_sub(p, a);
+    double d1 = cm_dot(ab, ap), d2 = cm_dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0)
+        return cm_norm(ap); /* corner a */
+    cm_vec3 bp = cm_sub(p, b);
+    double d3 = cm_dot(ab, bp), d4 = cm_dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3)
+        return cm_norm(bp); /* corner b */
+    double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) /* side ab */
+        return cm_norm(cm_sub(p, cm_add(a, cm_scale(ab, d1 / (d1 - d3)))));
+    cm_vec3 cp = cm_sub(p, c);
+    double d5 = cm_dot(ab, cp), d6 = cm_dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6)
+        return cm_norm(cp); /* corner c */
+    double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) /* side ac */
+        return cm_norm(cm_sub(p, cm_add(a, cm_scale(ac, d2 / (d2 - d6)))));
+    double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) /* side bc */
+        return cm_norm(cm_sub(p, cm_add(b, cm_scale(cm_sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))))));
+    double den = va + vb + vc;
+    if (!(fabs(den) > 0)) /* a flat triangle: its sides decide */
+        return fmin(fmin(cm_norm(ap), cm_norm(bp)), cm_norm(cp));
+    double v = vb / den, w = vc / den; /* inside */
+    return cm_norm(cm_sub(p, cm_add(a, cm_add(cm_scale(ab, v), cm_scale(ac, w)))));
+}
+
+static cm_vec3 mesh_pt(const float (*pos)[3], uint32_t i) { return cm_v3(pos[i][0], pos[i][1], pos[i][2]); }
+
+/* the distance from p to the nearest triangle */
+static double point_mesh_dist(cm_vec3 p, const float (*pos)[3], const uint32_t *idx, uint32_t nindex)
+{
+    double best = HUGE_VAL;
+    for (uint32_t t = 0; t + 2 < nindex; t += 3) {
+        double d = point_triangle_dist(p, mesh_pt(pos, idx[t]), mesh_pt(pos, idx[t + 1]), mesh_pt(pos, idx[t + 2]));
+        best = d < best ? d : best;
+    }
+    return best;
+}
+
+double verify_mesh_face(const loaded_model *lm, int f, const float (*pos)[3], uint32_t nverts, const uint32_t *idx,
+                        uint32_t nindex, double expect)
+{
+    const face_domain *fd = &lm->fds[lm->mesh.faces[f].brep_face];
+    if (!fd->uv || nindex < 3)
+        return -1.0;
+    for (uint32_t k = 0; k < nindex; k++)
+        if (idx[k] >= nverts)
+            return -1.0;
+    grid_pts *grid = malloc(sizeof *grid);
+    if (!grid)
+        return -1.0;
+    grid->n = 0;
+    double worst = 0;
+    /* the source to the mesh: the grid inside the face, then the boundary samples */
+    for (int i = 0; i <= 20; i++)
+        for (int j = 0; j <= 20; j++) {
+            cm_vec2 uv = cm_v2(fd->umin + (fd->umax - fd->umin) * i / 20.0, fd->vmin + (fd->vmax - fd->vmin) * j / 20.0);
+            cm_vec3 P;
+            if (!face_domain_inside(fd, uv) || face_domain_eval(&lm->brep, fd, uv.x, uv.y, &P, NULL, NULL) != CM_OK)
+                continue;
+            grid->uv[grid->n] = uv;
+            grid->xyz[grid->n++] = P;
+            double d = point_mesh_dist(P, pos, idx, nindex);
+            worst = d > worst ? d : worst;
+        }
+    for (int q = 0; q < fd->npts; q++) {
+        double d = point_mesh_dist(fd->xyz[q], pos, idx, nindex);
+        worst = d > worst ? d : worst;
+    }
+    /* the mesh to the source: its vertices (a piece of mesh where the face is not, or off it; the
+       chords' sag between them is what the other way sees) */
+    /* a local foot farther than twice what is expected is searched for again over the whole
+       surface (a foot stuck in a local minimum only overstates) */
+    double again = 2.0 * expect;
+    for (uint32_t k = 0; k < nverts; k++) {
+        double d = point_to_source(fd, grid, mesh_pt(pos, k), again);
+        if (d < HUGE_VAL) /* a foot that cannot be had is not a distance */
+            worst = d > worst ? d : worst;
+    }
+    free(grid);
+    return worst;
+}
+
 /* unit normal of face f's source surface near P, projected from the nearest boundary sample */
 static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n)
 {

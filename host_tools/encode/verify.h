@@ -101,4 +101,18 @@ double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const fa
  */
 double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, const face_surface *fs, int *worse);
 
+/**
+ * Face f as the terminal shows it - its triangles (positions pos, global vertex ids idx, the face
+ * alone in the mesh) at the file's recommended chordal tolerance - against its source surface, both
+ * ways: every vertex projected on the source surface (a piece of mesh off the face), and the
+ * source's 21 x 21 grid points inside the face (holes left out) and its boundary samples to the
+ * nearest triangle (the chords' sag, a part of the face not covered).  So it counts the rebuild's
+ * error and the tessellation's chords together.  `expect` (mm; the rebuild error plus the
+ * chordal tolerance): a vertex whose local foot is more than twice that off gets a search over the
+ * whole surface.  Returns the larger distance (mm), or -1 where the face's domain is unknown.
+ * (issue 14.6: --report's mesh_dev_mm)
+ */
+double verify_mesh_face(const loaded_model *lm, int f, const float (*pos)[3], uint32_t nverts, const uint32_t *idx,
+                        uint32_t nindex, double expect);
+
 #endif /* VERIFY_H */

@@ -9,6 +9,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "../unit/test_util.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +21,7 @@
 #include "cm/cm_method.h"
 #include "cm/cm_limits_info.h"
 #include "encode/encode.h"
+#include "encode/verify.h"
 #include "igs_writer.h"
 #include "mesh_topo.h"
 #include "model_load.h"
@@ -302,6 +304,79 @@ static void test_default_tolerance_model_level(void **state)
         encode_result_free(&r);
         model_free(&lm);
     }
+}
+
+/*
+ * The decoded mesh measured against the source (issue 14.6, --report's mesh_dev_mm): each face's
+ * triangles at the recommended chordal tolerance, as the terminal makes them, lie within the face's
+ * rebuild error plus that tolerance of its source; the same measure on the same triangles moved
+ * 0.5 mm along their normals reads 0.5 mm.
+ */
+static void test_mesh_deviation_measured(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    igw_bump_144(&w, 10, 2);
+    encode_opts o;
+    encode_opts_default(&o);
+    o.measure_mesh = 1;
+    loaded_model lm;
+    encode_result r;
+    encode_igw_opts(&w, &lm, &r, &o);
+    igw_free(&w);
+    cm_status st;
+    assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+    int curved = 0;
+    for (int f = 0; f < lm.mesh.nfaces; f++) {
+        double dev = r.faces[f].mesh_dev, bound = r.faces[f].rebuild_max + 1.5 * r.tess_used;
+        if (!(dev >= 0.0 && dev <= bound))
+            fail_msg("face %d (method %d): mesh %g mm off its source, bound %g (rebuild %g, chord %g)", f,
+                     r.faces[f].method, dev, bound, r.faces[f].rebuild_max, r.tess_used);
+        curved += dev > 0.1 * r.tess_used;
+        cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024};
+        cm_mesh_clear(&mesh);
+        cm_tess_info info;
+        cm_status_init(&st);
+        assert_ok(cm_tessellate_face(&dec.model, (uint32_t)f, dec.model.tess_tol, &mesh, &tess, &info, &st));
+        double expect = r.faces[f].rebuild_max + dec.model.tess_tol;
+        double again = verify_mesh_face(&lm, f, (const float(*)[3])pos, mesh.nverts, idx, mesh.nindex, expect);
+        assert_true(fabs(again - dev) <= 1e-12 * (1.0 + dev)); /* the encoder's measure, on the terminal's mesh */
+        /* half the triangles gone: only the source's side sees the hole */
+        uint32_t half = 3 * (mesh.nindex / 6);
+        double holed = verify_mesh_face(&lm, f, (const float(*)[3])pos, mesh.nverts, idx, half, expect);
+        if (!(holed > 10.0 * dev && holed > 0.1))
+            fail_msg("face %d: half its triangles gone reads %g mm (%g whole)", f, holed, dev);
+        /* one more triangle 2 mm above the first vertex's: only the mesh's side sees it */
+        if (mesh.nverts + 3 <= MESH_TRIS + 1024 && mesh.nindex + 3 <= 3 * MESH_TRIS) {
+            for (int c = 0; c < 3; c++) {
+                for (int k = 0; k < 3; k++)
+                    pos[mesh.nverts + c][k] = pos[0][k] + 2.0f * nrm[0][k] + (c == k ? 0.01f : 0.0f);
+                idx[mesh.nindex + c] = mesh.nverts + (uint32_t)c;
+            }
+            double flap =
+                verify_mesh_face(&lm, f, (const float(*)[3])pos, mesh.nverts + 3, idx, mesh.nindex + 3, expect);
+            if (!(flap >= 1.9 && flap <= 2.1 + dev))
+                fail_msg("face %d: a triangle 2 mm off reads %g mm", f, flap);
+        }
+        /* 16 times the chordal tolerance: the chords' sag is seen */
+        cm_mesh_clear(&mesh);
+        assert_ok(cm_tessellate_face(&dec.model, (uint32_t)f, 16.0 * dec.model.tess_tol, &mesh, &tess, &info, &st));
+        double coarse = verify_mesh_face(&lm, f, (const float(*)[3])pos, mesh.nverts, idx, mesh.nindex, expect);
+        if (!(coarse >= 0.5 * 16.0 * r.tess_used)) /* measured 0.105 mm at 16 x 0.00707 (its vertices: 0.011) */
+            fail_msg("face %d: at 16 times the chordal tolerance %g mm reads %g mm", f, r.tess_used, coarse);
+        cm_mesh_clear(&mesh);
+        assert_ok(cm_tessellate_face(&dec.model, (uint32_t)f, dec.model.tess_tol, &mesh, &tess, &info, &st));
+        for (uint32_t v = 0; v < mesh.nverts; v++)
+            for (int k = 0; k < 3; k++)
+                pos[v][k] += 0.5f * nrm[v][k];
+        double moved = verify_mesh_face(&lm, f, (const float(*)[3])pos, mesh.nverts, idx, mesh.nindex, expect);
+        if (!(moved >= 0.5 - dev - 1e-4 && moved <= 0.5 + 2.0 * dev + r.tess_used + 1e-4))
+            fail_msg("face %d: its mesh moved 0.5 mm reads %g mm (%g before)", f, moved, dev);
+    }
+    assert_true(curved > 0); /* the bump's chords are seen */
+    encode_result_free(&r);
+    model_free(&lm);
 }
 
 /*
@@ -657,6 +732,7 @@ int main(void)
         cmocka_unit_test(test_inside_out),
         cmocka_unit_test(test_flat_disc_plane),
         cmocka_unit_test(test_default_tolerance_model_level),
+        cmocka_unit_test(test_mesh_deviation_measured),
         cmocka_unit_test(test_profile_coarsens_tessellation),
         cmocka_unit_test(test_half_cylinder),
         cmocka_unit_test(test_bicubic_net),
