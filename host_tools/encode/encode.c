@@ -155,7 +155,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     }
     if (e == CM_OK && t.nfaults == 0) {
         enc_compute_needs(t.w, r, r->need);
-        e = enc_tessellation_needs(&t, r->need, o, st);
+        e = enc_tessellation_needs(&t, r->need, o, o->measure_mesh ? lm : NULL, r, st);
     }
     /* fit the board (issue 14.5): what the tessellation needs (points of a face, samples of an edge,
        triangles) follows the recommended chordal tolerance, the one setting the encoder may change
@@ -170,10 +170,8 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         t.w->dec.model.tess_tol = model_opts.tess_rel * diag;
         r->tess_used = t.w->dec.model.tess_tol;
         r->need[CM_LIMIT_MAX_TESS_POINTS] = r->need[CM_LIMIT_MAX_EDGE_SAMPLES] = r->need[CM_LIMIT_MAX_TRIS] = 0;
-        e = enc_tessellation_needs(&t, r->need, o, st);
+        e = enc_tessellation_needs(&t, r->need, o, o->measure_mesh ? lm : NULL, r, st);
     }
-    if (e == CM_OK && t.nfaults == 0 && o->measure_mesh)
-        e = enc_measure_mesh(&t, lm, r, o, st);
     if (e == CM_OK && t.nfaults > 0) {
         /* faces that cannot be sent: encode_model settles them and calls again */
         for (int f = 0; f < t.nfaces; f++)

@@ -162,11 +162,10 @@ cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st);
 cm_err enc_choose_and_write(loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, cm_status *st);
 
 /* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples */
-cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, cm_status *st);
-
-/* every face of the final model tessellated as the terminal will (at its recommended chordal
-   tolerance) and measured against its source surface both ways: r->faces[f].mesh_dev (issue 14.6) */
-cm_err enc_measure_mesh(tx *t, const loaded_model *lm, encode_result *r, const encode_opts *o, cm_status *st);
+/* measure (may be NULL): also each face's triangles against its source surface, both ways, into
+   r->faces[f].mesh_dev (issue 14.6, --report) */
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const loaded_model *measure,
+                              encode_result *r, cm_status *st);
 
 void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need);
 

@@ -29,8 +29,10 @@ static const char *tess_fault(cm_err e)
 }
 
 /* a face that does not tessellate is a fault of that face (see encode_model), not of the model */
-/* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples */
-cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, cm_status *st)
+/* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples;
+   with `measure`, each face's triangles against its source too (issue 14.6: r->faces[f].mesh_dev) */
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const loaded_model *measure,
+                              encode_result *r, cm_status *st)
 {
     enc_work *w = t->w;
     const cm_model *m = &w->dec.model;
@@ -49,6 +51,11 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, cm_st
             *st = fst;
             return e;
         }
+        if (measure && (int)f < t->nfaces)
+            r->faces[f].mesh_dev = e != CM_OK ? -1.0
+                                              : verify_mesh_face(measure, (int)f, (const float(*)[3])mesh.pos,
+                                                                 mesh.nverts, mesh.idx, mesh.nindex,
+                                                                 r->faces[f].rebuild_max + m->tess_tol);
         if (e != CM_OK) {
             tx_face_fault(t, (int)f, tess_fault(e));
             continue;
@@ -60,32 +67,6 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, cm_st
             need[CM_LIMIT_MAX_EDGE_SAMPLES] = (uint32_t)info.max_edge_samples;
     }
     need[CM_LIMIT_MAX_TRIS] = tris > UINT32_MAX ? UINT32_MAX : (uint32_t)tris;
-    return CM_OK;
-}
-
-cm_err enc_measure_mesh(tx *t, const loaded_model *lm, encode_result *r, const encode_opts *o, cm_status *st)
-{
-    enc_work *w = t->w;
-    const cm_model *m = &w->dec.model;
-    cm_mesh_face mf;
-    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1};
-    for (uint32_t f = 0; f < m->nfaces && (int)f < t->nfaces; f++) {
-        if (o->progress)
-            o->progress("measuring the mesh", (int)f + 1, (int)m->nfaces, o->progress_ctx);
-        r->faces[f].mesh_dev = -1.0;
-        cm_tess_info info;
-        cm_mesh_clear(&mesh);
-        cm_status fst;
-        cm_status_init(&fst);
-        cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &w->tess_ws, &info, &fst);
-        if (e == CM_E_NOMEM) {
-            *st = fst;
-            return e;
-        }
-        if (e == CM_OK)
-            r->faces[f].mesh_dev = verify_mesh_face(lm, (int)f, (const float(*)[3])mesh.pos, mesh.nverts, mesh.idx,
-                                                    mesh.nindex, r->faces[f].rebuild_max + m->tess_tol);
-    }
     return CM_OK;
 }
 
