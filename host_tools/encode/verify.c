@@ -493,7 +493,10 @@ static double point_triangle_dist(cm_vec3 p, cm_vec3 a, cm_vec3 b, cm_vec3 c)
     return cm_norm(cm_sub(p, cm_add(a, cm_add(cm_scale(ab, v), cm_scale(ac, w)))));
 }
 
-static cm_vec3 mesh_pt(const float (*pos)[3], uint32_t i) { return cm_v3(pos[i][0], pos[i][1], pos[i][2]); }
+static cm_vec3 mesh_pt(const float (*pos)[3], uint32_t i)
+{
+    return cm_v3((double)pos[i][0], (double)pos[i][1], (double)pos[i][2]);
+}
 
 /* the distance from p to the nearest triangle */
 static double point_mesh_dist(cm_vec3 p, const float (*pos)[3], const uint32_t *idx, uint32_t nindex)
