@@ -1,7 +1,9 @@
 /* cm_egreg.c - the Gregory patch over exact boundaries (cm_egreg.h). */
 #include "cm/cm_egreg.h"
 
+#include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "cm/cm_gregory.h"
 
@@ -14,12 +16,124 @@ static double clamp01(double s)
     return s > 1.0 ? 1.0 : s;
 }
 
+/* the normals' blend: A = unit(a), a = N x B', N = N0 + r (N1 - N0); a' = N' x B' + N x B'' */
+static void blend_basis(const cm_egreg_turn *tb, double r, double drds, const cm_vec3 q[3], cm_vec3 *a,
+                        cm_vec3 *da)
+{
+    cm_vec3 dN = cm_sub(tb->N1, tb->N0);
+    cm_vec3 N = cm_axpy(tb->N0, r, dN);
+    *a = cm_cross(N, q[1]);
+    *da = cm_add(cm_cross(cm_scale(dN, drds), q[1]), cm_cross(N, q[2]));
+}
+
+/* the normals carried along a plane curve: a = alpha m - beta P, m = P x t, t = B'/|B'|;
+   a' = alpha' m + alpha m' - beta' P with m' = P x t', t' = (B'' - t (t.B'')) / |B'| */
+static cm_err plane_basis(const cm_egreg_turn *tb, double r, double drds, const cm_vec3 q[3], cm_vec3 *a,
+                          cm_vec3 *da, cm_status *st)
+{
+    double len = cm_norm(q[1]);
+    if (!(len > 0.0))
+        return cm_fail(st, CM_E_DEGENERATE, "exact Gregory side: zero tangent");
+    cm_vec3 t = cm_scale(q[1], 1.0 / len);
+    cm_vec3 dt = cm_scale(cm_sub(q[2], cm_scale(t, cm_dot(t, q[2]))), 1.0 / len);
+    cm_vec3 m = cm_cross(tb->P, t), dm = cm_cross(tb->P, dt);
+    double al = tb->a0 + r * (tb->a1 - tb->a0), be = tb->b0 + r * (tb->b1 - tb->b0);
+    double dal = (tb->a1 - tb->a0) * drds, dbe = (tb->b1 - tb->b0) * drds;
+    *a = cm_sub(cm_scale(m, al), cm_scale(tb->P, be));
+    *da = cm_sub(cm_add(cm_scale(m, dal), cm_scale(dm, al)), cm_scale(tb->P, dbe));
+    return CM_OK;
+}
+
+/* the turning basis A and its derivative per unit s (cm_egreg.h) at the fraction r of the edge */
+static cm_err turning_basis(const cm_egreg_turn *tb, double r, double drds, const cm_vec3 q[3], cm_vec3 *A,
+                            cm_vec3 *dA, cm_status *st)
+{
+    cm_vec3 a = zero3, da = zero3;
+    if (tb->mode == CM_EGREG_TURN_PLANE) {
+        cm_err e = plane_basis(tb, r, drds, q, &a, &da, st);
+        if (e != CM_OK)
+            return e;
+    } else {
+        blend_basis(tb, r, drds, q, &a, &da);
+    }
+    double len = cm_norm(a);
+    if (!(len > 1e-12 * (1.0 + cm_norm(q[1]))))
+        return cm_fail(st, CM_E_DEGENERATE, "exact Gregory side: turning basis vanishes");
+    *A = cm_scale(a, 1.0 / len);
+    *dA = cm_scale(cm_sub(da, cm_scale(*A, cm_dot(*A, da))), 1.0 / len);
+    return CM_OK;
+}
+
+cm_egreg_turn cm_egreg_turn_part(const cm_egreg_turn *tb, double r0, double r1)
+{
+    cm_egreg_turn p = *tb;
+    if (tb->mode == CM_EGREG_TURN_BLEND) {
+        p.N0 = cm_axpy(tb->N0, r0, cm_sub(tb->N1, tb->N0));
+        p.N1 = cm_axpy(tb->N0, r1, cm_sub(tb->N1, tb->N0));
+    } else if (tb->mode == CM_EGREG_TURN_PLANE) {
+        p.a0 = tb->a0 + r0 * (tb->a1 - tb->a0);
+        p.a1 = tb->a0 + r1 * (tb->a1 - tb->a0);
+        p.b0 = tb->b0 + r0 * (tb->b1 - tb->b0);
+        p.b1 = tb->b0 + r1 * (tb->b1 - tb->b0);
+    }
+    return p;
+}
+
+/* samples of an edge's plane test (cm_egreg_choose_turn) */
+#define TURN_PLANE_SAMPLES 8
+/* how far from its plane, relative to its chord, a plane curve's samples may lie */
+#define TURN_PLANE_FLAT 1e-3
+
+cm_err cm_egreg_choose_turn(const cm_egreg_side *sd, cm_vec3 Ns, cm_vec3 Ne, cm_egreg_turn *tb, cm_status *st)
+{
+    memset(tb, 0, sizeof *tb);
+    if (!(cm_dot(sd->As, sd->Ae) < 0.0))
+        return CM_OK; /* a right angle or less: the linear basis */
+    cm_vec3 d0[3], dm[3], d1[3];
+    cm_err e;
+    if ((e = cm_egreg_side_eval(sd, 0.0, d0, NULL, st)) != CM_OK ||
+        (e = cm_egreg_side_eval(sd, 0.5, dm, NULL, st)) != CM_OK ||
+        (e = cm_egreg_side_eval(sd, 1.0, d1, NULL, st)) != CM_OK)
+        return e;
+    /* the plane through its ends and middle (the same plane, up to its sign, from either direction;
+       the basis does not depend on that sign) */
+    cm_vec3 a = cm_sub(dm[0], d0[0]), c = cm_sub(d1[0], d0[0]);
+    cm_vec3 n = cm_cross(a, c);
+    double chord = cm_norm(a) + cm_norm(c), nl = cm_norm(n);
+    int plane = nl > 1e-9 * chord * chord;
+    for (int i = 1; i < TURN_PLANE_SAMPLES && plane; i++) {
+        cm_vec3 d[3];
+        if ((e = cm_egreg_side_eval(sd, (double)i / TURN_PLANE_SAMPLES, d, NULL, st)) != CM_OK)
+            return e;
+        plane = fabs(cm_dot(cm_sub(d[0], d0[0]), n)) <= TURN_PLANE_FLAT * chord * nl;
+    }
+    double l0 = cm_norm(d0[1]), l1 = cm_norm(d1[1]);
+    if (plane && l0 > 0.0 && l1 > 0.0) {
+        tb->mode = CM_EGREG_TURN_PLANE;
+        tb->P = cm_scale(n, 1.0 / nl);
+        cm_vec3 m0 = cm_cross(tb->P, cm_scale(d0[1], 1.0 / l0)), m1 = cm_cross(tb->P, cm_scale(d1[1], 1.0 / l1));
+        tb->a0 = cm_dot(Ns, tb->P);
+        tb->b0 = cm_dot(Ns, m0);
+        tb->a1 = cm_dot(Ne, tb->P);
+        tb->b1 = cm_dot(Ne, m1);
+        return CM_OK;
+    }
+    if (cm_dot(Ns, Ne) > cm_dot(sd->As, sd->Ae)) {
+        tb->mode = CM_EGREG_TURN_BLEND;
+        tb->N0 = Ns;
+        tb->N1 = Ne;
+    }
+    return CM_OK;
+}
+
 cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_vec3 x[2], cm_status *st)
 {
     cm_vec3 q[3];
     s = clamp01(s);
     cm_vec3 As = sd->As, dA = cm_sub(sd->Ae, sd->As); /* the basis at s = 0 and its slope per unit s */
     double a0 = 0.0;                                 /* where As holds */
+    const cm_egreg_turn *tb = sd->kind == CM_EGREG_SIDE_EDGE ? &sd->tb : NULL; /* the turning basis, */
+    double frac = s, drds = 1.0; /* the fraction of its edge at s and its rate */
     if (sd->kind == CM_EGREG_SIDE_CHAIN) {
         /* the last piece that starts at or before s (fixed order: the same piece on every host) */
         int np = sd->npiece < 1 ? 1 : sd->npiece > CM_EGREG_MAX_PIECES ? CM_EGREG_MAX_PIECES : sd->npiece, j = 0;
@@ -39,6 +153,9 @@ cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_ve
         As = P->As;
         dA = cm_scale(cm_sub(P->Ae, P->As), 1.0 / ds);
         a0 = P->s0;
+        tb = &P->tb;
+        frac = (s - P->s0) / ds;
+        drds = 1.0 / ds;
     } else if (sd->kind == CM_EGREG_SIDE_EDGE) {
         double dt = sd->t1 - sd->t0;
         cm_err e = cm_curve_eval(&sd->curve, sd->t0 + dt * s, 2, q, st);
@@ -71,12 +188,30 @@ cm_err cm_egreg_side_eval(const cm_egreg_side *sd, double s, cm_vec3 d[3], cm_ve
     double dk = sd->k1 - sd->k0, dh = sd->h1 - sd->h0;
     double k = sd->k0 + dk * s, h = sd->h0 + dh * s;
     cm_vec3 A = cm_axpy(As, s - a0, dA);
+    if (tb && tb->mode != CM_EGREG_TURN_NONE) {
+        cm_err e = turning_basis(tb, frac, drds, q, &A, &dA, st);
+        if (e != CM_OK)
+            return e;
+    }
     x[0] = cm_add(cm_scale(A, k), cm_scale(q[1], h));
     cm_vec3 xd = cm_scale(A, dk);
     xd = cm_axpy(xd, k, dA);
     xd = cm_axpy(xd, dh, q[1]);
     x[1] = cm_axpy(xd, h, q[2]);
     return CM_OK;
+}
+
+cm_err cm_egreg_side_basis(const cm_egreg_side *sd, double s, cm_vec3 *A, cm_status *st)
+{
+    cm_egreg_side one = *sd; /* X = 1 A + 0 B' */
+    one.fan = 0;
+    one.k0 = one.k1 = 1.0;
+    one.h0 = one.h1 = 0.0;
+    cm_vec3 x[2];
+    cm_err e = cm_egreg_side_eval(&one, s, NULL, x, st);
+    if (e == CM_OK)
+        *A = x[0];
+    return e;
 }
 
 cm_err cm_egreg_finish(cm_egreg *g, cm_status *st)

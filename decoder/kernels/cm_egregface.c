@@ -30,6 +30,17 @@ static cm_err degenerate(cm_status *st, const char *where)
     return cm_fail(st, CM_E_DEGENERATE, where);
 }
 
+/* the turning basis of the EDGE side sd (its bases set) where cm_egreg_choose_turn() asks for it, in
+   files that have it (format 2.6); else the linear basis */
+static cm_err pick_turn(const cm_greg_input *in, cm_egreg_side *sd, cm_vec3 Ns, cm_vec3 Ne, cm_status *st)
+{
+    if (!in->turning) {
+        memset(&sd->tb, 0, sizeof sd->tb);
+        return CM_OK;
+    }
+    return cm_egreg_choose_turn(sd, Ns, Ne, &sd->tb, st);
+}
+
 /* side k of the loop, or the part [a, b] of it (fractions of the use, in the face's direction) */
 static void edge_side(const cm_greg_side *gs, double a, double b, cm_egreg_side *out)
 {
@@ -135,6 +146,8 @@ static cm_err build_degen(const cm_greg_input *in, int j, cm_greg_surface *out, 
         edge_side(gs, 0.0, 1.0, sd);
         if ((e = side_basis(sd, gs->Ns, gs->Ne, eps, &sd->As, &sd->Ae, st)) != CM_OK)
             return e;
+        if ((e = pick_turn(in, sd, gs->Ns, gs->Ne, st)) != CM_OK)
+            return e;
     }
     if ((e = side_at(&g->side[0], 0.0, d0, st)) != CM_OK || (e = side_at(&g->side[2], 1.0, d2, st)) != CM_OK)
         return e;
@@ -175,7 +188,9 @@ static cm_err joined_side(const cm_greg_input *in, int first, int count, cm_egre
     if (count == 1) {
         const cm_greg_side *gs = &in->side[first];
         edge_side(gs, 0.0, 1.0, sd);
-        return side_basis(sd, gs->Ns, gs->Ne, eps, &sd->As, &sd->Ae, st);
+        if ((e = side_basis(sd, gs->Ns, gs->Ne, eps, &sd->As, &sd->Ae, st)) != CM_OK)
+            return e;
+        return pick_turn(in, sd, gs->Ns, gs->Ne, st);
     }
     if (count < 2 || count > CM_EGREG_MAX_PIECES)
         return cm_fail(st, CM_E_UNSUPPORTED, "egregface: more edges joined into one side than a patch side holds");
@@ -197,6 +212,11 @@ static cm_err joined_side(const cm_greg_input *in, int first, int count, cm_egre
         P->t1 = one.t1;
         if ((e = side_basis(&one, gs->Ns, gs->Ne, eps, &P->As, &P->Ae, st)) != CM_OK)
             return e;
+        one.As = P->As;
+        one.Ae = P->Ae;
+        if ((e = pick_turn(in, &one, gs->Ns, gs->Ne, st)) != CM_OK)
+            return e;
+        P->tb = one.tb;
         double sp0 = cm_norm(d0[1]), sp1 = cm_norm(d1[1]);
         w[i] = i == 0 ? 1.0 : w[i - 1] * (sp0 / prev_end);
         if (!(w[i] > 1e-6 && w[i] < 1e6))
@@ -245,6 +265,8 @@ typedef struct esplit_ws {
     cm_egreg_side full; /* the edge of the side at hand (one at a time: a side is large) */
     cm_vec3 A0[CM_MAX_SIDES], A1[CM_MAX_SIDES];
     cm_vec3 M[CM_MAX_SIDES], V[CM_MAX_SIDES], T[CM_MAX_SIDES], nmid[CM_MAX_SIDES], U[CM_MAX_SIDES];
+    cm_vec3 Amid[CM_MAX_SIDES];    /* each edge's basis at its middle */
+    cm_egreg_turn tb[CM_MAX_SIDES]; /* each edge's turning basis (mode NONE: the linear one) */
 } esplit_ws;
 
 static cm_err esplit_mid(const cm_greg_input *in, esplit_ws *w, cm_status *st)
@@ -267,6 +289,13 @@ static cm_err esplit_mid(const cm_greg_input *in, esplit_ws *w, cm_status *st)
             return e;
         sd->As = w->A0[k];
         sd->Ae = w->A1[k];
+        if ((e = pick_turn(in, sd, in->side[k].Ns, in->side[k].Ne, st)) != CM_OK)
+            return e;
+        w->tb[k] = sd->tb;
+        w->Amid[k] = cm_scale(cm_add(w->A0[k], w->A1[k]), 0.5);
+        if (sd->tb.mode != CM_EGREG_TURN_NONE &&
+            (e = cm_egreg_side_basis(sd, CM_GREG_SPLIT_T, &w->Amid[k], st)) != CM_OK)
+            return e;
         if ((e = fit_side(sd, d[k][0][1], d[k][1][1], d[(k + n - 1) % n][1][1], d[(k + 1) % n][0][1], eps, st)) !=
             CM_OK)
             return e;
@@ -294,7 +323,8 @@ static cm_err esplit_patches(const cm_greg_input *in, const esplit_ws *w, cm_gre
         cm_egreg_side *q = g->side;
         edge_side(&in->side[k], 0.0, CM_GREG_SPLIT_T, &q[0]);
         q[0].As = w->A0[k];
-        q[0].Ae = cm_scale(cm_add(w->A0[k], w->A1[k]), 0.5);
+        q[0].Ae = w->Amid[k];
+        q[0].tb = cm_egreg_turn_part(&w->tb[k], 0.0, CM_GREG_SPLIT_T);
         cubic_side(&out->inner[k], &q[1]);
         if (!unit_chk(cm_cross(w->nmid[k], w->T[k]), CM_GREG_EPS_DIR, &q[1].As) ||
             !unit_chk(cm_cross(nC, cm_neg(w->U[k])), CM_GREG_EPS_DIR, &q[1].Ae))
@@ -305,8 +335,9 @@ static cm_err esplit_patches(const cm_greg_input *in, const esplit_ws *w, cm_gre
             !unit_chk(cm_cross(w->nmid[p], cm_neg(w->T[p])), CM_GREG_EPS_DIR, &q[2].Ae))
             return degenerate(st, "egregface: internal basis");
         edge_side(&in->side[p], CM_GREG_SPLIT_T, 1.0, &q[3]);
-        q[3].As = cm_scale(cm_add(w->A0[p], w->A1[p]), 0.5);
+        q[3].As = w->Amid[p];
         q[3].Ae = w->A1[p];
+        q[3].tb = cm_egreg_turn_part(&w->tb[p], CM_GREG_SPLIT_T, 1.0);
         cm_vec3 N[4] = {in->corner_normal[k], w->nmid[k], nC, w->nmid[p]};
         cm_err e = finish_patch(g, N, in->eps_len, st);
         if (e != CM_OK)

@@ -547,6 +547,39 @@ static uint32_t fnv_vec(uint32_t h, cm_vec3 p)
 
 /* an exact patch: per side its kind, edge, range, cubic, fan and cross data, then the corner data
    (the curve itself is the model's, checked by the CRCs; its number says which) */
+int cm_greg_surface_turns(const cm_greg_surface *s)
+{
+    if (!s || !s->exact)
+        return 0;
+    for (int k = 0; k < s->npatch && k < CM_MAX_GREG; k++)
+        for (int i = 0; i < 4; i++) {
+            const cm_egreg_side *sd = &s->e[k].side[i];
+            if (sd->tb.mode != CM_EGREG_TURN_NONE)
+                return 1;
+            for (int j = 0; j < sd->npiece && j < CM_EGREG_MAX_PIECES && sd->kind == CM_EGREG_SIDE_CHAIN; j++)
+                if (sd->piece[j].tb.mode != CM_EGREG_TURN_NONE)
+                    return 1;
+        }
+    return 0;
+}
+
+/* a turning basis in the checksum: nothing for the linear one, so that older files' sums stay */
+static uint32_t turn_checksum(uint32_t h, const cm_egreg_turn *tb)
+{
+    if (tb->mode == CM_EGREG_TURN_NONE)
+        return h;
+    h = fnv_double(h, (double)tb->mode);
+    if (tb->mode == CM_EGREG_TURN_BLEND) {
+        h = fnv_vec(h, tb->N0);
+        return fnv_vec(h, tb->N1);
+    }
+    h = fnv_vec(h, tb->P);
+    h = fnv_double(h, tb->a0);
+    h = fnv_double(h, tb->a1);
+    h = fnv_double(h, tb->b0);
+    return fnv_double(h, tb->b1);
+}
+
 static uint32_t egreg_checksum(uint32_t h, const cm_egreg *g)
 {
     for (int k = 0; k < 4; k++) {
@@ -564,6 +597,7 @@ static uint32_t egreg_checksum(uint32_t h, const cm_egreg *g)
             h = fnv_double(h, P->s1);
             h = fnv_vec(h, P->As);
             h = fnv_vec(h, P->Ae);
+            h = turn_checksum(h, &P->tb); /* (format 2.6 only: older files' sums stay) */
         }
         for (int i = 0; i < 4 && sd->kind == CM_EGREG_SIDE_CUBIC; i++)
             h = fnv_vec(h, sd->cub.c[i]); /* an edge side's union holds pointers: not hashed */
@@ -574,6 +608,7 @@ static uint32_t egreg_checksum(uint32_t h, const cm_egreg *g)
         h = fnv_double(h, sd->h0);
         h = fnv_double(h, sd->k1);
         h = fnv_double(h, sd->h1);
+        h = turn_checksum(h, &sd->tb);
         for (int i = 0; i < 4; i++)
             h = fnv_vec(h, sd->fx[i]);
     }

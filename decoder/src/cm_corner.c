@@ -126,6 +126,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_inp
         return e;
     in->n = n;
     in->eps_len = CM_EPS_LEN_REL * bbox;
+    in->turning = m->turning_basis;
     corner_ctx c = {m, in->nF, in->eps_len, ws->scratch, exact};
     const cm_vec3 *turn = exact ? NULL : &in->nF; /* what corner normals are turned to */
     /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */

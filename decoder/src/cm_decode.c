@@ -145,6 +145,7 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
         q = qe < 0 ? q * 0.5 : q * 2.0;
     d->model.q = q;
     d->model.tess_tol = h.tess_tol;
+    d->model.turning_basis = h.major > 2 || (h.major == 2 && h.minor >= CM_FMT_TURNING_MINOR);
     if (!isfinite(d->model.tess_tol))
         return fail(d, st, CM_E_NONFINITE, CM_HDR_TESS_TOL, "chordal tolerance");
     if (!(d->model.tess_tol > 0))

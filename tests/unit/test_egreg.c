@@ -7,7 +7,11 @@
  *   - the cross derivative along each side is the given one, all along it
  *     (the compatibility-corrected twists at work);
  *   - S_u and S_v are the true partial derivatives (central differences);
- *   - a surface linear in v between two curved sides is reproduced.
+ *   - a surface linear in v between two curved sides is reproduced;
+ *   - the turning basis (format 2.6) along a half circle: square to the edge
+ *     and of unit length where the linear basis vanishes, exact on a dome's
+ *     rim, the same line from either face, its derivative the true one, and
+ *     chosen only where the bases turn (cm_egreg_choose_turn).
  */
 #include "test_util.h"
 
@@ -181,6 +185,197 @@ static void test_nonfinite(void **state)
     assert_int_equal(cm_egreg_finish(&g, &st), CM_E_NONFINITE);
 }
 
+/* a half circle of radius R in z = 0 from (R,0,0) over (0,R,0) to (-R,0,0): two rational quarter arcs */
+static const double half_knots[8] = {0, 0, 0, 0.5, 0.5, 1, 1, 1};
+static const double half_w[5] = {1, 0.70710678118654752, 1, 0.70710678118654752, 1};
+static const cm_vec3 half_ctrl[5] = {{10, 0, 0}, {10, 10, 0}, {0, 10, 0}, {-10, 10, 0}, {-10, 0, 0}};
+
+/* an EDGE side along the half circle (backwards: from (-R,0,0)) with end normals Ns, Ne, its bases
+   from them (spec 5.4), k = 1 and h = 0 (X = A), and the basis cm_egreg_choose_turn() picks */
+static void half_circle_side(cm_egreg_side *sd, cm_vec3 Ns, cm_vec3 Ne, int backwards)
+{
+    memset(sd, 0, sizeof *sd);
+    sd->kind = CM_EGREG_SIDE_EDGE;
+    sd->curve = (cm_curve){2, 5, half_knots, half_ctrl, half_w};
+    sd->t0 = backwards ? 1.0 : 0.0;
+    sd->t1 = backwards ? 0.0 : 1.0;
+    cm_vec3 d0[3], d1[3];
+    assert_int_equal(cm_egreg_side_eval(sd, 0.0, d0, NULL, NULL), CM_OK);
+    assert_int_equal(cm_egreg_side_eval(sd, 1.0, d1, NULL, NULL), CM_OK);
+    sd->As = cm_unit(cm_cross(Ns, d0[1]));
+    sd->Ae = cm_unit(cm_cross(Ne, d1[1]));
+    sd->k0 = sd->k1 = 1.0;
+    assert_int_equal(cm_egreg_choose_turn(sd, Ns, Ne, &sd->tb, NULL), CM_OK);
+}
+
+/* X = A at s, and X' against central differences */
+static cm_vec3 basis_at(const cm_egreg_side *sd, double s, cm_vec3 d[3], int check_derivative)
+{
+    const double h = 1e-6;
+    cm_vec3 x[2], xa[2], xb[2];
+    assert_int_equal(cm_egreg_side_eval(sd, s, d, x, NULL), CM_OK);
+    if (check_derivative) {
+        assert_int_equal(cm_egreg_side_eval(sd, s + h, NULL, xa, NULL), CM_OK);
+        assert_int_equal(cm_egreg_side_eval(sd, s - h, NULL, xb, NULL), CM_OK);
+        assert_vec_near(x[1], cm_scale(cm_sub(xa[0], xb[0]), 0.5 / h), 1e-5 * (1 + cm_norm(x[1])));
+    }
+    return x[0];
+}
+
+/* the normal of the dome z = c - (x^2 + y^2) / 40 at (x, y) */
+static cm_vec3 dome_normal(double x, double y) { return cm_unit(cm_v3(x / 20.0, y / 20.0, 1.0)); }
+
+static void test_turning_basis_half_circle(void **state)
+{
+    (void)state;
+    const cm_vec3 up = {0, 0, 1};
+    cm_egreg_side lin, tur;
+    cm_vec3 d[3];
+    /* a flat face's half circle: opposite bases, equal normals: the plane's turning basis */
+    half_circle_side(&tur, up, up, 0);
+    assert_true(cm_dot(tur.As, tur.Ae) < -0.999);
+    assert_int_equal(tur.tb.mode, CM_EGREG_TURN_PLANE);
+    lin = tur;
+    lin.tb.mode = CM_EGREG_TURN_NONE;
+    /* the linear basis vanishes at the middle: the patch would be singular there */
+    assert_true(cm_norm(basis_at(&lin, 0.5, d, 0)) < 1e-12);
+    for (int i = 0; i <= 16; i++) {
+        double s = i / 16.0;
+        /* (inside, off the knot at s = 1/2, X' against differences; the clamp at the ends halves them) */
+        cm_vec3 A = basis_at(&tur, i == 8 ? 0.52 : s, d, i > 0 && i < 16);
+        /* unit, square to the edge, in the plane, inwards (N x B') */
+        assert_true(fabs(cm_norm(A) - 1.0) < 1e-12);
+        assert_true(fabs(cm_dot(A, d[1])) < 1e-9 * cm_norm(d[1]));
+        assert_vec_near(A, cm_unit(cm_cross(up, d[1])), 1e-12);
+        if (i == 0)
+            assert_vec_near(A, tur.As, 1e-12);
+        if (i == 16)
+            assert_vec_near(A, tur.Ae, 1e-12);
+    }
+    /* the rim of a dome (a surface of revolution about the circle's axis): its normal along the rim
+       turns with it, and the plane's turning basis follows it exactly */
+    half_circle_side(&tur, dome_normal(10, 0), dome_normal(-10, 0), 0);
+    assert_int_equal(tur.tb.mode, CM_EGREG_TURN_PLANE);
+    for (int i = 1; i < 16; i++) {
+        cm_vec3 A = basis_at(&tur, i / 16.0 + 0.01, d, 1);
+        assert_vec_near(A, cm_unit(cm_cross(dome_normal(d[0].x, d[0].y), d[1])), 1e-12);
+    }
+    /* the same edge from the face on its other side (backwards, normals turned over): the same line */
+    cm_egreg_side back;
+    half_circle_side(&back, cm_neg(dome_normal(-10, 0)), cm_neg(dome_normal(10, 0)), 1);
+    assert_int_equal(back.tb.mode, CM_EGREG_TURN_PLANE);
+    for (int i = 0; i <= 8; i++) {
+        cm_vec3 A = basis_at(&tur, i / 8.0, d, 0), B = basis_at(&back, 1.0 - i / 8.0, d, 0);
+        assert_true(cm_norm(cm_cross(A, B)) < 1e-12);
+    }
+    /* end normals that disagree (a twisted band): X' is still the derivative */
+    half_circle_side(&tur, up, cm_unit(cm_v3(0.4, -0.2, 1)), 0);
+    assert_int_equal(tur.tb.mode, CM_EGREG_TURN_PLANE);
+    for (int i = 1; i < 16; i++)
+        assert_true(fabs(cm_norm(basis_at(&tur, i / 16.0 + 0.01, d, 1)) - 1.0) < 1e-12);
+    /* the normals' blend (a space curve's turning basis), set by hand on the same edge */
+    tur.tb.mode = CM_EGREG_TURN_BLEND;
+    tur.tb.N0 = up;
+    tur.tb.N1 = cm_unit(cm_v3(0.4, -0.2, 1));
+    for (int i = 1; i < 16; i++) {
+        cm_vec3 A = basis_at(&tur, i / 16.0 + 0.01, d, 1);
+        assert_true(fabs(cm_norm(A) - 1.0) < 1e-12);
+        assert_true(fabs(cm_dot(A, d[1])) < 1e-9 * cm_norm(d[1]));
+    }
+    /* a half cylinder's half circle: normals opposite, bases equal; the linear basis, exact there */
+    half_circle_side(&lin, cm_v3(1, 0, 0), cm_v3(-1, 0, 0), 0);
+    assert_true(cm_dot(lin.As, lin.Ae) > 0.999);
+    assert_int_equal(lin.tb.mode, CM_EGREG_TURN_NONE);
+    /* a quarter circle turns by a right angle: the linear basis (what a cubic GREGORY neighbour has) */
+    half_circle_side(&lin, up, up, 0);
+    lin.t1 = 0.5;
+    lin.Ae = cm_unit(cm_cross(up, cm_v3(-1, 0, 0)));
+    assert_int_equal(cm_egreg_choose_turn(&lin, up, up, &lin.tb, NULL), CM_OK);
+    assert_int_equal(lin.tb.mode, CM_EGREG_TURN_NONE);
+    /* a basis that vanishes is refused, not a NaN */
+    half_circle_side(&tur, up, up, 0);
+    tur.tb.a0 = tur.tb.a1 = tur.tb.b0 = tur.tb.b1 = 0.0;
+    cm_status st;
+    cm_status_init(&st);
+    cm_vec3 x[2];
+    assert_int_equal(cm_egreg_side_eval(&tur, 0.3, d, x, &st), CM_E_DEGENERATE);
+    /* half of a turning edge (an N-split's): the whole edge's basis on that half */
+    half_circle_side(&tur, dome_normal(10, 0), dome_normal(-10, 0), 0);
+    cm_egreg_side half = tur;
+    half.t1 = 0.5;
+    half.tb = cm_egreg_turn_part(&tur.tb, 0.0, 0.5);
+    for (int i = 0; i <= 8; i++)
+        assert_vec_near(basis_at(&half, i / 8.0, d, 0), basis_at(&tur, i / 16.0, d, 0), 1e-12);
+}
+
+/* a CHAIN of the two quarter arcs, each with its own turning basis; and a patch with the turning
+   basis on one side whose partials are its derivatives (the sides do not meet: only the derivatives
+   of the formula are checked here) */
+static void test_turning_basis_chain_and_patch(void **state)
+{
+    (void)state;
+    const double h = 1e-6;
+    cm_vec3 d[3], x[2];
+#if CM_EGREG_MAX_PIECES >= 2 /* (a board of four sides joins no edges) */
+    const cm_vec3 up = {0, 0, 1};
+    cm_egreg_side sd;
+    memset(&sd, 0, sizeof sd);
+    sd.kind = CM_EGREG_SIDE_CHAIN;
+    sd.npiece = 2;
+    for (int i = 0; i < 2; i++) {
+        cm_egreg_piece *P = &sd.piece[i];
+        P->curve = (cm_curve){2, 5, half_knots, half_ctrl, half_w};
+        P->t0 = 0.5 * i;
+        P->t1 = 0.5 * (i + 1);
+        P->s0 = i ? 0.4 : 0.0; /* unequal shares of the side */
+        P->s1 = i ? 1.0 : 0.4;
+        P->tb.mode = CM_EGREG_TURN_PLANE;
+        P->tb.P = up;
+        P->tb.a0 = i ? 0.9 : 1.0;
+        P->tb.a1 = i ? 1.0 : 0.9;
+        P->tb.b0 = i ? 0.2 : 0.0;
+        P->tb.b1 = i ? 0.0 : 0.2;
+    }
+    sd.k0 = 1.0;
+    sd.k1 = 2.0;
+    sd.h0 = 0.1;
+    sd.h1 = -0.2;
+    for (int i = 1; i < 16; i++) {
+        double s = i / 16.0 + 0.003;
+        cm_vec3 X = basis_at(&sd, s, d, 1);
+        assert_int_equal(cm_egreg_side_eval(&sd, s, d, x, NULL), CM_OK);
+        double k = 1.0 + s, hh = 0.1 - 0.3 * s;
+        /* X = k A + h B' with A square to B' and of unit length */
+        cm_vec3 A = cm_scale(cm_sub(X, cm_scale(d[1], hh)), 1.0 / k);
+        assert_true(fabs(cm_norm(A) - 1.0) < 1e-12);
+        assert_true(fabs(cm_dot(A, d[1])) < 1e-9 * cm_norm(d[1]));
+    }
+#else
+    (void)d, (void)x;
+#endif
+    /* the patch: side 0 the half circle with the dome rim's turning basis, the others the warped
+       patch's */
+    cm_egreg g;
+    warped_patch(&g, 2.0);
+    half_circle_side(&g.side[0], dome_normal(10, 0), dome_normal(-10, 0), 0);
+    assert_int_equal(g.side[0].tb.mode, CM_EGREG_TURN_PLANE);
+    g.side[0].h0 = 0.3;
+    g.side[0].h1 = -0.1;
+    assert_int_equal(cm_egreg_finish(&g, NULL), CM_OK);
+    for (int i = 1; i < 8; i++)
+        for (int j = 1; j < 8; j++) {
+            double u = i / 8.0 + 0.01, v = j / 8.0 - 0.02;
+            cm_vec3 S, Su, Sv, a, b;
+            eval(&g, u, v, &S, &Su, &Sv);
+            eval(&g, u + h, v, &a, NULL, NULL);
+            eval(&g, u - h, v, &b, NULL, NULL);
+            assert_vec_near(Su, cm_scale(cm_sub(a, b), 0.5 / h), 1e-5 * (1 + cm_norm(Su)));
+            eval(&g, u, v + h, &a, NULL, NULL);
+            eval(&g, u, v - h, &b, NULL, NULL);
+            assert_vec_near(Sv, cm_scale(cm_sub(a, b), 0.5 / h), 1e-5 * (1 + cm_norm(Sv)));
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -188,6 +383,8 @@ int main(void)
         cmocka_unit_test(test_partials_are_derivatives),
         cmocka_unit_test(test_linear_between_curves),
         cmocka_unit_test(test_nonfinite),
+        cmocka_unit_test(test_turning_basis_half_circle),
+        cmocka_unit_test(test_turning_basis_chain_and_patch),
     };
     return cmocka_run_group_tests_name("egreg", tests, NULL, NULL);
 }

@@ -22,7 +22,9 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 2     /* what this writer emits when a face needs it (GREGORY) */
-#define CM_FMT_VERSION_MINOR 5     /* 1: GREGORY-EXACT, 2: GREGORY-FIT, 3: layout 3, 4: NFILL, 5: G1FIT */
+#define CM_FMT_VERSION_MINOR 6     /* 1: GREGORY-EXACT, 2: GREGORY-FIT, 3: layout 3, 4: NFILL, 5: G1FIT,
+                                      6: the exact patches' turning basis */
+#define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
@@ -167,6 +169,7 @@ typedef struct cm_model {
     double origin[3], q;  /* quantisation grid: p = origin + q * integer */
     double tess_tol;      /* chordal tolerance recommended by the encoder (mm) */
     double rel_tol;       /* the encoder's rebuild tolerance (fraction of a face's size) */
+    int turning_basis;    /* format 2.6 on: GREGORY-EXACT/-FIT sides use the turning basis (cm_egreg.h) */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
        face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
        model (MAX_TRIS).  The tessellation's work on a face, and on the model, is bounded by these

@@ -41,6 +41,29 @@
  * T-vertex): A(s) is then linear on each edge, from that edge's own basis,
  * while k and h stay linear over the whole side.
  *
+ * The turning basis (format 2.6): the exact edges turn, which the papers'
+ * cubic edges barely do.  Along a flat face's half circle B'(1) = -B'(0),
+ * so A_e = -A_s and the linear A passes through zero at the middle: the
+ * patch is singular there (Pieza1: the G1 check read 70-90 degrees at 54
+ * mid-edge samples; a cross derivative fell from 0.285 to 0.000138 between
+ * s = 0.4 and 0.5).  So a side along an edge whose end bases turn by more
+ * than a right angle (A_s.A_e < 0) takes, from format 2.6 on:
+ *  - on a plane curve (normal P), the normals carried along it without
+ *    twist (rotation-minimising: each end normal N = alpha P + beta m with
+ *    m = P x t keeps its alpha and beta as t turns) and blended:
+ *    A = unit(alpha(s) m(s) - beta(s) P), alpha, beta linear between the
+ *    ends' (CM_EGREG_TURN_PLANE).  Exact on a surface of revolution about
+ *    the circle's axis (a dome's rim), a flat face's arc (A = m) and a half
+ *    cylinder's (A = the axis);
+ *  - on a space curve, where the end normals agree better than the bases
+ *    (N_s.N_e > A_s.A_e): A = unit(N(s) x B'(s)), N(s) blended linearly
+ *    from N_s to N_e (CM_EGREG_TURN_BLEND).
+ * Either A is square to the edge at every s and of unit length.  Both faces
+ * of an edge make the same choice from the same edge and normals (equal up
+ * to one sign), so they still share span(A(s), B'(s)) and meet G1.  Edges
+ * that turn less keep the linear basis, which is what a cubic GREGORY face
+ * beside them has.  Sides inside the face (the N-split's cubics) keep it too.
+ *
  * Contract: pure functions of their inputs; no heap, no VLA, no recursion;
  * + - * / and comparisons only, fixed orders (spec §2 rules 3-4).
  */
@@ -65,6 +88,22 @@ enum { CM_EGREG_SIDE_EDGE = 0, CM_EGREG_SIDE_CUBIC = 1, CM_EGREG_SIDE_CHAIN = 2 
 #  define CM_EGREG_MAX_PIECES 1
 #endif
 
+enum { CM_EGREG_TURN_NONE = 0, CM_EGREG_TURN_BLEND = 1, CM_EGREG_TURN_PLANE = 2 };
+
+/** The turning basis of a side along an edge (or of a chain's edge), over the fraction r of it. */
+typedef struct cm_egreg_turn {
+    int mode;               /* CM_EGREG_TURN_*: NONE, the linear basis of spec 5.4 */
+    union {                 /* (one or the other: a board's decoder state holds a few hundred) */
+        struct {
+            cm_vec3 N0, N1; /* BLEND: the normals at r = 0 and 1 */
+        };
+        struct {
+            cm_vec3 P;      /* PLANE: the curve's plane normal */
+            double a0, a1, b0, b1; /* PLANE: alpha and beta at r = 0 and 1 */
+        };
+    };
+} cm_egreg_turn;
+
 /**
  * One edge of a CHAIN side: on [s0, s1] of the side, B(s) = curve(t0 + (t1 - t0) (s - s0) / (s1 - s0)),
  * with its own linear cross basis from As (at s0) to Ae (at s1): the basis of that edge alone
@@ -75,6 +114,7 @@ typedef struct cm_egreg_piece {
     uint32_t edge;
     double t0, t1, s0, s1;
     cm_vec3 As, Ae;
+    cm_egreg_turn tb;   /* its turning basis (mode 0: the linear one from As to Ae) */
 } cm_egreg_piece;
 
 /** One side of an exact-boundary patch. */
@@ -91,6 +131,7 @@ typedef struct cm_egreg_side {
     };
     int fan;            /* 1: X(s) is the Bezier cubic fx[] (a collapsed side), not the basis form */
     cm_vec3 As, Ae;     /* cross basis at s = 0 and 1, into the patch */
+    cm_egreg_turn tb;   /* EDGE: its turning basis over s (CHAIN: each piece's own) */
     double k0, h0, k1, h1; /* k(s) = k0 + (k1-k0)s, h(s) likewise */
     cm_vec3 fx[4];
 } cm_egreg_side;
@@ -102,6 +143,22 @@ typedef struct cm_egreg {
     cm_vec3 tw_a[2][2];    /* twist at corner (u=a, v=b) along the u-side: s_a'(b) */
     cm_vec3 tw_b[2][2];    /* twist at corner (a, b) along the v-side: t_b'(a) */
 } cm_egreg;
+
+/**
+ * The turning basis for the EDGE side sd (its curve and range set; sd->As, sd->Ae its end bases
+ * from the normals Ns, Ne): mode NONE when the bases turn by a right angle or less, else PLANE on a
+ * plane curve (within 1e-3 of its chord), else BLEND where Ns.Ne > As.Ae, else NONE.  Curve errors
+ * pass through.
+ */
+CM_NODISCARD cm_err cm_egreg_choose_turn(const cm_egreg_side *sd, cm_vec3 Ns, cm_vec3 Ne, cm_egreg_turn *tb,
+                                         cm_status *st);
+
+/** The cross basis A of an EDGE or CHAIN side at s: linear, or its turning basis (clamped to [0,1]). */
+CM_NODISCARD cm_err cm_egreg_side_basis(const cm_egreg_side *sd, double s, cm_vec3 *A, cm_status *st);
+
+/** The turning basis tb restricted to the fraction [r0, r1] of its edge (an N-split's half edge). */
+cm_egreg_turn cm_egreg_turn_part(const cm_egreg_turn *tb, double r0, double r1);
+
 
 /**
  * Side at s (clamped to [0,1]): d[0] = B, d[1] = B', d[2] = B'' (per unit s),

@@ -123,6 +123,7 @@ typedef struct cm_greg_input {
     cm_vec3 corner_normal[CM_GREG_MAX_INPUT]; /* N(F, V_k) of spec 5.3 at V_k (start of side k); odd-N spoke rule */
     cm_vec3 nF;                          /* face reference normal n_F (unit) */
     double eps_len;                      /* spec EPS_LEN: lengths <= this are zero */
+    int turning;                         /* exact sides: the turning basis (cm_egreg.h; format 2.6) */
 } cm_greg_input;
 
 /*
@@ -280,5 +281,9 @@ cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v,
 
 /** FNV-1a 32 of the rebuilt control data (order: top of this file; spec §2 rule 6). */
 uint32_t cm_greg_surface_checksum(const cm_greg_surface *s);
+
+/** 1 if an exact patch of s has a side (or a chain's edge) on the turning basis (cm_egreg.h): the
+    surface then needs a file of format 2.6; 0 for cubic patches. */
+int cm_greg_surface_turns(const cm_greg_surface *s);
 
 #endif /* CM_GREGFACE_H */
