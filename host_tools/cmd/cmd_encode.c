@@ -90,6 +90,8 @@ int cmd_encode(int argc, char **argv)
             o.nfill = 0;
         } else if (strcmp(a, "--no-g1fit") == 0) {
             o.g1fit = 0;
+        } else if (strcmp(a, "--no-turning-basis") == 0) {
+            o.turning_basis = 0;
         } else if (strcmp(a, "--strict") == 0) {
             o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {

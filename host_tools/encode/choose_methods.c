@@ -75,6 +75,7 @@ void enc_fit_accept(tx *t, int f, int layout, int corner, int shown, const cm_re
     t->layout[f] = layout;
     t->corner[f] = corner;
     t->checksum[f] = rb->checksum;
+    t->turning[f] = (unsigned char)(rb->repr == CM_REPR_PATCHES && cm_greg_surface_turns(rb->greg));
     rep->layout = layout;
     rep->corner = shown;
     rep->rebuild_max = fe->max;
@@ -142,6 +143,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         t->method[f] = CM_METHOD_FALLBACK;
         t->layout[f] = t->corner[f] = 0;
         t->checksum[f] = 0;
+        t->turning[f] = 0;
         free(t->fit[f]);
         t->fit[f] = NULL;
         if (t->keep_only[lm->mesh.faces[f].brep_face]) {
@@ -223,6 +225,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
         if (enc_kept(t->method[f])) {
             t->layout[f] = t->corner[f] = 0;
             t->checksum[f] = 0;
+            t->turning[f] = 0;
             rep->layout = -1;
             rep->fit_m = 0;
             enc_method_of((unsigned)t->method[f])->measure_kept(w, lm, f, rep);
@@ -244,6 +247,9 @@ cm_err enc_choose_and_write(loaded_model *lm, tx *t, const encode_opts *o, encod
     cm_err e = enc_write_file(t, lm, o, NULL, r, st);
     if (e == CM_OK)
         e = enc_decode_back(t->w, r, st);
+    /* that file has no exact patch, so it says format 1.0 or 2.0; the trials rebuild them as the
+       file with them will say (write_sections.c: 2.6 where a side turns) */
+    t->w->dec.model.turning_basis = o->turning_basis;
     if (e == CM_OK)
         e = choose_methods(lm, t, o, r, st);
     if (e == CM_OK)

@@ -11,6 +11,27 @@
 #include "cm/cm_method.h"
 
 
+void encode_opts_for_format(encode_opts *o, int major, int minor)
+{
+    if (major < 2) {
+        o->gregory = 0; /* format 1: planes only */
+        o->g1fit = 0;
+        o->nfill = 0;
+    }
+    if (major > 2)
+        return;
+    if (minor < 1)
+        o->gregory_exact = 0;
+    if (minor < 2)
+        o->gregory_fit = 0;
+    if (minor < 4)
+        o->nfill = 0;
+    if (minor < 5)
+        o->g1fit = 0;
+    if (minor < CM_FMT_TURNING_MINOR)
+        o->turning_basis = 0;
+}
+
 void encode_opts_default(encode_opts *o)
 {
     o->rel_tol = 0.01;    /* spec §1 RATIO_TOL: 1 % of the face's bounding box */
@@ -23,6 +44,7 @@ void encode_opts_default(encode_opts *o)
     o->gregory_fit = 1;
     o->g1fit = 1;
     o->nfill = 1;
+    o->turning_basis = 1;
     o->strict = 0;
     o->measure_mesh = 0;
     o->abs_tol = 0;
@@ -108,12 +130,14 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     t.layout = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.corner = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.checksum = calloc((size_t)t.nfaces + 1, sizeof(uint32_t));
+    t.turning = calloc((size_t)t.nfaces + 1, 1);
     t.color = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.surfs = calloc((size_t)t.nfaces + 1, sizeof *t.surfs);
     t.fault = calloc((size_t)t.nfaces + 1, sizeof *t.fault);
     t.fit = calloc((size_t)t.nfaces + 1, sizeof *t.fit);
     r->faces = calloc((size_t)t.nfaces + 1, sizeof *r->faces);
-    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.color || !t.surfs || !t.fault || !t.fit || !r->faces) {
+    if (!t.method || !t.layout || !t.corner || !t.checksum || !t.turning || !t.color || !t.surfs || !t.fault ||
+        !t.fit || !r->faces) {
         tx_free(&t);
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     }

@@ -47,6 +47,9 @@ typedef struct encode_opts {
     int gregory_fit;             /* then GREGORY-FIT (with gregory_exact; default 1) */
     int g1fit;                   /* then G1FIT (spec §9 over the face's edges; default 1) */
     int nfill;                   /* then NFILL (spec §8; default 1) */
+    int turning_basis;           /* exact patches turn their cross basis with edges that turn more than
+                                    a right angle (format 2.6, cm_egreg.h; default 1; 0: format 2.5's
+                                    linear basis throughout) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     int measure_mesh;            /* measure each face's triangles against its source (face_report.mesh_dev;
                                     default 0: it costs a second tessellation and many projections) */
@@ -55,6 +58,10 @@ typedef struct encode_opts {
 } encode_opts;
 
 void encode_opts_default(encode_opts *o);
+
+/** Leave out what a reader of format major.minor (at most) cannot read: methods and the turning
+    basis newer than it, so that the file is written as that version or older. */
+void encode_opts_for_format(encode_opts *o, int major, int minor);
 
 /** A face's rebuild tolerance in mm (spec §1 tol_F): rel_tol x bbox_F, or abs_tol, or the smaller. */
 double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox);

@@ -67,6 +67,7 @@ typedef struct tx {
     int *method;        /* per face */
     int *layout, *corner; /* per GREGORY or NFILL face: its record (spec 15.2; enc_record_fields) */
     uint32_t *checksum;
+    unsigned char *turning; /* per face: its exact patches turn a basis (the file is then format 2.6) */
     struct fit_record **fit; /* per GREGORY-FIT face: its correction (malloc'd; NULL otherwise) */
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
     int npalette;

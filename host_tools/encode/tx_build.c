@@ -58,6 +58,7 @@ void tx_free(tx *t)
     free(t->layout);
     free(t->corner);
     free(t->checksum);
+    free(t->turning);
     free(t->color);
     free(t->fault);
     memset(t, 0, sizeof *t);

@@ -309,6 +309,10 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
             /* the joined-side layout came with format 2.3 */
             if (M->layouts && t->layout[f] == CM_GREG_LAYOUT_JOINED && major == 2 && minor < 3)
                 minor = 3;
+            /* the exact patches' turning basis came with format 2.6 (cm_egreg.h); a face none of whose
+               sides turns rebuilds the same under 2.5 */
+            if (t->turning[f] && major == 2 && minor < CM_FMT_TURNING_MINOR)
+                minor = CM_FMT_TURNING_MINOR;
         }
         cm_fmt_header h = {0};
         h.major = (uint8_t)major;

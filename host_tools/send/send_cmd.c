@@ -248,7 +248,7 @@ static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_li
         fprintf(stderr, "cmz send: %s: not a .cmz file (give a .cmz, or an IGES model to encode)\n", path);
         return -1;
     }
-    if (b[4] > h->fmt_major_max || b[4] < h->fmt_major_min) {
+    if (b[4] > h->fmt_major_max || b[4] < h->fmt_major_min || (b[4] == h->fmt_major_max && b[5] > h->fmt_minor_max)) {
         fprintf(stderr,
                 "cmz send: %s: format %u.%u, terminal '%s' reads %u.x to %u.%u: encode it again from the IGES "
                 "(cmz send MODEL.igs does this for the terminal)\n",
@@ -296,8 +296,7 @@ static int encode_for(const char *path, const cm_link_hello *h, const cm_limit_i
         o.rel_tol = tol;
         o.rel_set = 1;
     }
-    if (h->fmt_major_max < 2)
-        o.gregory = 0; /* a format 1 terminal: planes only, written as 1.0 */
+    encode_opts_for_format(&o, h->fmt_major_max, h->fmt_minor_max); /* what the terminal reads */
     encode_result r;
     cm_status_init(&st);
     cm_err e = encode_model(&lm, &o, &r, &st);

@@ -88,6 +88,11 @@ void igw_l_shape_144(igw *w);
  *  biquadratic 128; each side an exact quadratic 126) with a round hole of radius r0 about the apex
  *  (two arcs at one height): one 144 with one inner loop. */
 void igw_dome_square_hole_144(igw *w, double a, double r0);
+
+/* one face on that dome: the half band r0 <= r <= r1 (< 20) over y >= 0, bounded by two half circles
+   about the apex (edges whose end bases are opposite while the surface turns round with them: the
+   turning basis of format 2.6) and two parabolas along y = 0 */
+void igw_half_dome_band_144(igw *w, double r0, double r1);
 /** The z values of igw_bicubic_128 (row-major [i][j]). */
 extern const double igw_bicubic_z[4][4];
 

@@ -53,10 +53,13 @@ static void load_split_cylinder(loaded_model *lm)
 /* gregory: 0 planes only, 1 GREGORY (cubic edges), 3 GREGORY then GREGORY-EXACT, 7 then GREGORY-FIT,
    15 then NFILL, 31 then G1FIT (the default; the tests here are about the Gregory family: NFILL is
    test_nfill.c's, G1FIT test_g1fit.c's) */
+static int linear_basis_only; /* 1: --no-turning-basis (format 2.5's exact patches) */
+
 static void encode_with(loaded_model *lm, double rel_tol, int gregory, encode_result *r)
 {
     encode_opts o;
     encode_opts_default(&o);
+    o.turning_basis = !linear_basis_only;
     o.rel_tol = rel_tol;
     o.rel_set = 1;
     o.gregory = gregory & 1;
@@ -653,6 +656,53 @@ static void test_gregory_fit_three_sided(void **state)
     model_free(&lm);
 }
 
+/*
+ * Format 2.6's turning basis on the face that needs it: half a band round a dome, whose two
+ * half-circle edges have opposite end bases (the linear basis vanishes at their middles) while the
+ * surface turns round with them.  With it the face is GREGORY-EXACT, exact to the grid (1.7e-7 of its
+ * size), and the file says 2.6; with the linear basis of 2.5 the best patch is 1.07e-3 of its size
+ * off, over the tolerance: the face keeps its surface, in a file of 2.5 or older.  A 2.5 reader
+ * (the turning basis off) rebuilds the 2.6 face differently and says so.
+ */
+static void test_gregory_exact_turning_half_dome(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    for (int linear = 1; linear >= 0; linear--) {
+        igw_init(&w);
+        igw_half_dome_band_144(&w, 8.0, 16.0);
+        load_igw(&w, "half-dome-band", 1, &lm);
+        linear_basis_only = linear;
+        encode_with(&lm, 1e-3, 3, &r);
+        linear_basis_only = 0;
+        decode(&r);
+        if (linear) {
+            assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+            assert_true(dec.buf[CM_HDR_MAJOR] < 2 || dec.buf[CM_HDR_MINOR] < CM_FMT_TURNING_MINOR);
+            encode_result_free(&r);
+            model_free(&lm);
+            continue;
+        }
+        assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 1);
+        if (!(r.faces[0].ratio < 1e-6))
+            fail_msg("half dome band: %.3g of its size off", r.faces[0].ratio);
+        assert_int_equal(dec.buf[CM_HDR_MAJOR], 2);
+        assert_int_equal(dec.buf[CM_HDR_MINOR], CM_FMT_TURNING_MINOR);
+        cm_rebuilt rb;
+        cm_status st;
+        cm_status_init(&st);
+        assert_ok(cm_rebuild_face(&dec.model, 0, &rb, &rbws[0], &st));
+        assert_int_equal(cm_greg_surface_turns(rb.greg), 1);
+        dec.model.turning_basis = 0; /* what a 2.5 reader does with it */
+        cm_status_init(&st);
+        assert_int_equal(cm_rebuild_face(&dec.model, 0, &rb, &rbws[0], &st), CM_E_CHECKSUM);
+        encode_result_free(&r);
+        model_free(&lm);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -665,6 +715,7 @@ int main(void)
         cmocka_unit_test(test_gregory_fit_not_larger_than_surface),
         cmocka_unit_test(test_gregory_joined_t_vertex),
         cmocka_unit_test(test_gregory_joined_ten_edges),
+        cmocka_unit_test(test_gregory_exact_turning_half_dome),
     };
     return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
 }
