@@ -13,7 +13,8 @@
 #   4. `cmz send MODEL.igs` encodes for the limits the terminal announced,
 #      through a line that inserts garbage bytes;
 #   5. a model over the terminal's limits is refused on the workstation,
-#      naming the limit (the tiny profile's terminal, when built);
+#      naming the limit (the tiny profile's terminal, when built); a file of
+#      a newer minor version than the terminal reads likewise (5b);
 #   6. sigterm_mid_transfer: `kill -TERM` of `cmz send` mid-transfer on a
 #      2400 baud line: it exits within a second with 143, and the next send
 #      resumes from what the terminal kept.
@@ -188,6 +189,22 @@ else
     # always run (issue 11): a skip here once hid the limit refusal from the aarch64 run
     nok "over the limits: no tiny-profile terminal given (TINY_TERMINAL=${tiny:-unset}): build it with make PROFILE=tiny"
 fi
+# ---- 5b. a newer minor version than the terminal reads: refused on the workstation ----
+# (a 2.5 terminal would leave a 2.6 file's turning faces out; here the file claims 2.99)
+start_relay ver || { nok "relay (version) did not start"; exit 1; }
+start_term "$tmp/ver.b" "$tmp/outv"
+cp "$tmp/as1_pe_203.cmz" "$tmp/newer.cmz"
+printf '\143' | dd of="$tmp/newer.cmz" bs=1 seek=5 conv=notrunc 2> /dev/null
+out=$("$cmz" send "$tmp/newer.cmz" --serial "$tmp/ver.a" --timeout 20 2>&1)
+rc=$?
+if [ $rc -ne 0 ] && grep -q "format 2\.99, terminal 'pty-test' reads" <<<"$out" && [ ! -e "$tmp/outv/model.cmz" ]; then
+    ok "a newer minor version than the terminal reads: refused before sending ($(grep -o 'format 2\.99.*reads [0-9.x ]*to [0-9.]*' <<<"$out"))"
+else
+    nok "a newer minor version: rc $rc, $(tr '\n' ' ' <<<"$out")"
+fi
+kill "$term_pid" "$relay_pid" 2>/dev/null
+wait 2>/dev/null
+
 # ---- 6. sigterm_mid_transfer: SIGTERM to cmz send on a slow line ----
 start_relay sig --baud 2400 || { nok "relay (sigterm) did not start"; exit 1; }
 start_term "$tmp/sig.b" "$tmp/out6"
