@@ -198,22 +198,34 @@ static int circle_100(igw *w, double cx, double cy, double z, double r)
     return de;
 }
 
-/* full clockwise circle (seen from +z) as a rational 126 of four quarter arcs, starting at angle 0 */
-static int circle_cw_126(igw *w, double cx, double cy, double z, double r)
+/* `quarters` quarter arcs clockwise (seen from +z) as one rational 126, from the point `first` of
+   the circle's eight (0: angle 0, 2: -90 degrees, 4: 180 degrees, ...) */
+static int arc_cw_126(igw *w, double cx, double cy, double z, double r, int first, int quarters)
 {
     const double s = sqrt(0.5);
     /* angles 0, -45(handle), -90, ... : clockwise */
-    const double px[9] = {1, 1, 0, -1, -1, -1, 0, 1, 1}, py[9] = {0, -1, -1, -1, 0, 1, 1, 1, 0};
+    const double px[8] = {1, 1, 0, -1, -1, -1, 0, 1}, py[8] = {0, -1, -1, -1, 0, 1, 1, 1};
+    int n = 2 * quarters + 1;
     char buf[4096];
-    int k = snprintf(buf, sizeof buf, "8,2,1,1,0,0,0,0,0,0.25,0.25,0.5,0.5,0.75,0.75,1,1,1");
-    for (int i = 0; i < 9; i++)
+    int k = snprintf(buf, sizeof buf, "%d,2,1,%d,0,0,0,0,0", n - 1, quarters == 4 ? 1 : 0);
+    for (int q = 1; q < quarters; q++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g", (double)q / quarters, (double)q / quarters);
+    k += snprintf(buf + k, sizeof buf - (size_t)k, ",1,1,1");
+    for (int i = 0; i < n; i++)
         k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g", i % 2 ? s : 1.0);
-    for (int i = 0; i < 9; i++)
-        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", cx + r * px[i], cy + r * py[i], z);
+    for (int i = 0; i < n; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", cx + r * px[(first + i) % 8],
+                      cy + r * py[(first + i) % 8], z);
     snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,0,1");
     int de = igw_add(w, 126, 0, "%s", buf);
     igw_set(w, de, 1, 0, 0);
     return de;
+}
+
+/* full clockwise circle (seen from +z), starting at angle 0 */
+static int circle_cw_126(igw *w, double cx, double cy, double z, double r)
+{
+    return arc_cw_126(w, cx, cy, z, r, 0, 4);
 }
 
 static int bilinear_128(igw *w, v3 p00, v3 p10, v3 p01, v3 p11)
@@ -667,7 +679,9 @@ static double dome_z(double x, double y)
     return 5.0 * (1.0 - (x * x + y * y) / 400.0);
 }
 
-/* the dome of igw_dome_square_hole_144 as a biquadratic B-spline over [-20, 20]^2 */
+/* the dome z = 5 (1 - (x^2 + y^2) / 400) over [-20, 20]^2 as a biquadratic B-spline: with
+   x = 20(2u-1), y = 20(2v-1), z = -5 + 20u - 20u^2 + 20v - 20v^2, in the Bernstein basis as
+   igw_l_shape_144 */
 static int dome_128(igw *w)
 {
     static const double c[3][3] = {{-5.0, 20.0, -20.0}, {20.0, 0.0, 0.0}, {-20.0, 0.0, 0.0}};
@@ -688,53 +702,19 @@ static int dome_128(igw *w)
     return s;
 }
 
-/* the clockwise half circle (seen from +z) from (cx - r, cy) over (cx, cy + r) to (cx + r, cy) as a
-   rational 126 of two quarter arcs */
-static int half_circle_cw_126(igw *w, double cx, double cy, double z, double r)
-{
-    const double s = sqrt(0.5);
-    const double px[5] = {-1, -1, 0, 1, 1}, py[5] = {0, 1, 1, 1, 0};
-    char buf[2048];
-    int k = snprintf(buf, sizeof buf, "4,2,1,0,0,0,0,0,0,0.5,0.5,1,1,1");
-    for (int i = 0; i < 5; i++)
-        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g", i % 2 ? s : 1.0);
-    for (int i = 0; i < 5; i++)
-        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", cx + r * px[i], cy + r * py[i], z);
-    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,0,1");
-    int de = igw_add(w, 126, 0, "%s", buf);
-    igw_set(w, de, 1, 0, 0);
-    return de;
-}
-
 void igw_half_dome_band_144(igw *w, double r0, double r1)
 {
     int s = dome_128(w);
     /* circles about the apex lie at one height: the outer half from (r1, 0) over (0, r1) to (-r1, 0),
        in along y = 0, the inner half back clockwise, out along y = 0 */
     int m[4] = {arc_100(w, 0, 0, dome_z(r1, 0.0), r1, 0.0, M_PI), lift_126(w, dome_z, -r1, 0.0, -r0, 0.0),
-                half_circle_cw_126(w, 0, 0, dome_z(r0, 0.0), r0), lift_126(w, dome_z, r0, 0.0, r1, 0.0)};
+                arc_cw_126(w, 0, 0, dome_z(r0, 0.0), r0, 4, 2), lift_126(w, dome_z, r0, 0.0, r1, 0.0)};
     igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 4)));
 }
 
 void igw_dome_square_hole_144(igw *w, double a, double r0)
 {
-    /* z = 5 (1 - (x^2 + y^2) / 400) over [-20, 20]^2: with x = 20(2u-1), y = 20(2v-1),
-       z = -5 + 20u - 20u^2 + 20v - 20v^2, in the biquadratic Bernstein basis as igw_l_shape_144 */
-    static const double c[3][3] = {{-5.0, 20.0, -20.0}, {20.0, 0.0, 0.0}, {-20.0, 0.0, 0.0}};
-    static const double C[3][3] = {{1, 0, 0}, {1, 1, 0}, {1, 2, 1}};
-    char buf[4096];
-    int k = snprintf(buf, sizeof buf, "2,2,2,2,0,0,1,0,0,0,0,0,1,1,1,0,0,0,1,1,1,1,1,1,1,1,1,1,1,1");
-    for (int l = 0; l < 3; l++)
-        for (int kk = 0; kk < 3; kk++) {
-            double z = 0.0;
-            for (int i = 0; i <= kk; i++)
-                for (int j = 0; j <= l; j++)
-                    z += c[i][j] * C[kk][i] / C[2][i] * C[l][j] / C[2][j];
-            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", 20.0 * (kk - 1), 20.0 * (l - 1), z);
-        }
-    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
-    int s = igw_add(w, 128, 0, "%s", buf);
-    igw_set(w, s, 1, 0, 0);
+    int s = dome_128(w);
     static const double px[4] = {-1, 1, 1, -1}, py[4] = {-1, -1, 1, 1};
     int m[4];
     for (int i = 0; i < 4; i++) {

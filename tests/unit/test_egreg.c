@@ -100,24 +100,30 @@ static void test_boundary_and_cross_derivatives(void **state)
     }
 }
 
-static void test_partials_are_derivatives(void **state)
+/* S_u and S_v of g are its derivatives (central differences) at 49 inner points */
+static void assert_partials(const cm_egreg *g)
 {
-    (void)state;
-    cm_egreg g;
-    warped_patch(&g, 3.0);
     const double h = 1e-6;
     for (int i = 1; i < 8; i++)
         for (int j = 1; j < 8; j++) {
             double u = i / 8.0 + 0.01, v = j / 8.0 - 0.02;
             cm_vec3 S, Su, Sv, a, b;
-            eval(&g, u, v, &S, &Su, &Sv);
-            eval(&g, u + h, v, &a, NULL, NULL);
-            eval(&g, u - h, v, &b, NULL, NULL);
+            eval(g, u, v, &S, &Su, &Sv);
+            eval(g, u + h, v, &a, NULL, NULL);
+            eval(g, u - h, v, &b, NULL, NULL);
             assert_vec_near(Su, cm_scale(cm_sub(a, b), 0.5 / h), 1e-5 * (1 + cm_norm(Su)));
-            eval(&g, u, v + h, &a, NULL, NULL);
-            eval(&g, u, v - h, &b, NULL, NULL);
+            eval(g, u, v + h, &a, NULL, NULL);
+            eval(g, u, v - h, &b, NULL, NULL);
             assert_vec_near(Sv, cm_scale(cm_sub(a, b), 0.5 / h), 1e-5 * (1 + cm_norm(Sv)));
         }
+}
+
+static void test_partials_are_derivatives(void **state)
+{
+    (void)state;
+    cm_egreg g;
+    warped_patch(&g, 3.0);
+    assert_partials(&g);
 }
 
 /* between two equal arcs (as cubics) at z = 0 and z = 5 joined by lines, with the cross derivative
@@ -314,7 +320,6 @@ static void test_turning_basis_half_circle(void **state)
 static void test_turning_basis_chain_and_patch(void **state)
 {
     (void)state;
-    const double h = 1e-6;
     cm_vec3 d[3], x[2];
 #if CM_EGREG_MAX_PIECES >= 2 /* (a board of four sides joins no edges) */
     const cm_vec3 up = {0, 0, 1};
@@ -362,18 +367,7 @@ static void test_turning_basis_chain_and_patch(void **state)
     g.side[0].h0 = 0.3;
     g.side[0].h1 = -0.1;
     assert_int_equal(cm_egreg_finish(&g, NULL), CM_OK);
-    for (int i = 1; i < 8; i++)
-        for (int j = 1; j < 8; j++) {
-            double u = i / 8.0 + 0.01, v = j / 8.0 - 0.02;
-            cm_vec3 S, Su, Sv, a, b;
-            eval(&g, u, v, &S, &Su, &Sv);
-            eval(&g, u + h, v, &a, NULL, NULL);
-            eval(&g, u - h, v, &b, NULL, NULL);
-            assert_vec_near(Su, cm_scale(cm_sub(a, b), 0.5 / h), 1e-5 * (1 + cm_norm(Su)));
-            eval(&g, u, v + h, &a, NULL, NULL);
-            eval(&g, u, v - h, &b, NULL, NULL);
-            assert_vec_near(Sv, cm_scale(cm_sub(a, b), 0.5 / h), 1e-5 * (1 + cm_norm(Sv)));
-        }
+    assert_partials(&g);
 }
 
 int main(void)
