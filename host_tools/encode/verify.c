@@ -128,7 +128,43 @@ typedef struct greg_walk {
     double accept;   /* a local answer at most this far is taken without a global search */
     int have, patch;
     double u, v;
+    double again;    /* an answer farther than this is confirmed: a foot at rest inside a patch asks the
+                        global search, and the global search's answer a dense one (0: never) */
 } greg_walk;
+
+/* samples per direction of each patch in the dense search that confirms a large distance */
+#define CONFIRM_SAMPLES 48
+
+/*
+ * The nearest point of the patches to p from a 49 x 49 grid on each and a local walk from the best:
+ * the global search (cm_greg_surface_project, 17 x 17) can settle in a local minimum.  On Pieza1's
+ * GREGORY-FIT face 111 it answered 0.45 mm for a source point the encoder's walk had put 0.18 mm
+ * from the face (a point 0.3 mm beside it is 0.009 mm from it), and `cmz eval` failed the file.
+ */
+static double greg_dense(const cm_greg_surface *s, cm_vec3 p, int *k, double *u, double *v)
+{
+    double best = HUGE_VAL;
+    for (int q = 0; q < s->npatch; q++)
+        for (int i = 0; i <= CONFIRM_SAMPLES; i++)
+            for (int j = 0; j <= CONFIRM_SAMPLES; j++) {
+                cm_vec3 S;
+                double a = (double)i / CONFIRM_SAMPLES, b = (double)j / CONFIRM_SAMPLES;
+                if (cm_greg_surface_eval(s, q, a, b, &S, NULL, NULL) != CM_OK)
+                    continue;
+                double d = cm_dist(S, p);
+                if (d < best) {
+                    best = d;
+                    *k = q;
+                    *u = a;
+                    *v = b;
+                }
+            }
+    if (best < HUGE_VAL) {
+        double d = greg_local(s, *k, p, u, v);
+        best = d < best ? d : best;
+    }
+    return best;
+}
 
 /*
  * greg_local, and across the internal curves of an N-split: patch k's side u = 1 is I_k, which is
@@ -181,9 +217,11 @@ static double greg_dist(greg_walk *w, cm_vec3 p)
         int k = w->patch, inner;
         d = greg_local_hop(w->s, &k, p, &u, &v, &inner);
         /* a local foot is a point of the surface, so its distance is never below the true one: it
-           is taken when small, or when it came to rest inside a patch (a minimum there); a foot
-           stopped against a side with a large distance asks the global search */
-        if (d <= w->accept || inner) {
+           is taken when small, or when it came to rest inside a patch (a minimum there) unless it
+           is far enough to matter (a local minimum is not the nearest point: Pieza1's face 111 read
+           0.45 mm so where the global search finds 0.18 mm); a foot stopped against a side with a
+           large distance asks the global search */
+        if (d <= w->accept || (inner && !(w->again > 0 && d > w->again))) {
             w->patch = k;
             w->u = u;
             w->v = v;
@@ -199,12 +237,19 @@ static double greg_dist(greg_walk *w, cm_vec3 p)
         w->v = v;
         w->have = 1;
     }
+    if (w->again > 0 && d > w->again && (g = greg_dense(w->s, p, &k, &u, &v)) < d) {
+        d = g;
+        w->patch = k;
+        w->u = u;
+        w->v = v;
+        w->have = 1;
+    }
     return d;
 }
 
 double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int *have, int *k, double *u, double *v)
 {
-    greg_walk w = {s, accept, *have, *k, *u, *v};
+    greg_walk w = {s, accept, *have, *k, *u, *v, 0};
     double d = greg_dist(&w, p);
     *have = w.have;
     *k = w.patch;
@@ -375,7 +420,8 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
         return 0;
     /* a walk's local answer is a distance to a point of the surface, so never below the true one:
        one within a tenth of the tolerance cannot change the verdict and needs no global search */
-    greg_walk w = {rb->greg, tol < HUGE_VAL ? 0.1 * tol : 1e-4 * rb->bbox, 0, 0, 0, 0};
+    greg_walk w = {rb->greg, tol < HUGE_VAL ? 0.1 * tol : 1e-4 * rb->bbox, 0, 0, 0, 0,
+                   tol < HUGE_VAL ? tol : 1e-3 * rb->bbox};
     surf_walk sw;
     if (rb->repr == CM_REPR_NURBS)
         surf_walk_init(&sw, &rb->surf, w.accept);
@@ -614,7 +660,7 @@ static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg
 
 int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm_vec3 P, cm_vec3 *n)
 {
-    greg_walk w = {NULL, 0, 0, 0, 0, 0};
+    greg_walk w = {NULL, 0, 0, 0, 0, 0, 0};
     surf_walk sw;
     if (fs[f].rebuilt && fs[f].repr == CM_REPR_NURBS && fs[f].nurbs_ctrl)
         surf_walk_init(&sw, &fs[f].nurbs, 0);
@@ -637,7 +683,7 @@ double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const fa
                 continue;
             cm_curve c;
             cm_model_edge_curve(m, e, &c);
-            greg_walk walk = {NULL, S->greg ? 1e-3 * S->bbox : 0, 0, 0, 0, 0};
+            greg_walk walk = {NULL, S->greg ? 1e-3 * S->bbox : 0, 0, 0, 0, 0, 0};
             surf_walk swalk;
             if (S->rebuilt && S->repr == CM_REPR_NURBS && S->nurbs_ctrl)
                 surf_walk_init(&swalk, &S->nurbs, 1e-3 * S->bbox);
@@ -669,7 +715,7 @@ double verify_g1_edge(const loaded_model *lm, const cm_model *m, uint32_t e, con
     double worst = 1.0;
     /* the edge lies on both surfaces (within the §12 tolerance): a local foot within 1e-3 of the
        face's size is the right one */
-    greg_walk walk[2] = {{NULL, 0, 0, 0, 0, 0}, {NULL, 0, 0, 0, 0, 0}};
+    greg_walk walk[2] = {{NULL, 0, 0, 0, 0, 0, 0}, {NULL, 0, 0, 0, 0, 0, 0}};
     for (int side = 0; side < 2; side++)
         walk[side].accept = fs[side ? b : a].greg ? 1e-3 * fs[side ? b : a].bbox : 0;
     surf_walk swalk[2];
