@@ -16,6 +16,9 @@ static double clamp01(double s)
     return s > 1.0 ? 1.0 : s;
 }
 
+/* x0 + r (x1 - x0): alpha, beta and N along the edge */
+static double lerp(double x0, double x1, double r) { return x0 + r * (x1 - x0); }
+
 /* the normals' blend: A = unit(a), a = N x B', N = N0 + r (N1 - N0); a' = N' x B' + N x B'' */
 static void blend_basis(const cm_egreg_turn *tb, double r, double drds, const cm_vec3 q[3], cm_vec3 *a,
                         cm_vec3 *da)
@@ -37,7 +40,7 @@ static cm_err plane_basis(const cm_egreg_turn *tb, double r, double drds, const 
     cm_vec3 t = cm_scale(q[1], 1.0 / len);
     cm_vec3 dt = cm_scale(cm_sub(q[2], cm_scale(t, cm_dot(t, q[2]))), 1.0 / len);
     cm_vec3 m = cm_cross(tb->P, t), dm = cm_cross(tb->P, dt);
-    double al = tb->a0 + r * (tb->a1 - tb->a0), be = tb->b0 + r * (tb->b1 - tb->b0);
+    double al = lerp(tb->a0, tb->a1, r), be = lerp(tb->b0, tb->b1, r);
     double dal = (tb->a1 - tb->a0) * drds, dbe = (tb->b1 - tb->b0) * drds;
     *a = cm_sub(cm_scale(m, al), cm_scale(tb->P, be));
     *da = cm_sub(cm_add(cm_scale(m, dal), cm_scale(dm, al)), cm_scale(tb->P, dbe));
@@ -71,10 +74,10 @@ cm_egreg_turn cm_egreg_turn_part(const cm_egreg_turn *tb, double r0, double r1)
         p.N0 = cm_axpy(tb->N0, r0, cm_sub(tb->N1, tb->N0));
         p.N1 = cm_axpy(tb->N0, r1, cm_sub(tb->N1, tb->N0));
     } else if (tb->mode == CM_EGREG_TURN_PLANE) {
-        p.a0 = tb->a0 + r0 * (tb->a1 - tb->a0);
-        p.a1 = tb->a0 + r1 * (tb->a1 - tb->a0);
-        p.b0 = tb->b0 + r0 * (tb->b1 - tb->b0);
-        p.b1 = tb->b0 + r1 * (tb->b1 - tb->b0);
+        p.a0 = lerp(tb->a0, tb->a1, r0);
+        p.a1 = lerp(tb->a0, tb->a1, r1);
+        p.b0 = lerp(tb->b0, tb->b1, r0);
+        p.b1 = lerp(tb->b0, tb->b1, r1);
     }
     return p;
 }
