@@ -9,6 +9,7 @@
 #include "cm/cm_bspline.h"
 #include "cm/cm_limits_info.h"
 #include "cm/cm_method.h"
+#include "cm/cm_predict.h"
 #include "cm/cm_sections.h"
 
 #define COORD_MAX CM_FMT_COORD_MAX
@@ -146,6 +147,7 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     d->model.q = q;
     d->model.tess_tol = h.tess_tol;
     d->model.turning_basis = h.major > 2 || (h.major == 2 && h.minor >= CM_FMT_TURNING_MINOR);
+    d->model.predicted = h.major >= CM_FMT_PREDICT_MAJOR;
     if (!isfinite(d->model.tess_tol))
         return fail(d, st, CM_E_NONFINITE, CM_HDR_TESS_TOL, "chordal tolerance");
     if (!(d->model.tess_tol > 0))
@@ -304,14 +306,29 @@ static cm_err read_count(reader *r, cm_ac_int *m, unsigned id, uint64_t cap, uin
     return CM_OK;
 }
 
-static cm_err read_coord(reader *r, cm_ac_int *m, int64_t pred, int64_t *out, const char *where)
+/* a grid coordinate sent as its prediction plus a multiple of step (1, or format 3's 2^s with
+   s <= CM_FMT_MAX_STEP): |pred| < 3 * 2^40 (the coordinates it comes from were checked), the
+   decoded multiple below 2^34, so nothing overflows before the range check */
+static cm_err read_coord(reader *r, cm_ac_int *m, int64_t pred, int64_t step, int64_t *out, const char *where)
 {
-    int64_t v = pred + cm_ac_dec_sint(&r->ac, m);
+    int64_t v = pred + cm_ac_dec_sint(&r->ac, m) * step;
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, where);
     if (v > COORD_MAX || v < -COORD_MAX)
         return rfail(r, CM_E_RANGE, where);
     *out = v;
+    return CM_OK;
+}
+
+/* format 3: a curve's or net's step exponent s, as the multiplier 2^s */
+static cm_err read_step(reader *r, cm_ac_int *m, int64_t *step, const char *where)
+{
+    uint64_t s = cm_ac_dec_uint(&r->ac, m);
+    if (r->ac.overrun)
+        return rfail(r, CM_E_TRUNCATED, where);
+    if (s > CM_FMT_MAX_STEP)
+        return rfail(r, CM_E_RANGE, where);
+    *step = (int64_t)1 << s;
     return CM_OK;
 }
 
@@ -333,7 +350,7 @@ static cm_err sec_vert(reader *r)
     int64_t prev[3] = {0, 0, 0};
     for (uint32_t i = 0; i < m->nverts; i++) {
         for (int k = 0; k < 3; k++) {
-            if ((e = read_coord(r, &ctx.coord[k], prev[k], &d->vq[i][k], "vertex")) != CM_OK)
+            if ((e = read_coord(r, &ctx.coord[k], prev[k], 1, &d->vq[i][k], "vertex")) != CM_OK)
                 return e;
             prev[k] = d->vq[i][k];
         }
@@ -342,8 +359,16 @@ static cm_err sec_vert(reader *r)
     return CM_OK;
 }
 
+/* the coding models of a knot vector: format 2 sends each gap as it is, format 3 the first gap,
+   then per gap a bit "zero" (a repeated knot) and otherwise the gap less the last gap that was not
+   zero (cm_predict.h) */
+typedef struct knot_models {
+    cm_ac_prob *uniform, *zero;
+    cm_ac_int *gap, *delta;
+} knot_models;
+
 /* knots of a clamped vector on [0,1] for degree p and n control points, appended to the pool */
-static cm_err read_knots(reader *r, cm_ac_prob *uniform_p, cm_ac_int *mk, int p, int n, uint32_t *knot0)
+static cm_err read_knots(reader *r, const knot_models *km, int p, int n, uint32_t *knot0)
 {
     cm_model *m = &r->d->model;
     uint32_t nk = (uint32_t)(n + p + 1);
@@ -355,15 +380,27 @@ static cm_err read_knots(reader *r, cm_ac_prob *uniform_p, cm_ac_int *mk, int p,
         K[i] = 0.0;
         K[n + i] = 1.0;
     }
-    if (cm_ac_dec_bit(&r->ac, uniform_p)) {
+    if (cm_ac_dec_bit(&r->ac, km->uniform)) {
         for (int j = 1; j <= interior; j++)
             K[p + j] = (double)j / (double)(interior + 1);
     } else {
-        int64_t prev = 0;
+        int64_t prev = 0, last_gap = 0;
         for (int j = 1; j <= interior; j++) {
-            int64_t kq = prev + (int64_t)cm_ac_dec_uint(&r->ac, mk);
+            int64_t gap;
+            if (!r->d->model.predicted || j == 1)
+                gap = (int64_t)cm_ac_dec_uint(&r->ac, km->gap);
+            else if (cm_ac_dec_bit(&r->ac, km->zero))
+                gap = 0;
+            else
+                gap = last_gap + cm_ac_dec_sint(&r->ac, km->delta);
             if (r->ac.overrun)
                 return rfail(r, CM_E_TRUNCATED, "knots");
+            /* a gap beyond [0,1] (a hostile delta: |delta| < 2^34, no overflow) */
+            if (gap < 0 || gap > KNOT_ONE)
+                return rfail(r, CM_E_KNOTS, "knots");
+            if (gap)
+                last_gap = gap;
+            int64_t kq = prev + gap;
             if (kq > KNOT_ONE)
                 return rfail(r, CM_E_KNOTS, "knots");
             K[p + j] = (double)kq / (double)KNOT_ONE;
@@ -437,33 +474,49 @@ static cm_err sec_edge(reader *r)
             K[2] = K[3] = 1.0;
             E->knot0 = m->nknots;
             m->nknots += 4;
-        } else if ((e = read_knots(r, &ctx.uniform, &ctx.knot, p, n, &E->knot0)) != CM_OK) {
-            return e;
+        } else {
+            knot_models km = {&ctx.uniform, &ctx.knot_zero, &ctx.knot, &ctx.knot_delta};
+            if ((e = read_knots(r, &km, p, n, &E->knot0)) != CM_OK)
+                return e;
         }
         E->ctrl0 = m->nctrl;
         cm_vec3 *P = m->ctrl + m->nctrl;
         double *W = m->w + m->nctrl;
-        int64_t prev[3] = {d->vq[E->v0][0], d->vq[E->v0][1], d->vq[E->v0][2]};
+        /* format 3: the curve's predictor (cm_predict.h) and its step, 2^step grid steps, of which
+           its points are multiples away from their predictions; format 2: the previous point, 1 */
+        int linear = 0;
+        int64_t step = 1;
+        if (m->predicted && n > 2) {
+            linear = (int)cm_ac_dec_bit(&r->ac, &ctx.linear);
+            if ((e = read_step(r, &ctx.step, &step, "edge step")) != CM_OK)
+                return e;
+        }
+        const int64_t *first = d->vq[E->v0], *last = d->vq[E->v1];
+        int64_t prev[3] = {first[0], first[1], first[2]}, prev2[3] = {first[0], first[1], first[2]};
         P[0] = m->verts[E->v0];
         for (int j = 1; j < n - 1; j++) {
             int64_t k3[3];
             for (int k = 0; k < 3; k++) {
-                if ((e = read_coord(r, &ctx.coord[k], prev[k], &k3[k], "edge control point")) != CM_OK)
+                int64_t pred = cm_pred_ctrl(linear, j, n, first[k], last[k], prev[k], prev2[k]);
+                if ((e = read_coord(r, &ctx.coord[k], pred, step, &k3[k], "edge control point")) != CM_OK)
                     return e;
+                prev2[k] = prev[k];
                 prev[k] = k3[k];
             }
             P[j] = grid_point(m, k3);
         }
         P[n - 1] = m->verts[E->v1];
-        int64_t wq = WEIGHT_ONE;
+        int64_t wq = WEIGHT_ONE, wprev = WEIGHT_ONE, wprev2 = WEIGHT_ONE;
         W[0] = 1.0;
         for (int j = 1; j < n; j++) {
             if (rational) {
-                wq += cm_ac_dec_sint(&r->ac, &ctx.weight);
+                wq = (m->predicted ? cm_pred_weight(j, wprev, wprev2) : wprev) + cm_ac_dec_sint(&r->ac, &ctx.weight);
                 if (r->ac.overrun)
                     return rfail(r, CM_E_TRUNCATED, "weights");
                 if (wq <= 0 || wq > WEIGHT_MAX)
                     return rfail(r, CM_E_RANGE, "weights");
+                wprev2 = wprev;
+                wprev = wq;
             }
             W[j] = (double)wq / (double)WEIGHT_ONE;
         }
@@ -512,21 +565,27 @@ static cm_err sec_surf(reader *r)
         S->nu = (uint16_t)cnt[0];
         S->nv = (uint16_t)cnt[1];
         S->rational = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.rational);
-        if ((e = read_knots(r, &ctx.uniform, &ctx.knot, deg[0], cnt[0], &S->uknot0)) != CM_OK ||
-            (e = read_knots(r, &ctx.uniform, &ctx.knot, deg[1], cnt[1], &S->vknot0)) != CM_OK)
+        knot_models km = {&ctx.uniform, &ctx.knot_zero, &ctx.knot, &ctx.knot_delta};
+        if ((e = read_knots(r, &km, deg[0], cnt[0], &S->uknot0)) != CM_OK ||
+            (e = read_knots(r, &km, deg[1], cnt[1], &S->vknot0)) != CM_OK)
             return e;
         S->ctrl0 = m->nctrl;
         int nu = cnt[0], nv = cnt[1];
-        /* parallelogram prediction over the net, row-major in u */
+        /* the net row-major in u, each point predicted from those before it (cm_pred_net: format 2
+           the parallelogram, format 3 the surface's choice) */
+        int quadratic = 0;
+        int64_t step = 1;
+        if (m->predicted) {
+            quadratic = (int)cm_ac_dec_bit(&r->ac, &ctx.quadratic);
+            if ((e = read_step(r, &ctx.step, &step, "surface step")) != CM_OK)
+                return e;
+        }
         for (int i = 0; i < nu; i++)
             for (int j = 0; j < nv; j++) {
                 int idx = i * nv + j;
                 for (int k = 0; k < 3; k++) {
-                    int64_t pred = i && j ? d->sq[idx - nv][k] + d->sq[idx - 1][k] - d->sq[idx - nv - 1][k]
-                                   : i    ? d->sq[idx - nv][k]
-                                   : j    ? d->sq[idx - 1][k]
-                                          : 0;
-                    if ((e = read_coord(r, &ctx.coord[k], pred, &d->sq[idx][k], "surface control point")) != CM_OK)
+                    int64_t pred = cm_pred_net(quadratic, (const int64_t(*)[3])d->sq, nv, i, j, k);
+                    if ((e = read_coord(r, &ctx.coord[k], pred, step, &d->sq[idx][k], "surface control point")) != CM_OK)
                         return e;
                 }
                 m->ctrl[S->ctrl0 + (uint32_t)idx] = grid_point(m, d->sq[idx]);

@@ -27,6 +27,10 @@ void cm_edge_ctx_init(cm_edge_ctx *c)
     cm_ac_prob_init(&c->kind);
     cm_ac_prob_init(&c->rational);
     cm_ac_prob_init(&c->uniform);
+    cm_ac_prob_init(&c->linear);
+    cm_ac_prob_init(&c->knot_zero);
+    cm_ac_int_init(&c->knot_delta);
+    cm_ac_int_init(&c->step);
 }
 
 void cm_surf_ctx_init(cm_surf_ctx *c)
@@ -39,6 +43,10 @@ void cm_surf_ctx_init(cm_surf_ctx *c)
     cm_ac_int_init(&c->weight);
     cm_ac_prob_init(&c->rational);
     cm_ac_prob_init(&c->uniform);
+    cm_ac_prob_init(&c->quadratic);
+    cm_ac_prob_init(&c->knot_zero);
+    cm_ac_int_init(&c->knot_delta);
+    cm_ac_int_init(&c->step);
 }
 
 void cm_face_ctx_init(cm_face_ctx *c)

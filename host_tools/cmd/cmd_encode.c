@@ -51,6 +51,24 @@ static int write_atomic(const char *path, const uint8_t *data, size_t len)
     return EXIT_OK;
 }
 
+/* --format MAJOR[.MINOR]: write what a reader of that version reads (encode_opts_for_format) */
+static int parse_format(const char *v, encode_opts *o)
+{
+    int major = 0, minor = 0, used = 0;
+    int n = sscanf(v, "%d%n.%d%n", &major, &used, &minor, &used);
+    int newest_minor = major == CM_FMT_VERSION_MAJOR ? CM_FMT_VERSION_MINOR : major == 2 ? CM_FMT_V2_MINOR : 0;
+    if (n < 1 || v[used] != '\0' || major < CM_FMT_VERSION_MIN_MAJOR || major > CM_FMT_VERSION_MAJOR || minor < 0 ||
+        minor > newest_minor) {
+        fprintf(stderr, "%s encode: --format '%s': a version this writer knows: 1.0, 2.0 to 2.%d, or %d.0 to the newest, %d.%d\n",
+                cmd_prog, v, CM_FMT_V2_MINOR, CM_FMT_VERSION_MAJOR, CM_FMT_VERSION_MAJOR, CM_FMT_VERSION_MINOR);
+        return 1;
+    }
+    if (n == 1)
+        minor = newest_minor;
+    encode_opts_for_format(o, major, minor);
+    return 0;
+}
+
 int cmd_encode(int argc, char **argv)
 {
     const char *path = NULL, *out = NULL, *report = NULL, *profile = NULL;
@@ -92,6 +110,10 @@ int cmd_encode(int argc, char **argv)
             o.g1fit = 0;
         } else if (strcmp(a, "--no-turning-basis") == 0) {
             o.turning_basis = 0;
+        } else if (strcmp(a, "--format") == 0 && v) {
+            if (parse_format(v, &o))
+                return EXIT_USAGE;
+            i++;
         } else if (strcmp(a, "--strict") == 0) {
             o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {

@@ -249,7 +249,7 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         }
         /* spec §14 step 6: a correction that costs more than the surface it replaces is not worth
            sending (the N-split's several patches on a small B-spline face) */
-        if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f])) {
+        if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f], t->o->predicted)) {
             too_large = 1;
             free(fr);
             continue;

@@ -50,6 +50,8 @@ typedef struct encode_opts {
     int turning_basis;           /* exact patches turn their cross basis with edges that turn more than
                                     a right angle (format 2.6, cm_egreg.h; default 1; 0: format 2.5's
                                     linear basis throughout) */
+    int predicted;               /* code curves and knots predicted (format 3, cm_predict.h; default 1;
+                                    0: format 2's coding, for terminals of format 2) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     int measure_mesh;            /* measure each face's triangles against its source (face_report.mesh_dev;
                                     default 0: it costs a second tessellation and many projections) */
@@ -59,8 +61,8 @@ typedef struct encode_opts {
 
 void encode_opts_default(encode_opts *o);
 
-/** Leave out what a reader of format major.minor (at most) cannot read: methods and the turning
-    basis newer than it, so that the file is written as that version or older. */
+/** Leave out what a reader of format major.minor (at most) cannot read: the coding, methods and the
+    turning basis newer than it, so that the file is written as that version or older. */
 void encode_opts_for_format(encode_opts *o, int major, int minor);
 
 /** A face's rebuild tolerance in mm (spec §1 tol_F): rel_tol x bbox_F, or abs_tol, or the smaller. */

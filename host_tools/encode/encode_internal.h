@@ -46,6 +46,8 @@ typedef struct tx_edge {
     int64_t *kq;      /* n - p - 1 interior knots */
     int64_t (*cq)[3]; /* n control points on the grid (ends = vertices) */
     int64_t *wq;      /* n weights */
+    int linear, step; /* format 3: the predictor and the step 2^step of the interior points
+                         (tx_coarsen.c; 0, 0 in format 2) */
 } tx_edge;
 
 typedef struct tx_surf {
@@ -53,6 +55,7 @@ typedef struct tx_surf {
     int64_t *ku, *kv;
     int64_t (*cq)[3];
     int64_t *wq;
+    int quadratic, step; /* format 3: the net's predictor and step (tx_coarsen.c) */
 } tx_surf;
 
 typedef struct tx {
@@ -150,7 +153,20 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
 
 /* Spec §14 step 6, estimated: the bits a kept surface and a GREGORY-FIT record cost in the file
    (write_sections.c says how; the same estimate for both, so they compare) */
-double enc_kept_surface_bits(const tx_surf *S);
+double enc_kept_surface_bits(const tx_surf *S, int predicted);
+/* the estimate of what one sint costs once the models have learnt (write_sections.c) */
+double enc_sint_bits(int64_t v);
+
+/*
+ * Format 3's precision from the tolerance budget (tx_coarsen.c): the interior control points of
+ * curve X, or the net of kept surface S, moved onto a coarser step of their own, as coarse as the
+ * budget allows: tol_mm is the tolerance of the faces the curve bounds, or of the face the surface
+ * is kept for.  Chooses the predictor too.  Nothing changes unless the options say format 3.
+ */
+void tx_coarsen_edge(const tx *t, tx_edge *X, double tol_mm);
+/* the diagonal (mm) of the box of n grid points (tx_build.c) */
+double ctrl_box_diag(const tx *t, const int64_t (*cq)[3], long n);
+void tx_coarsen_surface(const tx *t, tx_surf *S, double tol_mm);
 double enc_fit_record_bits(const struct fit_record *fr);
 
 /* ---- decoding what we wrote, with the terminal's code ---- */

@@ -77,6 +77,23 @@ static int quantise(const tx *t, cm_vec3 p, int64_t out[3])
     return ok;
 }
 
+/* the diagonal (mm) of the box of n grid points: it holds the curve or surface they control */
+double ctrl_box_diag(const tx *t, const int64_t (*cq)[3], long n)
+{
+    int64_t lo[3], hi[3];
+    for (int k = 0; k < 3; k++)
+        lo[k] = hi[k] = cq[0][k];
+    for (long j = 1; j < n; j++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = cq[j][k] < lo[k] ? cq[j][k] : lo[k];
+            hi[k] = cq[j][k] > hi[k] ? cq[j][k] : hi[k];
+        }
+    double s = 0;
+    for (int k = 0; k < 3; k++)
+        s += ((double)(hi[k] - lo[k]) * t->q) * ((double)(hi[k] - lo[k]) * t->q);
+    return sqrt(s);
+}
+
 /* a weight relative to the first on the format's grid; 0 when it cannot be sent */
 static int64_t quantise_weight(double w, double w0)
 {
@@ -291,6 +308,10 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
                 if (fabs(k - (double)j / (double)(interior + 1)) > 0.5 / (double)KNOT_ONE)
                     X->uniform = 0;
             }
+            /* format 3: the curve's own step from the tolerance of a face its size, which no face it
+               bounds is below (the face holds the curve) */
+            if (!why[order[i]] && t->o)
+                tx_coarsen_edge(t, X, encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, ctrl_box_diag(t, X->cq, n)));
         }
         hcurve_free(&c);
     }

@@ -11,6 +11,7 @@
 #include "cm/cm_crc32.h"
 #include "cm/cm_cubic_convert.h"
 #include "cm/cm_method.h"
+#include "cm/cm_predict.h"
 #include "fit_correction.h"
 #include "cm/cm_sections.h"
 
@@ -23,15 +24,31 @@ typedef struct outbuf {
 
 typedef void (*section_fn)(const tx *t, cm_ac_enc *e, const loaded_model *lm);
 
-static void put_knots(cm_ac_enc *e, cm_ac_prob *puni, cm_ac_int *mk, int uniform, const int64_t *kq, int interior)
+/* a knot vector's interior knots (docs/FORMAT.md, "Knots"): format 2 sends each gap, format 3 the
+   first gap, then per gap a bit "zero" and otherwise the gap less the last gap that was not zero */
+typedef struct knot_models {
+    cm_ac_prob *uniform, *zero;
+    cm_ac_int *gap, *delta;
+} knot_models;
+
+static void put_knots(cm_ac_enc *e, const knot_models *km, int predicted, int uniform, const int64_t *kq, int interior)
 {
-    cm_ac_enc_bit(e, puni, (unsigned)uniform);
+    cm_ac_enc_bit(e, km->uniform, (unsigned)uniform);
     if (uniform)
         return;
-    int64_t prev = 0;
+    int64_t prev = 0, last_gap = 0;
     for (int j = 0; j < interior; j++) {
-        cm_ac_enc_uint(e, mk, (uint64_t)(kq[j] - prev));
+        int64_t gap = kq[j] - prev;
         prev = kq[j];
+        if (!predicted || j == 0) {
+            cm_ac_enc_uint(e, km->gap, (uint64_t)gap);
+        } else {
+            cm_ac_enc_bit(e, km->zero, gap == 0);
+            if (gap)
+                cm_ac_enc_sint(e, km->delta, gap - last_gap);
+        }
+        if (gap)
+            last_gap = gap;
     }
 }
 
@@ -60,9 +77,18 @@ static void put_vref(cm_ac_enc *e, cm_ac_prob *pnew, cm_ac_int *mb, int *next, i
     }
 }
 
+/* control point j's prediction, coordinate k (cm_predict.h; format 2: linear = 0) */
+static int64_t edge_ctrl_pred(const tx_edge *X, int linear, int j, int k)
+{
+    return cm_pred_ctrl(linear, j, X->n, X->cq[0][k], X->cq[X->n - 1][k], X->cq[j - 1][k], j >= 2 ? X->cq[j - 2][k] : 0);
+}
+
+static double est_sint_bits(int64_t v);
+
 static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
+    int pred = t->o->predicted;
     cm_edge_ctx ctx;
     cm_edge_ctx_init(&ctx);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nedges);
@@ -78,29 +104,30 @@ static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(X->p - 1));
         cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(X->n - X->p - 1));
         cm_ac_enc_bit(e, &ctx.rational, (unsigned)X->rational);
-        put_knots(e, &ctx.uniform, &ctx.knot, X->uniform, X->kq, X->n - X->p - 1);
-        int64_t prev[3] = {X->cq[0][0], X->cq[0][1], X->cq[0][2]};
+        knot_models km = {&ctx.uniform, &ctx.knot_zero, &ctx.knot, &ctx.knot_delta};
+        put_knots(e, &km, pred, X->uniform, X->kq, X->n - X->p - 1);
+        /* format 3: the predictor and step tx_coarsen_edge chose; the points are multiples of the
+           step away from their predictions */
+        int linear = pred ? X->linear : 0, step = pred ? X->step : 0;
+        if (pred && X->n > 2) {
+            cm_ac_enc_bit(e, &ctx.linear, (unsigned)linear);
+            cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
+        }
         for (int j = 1; j < X->n - 1; j++)
-            for (int k = 0; k < 3; k++) {
-                cm_ac_enc_sint(e, &ctx.coord[k], X->cq[j][k] - prev[k]);
-                prev[k] = X->cq[j][k];
-            }
+            for (int k = 0; k < 3; k++)
+                cm_ac_enc_sint(e, &ctx.coord[k], (X->cq[j][k] - edge_ctrl_pred(X, linear, j, k)) / ((int64_t)1 << step));
         if (X->rational)
             for (int j = 1; j < X->n; j++)
-                cm_ac_enc_sint(e, &ctx.weight, X->wq[j] - X->wq[j - 1]);
+                cm_ac_enc_sint(e, &ctx.weight, X->wq[j] - (pred ? cm_pred_weight(j, X->wq[j - 1], j >= 2 ? X->wq[j - 2] : 0)
+                                                                : X->wq[j - 1]));
     }
 }
 
-/* a kept surface's control point (i, j), coordinate k, less its parallelogram prediction from the
-   points before it in the grid (docs/FORMAT.md, SURF) */
-static int64_t surf_coord_residual(const tx_surf *S, int i, int j, int k)
+/* a kept surface's control point (i, j), coordinate k, less its prediction from the points before
+   it in the grid (cm_pred_net; docs/FORMAT.md, SURF) */
+static int64_t surf_coord_residual(const tx_surf *S, int quadratic, int i, int j, int k)
 {
-    int nv = S->nv, idx = i * nv + j;
-    int64_t pred = i && j ? S->cq[idx - nv][k] + S->cq[idx - 1][k] - S->cq[idx - nv - 1][k]
-                   : i    ? S->cq[idx - nv][k]
-                   : j    ? S->cq[idx - 1][k]
-                          : 0;
-    return S->cq[idx][k] - pred;
+    return S->cq[i * S->nv + j][k] - cm_pred_net(quadratic, (const int64_t(*)[3])S->cq, S->nv, i, j, k);
 }
 
 /* its weight likewise ((i, j) != (0, 0): the first weight is 1 and not sent) */
@@ -130,25 +157,39 @@ static double est_sint_bits(int64_t v)
     return v == 0 ? est_uint_bits(0) : est_uint_bits(v < 0 ? (uint64_t)(-(v + 1)) + 1u : (uint64_t)v) + 1.0;
 }
 
-static double est_knot_bits(int uniform, const int64_t *kq, int interior)
+double enc_sint_bits(int64_t v)
+{
+    return est_sint_bits(v);
+}
+
+/* as put_knots codes them: a repeated knot about a fifth of a bit once the model has learnt it */
+static double est_knot_bits(int predicted, int uniform, const int64_t *kq, int interior)
 {
     double b = 1.0;
-    int64_t prev = 0;
+    int64_t prev = 0, last_gap = 0;
     for (int j = 0; !uniform && j < interior; j++) {
-        b += est_uint_bits((uint64_t)(kq[j] - prev));
+        int64_t gap = kq[j] - prev;
         prev = kq[j];
+        if (!predicted || j == 0)
+            b += est_uint_bits((uint64_t)gap);
+        else
+            b += gap ? 1.0 + est_sint_bits(gap - last_gap) : 0.2;
+        if (gap)
+            last_gap = gap;
     }
     return b;
 }
 
-double enc_kept_surface_bits(const tx_surf *S)
+double enc_kept_surface_bits(const tx_surf *S, int predicted)
 {
-    double b = 4 * est_uint_bits(3) + 1.0;
-    b += est_knot_bits(S->uniform_u, S->ku, S->nu - S->p - 1) + est_knot_bits(S->uniform_v, S->kv, S->nv - S->q - 1);
+    double b = 4 * est_uint_bits(3) + 1.0 + (predicted ? 1.0 + est_uint_bits((uint64_t)S->step) : 0.0);
+    int quadratic = predicted ? S->quadratic : 0, step = predicted ? S->step : 0;
+    b += est_knot_bits(predicted, S->uniform_u, S->ku, S->nu - S->p - 1) +
+         est_knot_bits(predicted, S->uniform_v, S->kv, S->nv - S->q - 1);
     for (int i = 0; i < S->nu; i++)
         for (int j = 0; j < S->nv; j++) {
             for (int k = 0; k < 3; k++)
-                b += est_sint_bits(surf_coord_residual(S, i, j, k));
+                b += est_sint_bits(surf_coord_residual(S, quadratic, i, j, k) / ((int64_t)1 << step));
             if (S->rational && (i || j))
                 b += est_sint_bits(surf_weight_residual(S, i, j));
         }
@@ -183,14 +224,20 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->q - 1));
         cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nv - S->q - 1));
         cm_ac_enc_bit(e, &ctx.rational, (unsigned)S->rational);
-        put_knots(e, &ctx.uniform, &ctx.knot, S->uniform_u, S->ku, S->nu - S->p - 1);
-        put_knots(e, &ctx.uniform, &ctx.knot, S->uniform_v, S->kv, S->nv - S->q - 1);
-        int nu = S->nu, nv = S->nv;
+        knot_models km = {&ctx.uniform, &ctx.knot_zero, &ctx.knot, &ctx.knot_delta};
+        put_knots(e, &km, t->o->predicted, S->uniform_u, S->ku, S->nu - S->p - 1);
+        put_knots(e, &km, t->o->predicted, S->uniform_v, S->kv, S->nv - S->q - 1);
+        int nu = S->nu, nv = S->nv, pred = t->o->predicted;
+        int quadratic = pred ? S->quadratic : 0, step = pred ? S->step : 0;
+        if (pred) {
+            cm_ac_enc_bit(e, &ctx.quadratic, (unsigned)quadratic);
+            cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
+        }
         for (int i = 0; i < nu; i++)
             for (int j = 0; j < nv; j++) {
                 int idx = i * nv + j;
                 for (int k = 0; k < 3; k++)
-                    cm_ac_enc_sint(e, &ctx.coord[k], surf_coord_residual(S, i, j, k));
+                    cm_ac_enc_sint(e, &ctx.coord[k], surf_coord_residual(S, quadratic, i, j, k) / ((int64_t)1 << step));
                 if (S->rational && idx > 0)
                     cm_ac_enc_sint(e, &ctx.weight, surf_weight_residual(S, i, j));
             }
@@ -313,6 +360,17 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
                sides turns rebuilds the same under 2.5 */
             if (t->turning[f] && major == 2 && minor < CM_FMT_TURNING_MINOR)
                 minor = CM_FMT_TURNING_MINOR;
+        }
+        /* format 3 codes curves and knots predicted: a file with neither (lines and rebuilt faces
+           only) is the same bytes in format 2's coding and keeps its older version */
+        int curves = 0;
+        for (int f = 0; f < t->nfaces && !curves; f++)
+            curves = enc_kept(t->method[f]);
+        for (int i = 0; i < t->nedges && !curves; i++)
+            curves = t->edges[i].kind != CM_EDGE_LINE;
+        if (t->o->predicted && curves) {
+            major = CM_FMT_PREDICT_MAJOR;
+            minor = 0;
         }
         cm_fmt_header h = {0};
         h.major = (uint8_t)major;

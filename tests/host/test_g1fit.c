@@ -93,6 +93,7 @@ static void encode_g1fit_only(loaded_model *lm, int g1fit, encode_result *r)
     o.gregory = 0;
     o.nfill = 0;
     o.g1fit = g1fit;
+    o.predicted = 0; /* format 2's coding: the minor version says G1FIT (2.5) */
     cm_status st;
     cm_status_init(&st);
     memset(r, 0, sizeof *r);

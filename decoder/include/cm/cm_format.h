@@ -21,10 +21,12 @@
 #define CM_FMT_MAGIC1 'C'
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
-#define CM_FMT_VERSION_MAJOR 2     /* what this writer emits when a face needs it (GREGORY) */
-#define CM_FMT_VERSION_MINOR 6     /* 1: GREGORY-EXACT, 2: GREGORY-FIT, 3: layout 3, 4: NFILL, 5: G1FIT,
-                                      6: the exact patches' turning basis */
+#define CM_FMT_VERSION_MAJOR 3     /* the newest this reader knows (3: predicted curve coding) */
+#define CM_FMT_VERSION_MINOR 0     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
+                                      4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
+#define CM_FMT_PREDICT_MAJOR 3     /* files of 3.0 on code curves and knots predicted (cm_predict.h) */
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
@@ -86,6 +88,7 @@ static inline uint32_t cm_fmt_header_len(uint32_t nlimits, uint32_t nsections)
 #define CM_FMT_WEIGHT_BITS 24     /* weights quantised to 2^-24 of the first weight */
 #define CM_FMT_COORD_MAX (1ll << 40)  /* |grid coordinate| beyond this is refused (hostile) */
 #define CM_FMT_WEIGHT_MAX (1ll << 48) /* quantised weight beyond this is refused */
+#define CM_FMT_MAX_STEP 24        /* format 3: a curve's or net's own step is at most 2^24 grid steps */
 #define CM_FMT_MAX_PALETTE 255    /* colours (index 0 = none) */
 #define CM_FMT_SEG_PER_EDGE 10    /* boundary samples per edge use (spec 8.1 / 5A) */
 /** Boundary samples of a face: CM_FMT_SEG_PER_EDGE per edge use (spec 8.1), all loops. */
@@ -170,6 +173,7 @@ typedef struct cm_model {
     double tess_tol;      /* chordal tolerance recommended by the encoder (mm) */
     double rel_tol;       /* the encoder's rebuild tolerance (fraction of a face's size) */
     int turning_basis;    /* format 2.6 on: GREGORY-EXACT/-FIT sides use the turning basis (cm_egreg.h) */
+    int predicted;        /* format 3 on: edges and knots coded with cm_predict.h's predictions */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
        face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
        model (MAX_TRIS).  The tessellation's work on a face, and on the model, is bounded by these

@@ -20,12 +20,19 @@ typedef struct cm_vert_ctx {
 typedef struct cm_edge_ctx {
     cm_ac_int count, back, degree, ncoef, knot, coord[3], weight;
     cm_ac_prob is_new, g1, kind, rational, uniform;
+    cm_ac_prob linear, knot_zero; /* format 3: the curve's predictor, a repeated knot */
+    cm_ac_int knot_delta;         /* format 3: a knot gap less the last gap that was not zero */
+    cm_ac_int step;               /* format 3: the exponent of the curve's own step */
 } cm_edge_ctx;
 
 /* SURF: count; per kept surface its degrees, sizes, knots, net and weights */
 typedef struct cm_surf_ctx {
     cm_ac_int count, degree, ncoef, knot, coord[3], weight;
     cm_ac_prob rational, uniform;
+    cm_ac_prob quadratic;         /* format 3: the net's predictor (cm_pred_net) */
+    cm_ac_int step;               /* format 3: the exponent of the net's own step */
+    cm_ac_prob knot_zero;         /* format 3, as for edges */
+    cm_ac_int knot_delta;
 } cm_surf_ctx;
 
 /* FACE: count; per face its method, its record (GREGORY: layout, corner, checksum), orientation,

@@ -1,0 +1,448 @@
+/*
+ * test_format3.c - format 3's predicted coding of curves, knots and kept surfaces (cm_predict.h,
+ * docs/FORMAT.md): synthetic IGES -> encoder -> .cmz as format 3 and as format 2 -> the terminal's
+ * decoder.  Both files must decode to the same model (vertices, knots and weights bit for bit; the
+ * control points that format 3 sends on a coarser step of their own within its budget, tx_coarsen.c),
+ * the format 3 file must not be the larger, and a format 3 file whose numbers leave their range (a
+ * knot gap below zero, a weight at zero, a step too large) is refused by name.  The predictions themselves are checked exactly on the sequences they are made for.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "../unit/test_util.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
+#include "cm/cm_decode.h"
+#include "cm/cm_predict.h"
+#include "cm/cm_sections.h"
+#include "encode/encode.h"
+#include "igs_writer.h"
+#include "model_load.h"
+
+static cm_decoder dec2, dec3;
+
+/* ---- the predictions, exactly ---- */
+
+/* evenly spaced points are predicted exactly by the line, from the chord for the first; a circle's
+   weights 1, w, 1, w, ... by the weight two places before */
+static void test_predictions_exact(void **state)
+{
+    (void)state;
+    const int n = 7;
+    int64_t x[7];
+    for (int j = 0; j < n; j++)
+        x[j] = -300 + 1000 * j;
+    for (int j = 1; j < n - 1; j++) {
+        assert_true(cm_pred_ctrl(1, j, n, x[0], x[n - 1], x[j - 1], j >= 2 ? x[j - 2] : 0) == x[j]);
+        assert_true(cm_pred_ctrl(0, j, n, x[0], x[n - 1], x[j - 1], 12345) == x[j - 1]);
+    }
+    const int64_t w[5] = {1 << 24, 11863283, 1 << 24, 11863283, 1 << 24};
+    for (int j = 2; j < 5; j++)
+        assert_true(cm_pred_weight(j, w[j - 1], w[j - 2]) == w[j]);
+    assert_true(cm_pred_weight(1, w[0], 0) == w[0]);
+    /* a net whose second differences across both directions vanish (quadratic in i along a line
+       in j and back: i^2 j, i j^2, ...) is predicted exactly by the quadratic predictor from (2, 2)
+       on; one whose mixed first difference vanishes (a sum f(i) + g(j), a translational surface)
+       by the parallelogram from (1, 1) on */
+    enum { NU = 5, NV = 6 };
+    int64_t quad[NU * NV][3], bil[NU * NV][3];
+    for (int i = 0; i < NU; i++)
+        for (int j = 0; j < NV; j++)
+            for (int k = 0; k < 3; k++) {
+                quad[i * NV + j][k] = 7 * i * i - 3 * j * j + 5 * i * j * (k + 1) + 11 * i * i * j - 6 * i * j * j - 2 * k;
+                bil[i * NV + j][k] = 100 + 9 * i * i - 4 * j * j * j + (k + 2) * i;
+            }
+    for (int i = 0; i < NU; i++)
+        for (int j = 0; j < NV; j++)
+            for (int k = 0; k < 3; k++) {
+                if (i >= 2 && j >= 2)
+                    assert_true(cm_pred_net(1, (const int64_t(*)[3])quad, NV, i, j, k) == quad[i * NV + j][k]);
+                if (i >= 1 && j >= 1)
+                    assert_true(cm_pred_net(0, (const int64_t(*)[3])bil, NV, i, j, k) == bil[i * NV + j][k]);
+            }
+    /* the first row of the quadratic predictor continues the line, the parallelogram's repeats */
+    assert_true(cm_pred_net(1, (const int64_t(*)[3])bil, NV, 0, 3, 0) == 2 * bil[2][0] - bil[1][0]);
+    assert_true(cm_pred_net(0, (const int64_t(*)[3])bil, NV, 0, 3, 0) == bil[2][0]);
+    assert_true(cm_pred_net(1, (const int64_t(*)[3])bil, NV, 0, 0, 0) == 0);
+}
+
+/* ---- the same model both ways ---- */
+
+static void encode_as(loaded_model *lm, int predicted, int gregory, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    if (!predicted)
+        encode_opts_for_format(&o, 2, CM_FMT_V2_MINOR);
+    o.gregory = gregory;
+    if (!gregory) {
+        o.g1fit = 0;
+        o.nfill = 0;
+    }
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+static void decode_into(cm_decoder *d, const uint8_t *b, size_t len)
+{
+    cm_status st;
+    cm_status_init(&st);
+    cm_dec_init(d);
+    assert_ok(cm_dec_feed(d, b, len, &st));
+    assert_ok(cm_dec_finish(d, &st));
+}
+
+static int same_doubles(const double *a, const double *b, uint32_t n)
+{
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* what the two files are made of, counted over the format 3 model, so that a test model that no
+   longer reaches a prediction or a coarser step is seen */
+typedef struct reach {
+    int curves, rational, repeated_knot, surfaces;
+    int moved_edge_points, moved_net_points; /* points format 3 sent on a step of their own */
+    double worst_move;                       /* mm */
+} reach;
+
+static double point_move(cm_vec3 p, cm_vec3 q)
+{
+    return sqrt((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) + (p.z - q.z) * (p.z - q.z));
+}
+
+/* a and b hold the same model, control points within `move` mm of each other (0: bit for bit):
+   every vertex, edge curve (degree, knots, ends, weights), kept surface (sizes, knots, weights) and
+   face method equal */
+static void assert_same_model(const cm_model *a, const cm_model *b, double move, reach *seen)
+{
+    assert_int_equal(a->nverts, b->nverts);
+    assert_int_equal(a->nedges, b->nedges);
+    assert_int_equal(a->nfaces, b->nfaces);
+    assert_int_equal(a->nsurfs, b->nsurfs);
+    assert_true(memcmp(a->verts, b->verts, a->nverts * sizeof *a->verts) == 0);
+    for (uint32_t i = 0; i < a->nedges; i++) {
+        const cm_edge *x = &a->edges[i], *y = &b->edges[i];
+        assert_int_equal(x->kind, y->kind);
+        assert_int_equal(x->p, y->p);
+        assert_int_equal(x->nctrl, y->nctrl);
+        assert_int_equal(x->rational, y->rational);
+        assert_true(same_doubles(a->knots + x->knot0, b->knots + y->knot0, (uint32_t)(x->nctrl + x->p + 1)));
+        for (int j = 0; j < x->nctrl; j++) {
+            double d = point_move(a->ctrl[x->ctrl0 + (uint32_t)j], b->ctrl[y->ctrl0 + (uint32_t)j]);
+            if (j == 0 || j == x->nctrl - 1 ? d != 0 : !(d <= move))
+                fail_msg("edge %u point %d moved %.3g mm (allowed %.3g, ends 0)", i, j, d, move);
+            seen->moved_edge_points += d > 0;
+            seen->worst_move = fmax(seen->worst_move, d);
+        }
+        assert_true(same_doubles(a->w + x->ctrl0, b->w + y->ctrl0, x->nctrl));
+        if (x->kind == CM_EDGE_CURVE) {
+            seen->curves++;
+            seen->rational += x->rational;
+            const double *K = a->knots + x->knot0;
+            for (int j = x->p + 1; j < x->nctrl; j++)
+                seen->repeated_knot += K[j] == K[j + 1] && K[j] < 1.0;
+        }
+    }
+    for (uint32_t s = 0; s < a->nsurfs; s++) {
+        const cm_ksurf *x = &a->surfs[s], *y = &b->surfs[s];
+        assert_int_equal(x->nu, y->nu);
+        assert_int_equal(x->nv, y->nv);
+        assert_int_equal(x->p, y->p);
+        assert_int_equal(x->q, y->q);
+        assert_true(same_doubles(a->knots + x->uknot0, b->knots + y->uknot0, (uint32_t)(x->nu + x->p + 1)));
+        assert_true(same_doubles(a->knots + x->vknot0, b->knots + y->vknot0, (uint32_t)(x->nv + x->q + 1)));
+        uint32_t n = (uint32_t)x->nu * x->nv;
+        for (uint32_t j = 0; j < n; j++) {
+            double d = point_move(a->ctrl[x->ctrl0 + j], b->ctrl[y->ctrl0 + j]);
+            if (!(d <= move))
+                fail_msg("surface %u point %u moved %.3g mm (allowed %.3g)", s, j, d, move);
+            seen->moved_net_points += d > 0;
+            seen->worst_move = fmax(seen->worst_move, d);
+        }
+        assert_true(same_doubles(a->w + x->ctrl0, b->w + y->ctrl0, n));
+        seen->surfaces++;
+    }
+    for (uint32_t f = 0; f < a->nfaces; f++) {
+        assert_int_equal(a->faces[f].method, b->faces[f].method);
+        if (move == 0)
+            assert_int_equal(a->faces[f].checksum, b->faces[f].checksum);
+    }
+}
+
+/* lm encoded as format 2.x and as 3.0 (gregory: as encode_as) decodes to the same model, the
+   control points of format 3 within its budget (tx_coarsen.c: a sixteenth of the tolerance, which is
+   at most 1e-3 of the model's diagonal by default); the 3.0 file is not the larger */
+static void check_both_ways(loaded_model *lm, int gregory, reach *seen)
+{
+    encode_result r2, r3;
+    encode_as(lm, 0, gregory, &r2);
+    encode_as(lm, 1, gregory, &r3);
+    assert_int_equal(r2.bytes[CM_HDR_MAJOR] <= 2, 1);
+    assert_int_equal(r3.bytes[CM_HDR_MAJOR], CM_FMT_PREDICT_MAJOR);
+    assert_int_equal(r3.bytes[CM_HDR_MINOR], 0);
+    decode_into(&dec2, r2.bytes, r2.len);
+    decode_into(&dec3, r3.bytes, r3.len);
+    assert_int_equal(dec3.model.predicted, 1);
+    assert_int_equal(dec2.model.predicted, 0);
+    assert_same_model(&dec3.model, &dec2.model, 1e-3 * brep_diag(&lm->brep) / 16.0, seen);
+    if (!(r3.len <= r2.len))
+        fail_msg("format 3: %zu bytes, format 2: %zu", r3.len, r2.len);
+    encode_result_free(&r2);
+    encode_result_free(&r3);
+}
+
+static void load(igw *w, const char *name, loaded_model *lm)
+{
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(igw_load(w, name, lm, &st));
+}
+
+/*
+ * Rebuilt faces over rational half circles (a half cylinder, its split twin, a dome band), and
+ * the same models with their surfaces kept (a surface of revolution's net, a bicubic B-spline):
+ * every prediction is reached, and the files shrink.
+ */
+static void test_same_model_smaller_file(void **state)
+{
+    (void)state;
+    reach seen = {0};
+    loaded_model lm;
+    igw w;
+    for (int gregory = 1; gregory >= 0; gregory--) {
+        igw_init(&w);
+        igw_half_cylinder_120(&w, 10.0, 20.0);
+        load(&w, "half-cylinder", &lm);
+        check_both_ways(&lm, gregory, &seen);
+        model_free(&lm);
+        igw_init(&w);
+        igw_split_half_cylinder_144(&w, 10.0, 20.0);
+        load(&w, "split-cylinder", &lm);
+        check_both_ways(&lm, gregory, &seen);
+        model_free(&lm);
+        igw_init(&w);
+        igw_half_dome_band_144(&w, 8.0, 16.0);
+        load(&w, "half-dome-band", &lm);
+        check_both_ways(&lm, gregory, &seen);
+        model_free(&lm);
+    }
+    igw_init(&w);
+    igw_bicubic_128(&w);
+    load(&w, "bicubic", &lm);
+    check_both_ways(&lm, 0, &seen);
+    model_free(&lm);
+    print_message("format 3: %d curves (%d rational), %d repeated knots, %d kept surfaces compared; %d edge and %d "
+                  "net points on a coarser step, moved at most %.3g mm\n",
+                  seen.curves, seen.rational, seen.repeated_knot, seen.surfaces, seen.moved_edge_points,
+                  seen.moved_net_points, seen.worst_move);
+    assert_true(seen.rational > 0);
+    assert_true(seen.repeated_knot > 0);
+    assert_true(seen.surfaces > 0);
+    assert_true(seen.moved_edge_points > 0);
+    assert_true(seen.moved_net_points > 0);
+}
+
+/* ---- format 3 EDGE sections written here, valid and hostile ---- */
+
+/* a grid coordinate or a fixed-point number of the decoded model as its integer (exact) */
+static int64_t grid_int(const cm_model *m, int k, double v)
+{
+    double x = (v - m->origin[k]) / m->q;
+    int64_t g = llround(x);
+    assert_true((double)g == x);
+    return g;
+}
+
+static int64_t fixed(double v, int bits)
+{
+    int64_t k = llround(ldexp(v, bits));
+    assert_true(ldexp((double)k, -bits) == v);
+    return k;
+}
+
+/* what write_edges spoils: nothing, one knot gap below zero, one weight at zero, one curve's step past
+   2^CM_FMT_MAX_STEP.  (A coordinate
+   cannot be driven past the grid's range by a few points: a residual has at most 33 bits, the range
+   is 2^40; the reader checks every point against it, so the line's 2 prev - prev2 stays in 2^42.) */
+enum spoil { SPOIL_NONE, SPOIL_KNOT, SPOIL_WEIGHT, SPOIL_STEP };
+
+/*
+ * m's EDGE section in format 3's coding, with every curve on the line predictor (the encoder picks
+ * per curve; either is a valid file) and every knot vector sent gap by gap (never "uniform"), so that
+ * each prediction of the reader is reached whatever the encoder chose; `spoil` breaks the first
+ * curve that can carry it.  Returns the section's length in buf.
+ */
+static size_t write_edges(const cm_model *m, enum spoil spoil, uint8_t *buf, size_t cap)
+{
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, buf, cap);
+    cm_edge_ctx c;
+    cm_edge_ctx_init(&c);
+    cm_ac_enc_uint(&e, &c.count, m->nedges);
+    uint32_t vnext = 0;
+    for (uint32_t i = 0; i < m->nedges; i++) {
+        const cm_edge *E = &m->edges[i];
+        for (int end = 0; end < 2; end++) {
+            uint32_t v = (uint32_t)(end ? E->v1 : E->v0);
+            cm_ac_enc_bit(&e, &c.is_new, v == vnext);
+            if (v == vnext)
+                vnext++;
+            else
+                cm_ac_enc_uint(&e, &c.back, vnext - 1 - v);
+        }
+        cm_ac_enc_bit(&e, &c.g1, E->g1);
+        cm_ac_enc_bit(&e, &c.kind, E->kind);
+        if (E->kind == CM_EDGE_LINE)
+            continue;
+        int p = E->p, n = E->nctrl, interior = n - p - 1;
+        cm_ac_enc_uint(&e, &c.degree, (uint64_t)(p - 1));
+        cm_ac_enc_uint(&e, &c.ncoef, (uint64_t)interior);
+        cm_ac_enc_bit(&e, &c.rational, E->rational);
+        cm_ac_enc_bit(&e, &c.uniform, 0);
+        const double *K = m->knots + E->knot0;
+        int64_t prev = 0, last_gap = 0;
+        for (int j = 1; j <= interior; j++) {
+            int64_t gap = fixed(K[p + j], CM_FMT_KNOT_BITS) - prev;
+            prev += gap;
+            if (j == 1) {
+                cm_ac_enc_uint(&e, &c.knot, (uint64_t)gap);
+            } else if (spoil == SPOIL_KNOT) { /* a gap of -1 */
+                cm_ac_enc_bit(&e, &c.knot_zero, 0);
+                cm_ac_enc_sint(&e, &c.knot_delta, -1 - last_gap);
+                spoil = SPOIL_NONE;
+            } else {
+                cm_ac_enc_bit(&e, &c.knot_zero, gap == 0);
+                if (gap)
+                    cm_ac_enc_sint(&e, &c.knot_delta, gap - last_gap);
+            }
+            if (gap)
+                last_gap = gap;
+        }
+        const cm_vec3 *P = m->ctrl + E->ctrl0;
+        if (n > 2) {
+            cm_ac_enc_bit(&e, &c.linear, 1);
+            cm_ac_enc_uint(&e, &c.step, spoil == SPOIL_STEP ? CM_FMT_MAX_STEP + 1 : 0); /* the points as they are */
+            if (spoil == SPOIL_STEP)
+                spoil = SPOIL_NONE;
+        }
+        for (int j = 1; j < n - 1; j++)
+            for (int k = 0; k < 3; k++) {
+                int64_t g[4];
+                const double *pk[4] = {&P[0].x, &P[n - 1].x, &P[j - 1].x, &P[j >= 2 ? j - 2 : 0].x};
+                for (int a = 0; a < 4; a++)
+                    g[a] = grid_int(m, k, pk[a][k]);
+                cm_ac_enc_sint(&e, &c.coord[k], grid_int(m, k, (&P[j].x)[k]) - cm_pred_ctrl(1, j, n, g[0], g[1], g[2], g[3]));
+            }
+        int64_t wprev = 1ll << CM_FMT_WEIGHT_BITS, wprev2 = wprev;
+        for (int j = 1; j < n && E->rational; j++) {
+            int64_t wq = fixed(m->w[E->ctrl0 + (uint32_t)j], CM_FMT_WEIGHT_BITS);
+            int64_t pred = cm_pred_weight(j, wprev, wprev2);
+            if (spoil == SPOIL_WEIGHT && j >= 2) { /* a weight of 0 */
+                cm_ac_enc_sint(&e, &c.weight, -pred);
+                spoil = SPOIL_NONE;
+            } else {
+                cm_ac_enc_sint(&e, &c.weight, wq - pred);
+            }
+            wprev2 = wprev;
+            wprev = wq;
+        }
+    }
+    size_t len = cm_ac_enc_finish(&e);
+    assert_true(len > 0);
+    return len;
+}
+
+/* file b (len) with its EDGE section replaced by sec (n bytes), every offset, length, CRC and the
+   file-size need made to match: a well-formed file around what sec says (malloc'd, *out_len) */
+static uint8_t *with_edges(const uint8_t *b, size_t len, const uint8_t *sec, size_t n, size_t *out_len)
+{
+    uint32_t nlim = b[CM_HDR_NLIMITS], H = cm_get_u32(b + CM_HDR_LENGTH);
+    const uint8_t *ent = b + cm_fmt_entry_at(nlim, CM_SEC_EDGE - 1);
+    uint32_t off = cm_get_u32(ent + CM_ENT_OFFSET), old = cm_get_u32(ent + CM_ENT_LENGTH);
+    size_t total = len - old + n;
+    uint8_t *o = malloc(total);
+    assert_non_null(o);
+    memcpy(o, b, off);
+    memcpy(o + off, sec, n);
+    memcpy(o + off + n, b + off + old, len - off - old);
+    for (uint32_t s = CM_SEC_EDGE; s < CM_SEC_COUNT; s++) { /* the sections after EDGE move */
+        uint8_t *t = o + cm_fmt_entry_at(nlim, s);
+        cm_put_u32(t + CM_ENT_OFFSET, (uint32_t)(cm_get_u32(t + CM_ENT_OFFSET) + n - old));
+    }
+    uint8_t *t = o + cm_fmt_entry_at(nlim, CM_SEC_EDGE - 1);
+    cm_put_u32(t + CM_ENT_LENGTH, (uint32_t)n);
+    cm_put_u32(t + CM_ENT_CRC, cm_crc32(sec, n));
+    cm_put_u32(o + CM_HDR_FILE_LENGTH, (uint32_t)total);
+    cm_put_u32(o + cm_fmt_need_at(CM_LIMIT_MAX_FILE_BYTES), (uint32_t)total);
+    cm_put_u32(o + H - 4, cm_crc32(o, H - 4));
+    cm_put_u32(o + total - 4, cm_crc32(o, total - 4));
+    *out_len = total;
+    return o;
+}
+
+/*
+ * The half cylinder's two half circles (rational, a repeated knot) and its kept surface's file, its
+ * edges rewritten on the line predictor: the reader rebuilds the same curves.  Spoiled, each is
+ * refused with its error and its field named: a knot gap below zero (CM_E_KNOTS), a weight at zero
+ * (CM_E_RANGE, "weights"), a step past 2^24 grid steps (CM_E_RANGE, "edge step").
+ */
+static void test_edges_written_here(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    igw_half_cylinder_120(&w, 10.0, 20.0);
+    loaded_model lm;
+    load(&w, "half-cylinder", &lm);
+    encode_result r;
+    encode_as(&lm, 1, 0, &r);
+    model_free(&lm);
+    decode_into(&dec3, r.bytes, r.len);
+    static uint8_t sec[1 << 16];
+    static const struct {
+        enum spoil spoil;
+        cm_err code;
+        const char *where;
+    } cases[] = {
+        {SPOIL_NONE, CM_OK, NULL},
+        {SPOIL_KNOT, CM_E_KNOTS, "knots"},
+        {SPOIL_WEIGHT, CM_E_RANGE, "weights"},
+        {SPOIL_STEP, CM_E_RANGE, "edge step"},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        size_t n = write_edges(&dec3.model, cases[c].spoil, sec, sizeof sec), flen;
+        uint8_t *f = with_edges(r.bytes, r.len, sec, n, &flen);
+        cm_status st;
+        cm_status_init(&st);
+        cm_dec_init(&dec2);
+        assert_ok(cm_dec_feed(&dec2, f, flen, &st));
+        cm_err e = cm_dec_finish(&dec2, &st);
+        if (e != cases[c].code)
+            fail_msg("case %zu: %s, expected %s", c, cm_err_name(e), cm_err_name(cases[c].code));
+        if (e == CM_OK) {
+            reach seen = {0};
+            assert_same_model(&dec2.model, &dec3.model, 0, &seen);
+            assert_true(seen.rational >= 2 && seen.repeated_knot >= 2);
+        } else {
+            assert_non_null(st.where);
+            assert_string_equal(st.where, cases[c].where);
+        }
+        free(f);
+    }
+    encode_result_free(&r);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_predictions_exact),
+        cmocka_unit_test(test_same_model_smaller_file),
+        cmocka_unit_test(test_edges_written_here),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
