@@ -347,10 +347,14 @@ static cm_err sec_vert(reader *r)
     cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_VERTICES, CM_MAX_VERTICES, &m->nverts, "vertex count");
     if (e != CM_OK)
         return e;
+    /* format 3: the vertices' step, of which their deltas are multiples */
+    int64_t step = 1;
+    if (m->predicted && (e = read_step(r, &ctx.step, &step, "vertex step")) != CM_OK)
+        return e;
     int64_t prev[3] = {0, 0, 0};
     for (uint32_t i = 0; i < m->nverts; i++) {
         for (int k = 0; k < 3; k++) {
-            if ((e = read_coord(r, &ctx.coord[k], prev[k], 1, &d->vq[i][k], "vertex")) != CM_OK)
+            if ((e = read_coord(r, &ctx.coord[k], prev[k], step, &d->vq[i][k], "vertex")) != CM_OK)
                 return e;
             prev[k] = d->vq[i][k];
         }

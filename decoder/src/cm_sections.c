@@ -11,6 +11,7 @@ void cm_vert_ctx_init(cm_vert_ctx *c)
 {
     cm_ac_int_init(&c->count);
     ints(c->coord, 3);
+    cm_ac_int_init(&c->step);
 }
 
 void cm_edge_ctx_init(cm_edge_ctx *c)

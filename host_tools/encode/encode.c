@@ -201,6 +201,21 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
        pass 2: the final methods, decoded again, needs taken from what the terminal will see */
     if (e == CM_OK && t.nfaults == 0)
         e = enc_choose_and_write(lm, &t, o, r, st);
+    /* format 3: kept faces' edges (and the vertices, when a face is kept) back on the grid, the
+       methods chosen again on them (tx_coarsen.c, enc_keep_fine_edges); the fourth round puts every
+       edge back */
+    for (int round = 0; e == CM_OK && t.nfaults == 0 && o->predicted && round < 4; round++) {
+        if (!enc_keep_fine_edges(lm, &t, round == 3))
+            break;
+        for (int f = 0; f < t.nfaces; f++) {
+            free(t.fit[f]);
+            t.fit[f] = NULL;
+        }
+        tx_free_edges(&t);
+        t.edges_refit = 0;
+        if ((e = tx_build_edges(lm, &t, st)) == CM_OK && t.nfaults == 0)
+            e = enc_choose_and_write(lm, &t, o, r, st);
+    }
     if (e == CM_OK) {
         for (int i = 0; i < t.nedges; i++) {
             r->edges_line += t.edges[i].kind == CM_EDGE_LINE;

@@ -61,6 +61,10 @@ typedef struct tx_surf {
 typedef struct tx {
     double origin[3], q;
     int q_exp;
+    int vstep;          /* format 3: the vertices' step exponent (tx_coarsen_vertices; 0 in format 2) */
+    unsigned char *fine; /* per curve mesh edge: 1 keeps it on the grid (it bounds a kept face;
+                            enc_keep_fine_edges); NULL: none */
+    int no_vstep;       /* 1: the vertices stay on the grid (a face is kept) */
     int nverts, nedges, nfaces, nsurfs;
     int64_t (*vq)[3];   /* vertices in transmission order */
     tx_edge *edges;     /* in transmission order */
@@ -163,7 +167,14 @@ double enc_sint_bits(int64_t v);
  * budget allows: tol_mm is the tolerance of the faces the curve bounds, or of the face the surface
  * is kept for.  Chooses the predictor too.  Nothing changes unless the options say format 3.
  */
-void tx_coarsen_edge(const tx *t, tx_edge *X, double tol_mm);
+void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm);
+/* After the methods are chosen: the edges of kept faces that were moved are marked to stay on the
+   grid (every edge when `all`), the vertices too when a face is kept and they were moved.  Returns
+   1 if anything is to change (the edges are then made again and the methods chosen again). */
+int enc_keep_fine_edges(const loaded_model *lm, tx *t, int all);
+/* the vertices likewise, one step for all of them: the smallest face's budget and the shortest
+   edge's (their grid numbers in t->vq, transmission numbers in vert_tx) */
+void tx_coarsen_vertices(tx *t, const cmesh *cm);
 /* the diagonal (mm) of the box of n grid points (tx_build.c) */
 double ctrl_box_diag(const tx *t, const int64_t (*cq)[3], long n);
 void tx_coarsen_surface(const tx *t, tx_surf *S, double tol_mm);

@@ -44,6 +44,8 @@ void tx_free_edges(tx *t)
 void tx_free(tx *t)
 {
     tx_free_edges(t);
+    free(t->fine);
+    t->fine = NULL;
     for (int i = 0; i < t->nfaces; i++) {
         free(t->surfs[i].ku);
         free(t->surfs[i].kv);
@@ -211,6 +213,8 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
         if (off_grid[cm->edges[order[i]].v0] || off_grid[cm->edges[order[i]].v1])
             why[order[i]] = "a vertex lies off the coordinate grid (not finite or too far from the model)";
     free(off_grid);
+    if (t->o)
+        tx_coarsen_vertices(t, cm);
     cm_err err = CM_OK;
     for (int i = 0; i < t->nedges && err == CM_OK; i++) {
         const cmesh_edge *E = &cm->edges[order[i]];
@@ -311,7 +315,8 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
             /* format 3: the curve's own step from the tolerance of a face its size, which no face it
                bounds is below (the face holds the curve) */
             if (!why[order[i]] && t->o)
-                tx_coarsen_edge(t, X, encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, ctrl_box_diag(t, X->cq, n)));
+                tx_coarsen_edge(t, X, t->fine && t->fine[order[i]],
+                                encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, ctrl_box_diag(t, X->cq, n)));
         }
         hcurve_free(&c);
     }

@@ -58,10 +58,14 @@ static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     cm_vert_ctx ctx;
     cm_vert_ctx_init(&ctx);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nverts);
+    /* format 3: the vertices' step (tx_coarsen_vertices), the deltas in steps */
+    int step = t->o->predicted ? t->vstep : 0;
+    if (t->o->predicted)
+        cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
     int64_t prev[3] = {0, 0, 0};
     for (int i = 0; i < t->nverts; i++)
         for (int k = 0; k < 3; k++) {
-            cm_ac_enc_sint(e, &ctx.coord[k], t->vq[i][k] - prev[k]);
+            cm_ac_enc_sint(e, &ctx.coord[k], (t->vq[i][k] - prev[k]) / ((int64_t)1 << step));
             prev[k] = t->vq[i][k];
         }
 }
@@ -361,14 +365,8 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
             if (t->turning[f] && major == 2 && minor < CM_FMT_TURNING_MINOR)
                 minor = CM_FMT_TURNING_MINOR;
         }
-        /* format 3 codes curves and knots predicted: a file with neither (lines and rebuilt faces
-           only) is the same bytes in format 2's coding and keeps its older version */
-        int curves = 0;
-        for (int f = 0; f < t->nfaces && !curves; f++)
-            curves = enc_kept(t->method[f]);
-        for (int i = 0; i < t->nedges && !curves; i++)
-            curves = t->edges[i].kind != CM_EDGE_LINE;
-        if (t->o->predicted && curves) {
+        /* format 3 codes the model predicted, on steps from its tolerance budget (tx_coarsen.c) */
+        if (t->o->predicted) {
             major = CM_FMT_PREDICT_MAJOR;
             minor = 0;
         }

@@ -107,6 +107,7 @@ static int same_doubles(const double *a, const double *b, uint32_t n)
 typedef struct reach {
     int curves, rational, repeated_knot, surfaces;
     int moved_edge_points, moved_net_points; /* points format 3 sent on a step of their own */
+    int moved_vertices;
     double worst_move;                       /* mm */
 } reach;
 
@@ -124,7 +125,12 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
     assert_int_equal(a->nedges, b->nedges);
     assert_int_equal(a->nfaces, b->nfaces);
     assert_int_equal(a->nsurfs, b->nsurfs);
-    assert_true(memcmp(a->verts, b->verts, a->nverts * sizeof *a->verts) == 0);
+    for (uint32_t v = 0; v < a->nverts; v++) {
+        double d = point_move(a->verts[v], b->verts[v]);
+        if (!(d <= move))
+            fail_msg("vertex %u moved %.3g mm (allowed %.3g)", v, d, move);
+        seen->moved_vertices += d > 0;
+    }
     for (uint32_t i = 0; i < a->nedges; i++) {
         const cm_edge *x = &a->edges[i], *y = &b->edges[i];
         assert_int_equal(x->kind, y->kind);
@@ -134,8 +140,12 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
         assert_true(same_doubles(a->knots + x->knot0, b->knots + y->knot0, (uint32_t)(x->nctrl + x->p + 1)));
         for (int j = 0; j < x->nctrl; j++) {
             double d = point_move(a->ctrl[x->ctrl0 + (uint32_t)j], b->ctrl[y->ctrl0 + (uint32_t)j]);
-            if (j == 0 || j == x->nctrl - 1 ? d != 0 : !(d <= move))
-                fail_msg("edge %u point %d moved %.3g mm (allowed %.3g, ends 0)", i, j, d, move);
+            if (!(d <= move))
+                fail_msg("edge %u point %d moved %.3g mm (allowed %.3g)", i, j, d, move);
+            if (j == 0 || j == x->nctrl - 1) { /* its vertices, exactly */
+                cm_vec3 end = a->verts[j ? x->v1 : x->v0];
+                assert_true(memcmp(&a->ctrl[x->ctrl0 + (uint32_t)j], &end, sizeof end) == 0);
+            }
             seen->moved_edge_points += d > 0;
             seen->worst_move = fmax(seen->worst_move, d);
         }
@@ -167,11 +177,27 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
         assert_true(same_doubles(a->w + x->ctrl0, b->w + y->ctrl0, n));
         seen->surfaces++;
     }
+    int kept = 0;
     for (uint32_t f = 0; f < a->nfaces; f++) {
         assert_int_equal(a->faces[f].method, b->faces[f].method);
         if (move == 0)
             assert_int_equal(a->faces[f].checksum, b->faces[f].checksum);
+        if (a->faces[f].method != CM_METHOD_KEEP)
+            continue;
+        /* a kept face is tessellated on its own surface: its edges stay on the grid (tx_coarsen.c,
+           enc_keep_fine_edges), and so do the vertices */
+        kept = 1;
+        const cm_face *F = &a->faces[f];
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            const cm_loop *L = &a->loops[F->loop0 + l];
+            for (uint32_t u = 0; u < L->nuse; u++) {
+                const cm_edge *x = &a->edges[a->uses[L->use0 + u].edge], *y = &b->edges[a->uses[L->use0 + u].edge];
+                assert_true(memcmp(a->ctrl + x->ctrl0, b->ctrl + y->ctrl0, x->nctrl * sizeof *a->ctrl) == 0);
+            }
+        }
     }
+    if (kept)
+        assert_true(memcmp(a->verts, b->verts, a->nverts * sizeof *a->verts) == 0);
 }
 
 /* lm encoded as format 2.x and as 3.0 (gregory: as encode_as) decodes to the same model, the
@@ -236,15 +262,16 @@ static void test_same_model_smaller_file(void **state)
     load(&w, "bicubic", &lm);
     check_both_ways(&lm, 0, &seen);
     model_free(&lm);
-    print_message("format 3: %d curves (%d rational), %d repeated knots, %d kept surfaces compared; %d edge and %d "
-                  "net points on a coarser step, moved at most %.3g mm\n",
-                  seen.curves, seen.rational, seen.repeated_knot, seen.surfaces, seen.moved_edge_points,
-                  seen.moved_net_points, seen.worst_move);
+    print_message("format 3: %d curves (%d rational), %d repeated knots, %d kept surfaces compared; %d vertices, "
+                  "%d edge and %d net points on a coarser step, moved at most %.3g mm\n",
+                  seen.curves, seen.rational, seen.repeated_knot, seen.surfaces, seen.moved_vertices,
+                  seen.moved_edge_points, seen.moved_net_points, seen.worst_move);
     assert_true(seen.rational > 0);
     assert_true(seen.repeated_knot > 0);
     assert_true(seen.surfaces > 0);
     assert_true(seen.moved_edge_points > 0);
-    assert_true(seen.moved_net_points > 0);
+    assert_true(seen.moved_net_points == 0); /* kept nets stay on the grid (tx_coarsen_surface) */
+    assert_true(seen.moved_vertices > 0);
 }
 
 /* ---- format 3 EDGE sections written here, valid and hostile ---- */
@@ -357,12 +384,12 @@ static size_t write_edges(const cm_model *m, enum spoil spoil, uint8_t *buf, siz
     return len;
 }
 
-/* file b (len) with its EDGE section replaced by sec (n bytes), every offset, length, CRC and the
+/* file b (len) with its section `tag` replaced by sec (n bytes), every offset, length, CRC and the
    file-size need made to match: a well-formed file around what sec says (malloc'd, *out_len) */
-static uint8_t *with_edges(const uint8_t *b, size_t len, const uint8_t *sec, size_t n, size_t *out_len)
+static uint8_t *with_section(const uint8_t *b, size_t len, unsigned tag, const uint8_t *sec, size_t n, size_t *out_len)
 {
     uint32_t nlim = b[CM_HDR_NLIMITS], H = cm_get_u32(b + CM_HDR_LENGTH);
-    const uint8_t *ent = b + cm_fmt_entry_at(nlim, CM_SEC_EDGE - 1);
+    const uint8_t *ent = b + cm_fmt_entry_at(nlim, tag - 1);
     uint32_t off = cm_get_u32(ent + CM_ENT_OFFSET), old = cm_get_u32(ent + CM_ENT_LENGTH);
     size_t total = len - old + n;
     uint8_t *o = malloc(total);
@@ -370,11 +397,11 @@ static uint8_t *with_edges(const uint8_t *b, size_t len, const uint8_t *sec, siz
     memcpy(o, b, off);
     memcpy(o + off, sec, n);
     memcpy(o + off + n, b + off + old, len - off - old);
-    for (uint32_t s = CM_SEC_EDGE; s < CM_SEC_COUNT; s++) { /* the sections after EDGE move */
+    for (uint32_t s = tag; s < CM_SEC_COUNT; s++) { /* the sections after it move */
         uint8_t *t = o + cm_fmt_entry_at(nlim, s);
         cm_put_u32(t + CM_ENT_OFFSET, (uint32_t)(cm_get_u32(t + CM_ENT_OFFSET) + n - old));
     }
-    uint8_t *t = o + cm_fmt_entry_at(nlim, CM_SEC_EDGE - 1);
+    uint8_t *t = o + cm_fmt_entry_at(nlim, tag - 1);
     cm_put_u32(t + CM_ENT_LENGTH, (uint32_t)n);
     cm_put_u32(t + CM_ENT_CRC, cm_crc32(sec, n));
     cm_put_u32(o + CM_HDR_FILE_LENGTH, (uint32_t)total);
@@ -389,7 +416,8 @@ static uint8_t *with_edges(const uint8_t *b, size_t len, const uint8_t *sec, siz
  * The half cylinder's two half circles (rational, a repeated knot) and its kept surface's file, its
  * edges rewritten on the line predictor: the reader rebuilds the same curves.  Spoiled, each is
  * refused with its error and its field named: a knot gap below zero (CM_E_KNOTS), a weight at zero
- * (CM_E_RANGE, "weights"), a step past 2^24 grid steps (CM_E_RANGE, "edge step").
+ * (CM_E_RANGE, "weights"), a step past 2^24 grid steps (CM_E_RANGE, "edge step"; the vertices'
+ * likewise, "vertex step").
  */
 static void test_edges_written_here(void **state)
 {
@@ -416,7 +444,7 @@ static void test_edges_written_here(void **state)
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         size_t n = write_edges(&dec3.model, cases[c].spoil, sec, sizeof sec), flen;
-        uint8_t *f = with_edges(r.bytes, r.len, sec, n, &flen);
+        uint8_t *f = with_section(r.bytes, r.len, CM_SEC_EDGE, sec, n, &flen);
         cm_status st;
         cm_status_init(&st);
         cm_dec_init(&dec2);
@@ -434,6 +462,125 @@ static void test_edges_written_here(void **state)
         }
         free(f);
     }
+    /* the vertices' step past 2^24 grid steps: refused before any vertex is read */
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, sec, sizeof sec);
+    cm_vert_ctx vc;
+    cm_vert_ctx_init(&vc);
+    cm_ac_enc_uint(&e, &vc.count, dec3.model.nverts);
+    cm_ac_enc_uint(&e, &vc.step, CM_FMT_MAX_STEP + 1);
+    size_t n = cm_ac_enc_finish(&e), flen;
+    uint8_t *f = with_section(r.bytes, r.len, CM_SEC_VERT, sec, n, &flen);
+    cm_status st;
+    cm_status_init(&st);
+    cm_dec_init(&dec2);
+    assert_ok(cm_dec_feed(&dec2, f, flen, &st));
+    assert_int_equal(cm_dec_finish(&dec2, &st), CM_E_RANGE);
+    assert_string_equal(st.where, "vertex step");
+    free(f);
+    encode_result_free(&r);
+}
+
+/*
+ * A kept net sent on a step of its own (the format allows it; the encoder keeps nets on the grid):
+ * the bicubic patch's kept surface written here with step 2^1, each point its prediction plus twice
+ * the integer nearest half the difference, in closed loop as the format says; the reader must
+ * rebuild exactly those points.  With a step past 2^24 the section is refused ("surface step").
+ */
+static void test_net_on_a_step(void **state)
+{
+    (void)state;
+    igw w;
+    igw_init(&w);
+    igw_bicubic_128(&w);
+    loaded_model lm;
+    load(&w, "bicubic", &lm);
+    encode_result r;
+    encode_as(&lm, 1, 0, &r);
+    model_free(&lm);
+    decode_into(&dec3, r.bytes, r.len);
+    const cm_model *m = &dec3.model;
+    assert_int_equal(m->nsurfs, 1);
+    const cm_ksurf *S = &m->surfs[0];
+    int nu = S->nu, nv = S->nv;
+    static int64_t want[4096][3];
+    assert_true(nu * nv <= 4096);
+    static uint8_t sec[1 << 16];
+    for (int big = 0; big < 2; big++) {
+        cm_ac_enc e;
+        cm_ac_enc_init(&e, sec, sizeof sec);
+        cm_surf_ctx c;
+        cm_surf_ctx_init(&c);
+        cm_ac_enc_uint(&e, &c.count, 1);
+        const int deg[2] = {S->p, S->q}, cnt[2] = {nu, nv};
+        for (int dir = 0; dir < 2; dir++) {
+            cm_ac_enc_uint(&e, &c.degree, (uint64_t)(deg[dir] - 1));
+            cm_ac_enc_uint(&e, &c.ncoef, (uint64_t)(cnt[dir] - deg[dir] - 1));
+        }
+        cm_ac_enc_bit(&e, &c.rational, S->rational);
+        const uint32_t k0[2] = {S->uknot0, S->vknot0};
+        for (int dir = 0; dir < 2; dir++) { /* every gap sent, as in write_edges */
+            const double *K = m->knots + k0[dir];
+            cm_ac_enc_bit(&e, &c.uniform, 0);
+            int64_t prev = 0, last_gap = 0;
+            for (int j = 1; j <= cnt[dir] - deg[dir] - 1; j++) {
+                int64_t gap = fixed(K[deg[dir] + j], CM_FMT_KNOT_BITS) - prev;
+                prev += gap;
+                if (j == 1) {
+                    cm_ac_enc_uint(&e, &c.knot, (uint64_t)gap);
+                } else {
+                    cm_ac_enc_bit(&e, &c.knot_zero, gap == 0);
+                    if (gap)
+                        cm_ac_enc_sint(&e, &c.knot_delta, gap - last_gap);
+                }
+                if (gap)
+                    last_gap = gap;
+            }
+        }
+        cm_ac_enc_bit(&e, &c.quadratic, 1);
+        cm_ac_enc_uint(&e, &c.step, big ? CM_FMT_MAX_STEP + 1 : 1);
+        for (int i = 0; i < nu * nv; i++) {
+            for (int k = 0; k < 3; k++) {
+                int64_t g = grid_int(m, k, (&m->ctrl[S->ctrl0 + (uint32_t)i].x)[k]);
+                int64_t pred = cm_pred_net(1, (const int64_t(*)[3])want, nv, i / nv, i % nv, k);
+                int64_t d = g - pred, half = d >= 0 ? (d + 1) / 2 : -((-d + 1) / 2);
+                want[i][k] = pred + 2 * half;
+                cm_ac_enc_sint(&e, &c.coord[k], half);
+            }
+            if (S->rational && i > 0) { /* the weights as the format says: parallelogram prediction */
+                int a = i / nv, b = i % nv;
+                const double *W = m->w + S->ctrl0;
+                int64_t wq = fixed(W[i], CM_FMT_WEIGHT_BITS);
+                int64_t pred = a && b ? fixed(W[i - nv], 24) + fixed(W[i - 1], 24) - fixed(W[i - nv - 1], 24)
+                               : a    ? fixed(W[i - nv], 24)
+                                      : fixed(W[i - 1], 24);
+                cm_ac_enc_sint(&e, &c.weight, wq - pred);
+            }
+        }
+        size_t n = cm_ac_enc_finish(&e), flen;
+        assert_true(n > 0);
+        uint8_t *f = with_section(r.bytes, r.len, CM_SEC_SURF, sec, n, &flen);
+        cm_status st;
+        cm_status_init(&st);
+        cm_dec_init(&dec2);
+        assert_ok(cm_dec_feed(&dec2, f, flen, &st));
+        cm_err err = cm_dec_finish(&dec2, &st);
+        free(f);
+        if (big) {
+            assert_int_equal(err, CM_E_RANGE);
+            assert_string_equal(st.where, "surface step");
+            continue;
+        }
+        assert_ok(err);
+        const cm_model *m2 = &dec2.model;
+        int moved = 0;
+        for (int i = 0; i < nu * nv; i++)
+            for (int k = 0; k < 3; k++) {
+                assert_true(grid_int(m2, k, (&m2->ctrl[m2->surfs[0].ctrl0 + (uint32_t)i].x)[k]) == want[i][k]);
+                moved += want[i][k] != grid_int(m, k, (&m->ctrl[S->ctrl0 + (uint32_t)i].x)[k]);
+            }
+        assert_true(moved > 0); /* some odd residual was rounded: the step did something */
+    }
     encode_result_free(&r);
 }
 
@@ -443,6 +590,7 @@ int main(void)
         cmocka_unit_test(test_predictions_exact),
         cmocka_unit_test(test_same_model_smaller_file),
         cmocka_unit_test(test_edges_written_here),
+        cmocka_unit_test(test_net_on_a_step),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -13,6 +13,7 @@
 /* VERT: count, then grid coordinates as deltas */
 typedef struct cm_vert_ctx {
     cm_ac_int count, coord[3];
+    cm_ac_int step; /* format 3: the exponent of the vertices' step */
 } cm_vert_ctx;
 
 /* EDGE: count; per edge its vertex references, G1 bit, kind, and a curve's degree, size, knots,
