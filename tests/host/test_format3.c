@@ -116,6 +116,21 @@ static double point_move(cm_vec3 p, cm_vec3 q)
     return sqrt((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) + (p.z - q.z) * (p.z - q.z));
 }
 
+/* points p and q (n of them, of `what` number `which`) within `move` mm of each other: how many moved */
+static int moved_points(const cm_vec3 *p, const cm_vec3 *q, uint32_t n, double move, const char *what, uint32_t which,
+                        reach *seen)
+{
+    int moved = 0;
+    for (uint32_t j = 0; j < n; j++) {
+        double d = point_move(p[j], q[j]);
+        if (!(d <= move))
+            fail_msg("%s %u point %u moved %.3g mm (allowed %.3g)", what, which, j, d, move);
+        moved += d > 0;
+        seen->worst_move = fmax(seen->worst_move, d);
+    }
+    return moved;
+}
+
 /* a and b hold the same model, control points within `move` mm of each other (0: bit for bit):
    every vertex, edge curve (degree, knots, ends, weights), kept surface (sizes, knots, weights) and
    face method equal */
@@ -125,12 +140,7 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
     assert_int_equal(a->nedges, b->nedges);
     assert_int_equal(a->nfaces, b->nfaces);
     assert_int_equal(a->nsurfs, b->nsurfs);
-    for (uint32_t v = 0; v < a->nverts; v++) {
-        double d = point_move(a->verts[v], b->verts[v]);
-        if (!(d <= move))
-            fail_msg("vertex %u moved %.3g mm (allowed %.3g)", v, d, move);
-        seen->moved_vertices += d > 0;
-    }
+    seen->moved_vertices += moved_points(a->verts, b->verts, a->nverts, move, "vertices", 0, seen);
     for (uint32_t i = 0; i < a->nedges; i++) {
         const cm_edge *x = &a->edges[i], *y = &b->edges[i];
         assert_int_equal(x->kind, y->kind);
@@ -138,17 +148,10 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
         assert_int_equal(x->nctrl, y->nctrl);
         assert_int_equal(x->rational, y->rational);
         assert_true(same_doubles(a->knots + x->knot0, b->knots + y->knot0, (uint32_t)(x->nctrl + x->p + 1)));
-        for (int j = 0; j < x->nctrl; j++) {
-            double d = point_move(a->ctrl[x->ctrl0 + (uint32_t)j], b->ctrl[y->ctrl0 + (uint32_t)j]);
-            if (!(d <= move))
-                fail_msg("edge %u point %d moved %.3g mm (allowed %.3g)", i, j, d, move);
-            if (j == 0 || j == x->nctrl - 1) { /* its vertices, exactly */
-                cm_vec3 end = a->verts[j ? x->v1 : x->v0];
-                assert_true(memcmp(&a->ctrl[x->ctrl0 + (uint32_t)j], &end, sizeof end) == 0);
-            }
-            seen->moved_edge_points += d > 0;
-            seen->worst_move = fmax(seen->worst_move, d);
-        }
+        seen->moved_edge_points += moved_points(a->ctrl + x->ctrl0, b->ctrl + y->ctrl0, x->nctrl, move, "edge", i, seen);
+        /* its ends are its vertices, exactly */
+        assert_true(memcmp(&a->ctrl[x->ctrl0], &a->verts[x->v0], sizeof(cm_vec3)) == 0);
+        assert_true(memcmp(&a->ctrl[x->ctrl0 + x->nctrl - 1u], &a->verts[x->v1], sizeof(cm_vec3)) == 0);
         assert_true(same_doubles(a->w + x->ctrl0, b->w + y->ctrl0, x->nctrl));
         if (x->kind == CM_EDGE_CURVE) {
             seen->curves++;
@@ -167,13 +170,7 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
         assert_true(same_doubles(a->knots + x->uknot0, b->knots + y->uknot0, (uint32_t)(x->nu + x->p + 1)));
         assert_true(same_doubles(a->knots + x->vknot0, b->knots + y->vknot0, (uint32_t)(x->nv + x->q + 1)));
         uint32_t n = (uint32_t)x->nu * x->nv;
-        for (uint32_t j = 0; j < n; j++) {
-            double d = point_move(a->ctrl[x->ctrl0 + j], b->ctrl[y->ctrl0 + j]);
-            if (!(d <= move))
-                fail_msg("surface %u point %u moved %.3g mm (allowed %.3g)", s, j, d, move);
-            seen->moved_net_points += d > 0;
-            seen->worst_move = fmax(seen->worst_move, d);
-        }
+        seen->moved_net_points += moved_points(a->ctrl + x->ctrl0, b->ctrl + y->ctrl0, n, move, "surface", s, seen);
         assert_true(same_doubles(a->w + x->ctrl0, b->w + y->ctrl0, n));
         seen->surfaces++;
     }
