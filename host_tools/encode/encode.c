@@ -19,7 +19,7 @@ void encode_opts_for_format(encode_opts *o, int major, int minor)
         o->nfill = 0;
     }
     if (major < CM_FMT_PREDICT_MAJOR)
-        o->predicted = 0;
+        o->predicted = o->budget_steps = 0;
     if (major > 2)
         return;
     if (minor < 1)
@@ -48,6 +48,7 @@ void encode_opts_default(encode_opts *o)
     o->nfill = 1;
     o->turning_basis = 1;
     o->predicted = 1;
+    o->budget_steps = 0;
     o->strict = 0;
     o->measure_mesh = 0;
     o->abs_tol = 0;
@@ -204,7 +205,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     /* format 3: kept faces' edges (and the vertices, when a face is kept) back on the grid, the
        methods chosen again on them (tx_coarsen.c, enc_keep_fine_edges); the fourth round puts every
        edge back */
-    for (int round = 0; e == CM_OK && t.nfaults == 0 && o->predicted && round < 4; round++) {
+    for (int round = 0; e == CM_OK && t.nfaults == 0 && o->predicted && o->budget_steps && round < 4; round++) {
         if (!enc_keep_fine_edges(lm, &t, round == 3))
             break;
         for (int f = 0; f < t.nfaces; f++) {

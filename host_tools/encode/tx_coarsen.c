@@ -37,7 +37,7 @@
 /* the step exponent for points whose shortest leg is h_min mm (0: coincident points) */
 static int choose_step(const tx *t, double tol_mm, double h_min)
 {
-    if (!t->o->predicted || !(tol_mm > 0) || !(h_min > 0))
+    if (!t->o->predicted || !t->o->budget_steps || !(tol_mm > 0) || !(h_min > 0))
         return 0;
     double allowed = fmin(BUDGET_SHARE * tol_mm, TURN_SHARE * h_min);
     int s = 0;
@@ -139,7 +139,7 @@ static double face_tol(const tx *t, const cmesh *cm, int f)
 void tx_coarsen_vertices(tx *t, const cmesh *cm)
 {
     t->vstep = 0;
-    if (!t->o->predicted || t->nverts == 0 || t->no_vstep)
+    if (!t->o->predicted || !t->o->budget_steps || t->nverts == 0 || t->no_vstep)
         return;
     /* one step for all: a vertex's own budget (its faces, its edges) would let the vertices of large
        faces move further, and measured over the corpus that turned more faces back (gmsh__model1:

@@ -71,12 +71,14 @@ static void test_predictions_exact(void **state)
 
 /* ---- the same model both ways ---- */
 
+/* predicted: 0 format 2.6, 1 format 3 (the default), 2 format 3 with --budget-steps */
 static void encode_as(loaded_model *lm, int predicted, int gregory, encode_result *r)
 {
     encode_opts o;
     encode_opts_default(&o);
     if (!predicted)
         encode_opts_for_format(&o, 2, CM_FMT_V2_MINOR);
+    o.budget_steps = predicted == 2;
     o.gregory = gregory;
     if (!gregory) {
         o.g1fit = 0;
@@ -197,14 +199,25 @@ static void assert_same_model(const cm_model *a, const cm_model *b, double move,
         assert_true(memcmp(a->verts, b->verts, a->nverts * sizeof *a->verts) == 0);
 }
 
-/* lm encoded as format 2.x and as 3.0 (gregory: as encode_as) decodes to the same model, the
-   control points of format 3 within its budget (tx_coarsen.c: a sixteenth of the tolerance, which is
+/* lm encoded as format 2.x and as 3.0 (gregory: as encode_as) decodes to the same model, bit for
+   bit; with --budget-steps the control points of format 3 within its budget (tx_coarsen.c: a sixteenth of the tolerance, which is
    at most 1e-3 of the model's diagonal by default); the 3.0 file is not the larger */
 static void check_both_ways(loaded_model *lm, int gregory, reach *seen)
 {
     encode_result r2, r3;
     encode_as(lm, 0, gregory, &r2);
+    /* the default: the same numbers as format 2, coded otherwise */
     encode_as(lm, 1, gregory, &r3);
+    decode_into(&dec2, r2.bytes, r2.len);
+    decode_into(&dec3, r3.bytes, r3.len);
+    reach same = {0};
+    assert_same_model(&dec3.model, &dec2.model, 0, &same);
+    assert_true(same.moved_vertices == 0 && same.moved_edge_points == 0 && same.moved_net_points == 0);
+    if (!(r3.len <= r2.len))
+        fail_msg("format 3: %zu bytes, format 2: %zu", r3.len, r2.len);
+    encode_result_free(&r3);
+    /* --budget-steps: points moved within their budget */
+    encode_as(lm, 2, gregory, &r3);
     assert_int_equal(r2.bytes[CM_HDR_MAJOR] <= 2, 1);
     assert_int_equal(r3.bytes[CM_HDR_MAJOR], CM_FMT_PREDICT_MAJOR);
     assert_int_equal(r3.bytes[CM_HDR_MINOR], 0);
