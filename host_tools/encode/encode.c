@@ -67,28 +67,6 @@ double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox)
     return rel_set && rel_tol * bbox < abs_tol ? rel_tol * bbox : abs_tol;
 }
 
-/* the diagonal (mm) of the box of face f's boundary curves' control points */
-static double face_boundary_diag(const tx *t, const cmesh *cm, int f)
-{
-    const cmesh_face *cf = &cm->faces[f];
-    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (int l = 0; l < cf->nloops; l++) {
-        const cmesh_loop *cl = &cm->loops[cf->first_loop + l];
-        for (int i = 0; i < cl->n; i++) {
-            const tx_edge *X = &t->edges[t->edge_tx[cm->uses[cl->first + i].edge]];
-            for (int j = 0; j < X->n; j++)
-                for (int k = 0; k < 3; k++) {
-                    lo[k] = fmin(lo[k], (double)X->cq[j][k] * t->q);
-                    hi[k] = fmax(hi[k], (double)X->cq[j][k] * t->q);
-                }
-        }
-    }
-    double s = 0;
-    for (int k = 0; k < 3; k++)
-        s += hi[k] > lo[k] ? (hi[k] - lo[k]) * (hi[k] - lo[k]) : 0.0;
-    return sqrt(s);
-}
-
 void encode_opts_for_model(encode_opts *o, double diag)
 {
     if (o->model_tol_rel > 0 && !o->rel_set && !(o->abs_tol > 0) && diag > 0) {
@@ -184,10 +162,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
             tx_face_fault(&t, f, fst.where ? fst.where : cm_strerror(e));
             e = CM_OK;
         } else {
-            /* format 3: the net's own step from the face's tolerance (its size: the box of its
-               boundary curves' control points, which holds the boundary) */
-            tx_coarsen_surface(&t, &t.surfs[f], encode_face_tol(model_opts.rel_tol, model_opts.rel_set,
-                                                                  model_opts.abs_tol, face_boundary_diag(&t, &lm->mesh, f)));
+            tx_net_predictor(&t, &t.surfs[f]); /* format 3: the net's predictor */
         }
         if (bf->has_color) {
             int k = 1;

@@ -14,6 +14,7 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_format.h"
 #include "cm/cm_method.h"
+#include "cm/cm_predict.h"
 #include "cm/cm_rebuild.h"
 #include "cm/cm_tessellate.h"
 #include "encode.h"
@@ -55,7 +56,7 @@ typedef struct tx_surf {
     int64_t *ku, *kv;
     int64_t (*cq)[3];
     int64_t *wq;
-    int quadratic, step; /* format 3: the net's predictor and step (tx_coarsen.c) */
+    int quadratic;      /* format 3: the net's predictor (tx_net_predictor); its step is always 0 */
 } tx_surf;
 
 typedef struct tx {
@@ -158,6 +159,13 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
 /* Spec §14 step 6, estimated: the bits a kept surface and a GREGORY-FIT record cost in the file
    (write_sections.c says how; the same estimate for both, so they compare) */
 double enc_kept_surface_bits(const tx_surf *S, int predicted);
+/* control point j's prediction in edge X, coordinate k, on predictor `linear` (cm_predict.h; format 2:
+   linear = 0, the previous point) */
+static inline int64_t tx_edge_pred(const tx_edge *X, int linear, int j, int k)
+{
+    return cm_pred_ctrl(linear, j, X->n, X->cq[0][k], X->cq[X->n - 1][k], X->cq[j - 1][k], j >= 2 ? X->cq[j - 2][k] : 0);
+}
+
 /* the estimate of what one sint costs once the models have learnt (write_sections.c) */
 double enc_sint_bits(int64_t v);
 
@@ -177,7 +185,7 @@ int enc_keep_fine_edges(const loaded_model *lm, tx *t, int all);
 void tx_coarsen_vertices(tx *t, const cmesh *cm);
 /* the diagonal (mm) of the box of n grid points (tx_build.c) */
 double ctrl_box_diag(const tx *t, const int64_t (*cq)[3], long n);
-void tx_coarsen_surface(const tx *t, tx_surf *S, double tol_mm);
+void tx_net_predictor(const tx *t, tx_surf *S);
 double enc_fit_record_bits(const struct fit_record *fr);
 
 /* ---- decoding what we wrote, with the terminal's code ---- */

@@ -19,7 +19,7 @@
  * A curve's points are moved in closed loop: each is sent as its prediction from the points already
  * moved plus a multiple of the step, nearest to the original, so each coordinate moves by at most
  * half a step whatever came before.  The vertices go to the nearest multiple of their step instead,
- * so that equal vertices stay equal.  Kept nets stay on the grid (tx_coarsen_surface says why), and so
+ * so that equal vertices stay equal.  Kept nets stay on the grid (tx_net_predictor says why), and so
  * do the edges of kept faces and, when a face is kept, the vertices (enc_keep_fine_edges).
  * Everything after this (the methods' trials, the G1 check, the needs) runs on the moved points,
  * exactly as the terminal will decode them.
@@ -29,7 +29,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "cm/cm_predict.h"
 
 #define BUDGET_SHARE (1.0 / 16.0) /* of the faces' tolerance, for the points of a curve or net */
 #define TURN_SHARE 4.4e-3         /* of the shortest leg: tan(0.5 deg) / 2, half a degree of turning */
@@ -79,31 +78,26 @@ void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm)
     for (int linear = 0; linear < 2; linear++)
         for (int j = 1; j < n - 1; j++)
             for (int k = 0; k < 3; k++)
-                bits[linear] += enc_sint_bits(div_step(
-                    X->cq[j][k] - cm_pred_ctrl(linear, j, n, X->cq[0][k], X->cq[n - 1][k], X->cq[j - 1][k],
-                                               j >= 2 ? X->cq[j - 2][k] : 0),
-                    s));
+                bits[linear] += enc_sint_bits(div_step(X->cq[j][k] - tx_edge_pred(X, linear, j, k), s));
     X->linear = bits[1] < bits[0];
     X->step = s;
     for (int j = 1; j < n - 1; j++)
         for (int k = 0; k < 3; k++) {
-            int64_t pred = cm_pred_ctrl(X->linear, j, n, X->cq[0][k], X->cq[n - 1][k], X->cq[j - 1][k],
-                                        j >= 2 ? X->cq[j - 2][k] : 0);
+            int64_t pred = tx_edge_pred(X, X->linear, j, k);
             X->cq[j][k] = pred + div_step(X->cq[j][k] - pred, s) * ((int64_t)1 << s);
         }
 }
 
-void tx_coarsen_surface(const tx *t, tx_surf *S, double tol_mm)
+void tx_net_predictor(const tx *t, tx_surf *S)
 {
-    /* Kept nets stay on the grid (step 0; the format carries a step for them).  Moved by up to a
+    /* Kept nets stay on the grid (the format's step for them is sent as 0).  Moved by up to a
        sixteenth of their face's tolerance, in closed loop or to the nearest multiples of their step
        alike, the kept faces' boundaries came apart from their neighbours' in the decoded mesh
        (elif__Motor_case_back: 8 open sides; in closed loop also gmsh__model1, whose seams opened,
        and a projection 2.2 mm astray in asitus__IAD_v3): the tessellation of a kept face meets its
        edges through the surface, which then no longer passes through them closely enough.  Only
-       the predictor is chosen here. */
-    (void)tol_mm;
-    S->quadratic = S->step = 0;
+       the predictor is chosen here: the one whose residuals cost fewer bits. */
+    S->quadratic = 0;
     if (!t->o->predicted)
         return;
     int nu = S->nu, nv = S->nv;

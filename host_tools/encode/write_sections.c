@@ -11,7 +11,6 @@
 #include "cm/cm_crc32.h"
 #include "cm/cm_cubic_convert.h"
 #include "cm/cm_method.h"
-#include "cm/cm_predict.h"
 #include "fit_correction.h"
 #include "cm/cm_sections.h"
 
@@ -81,14 +80,6 @@ static void put_vref(cm_ac_enc *e, cm_ac_prob *pnew, cm_ac_int *mb, int *next, i
     }
 }
 
-/* control point j's prediction, coordinate k (cm_predict.h; format 2: linear = 0) */
-static int64_t edge_ctrl_pred(const tx_edge *X, int linear, int j, int k)
-{
-    return cm_pred_ctrl(linear, j, X->n, X->cq[0][k], X->cq[X->n - 1][k], X->cq[j - 1][k], j >= 2 ? X->cq[j - 2][k] : 0);
-}
-
-static double est_sint_bits(int64_t v);
-
 static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
@@ -119,7 +110,7 @@ static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         }
         for (int j = 1; j < X->n - 1; j++)
             for (int k = 0; k < 3; k++)
-                cm_ac_enc_sint(e, &ctx.coord[k], (X->cq[j][k] - edge_ctrl_pred(X, linear, j, k)) / ((int64_t)1 << step));
+                cm_ac_enc_sint(e, &ctx.coord[k], (X->cq[j][k] - tx_edge_pred(X, linear, j, k)) / ((int64_t)1 << step));
         if (X->rational)
             for (int j = 1; j < X->n; j++)
                 cm_ac_enc_sint(e, &ctx.weight, X->wq[j] - (pred ? cm_pred_weight(j, X->wq[j - 1], j >= 2 ? X->wq[j - 2] : 0)
@@ -186,14 +177,14 @@ static double est_knot_bits(int predicted, int uniform, const int64_t *kq, int i
 
 double enc_kept_surface_bits(const tx_surf *S, int predicted)
 {
-    double b = 4 * est_uint_bits(3) + 1.0 + (predicted ? 1.0 + est_uint_bits((uint64_t)S->step) : 0.0);
-    int quadratic = predicted ? S->quadratic : 0, step = predicted ? S->step : 0;
+    double b = 4 * est_uint_bits(3) + 1.0 + (predicted ? 1.0 + est_uint_bits(0) : 0.0);
+    int quadratic = predicted ? S->quadratic : 0;
     b += est_knot_bits(predicted, S->uniform_u, S->ku, S->nu - S->p - 1) +
          est_knot_bits(predicted, S->uniform_v, S->kv, S->nv - S->q - 1);
     for (int i = 0; i < S->nu; i++)
         for (int j = 0; j < S->nv; j++) {
             for (int k = 0; k < 3; k++)
-                b += est_sint_bits(surf_coord_residual(S, quadratic, i, j, k) / ((int64_t)1 << step));
+                b += est_sint_bits(surf_coord_residual(S, quadratic, i, j, k));
             if (S->rational && (i || j))
                 b += est_sint_bits(surf_weight_residual(S, i, j));
         }
@@ -232,16 +223,16 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         put_knots(e, &km, t->o->predicted, S->uniform_u, S->ku, S->nu - S->p - 1);
         put_knots(e, &km, t->o->predicted, S->uniform_v, S->kv, S->nv - S->q - 1);
         int nu = S->nu, nv = S->nv, pred = t->o->predicted;
-        int quadratic = pred ? S->quadratic : 0, step = pred ? S->step : 0;
-        if (pred) {
+        int quadratic = pred ? S->quadratic : 0;
+        if (pred) { /* the net's predictor; its step is 0: kept nets stay on the grid (tx_net_predictor) */
             cm_ac_enc_bit(e, &ctx.quadratic, (unsigned)quadratic);
-            cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
+            cm_ac_enc_uint(e, &ctx.step, 0);
         }
         for (int i = 0; i < nu; i++)
             for (int j = 0; j < nv; j++) {
                 int idx = i * nv + j;
                 for (int k = 0; k < 3; k++)
-                    cm_ac_enc_sint(e, &ctx.coord[k], surf_coord_residual(S, quadratic, i, j, k) / ((int64_t)1 << step));
+                    cm_ac_enc_sint(e, &ctx.coord[k], surf_coord_residual(S, quadratic, i, j, k));
                 if (S->rational && idx > 0)
                     cm_ac_enc_sint(e, &ctx.weight, surf_weight_residual(S, i, j));
             }

@@ -280,7 +280,7 @@ static void test_same_model_smaller_file(void **state)
     assert_true(seen.repeated_knot > 0);
     assert_true(seen.surfaces > 0);
     assert_true(seen.moved_edge_points > 0);
-    assert_true(seen.moved_net_points == 0); /* kept nets stay on the grid (tx_coarsen_surface) */
+    assert_true(seen.moved_net_points == 0); /* kept nets stay on the grid (tx_net_predictor) */
     assert_true(seen.moved_vertices > 0);
 }
 
