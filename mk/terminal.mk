@@ -56,7 +56,7 @@ $(LINK_TEST_BIN): $(call bdir,terminal)/tests/link/test_link.o \
 .PHONY: check-link
 check-link: $(LINK_TEST_BIN) $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,tiny)/cmz-terminal \
 		$(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode
-	$(Q)tests/tools/sum_suites.sh "$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf" \
+	$(Q)tests/tools/sum_suites.sh "$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_v3_chunk0.cmzf" \
 		"$(LINK_RECOVERY_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf" \
 		"TINY_TERMINAL=$(call bdir,tiny)/cmz-terminal tests/link/check_link_pty.sh $(CMZ) \
 		$(call bdir,terminal)/cmz-terminal $(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode 50"
@@ -77,7 +77,7 @@ A64_B := $(BUILD_ROOT)/aarch64-linux-gnu-terminal
 check-link-aarch64: $(CMZ) $(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode \
 		$(call bdir,tiny)/cmz-terminal
 	$(Q)$(MAKE) --no-print-directory -s $(A64) $(A64_B)/cmz-terminal $(A64_B)/tests/link/test_link
-	$(Q)tests/tools/sum_suites.sh "qemu-aarch64 $(A64_B)/tests/link/test_link tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf" \
+	$(Q)tests/tools/sum_suites.sh "qemu-aarch64 $(A64_B)/tests/link/test_link tests/fuzz/corpus_decode/as1_pe_203_v3_chunk0.cmzf" \
 		"TERMINAL_EMU=qemu-aarch64 TINY_TERMINAL=$(call bdir,tiny)/cmz-terminal tests/link/check_link_pty.sh $(CMZ) $(A64_B)/cmz-terminal \
 		$(call bdir,host)/tests/tools/pty_relay $(call bdir,terminal)/cmz-decode 5"
 
@@ -94,13 +94,13 @@ $(call bdir,terminal)/tests/fuzz/replay_link: $(call LINK_FUZZ_OBJS,$(call bdir,
 .PHONY: check-fuzz-link-replay fuzz-link
 check-fuzz-link-replay: $(LINK_TEST_BIN)
 	$(Q)mkdir -p $(BUILD_ROOT)/link-seeds
-	$(Q)$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf --write-seeds $(BUILD_ROOT)/link-seeds
+	$(Q)$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_v3_chunk0.cmzf --write-seeds $(BUILD_ROOT)/link-seeds
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 PROFILE=terminal \
 		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" $(LINK_SAN_B)/tests/fuzz/replay_link
 	$(Q)ASAN_OPTIONS=detect_leaks=1 $(LINK_SAN_B)/tests/fuzz/replay_link $(BUILD_ROOT)/link-seeds
 fuzz-link: $(LINK_TEST_BIN)
 	$(Q)mkdir -p $(BUILD_ROOT)/fuzz-link/corpus_link
-	$(Q)$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf --write-seeds $(BUILD_ROOT)/fuzz-link/corpus_link
+	$(Q)$(LINK_TEST_BIN) tests/fuzz/corpus_decode/as1_pe_203_v3_chunk0.cmzf --write-seeds $(BUILD_ROOT)/fuzz-link/corpus_link
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz-link CM_NO_STACK_FLAGS=1 PROFILE=terminal \
 		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all $(FUZZ_DECODE_IGNORE)" \
 		$(call LINK_FUZZ_OBJS,$(BUILD_ROOT)/fuzz-link/$(FUZZ_TRIPLET)-terminal) $(BUILD_ROOT)/fuzz-link/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a

@@ -134,13 +134,32 @@ size_t cm_ac_enc_finish(cm_ac_enc *e)
     return e->overflow ? 0 : e->pos;
 }
 
+size_t cm_ac_enc_finish_trimmed(cm_ac_enc *e)
+{
+    /* end on the value in [low, low + range) whose low 24 bits are zero (range >= 2^24: there is
+       one), so the last three bytes of the flush are zeros */
+    e->low = (e->low + 0xFFFFFFu) & ~(uint64_t)0xFFFFFFu;
+    for (int i = 0; i < 5; i++)
+        shift_low(e);
+    if (e->overflow)
+        return 0;
+    size_t n = e->pos;
+    /* the trailing zeros, at most CM_AC_TRIM_PAD of them, and the leading 0 */
+    for (int i = 0; i < CM_AC_TRIM_PAD && n > 1 && e->buf[n - 1] == 0; i++)
+        n--;
+    for (size_t i = 1; i < n; i++)
+        e->buf[i - 1] = e->buf[i];
+    return n - 1;
+}
+
 /* ---- decoder ---- */
 
 static uint8_t get_byte(cm_ac_dec *d)
 {
     if (d->pos < d->len)
         return d->buf[d->pos++];
-    d->overrun = 1;
+    if (d->pos - d->len >= d->pad)
+        d->overrun = 1;
     d->pos++;
     return 0;
 }
@@ -150,10 +169,24 @@ void cm_ac_dec_init(cm_ac_dec *d, const uint8_t *buf, size_t len)
     d->buf = buf;
     d->len = len;
     d->pos = 0;
+    d->pad = 0;
     d->overrun = 0;
     d->range = 0xFFFFFFFFu;
     d->code = 0;
     for (int i = 0; i < 5; i++)
+        d->code = (d->code << 8) | get_byte(d);
+}
+
+void cm_ac_dec_init_trimmed(cm_ac_dec *d, const uint8_t *buf, size_t len)
+{
+    d->buf = buf;
+    d->len = len;
+    d->pos = 0;
+    d->pad = CM_AC_TRIM_PAD;
+    d->overrun = 0;
+    d->range = 0xFFFFFFFFu;
+    d->code = 0;
+    for (int i = 0; i < 4; i++) /* the leading 0 is not in the stream */
         d->code = (d->code << 8) | get_byte(d);
 }
 

@@ -1,4 +1,4 @@
-/* cm_decode.c - the .cmz reader, formats 1 and 2 (see cm_decode.h and docs/FORMAT.md). */
+/* cm_decode.c - the .cmz reader, formats 1 to 4 (see cm_decode.h and docs/FORMAT.md). */
 #include "cm/cm_decode.h"
 
 #include <string.h>
@@ -81,101 +81,88 @@ _Static_assert(CM_LIMIT_COUNT >= CM_FMT_MIN_NEEDS, "the limit list only grows (i
 
 static uint32_t declared(uint32_t need) { return need > 0 ? need : 1u; }
 
-static cm_err check_header(cm_decoder *d, cm_status *st)
-{
-    const uint8_t *b = d->buf;
-    uint32_t H = d->header_len;
+/* the header's fields, wherever its format put them: the offsets name a refused field */
+typedef struct header_view {
     cm_fmt_header h;
-    cm_fmt_header_unpack(b, &h);
-    d->version_major = h.major;
-    d->version_minor = h.minor;
-    d->flags = h.flags;
-    d->file_len = h.file_len;
-    d->nlimits = h.nlimits;
-    uint32_t nsec = h.nsections;
-    d->nsec = 0;
-    /* H must be exactly the fixed fields, the two tables and the CRC (nlimits, nsec <= 255: no
-       overflow); then the CRC, which covers every field below */
-    if (H != cm_fmt_header_len(d->nlimits, nsec))
-        return fail(d, st, CM_E_FORMAT, CM_HDR_LENGTH, "header length does not fit its need and section counts");
-    uint32_t crc = cm_get_u32(b + H - 4);
-    if (crc_differs(cm_crc32(b, H - 4), crc))
-        return fail(d, st, CM_E_CRC, H - 4, "header CRC");
-    if (nsec != CM_SEC_COUNT)
-        return fail(d, st, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count (a .cmz has 5 sections)");
-    d->nsec = nsec;
+    uint32_t at_nlimits, at_nsec, at_file_len, at_qexp, at_origin[3], at_tess, at_rel;
+} header_view;
+
+/* need i of the model against this build (i past the build's list: must be 0) */
+static cm_err check_need(cm_decoder *d, cm_status *st, uint32_t i, uint32_t need, uint32_t at)
+{
+    if (i < (uint32_t)CM_LIMIT_COUNT) {
+        d->need[i] = need;
+        if (need > cm_limit_table[i].value)
+            return header_limit(d, st, i, need, cm_limit_table[i].value, at, "header needs");
+    } else if (need != 0) {
+        /* a limit this build does not know about, and the model needs it */
+        return fail(d, st, CM_E_VERSION, at, "unknown limit");
+    }
+    return CM_OK;
+}
+
+/* the counts every version checks before its tables are read */
+static cm_err check_counts(cm_decoder *d, cm_status *st, const header_view *v)
+{
+    if (v->h.nsections != CM_SEC_COUNT)
+        return fail(d, st, CM_E_FORMAT, v->at_nsec, "section count (a .cmz has 5 sections)");
     /* every writer declares the 25 needs of format 1.0; without MAX_TRIS, MAX_TESS_POINTS and
        MAX_EDGE_SAMPLES the tessellation would be bounded only by this build's limits (on the
        workstation: minutes for a 4 KB file whose tolerance says 1e-300 mm) */
-    if (d->nlimits < CM_FMT_MIN_NEEDS)
-        return fail(d, st, CM_E_FORMAT, CM_HDR_NLIMITS, "need table shorter than the 25 needs of format 1.0");
+    if (v->h.nlimits < CM_FMT_MIN_NEEDS)
+        return fail(d, st, CM_E_FORMAT, v->at_nlimits, "need table shorter than the 25 needs of format 1.0");
+    return CM_OK;
+}
+
+/* formats 1-3: fixed fields, a u32 per need, a 16-byte entry per section with its CRC */
+static cm_err parse_fixed(cm_decoder *d, cm_status *st, header_view *v)
+{
+    const uint8_t *b = d->buf;
+    uint32_t H = d->header_len;
+    cm_fmt_header_unpack(b, &v->h);
+    v->at_nlimits = CM_HDR_NLIMITS;
+    v->at_nsec = CM_HDR_NSECTIONS;
+    v->at_file_len = CM_HDR_FILE_LENGTH;
+    v->at_qexp = CM_HDR_QEXP;
+    for (uint32_t k = 0; k < 3; k++)
+        v->at_origin[k] = CM_HDR_ORIGIN + 8u * k;
+    v->at_tess = CM_HDR_TESS_TOL;
+    v->at_rel = CM_HDR_REL_TOL;
+    uint32_t nsec = v->h.nsections;
+    /* H must be exactly the fixed fields, the two tables and the CRC (nlimits, nsec <= 255: no
+       overflow); then the CRC, which covers every field below */
+    if (H != cm_fmt_header_len(v->h.nlimits, nsec))
+        return fail(d, st, CM_E_FORMAT, CM_HDR_LENGTH, "header length does not fit its need and section counts");
+    if (crc_differs(cm_crc32(b, H - 4), cm_get_u32(b + H - 4)))
+        return fail(d, st, CM_E_CRC, H - 4, "header CRC");
+    cm_err e = check_counts(d, st, v);
+    if (e != CM_OK)
+        return e;
+    d->file_len = v->h.file_len;
     if (d->file_len > (uint32_t)CM_MAX_FILE_BYTES)
         return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->file_len, CM_MAX_FILE_BYTES, CM_HDR_FILE_LENGTH,
                             "file length");
     if (d->file_len < H + 4u)
         return fail(d, st, CM_E_FORMAT, CM_HDR_FILE_LENGTH, "file length shorter than its header and trailer");
     /* the model's needs against this build: refused here, before the body */
-    for (uint32_t i = 0; i < d->nlimits; i++) {
-        uint32_t at = cm_fmt_need_at(i);
-        uint32_t need = cm_get_u32(b + at);
-        if (i < (uint32_t)CM_LIMIT_COUNT) {
-            d->need[i] = need;
-            if (need > cm_limit_table[i].value)
-                return header_limit(d, st, i, need, cm_limit_table[i].value, at, "header needs");
-        } else if (need != 0) {
-            /* a limit this build does not know about, and the model needs it */
-            return fail(d, st, CM_E_VERSION, at, "unknown limit");
-        }
-    }
-    for (uint32_t i = d->nlimits; i < (uint32_t)CM_LIMIT_COUNT; i++)
-        d->need[i] = 0;
-    /* the grid and the tolerances */
-    int qe = h.q_exp;
-    if (qe < -60 || qe > 20)
-        return fail(d, st, CM_E_RANGE, CM_HDR_QEXP, "quantisation exponent (grid step 2^e mm, e in -60..20)");
-    for (uint32_t k = 0; k < 3; k++) {
-        double o = h.origin[k];
-        if (!isfinite(o))
-            return fail(d, st, CM_E_NONFINITE, CM_HDR_ORIGIN + 8u * k, "grid origin");
-        if (!(fabs(o) <= ORIGIN_MAX))
-            return fail(d, st, CM_E_RANGE, CM_HDR_ORIGIN + 8u * k, "grid origin (|origin| <= 2^100 mm)");
-        d->model.origin[k] = o;
-    }
-    double q = 1.0;
-    for (int i = 0; i < (qe < 0 ? -qe : qe); i++)
-        q = qe < 0 ? q * 0.5 : q * 2.0;
-    d->model.q = q;
-    d->model.tess_tol = h.tess_tol;
-    d->model.turning_basis = h.major > 2 || (h.major == 2 && h.minor >= CM_FMT_TURNING_MINOR);
-    d->model.predicted = h.major >= CM_FMT_PREDICT_MAJOR;
-    if (!isfinite(d->model.tess_tol))
-        return fail(d, st, CM_E_NONFINITE, CM_HDR_TESS_TOL, "chordal tolerance");
-    if (!(d->model.tess_tol > 0))
-        return fail(d, st, CM_E_RANGE, CM_HDR_TESS_TOL, "chordal tolerance (must be > 0)");
-    d->model.rel_tol = h.rel_tol;
-    if (!isfinite(d->model.rel_tol))
-        return fail(d, st, CM_E_NONFINITE, CM_HDR_REL_TOL, "rebuild tolerance");
-    if (!(d->model.rel_tol >= 0))
-        return fail(d, st, CM_E_RANGE, CM_HDR_REL_TOL, "rebuild tolerance (must be >= 0)");
-    /* what bounds the tessellation's work (cm_tessellate.c); a file declares them, so a need of 0
-       is the model's figure, kept apart from 0 = "not declared" (the build's limit) */
-    d->model.need_tess_points = declared(d->need[CM_LIMIT_MAX_TESS_POINTS]);
-    d->model.need_edge_samples = declared(d->need[CM_LIMIT_MAX_EDGE_SAMPLES]);
-    d->model.need_tris = declared(d->need[CM_LIMIT_MAX_TRIS]);
+    for (uint32_t i = 0; i < v->h.nlimits; i++)
+        if ((e = check_need(d, st, i, cm_get_u32(b + cm_fmt_need_at(i)), cm_fmt_need_at(i))) != CM_OK)
+            return e;
     /* the section table: tags 1..5 in order, each once, back to back after the header, filling the
        file up to its trailer (offsets and lengths checked before cm_dec_finish addresses bytes) */
     uint32_t prev_end = H;
     for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
-        uint32_t at = cm_fmt_entry_at(d->nlimits, s);
-        const uint8_t *e = b + at;
+        uint32_t at = cm_fmt_entry_at(v->h.nlimits, s);
+        const uint8_t *en = b + at;
         cm_dec_section *sec = &d->sec[s];
-        sec->tag = e[CM_ENT_TAG];
-        sec->off = cm_get_u32(e + CM_ENT_OFFSET);
-        sec->len = cm_get_u32(e + CM_ENT_LENGTH);
-        sec->crc = cm_get_u32(e + CM_ENT_CRC);
+        sec->tag = en[CM_ENT_TAG];
+        sec->off = cm_get_u32(en + CM_ENT_OFFSET);
+        sec->len = cm_get_u32(en + CM_ENT_LENGTH);
+        sec->crc = cm_get_u32(en + CM_ENT_CRC);
+        sec->has_crc = 1;
         if (sec->tag != s + 1)
             return fail(d, st, CM_E_FORMAT, at, "section table: tags must be 1..5 in order");
-        if (e[CM_ENT_RESERVED] || e[CM_ENT_RESERVED + 1] || e[CM_ENT_RESERVED + 2])
+        if (en[CM_ENT_RESERVED] || en[CM_ENT_RESERVED + 1] || en[CM_ENT_RESERVED + 2])
             return fail(d, st, CM_E_FORMAT, at + CM_ENT_RESERVED, "section table: reserved bytes must be 0");
         if (sec->off != prev_end)
             return fail(d, st, CM_E_FORMAT, at + CM_ENT_OFFSET,
@@ -186,6 +173,146 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     }
     if (prev_end != d->file_len - 4u)
         return fail(d, st, CM_E_FORMAT, CM_HDR_FILE_LENGTH, "sections do not fill the file");
+    return CM_OK;
+}
+
+/* one varint of format 4's header, at most `max` (a field past it is malformed: CM_E_FORMAT) */
+static cm_err header_varint(cm_decoder *d, cm_status *st, uint32_t *at, uint64_t max, uint64_t *out,
+                            uint32_t *field_at, const char *where)
+{
+    uint32_t end = d->header_len - 4u;
+    *field_at = *at;
+    if (!cm_fmt_get_varint(d->buf, end, at, out))
+        return fail(d, st, CM_E_FORMAT, *field_at, where);
+    if (*out > max)
+        return fail(d, st, CM_E_FORMAT, *field_at, where);
+    return CM_OK;
+}
+
+/* format 4: the compact header (cm_format.h), CRC first, then each field in order */
+static cm_err parse_compact(cm_decoder *d, cm_status *st, header_view *v)
+{
+    const uint8_t *b = d->buf;
+    uint32_t H = d->header_len;
+    if (crc_differs(cm_crc32(b, H - 4), cm_get_u32(b + H - 4)))
+        return fail(d, st, CM_E_CRC, H - 4, "header CRC");
+    memset(&v->h, 0, sizeof v->h);
+    v->h.major = b[CM_HDR_MAJOR];
+    v->h.minor = b[CM_HDR_MINOR];
+    v->h.header_len = H;
+    uint32_t at = CM_FMT_COMPACT_AT_H, fat;
+    uint64_t x;
+    cm_err e;
+    /* H again (feed_header read it), then the flags */
+    if ((e = header_varint(d, st, &at, UINT32_MAX, &x, &fat, "header length")) != CM_OK ||
+        (e = header_varint(d, st, &at, UINT16_MAX, &x, &fat, "header flags")) != CM_OK)
+        return e;
+    v->h.flags = (uint16_t)x;
+    if ((e = header_varint(d, st, &at, 255, &x, &v->at_nlimits, "need count")) != CM_OK)
+        return e;
+    v->h.nlimits = (uint8_t)x;
+    v->at_nsec = v->at_nlimits; /* refined below; a short need table is refused at its count */
+    if (v->h.nlimits < CM_FMT_MIN_NEEDS)
+        return fail(d, st, CM_E_FORMAT, v->at_nlimits, "need table shorter than the 25 needs of format 1.0");
+    for (uint32_t i = 0; i < v->h.nlimits; i++) {
+        if ((e = header_varint(d, st, &at, UINT32_MAX, &x, &fat, "header needs")) != CM_OK ||
+            (e = check_need(d, st, i, (uint32_t)x, fat)) != CM_OK)
+            return e;
+    }
+    if ((e = header_varint(d, st, &at, 255, &x, &v->at_nsec, "section count")) != CM_OK)
+        return e;
+    v->h.nsections = (uint8_t)x;
+    if ((e = check_counts(d, st, v)) != CM_OK)
+        return e;
+    /* the sections back to back after the header; the file is they and its trailer */
+    uint64_t off = H;
+    for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+        if ((e = header_varint(d, st, &at, UINT32_MAX, &x, &v->at_file_len, "section length")) != CM_OK)
+            return e;
+        cm_dec_section *sec = &d->sec[s];
+        sec->tag = (uint8_t)(s + 1);
+        sec->off = (uint32_t)(off < UINT32_MAX ? off : UINT32_MAX);
+        sec->len = (uint32_t)x;
+        sec->crc = 0;
+        sec->has_crc = 0;
+        off += x;
+        if (off + 4u > (uint64_t)CM_MAX_FILE_BYTES)
+            return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, off + 4u > UINT32_MAX ? UINT32_MAX : off + 4u,
+                                CM_MAX_FILE_BYTES, v->at_file_len, "file length");
+    }
+    d->file_len = (uint32_t)(off + 4u);
+    v->h.file_len = d->file_len;
+    if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_qexp, "quantisation exponent")) != CM_OK)
+        return e;
+    int64_t qe = cm_fmt_unzigzag(x);
+    if (qe < -60 || qe > 20)
+        return fail(d, st, CM_E_RANGE, v->at_qexp, "quantisation exponent (grid step 2^e mm, e in -60..20)");
+    v->h.q_exp = (int8_t)qe;
+    double q = cm_fmt_grid_step((int)qe);
+    for (uint32_t k = 0; k < 3; k++) {
+        if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_origin[k], "grid origin")) != CM_OK)
+            return e;
+        /* exact for |k| <= 2^53 (the writer's origin is a multiple of q), deterministic beyond; the
+           range is checked below with the other versions' (|k q| < 2^84 here) */
+        v->h.origin[k] = (double)cm_fmt_unzigzag(x) * q;
+    }
+    if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_tess, "chordal tolerance")) != CM_OK)
+        return e;
+    v->h.tess_tol = (double)x * q;
+    if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_rel, "rebuild tolerance")) != CM_OK)
+        return e;
+    v->h.rel_tol = (double)x / (double)CM_FMT_REL_TOL_ONE;
+    if (at != H - 4u)
+        return fail(d, st, CM_E_FORMAT, at, "header length: fields end before the header CRC");
+    return CM_OK;
+}
+
+static cm_err check_header(cm_decoder *d, cm_status *st)
+{
+    header_view v;
+    d->nsec = 0;
+    d->nlimits = 0;
+    for (uint32_t i = 0; i < (uint32_t)CM_LIMIT_COUNT; i++)
+        d->need[i] = 0;
+    cm_err e = d->buf[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR ? parse_compact(d, st, &v) : parse_fixed(d, st, &v);
+    if (e != CM_OK)
+        return e;
+    const cm_fmt_header *h = &v.h;
+    d->version_major = h->major;
+    d->version_minor = h->minor;
+    d->flags = h->flags;
+    d->nlimits = h->nlimits;
+    d->nsec = CM_SEC_COUNT;
+    /* the grid and the tolerances */
+    int qe = h->q_exp;
+    if (qe < -60 || qe > 20)
+        return fail(d, st, CM_E_RANGE, v.at_qexp, "quantisation exponent (grid step 2^e mm, e in -60..20)");
+    for (uint32_t k = 0; k < 3; k++) {
+        double o = h->origin[k];
+        if (!isfinite(o))
+            return fail(d, st, CM_E_NONFINITE, v.at_origin[k], "grid origin");
+        if (!(fabs(o) <= ORIGIN_MAX))
+            return fail(d, st, CM_E_RANGE, v.at_origin[k], "grid origin (|origin| <= 2^100 mm)");
+        d->model.origin[k] = o;
+    }
+    d->model.q = cm_fmt_grid_step(qe);
+    d->model.tess_tol = h->tess_tol;
+    d->model.turning_basis = h->major > 2 || (h->major == 2 && h->minor >= CM_FMT_TURNING_MINOR);
+    d->model.predicted = h->major >= CM_FMT_PREDICT_MAJOR;
+    if (!isfinite(d->model.tess_tol))
+        return fail(d, st, CM_E_NONFINITE, v.at_tess, "chordal tolerance");
+    if (!(d->model.tess_tol > 0))
+        return fail(d, st, CM_E_RANGE, v.at_tess, "chordal tolerance (must be > 0)");
+    d->model.rel_tol = h->rel_tol;
+    if (!isfinite(d->model.rel_tol))
+        return fail(d, st, CM_E_NONFINITE, v.at_rel, "rebuild tolerance");
+    if (!(d->model.rel_tol >= 0))
+        return fail(d, st, CM_E_RANGE, v.at_rel, "rebuild tolerance (must be >= 0)");
+    /* what bounds the tessellation's work (cm_tessellate.c); a file declares them, so a need of 0
+       is the model's figure, kept apart from 0 = "not declared" (the build's limit) */
+    d->model.need_tess_points = declared(d->need[CM_LIMIT_MAX_TESS_POINTS]);
+    d->model.need_edge_samples = declared(d->need[CM_LIMIT_MAX_EDGE_SAMPLES]);
+    d->model.need_tris = declared(d->need[CM_LIMIT_MAX_TRIS]);
     d->state = CM_DEC_BODY;
     return CM_OK;
 }
@@ -205,9 +332,19 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
         return fail(d, st, CM_E_VERSION, CM_HDR_MAJOR, "version");
     if (d->len < CM_HDR_LENGTH + 4)
         return CM_OK;
-    d->header_len = cm_get_u32(d->buf + CM_HDR_LENGTH);
-    if (d->header_len < CM_FMT_FIXED_HEADER + 4u || d->header_len > CM_FMT_MAX_HEADER)
-        return fail(d, st, CM_E_FORMAT, CM_HDR_LENGTH, "header length");
+    if (d->buf[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR) {
+        /* format 4: a varint at byte 6, within the 12 bytes in (a header holds at least 25 needs) */
+        uint32_t at = CM_FMT_COMPACT_AT_H;
+        uint64_t h;
+        if (!cm_fmt_get_varint(d->buf, d->len, &at, &h) || at > CM_FMT_COMPACT_AT_H + 5u ||
+            h < CM_FMT_COMPACT_AT_H + CM_FMT_MIN_NEEDS + 4u || h > CM_FMT_MAX_HEADER)
+            return fail(d, st, CM_E_FORMAT, CM_FMT_COMPACT_AT_H, "header length");
+        d->header_len = (uint32_t)h;
+    } else {
+        d->header_len = cm_get_u32(d->buf + CM_HDR_LENGTH);
+        if (d->header_len < CM_FMT_FIXED_HEADER + 4u || d->header_len > CM_FMT_MAX_HEADER)
+            return fail(d, st, CM_E_FORMAT, CM_HDR_LENGTH, "header length");
+    }
     if (d->header_len > (uint32_t)CM_MAX_FILE_BYTES)
         return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, d->header_len, CM_MAX_FILE_BYTES, CM_HDR_LENGTH,
                             "header length");
@@ -774,10 +911,13 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         return fail(d, st, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count (a .cmz has 5 sections)");
     for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
         const cm_dec_section *sec = &d->sec[s];
-        if (crc_differs(cm_crc32(d->buf + sec->off, sec->len), sec->crc))
+        if (sec->has_crc && crc_differs(cm_crc32(d->buf + sec->off, sec->len), sec->crc))
             return fail(d, st, CM_E_CRC, sec->off, "section CRC");
         reader r;
-        cm_ac_dec_init(&r.ac, d->buf + sec->off, sec->len);
+        if (d->version_major >= CM_FMT_COMPACT_MAJOR)
+            cm_ac_dec_init_trimmed(&r.ac, d->buf + sec->off, sec->len);
+        else
+            cm_ac_dec_init(&r.ac, d->buf + sec->off, sec->len);
         r.base = sec->off;
         r.face = CM_NO_FACE_INDEX;
         r.d = d;

@@ -59,8 +59,9 @@ static int parse_format(const char *v, encode_opts *o)
     int newest_minor = major == CM_FMT_VERSION_MAJOR ? CM_FMT_VERSION_MINOR : major == 2 ? CM_FMT_V2_MINOR : 0;
     if (n < 1 || v[used] != '\0' || major < CM_FMT_VERSION_MIN_MAJOR || major > CM_FMT_VERSION_MAJOR || minor < 0 ||
         minor > newest_minor) {
-        fprintf(stderr, "%s encode: --format '%s': a version this writer knows: 1.0, 2.0 to 2.%d, or %d.0 to the newest, %d.%d\n",
-                cmd_prog, v, CM_FMT_V2_MINOR, CM_FMT_VERSION_MAJOR, CM_FMT_VERSION_MAJOR, CM_FMT_VERSION_MINOR);
+        fprintf(stderr, "%s encode: --format '%s': a version this writer knows: 1.0, 2.0 to 2.%d, %d.0, or %d.0 to the newest, %d.%d\n",
+                cmd_prog, v, CM_FMT_V2_MINOR, CM_FMT_PREDICT_MAJOR, CM_FMT_VERSION_MAJOR, CM_FMT_VERSION_MAJOR,
+                CM_FMT_VERSION_MINOR);
         return 1;
     }
     if (n == 1)

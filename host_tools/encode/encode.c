@@ -18,6 +18,8 @@ void encode_opts_for_format(encode_opts *o, int major, int minor)
         o->g1fit = 0;
         o->nfill = 0;
     }
+    if (major < CM_FMT_COMPACT_MAJOR)
+        o->compact_header = 0;
     if (major < CM_FMT_PREDICT_MAJOR)
         o->predicted = o->budget_steps = 0;
     if (major > 2)
@@ -48,6 +50,7 @@ void encode_opts_default(encode_opts *o)
     o->nfill = 1;
     o->turning_basis = 1;
     o->predicted = 1;
+    o->compact_header = 1;
     o->budget_steps = 0;
     o->strict = 0;
     o->measure_mesh = 0;
@@ -129,6 +132,10 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     t.origin[0] = lm->brep.box.lo.x;
     t.origin[1] = lm->brep.box.lo.y;
     t.origin[2] = lm->brep.box.lo.z;
+    /* format 4 sends the origin as a multiple of the grid step (a few bytes, not 24) */
+    if (o->predicted && o->compact_header)
+        for (int k = 0; k < 3; k++)
+            t.origin[k] = floor(t.origin[k] / t.q) * t.q;
     t.nfaces = lm->mesh.nfaces;
     t.method = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.layout = calloc((size_t)t.nfaces + 1, sizeof(int));
@@ -207,12 +214,12 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
        without changing the model.  Past a target profile's tessellation limits it is made coarser,
        twice at a time, at most 16 times (occt__bug22869_Spring: a face of 16329 points, where the
        terminal has 8192); the summary says so.  Beyond that the profile refuses, as before */
-    r->tess_asked = r->tess_used = o->tess_rel * diag;
+    r->tess_asked = r->tess_used = enc_file_tess(&t, o->tess_rel * diag); /* as the file can say it */
     r->edges_refit = t.edges_refit;
     r->surfs_refit = t.surfs_refit;
     for (int k = 0; e == CM_OK && t.nfaults == 0 && o->target && k < 4 && tess_over(o->target, r->need); k++) {
         model_opts.tess_rel *= 2;
-        t.w->dec.model.tess_tol = model_opts.tess_rel * diag;
+        t.w->dec.model.tess_tol = enc_file_tess(&t, model_opts.tess_rel * diag);
         r->tess_used = t.w->dec.model.tess_tol;
         r->need[CM_LIMIT_MAX_TESS_POINTS] = r->need[CM_LIMIT_MAX_EDGE_SAMPLES] = r->need[CM_LIMIT_MAX_TRIS] = 0;
         e = enc_tessellation_needs(&t, r->need, o, o->measure_mesh ? lm : NULL, r, st);

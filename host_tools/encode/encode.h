@@ -52,6 +52,8 @@ typedef struct encode_opts {
                                     linear basis throughout) */
     int predicted;               /* code curves and knots predicted (format 3, cm_predict.h; default 1;
                                     0: format 2's coding, for terminals of format 2) */
+    int compact_header;          /* with predicted: format 4's compact header (cm_fmt_compact_pack; default 1;
+                                    0: format 3's fixed one, for terminals of format 3) */
     int budget_steps;            /* with predicted: curves and vertices on steps of their own from the
                                     tolerance budget (tx_coarsen.c; default 0: about 3 % smaller over
                                     the corpus for twice the encode time where a face is kept) */

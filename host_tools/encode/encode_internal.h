@@ -153,6 +153,9 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st);
 
 /* assemble header + sections + trailer; needs may be NULL (all zero) */
+/* the chordal tolerance the file can say nearest to tess (format 4: a multiple of the grid step), so
+   that what the encoder measures the tessellation with is what the terminal reads */
+double enc_file_tess(const tx *t, double tess);
 cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o, const uint32_t *need,
                          encode_result *r, cm_status *st);
 

@@ -306,8 +306,9 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
         cm_ac_enc e;
         cm_ac_enc_init(&e, buf, cap);
         fn(t, &e, lm);
-        size_t n = cm_ac_enc_finish(&e);
-        if (n > 0) {
+        /* format 4 trims each stream (cm_arith.h), which may leave no byte at all */
+        size_t n = t->o->predicted && t->o->compact_header ? cm_ac_enc_finish_trimmed(&e) : cm_ac_enc_finish(&e);
+        if (!e.overflow) {
             out->p = buf;
             out->len = n;
             return CM_OK;
@@ -315,6 +316,11 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
         free(buf);
     }
     return cm_fail(st, CM_E_NOSPACE, "section too large");
+}
+
+double enc_file_tess(const tx *t, double tess)
+{
+    return t->o->predicted && t->o->compact_header ? cm_fmt_compact_tess(tess, t->q_exp) : tess;
 }
 
 /* assemble header + sections + trailer; needs may be NULL (all zero) */
@@ -327,7 +333,40 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     cm_err e = CM_OK;
     for (int s = 0; s < CM_SEC_COUNT && e == CM_OK; s++)
         e = run_section(fns[s], t, lm, &sec[s], st);
+    int compact = t->o->predicted && t->o->compact_header;
+    uint8_t hb[CM_FMT_MAX_HEADER];
+    cm_fmt_header h = {0};
+    uint32_t seclen[CM_SEC_COUNT];
+    for (int s = 0; s < CM_SEC_COUNT; s++)
+        seclen[s] = (uint32_t)sec[s].len;
+    h.nlimits = CM_LIMIT_COUNT;
+    h.nsections = CM_SEC_COUNT;
+    h.q_exp = (int8_t)t->q_exp;
+    for (int k = 0; k < 3; k++)
+        h.origin[k] = t->origin[k];
+    h.tess_tol = enc_file_tess(t, o->tess_rel * brep_diag(&lm->brep));
+    h.rel_tol = o->rel_tol;
+    h.flags = (uint16_t)(t->npalette ? 1 : 0);
+    if (compact) {
+        h.major = CM_FMT_COMPACT_MAJOR;
+        h.minor = 0;
+    }
     size_t H = cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT);
+    if (compact) {
+        /* the file's own length is one of its needs, and in format 4 the needs' varints size the
+           header: packed again until the declared length is the length (twice, at most thrice) */
+        uint32_t nd[CM_LIMIT_COUNT] = {0};
+        if (need)
+            memcpy(nd, need, sizeof nd);
+        for (int k = 0; k < 4; k++) {
+            H = cm_fmt_compact_pack(hb, &h, nd, seclen);
+            if (!need || H == 0 || nd[CM_LIMIT_MAX_FILE_BYTES] == h.file_len)
+                break;
+            nd[CM_LIMIT_MAX_FILE_BYTES] = h.file_len;
+        }
+    }
+    if (H == 0 && e == CM_OK)
+        e = cm_fail(st, CM_E_FORMAT, "the header does not fit its format's bound");
     size_t total = H + 4;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
         total += sec[s].len;
@@ -339,7 +378,18 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
         e = cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK && total > 0x7fffffffu)
         e = cm_fail(st, CM_E_NOSPACE, "file larger than 2 GiB");
-    if (e == CM_OK) {
+    if (e == CM_OK && compact) {
+        memcpy(b, hb, H);
+        size_t off = H;
+        for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+            memcpy(b + off, sec[s].p, sec[s].len);
+            off += sec[s].len;
+        }
+        cm_put_u32(b + total - 4, cm_crc32(b, total - 4));
+        free(r->bytes);
+        r->bytes = b;
+        r->len = total;
+    } else if (e == CM_OK) {
         /* the oldest version that can say it: format 1 readers still load files of format 1's methods */
         int major = 1, minor = 0;
         for (int f = 0; f < t->nfaces; f++) {
@@ -361,19 +411,10 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
             major = CM_FMT_PREDICT_MAJOR;
             minor = 0;
         }
-        cm_fmt_header h = {0};
         h.major = (uint8_t)major;
         h.minor = (uint8_t)minor;
-        h.flags = (uint16_t)(t->npalette ? 1 : 0);
         h.header_len = (uint32_t)H;
         h.file_len = (uint32_t)total;
-        h.nlimits = CM_LIMIT_COUNT;
-        h.nsections = CM_SEC_COUNT;
-        h.q_exp = (int8_t)t->q_exp;
-        for (int k = 0; k < 3; k++)
-            h.origin[k] = t->origin[k];
-        h.tess_tol = o->tess_rel * brep_diag(&lm->brep);
-        h.rel_tol = o->rel_tol;
         cm_fmt_header_pack(b, &h);
         for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
             cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);

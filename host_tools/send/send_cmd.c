@@ -255,15 +255,14 @@ static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_li
                 path, b[4], b[5], h->name, h->fmt_major_min, h->fmt_major_max, h->fmt_minor_max);
         return -1;
     }
-    unsigned nneed = b[16];
-    if (60u + 4u * nneed > n)
+    uint32_t need[CM_LIMIT_COUNT], nneed = 0;
+    if (!cm_fmt_header_needs(b, n, need, CM_LIMIT_COUNT, &nneed))
         return 0; /* malformed: the terminal's decoder will say so */
     for (unsigned i = 0; i < nneed && i < (unsigned)CM_LIMIT_COUNT; i++) {
-        uint32_t need = cm_link_get32(b + 60 + 4 * i);
-        if (need > tab[i].value) {
+        if (need[i] > tab[i].value) {
             fprintf(stderr,
                     "cmz send: %s: refused before sending: the model needs %s=%u, terminal '%s' has %u (%s)\n",
-                    path, tab[i].name, (unsigned)need, h->name, (unsigned)tab[i].value, limit_hint(i));
+                    path, tab[i].name, (unsigned)need[i], h->name, (unsigned)tab[i].value, limit_hint(i));
             return -1;
         }
     }

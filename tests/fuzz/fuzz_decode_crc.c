@@ -18,6 +18,8 @@
  *     the header or file length, the quantisation exponent, the origin and
  *     tolerances (NaN, infinities, huge, zero, negative); or the feed's chunk
  *     size (byte 0).
+ *   - format 4 files (the compact header, no section table) take libFuzzer's
+ *     own mutation with their header and file CRCs made right again.
  *
  * The input format and the checks are fuzz_decode.c's (included below): the
  * first byte chooses the feed size, the rest is a .cmz; every failure must
@@ -129,6 +131,16 @@ static size_t put_together(const parts *p, uint8_t *out, size_t cap)
 /* make whatever CRCs b[0, n) has room for right again, after a change that broke its layout on purpose */
 static void fix_crcs(uint8_t *b, size_t n)
 {
+    if (n >= 12 && b[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR) {
+        /* format 4: no table to lay out (the generic mutation's), the header's and the file's CRCs */
+        uint32_t at = CM_FMT_COMPACT_AT_H;
+        uint64_t H;
+        if (cm_fmt_get_varint(b, (uint32_t)n, &at, &H) && H >= 16 && H + 4 <= n) {
+            cm_put_u32(b + H - 4, cm_crc32(b, (size_t)H - 4));
+            cm_put_u32(b + n - 4, cm_crc32(b, n - 4));
+        }
+        return;
+    }
     if (n < CM_FMT_FIXED_HEADER + 8)
         return;
     uint32_t H = cm_get_u32(b + CM_HDR_LENGTH), L = cm_get_u32(b + CM_HDR_FILE_LENGTH), nl = b[CM_HDR_NLIMITS];

@@ -71,13 +71,13 @@ static void test_predictions_exact(void **state)
 
 /* ---- the same model both ways ---- */
 
-/* predicted: 0 format 2.6, 1 format 3 (the default), 2 format 3 with --budget-steps */
+/* predicted: 0 format 2.6, 1 format 3 (the default's coding, its header format 3's), 2 format 3
+   with --budget-steps (format 4's compact header is test_format4.c's) */
 static void encode_as(loaded_model *lm, int predicted, int gregory, encode_result *r)
 {
     encode_opts o;
     encode_opts_default(&o);
-    if (!predicted)
-        encode_opts_for_format(&o, 2, CM_FMT_V2_MINOR);
+    encode_opts_for_format(&o, predicted ? CM_FMT_PREDICT_MAJOR : 2, predicted ? 0 : CM_FMT_V2_MINOR);
     o.budget_steps = predicted == 2;
     o.gregory = gregory;
     if (!gregory) {

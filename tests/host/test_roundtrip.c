@@ -594,15 +594,20 @@ static void test_bicubic_net(void **state)
 static uint8_t *good;
 static size_t good_len;
 
-static int setup_good(void **state)
+/* the box with a hole, written by the default encoder (format 4's compact header) or for format 3
+   readers (the fixed header) */
+static int setup_good_as(int major)
 {
-    (void)state;
     igw w;
     igw_init(&w);
     igw_box_with_hole_144(&w, BA, BB, BC, BR);
     loaded_model lm;
     encode_result r;
-    encode_igw(&w, &lm, &r);
+    encode_opts o;
+    encode_opts_default(&o);
+    if (major)
+        encode_opts_for_format(&o, major, 0);
+    encode_igw_opts(&w, &lm, &r, &o);
     igw_free(&w);
     good = r.bytes;
     good_len = r.len;
@@ -612,6 +617,18 @@ static int setup_good(void **state)
     return 0;
 }
 
+static int setup_good(void **state)
+{
+    (void)state;
+    return setup_good_as(0);
+}
+
+static int setup_good3(void **state)
+{
+    (void)state;
+    return setup_good_as(3);
+}
+
 static int teardown_good(void **state)
 {
     (void)state;
@@ -619,114 +636,229 @@ static int teardown_good(void **state)
     return 0;
 }
 
-static uint32_t hdr_len(const uint8_t *p) { return cm_get_u32(p + CM_HDR_LENGTH); }
-static uint32_t entry_at(const uint8_t *p, int s) { return cm_fmt_entry_at(p[CM_HDR_NLIMITS], (uint32_t)s); }
-static uint32_t sec_off(const uint8_t *p, int s) { return cm_get_u32(p + entry_at(p, s) + CM_ENT_OFFSET); }
-static uint32_t sec_len(const uint8_t *p, int s) { return cm_get_u32(p + entry_at(p, s) + CM_ENT_LENGTH); }
+/* where a file's fields are, either header (docs/FORMAT.md) */
+typedef struct layout {
+    int compact;                      /* format 4 */
+    uint32_t H, L;                    /* header (its CRC included) and file lengths */
+    uint32_t off[CM_SEC_COUNT], len[CM_SEC_COUNT];
+    uint32_t need_at[CM_LIMIT_COUNT]; /* each need's first byte */
+    uint32_t fields[CM_FMT_MAX_HEADER], nfields; /* format 4: the varints after H */
+} layout;
 
-/* recompute the header CRC, every section CRC and the trailer (so only the intended damage remains) */
-static void reseal(uint8_t *p, size_t n)
+/* the layout of p (n bytes) read as format 4 (compact) or 3; 0 when it does not parse */
+static int layout_of(const uint8_t *p, size_t n, int compact, layout *l)
 {
-    for (int s = 0; s < p[CM_HDR_NSECTIONS]; s++)
-        cm_put_u32(p + entry_at(p, s) + CM_ENT_CRC, cm_crc32(p + sec_off(p, s), sec_len(p, s)));
-    uint32_t H = hdr_len(p);
-    cm_put_u32(p + H - 4, cm_crc32(p, H - 4));
+    memset(l, 0, sizeof *l);
+    l->compact = compact;
+    l->L = (uint32_t)n;
+    if (!l->compact) {
+        l->H = cm_get_u32(p + CM_HDR_LENGTH);
+        for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+            uint32_t e = cm_fmt_entry_at(p[CM_HDR_NLIMITS], s);
+            l->off[s] = cm_get_u32(p + e + CM_ENT_OFFSET);
+            l->len[s] = cm_get_u32(p + e + CM_ENT_LENGTH);
+        }
+        for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+            l->need_at[i] = cm_fmt_need_at(i);
+        return 1;
+    }
+    uint32_t at = CM_FMT_COMPACT_AT_H;
+    uint64_t v;
+    if (!cm_fmt_get_varint(p, (uint32_t)n, &at, &v) || v > n || v < 8)
+        return 0;
+    l->H = (uint32_t)v;
+    /* flags, N, the needs, S, the lengths, grid exponent, origin, tolerances */
+    while (at < l->H - 4) {
+        uint32_t i = l->nfields, field_at = at;
+        if (!cm_fmt_get_varint(p, l->H - 4, &at, &v))
+            return 0;
+        l->fields[l->nfields++] = (uint32_t)v;
+        if (i >= 2 && i < 2 + CM_LIMIT_COUNT)
+            l->need_at[i - 2] = field_at;
+    }
+    uint32_t nl = l->fields[1], off = l->H;
+    for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+        l->len[s] = l->fields[3 + nl + s];
+        l->off[s] = off;
+        off += l->len[s];
+    }
+    return 1;
+}
+
+/* recompute the header CRC, every section CRC (formats 1-3) and the trailer, so only the intended
+   damage remains */
+static void reseal(uint8_t *p, size_t n, int compact)
+{
+    layout l;
+    assert_true(layout_of(p, n, compact, &l));
+    if (!l.compact)
+        for (uint32_t s = 0; s < CM_SEC_COUNT; s++)
+            cm_put_u32(p + cm_fmt_entry_at(p[CM_HDR_NLIMITS], s) + CM_ENT_CRC, cm_crc32(p + l.off[s], l.len[s]));
+    cm_put_u32(p + l.H - 4, cm_crc32(p, l.H - 4));
     cm_put_u32(p + n - 4, cm_crc32(p, n - 4));
 }
 
-typedef enum { CUT, FLIP_BYTE, SET_U8, SET_U32, APPEND, GARBLE_SECTION } damage_kind;
+/* limit i's need set to v (format 4: the varints re-emitted, H anew; p has room for 16 more bytes) */
+static void set_need(uint8_t *p, size_t *n, uint32_t i, uint32_t v)
+{
+    layout l;
+    assert_true(layout_of(p, *n, p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR, &l));
+    if (!l.compact) {
+        cm_put_u32(p + l.need_at[i], v);
+        return;
+    }
+    l.fields[2 + i] = v;
+    uint8_t body[CM_FMT_MAX_HEADER];
+    uint32_t nb = 0;
+    for (uint32_t k = 0; k < l.nfields; k++)
+        nb += cm_fmt_put_varint(body + nb, l.fields[k]);
+    uint8_t hb[CM_FMT_VARINT_MAX];
+    uint32_t H = 0, lh = 1;
+    for (; lh <= 5 && !H; lh++)
+        if (cm_fmt_put_varint(hb, CM_FMT_COMPACT_AT_H + lh + nb + 4u) == lh)
+            H = CM_FMT_COMPACT_AT_H + lh + nb + 4u;
+    size_t rest = *n - l.H;
+    memmove(p + H, p + l.H, rest);
+    cm_fmt_put_varint(p + CM_FMT_COMPACT_AT_H, H);
+    memcpy(p + H - 4 - nb, body, nb);
+    *n = H + rest;
+}
+
+typedef enum { CUT, FLIP_BYTE, SET_U8, SET_U32, APPEND, GARBLE_SECTION, SET_NEED } damage_kind;
 
 typedef struct damage {
     const char *name;
     damage_kind kind;
-    int64_t where; /* byte offset; negative: from the end; for GARBLE_SECTION the section index */
+    int64_t where; /* byte offset; negative: from the end; for GARBLE_SECTION the section index,
+                      for SET_NEED the limit */
     uint32_t value;
     int reseal;
     cm_err want;
-    int64_t want_offset; /* -1: any offset inside the damaged section; -2: not checked */
+    int64_t want_offset; /* -1: any offset inside the damaged section; -2: not checked; -3: the
+                            need's own offset */
 } damage;
+
+static void check_damage(const damage *d, uint8_t *buf, size_t c, const layout *l)
+{
+    size_t n = good_len;
+    memcpy(buf, good, good_len);
+    size_t at = d->where < 0 ? (size_t)((int64_t)n + d->where) : (size_t)d->where;
+    uint32_t seed = 12345u + (uint32_t)c;
+    switch (d->kind) {
+    case CUT: n = at; break;
+    case FLIP_BYTE: buf[at] ^= 0x5A; break;
+    case SET_U8: buf[at] = (uint8_t)d->value; break;
+    case SET_U32: cm_put_u32(buf + at, d->value); break;
+    case APPEND: buf[n++] = 0; break;
+    case SET_NEED: set_need(buf, &n, (uint32_t)d->where, d->value); break;
+    case GARBLE_SECTION:
+        for (uint32_t i = 0; i < l->len[d->where]; i++)
+            buf[l->off[d->where] + i] = (uint8_t)(test_rand(&seed) * 256);
+        break;
+    }
+    if (d->reseal)
+        reseal(buf, n, l->compact);
+    layout now = *l;
+    if (d->kind == SET_NEED)
+        assert_true(layout_of(buf, n, l->compact, &now));
+    /* fed whole, and fed in 3-byte pieces: the same verdict */
+    for (int pass = 0; pass < 2; pass++) {
+        cm_status st;
+        cm_err e = decode_bytes(buf, n, pass ? 3 : (n ? n : 1), &st);
+        if (d->kind == GARBLE_SECTION) {
+            /* random bytes with valid CRCs: any clear refusal, located inside that section */
+            uint32_t so = l->off[d->where], sl = l->len[d->where];
+            if (e == CM_OK)
+                continue; /* random bits may happen to decode to a valid model; then it must also tessellate */
+            if (st.offset == CM_NO_OFFSET || st.offset < so || st.offset > so + sl + 8)
+                fail_msg("%s: %s at offset %u, outside the section [%u, %u)", d->name, cm_err_name(e), st.offset, so,
+                         so + sl);
+            assert_non_null(st.where);
+            continue;
+        }
+        if (e != d->want)
+            fail_msg("%s: %s (%s), expected %s", d->name, cm_err_name(e), st.where ? st.where : "?",
+                     cm_err_name(d->want));
+        int64_t want_at = d->want_offset == -3 ? (int64_t)now.need_at[d->where] : d->want_offset;
+        if (want_at >= 0 && st.offset != (uint32_t)want_at)
+            fail_msg("%s: offset %u, expected %lld", d->name, st.offset, (long long)want_at);
+        if (d->want == CM_E_CRC && d->want_offset == -2 && !(st.offset >= l->off[3] && st.offset < l->L))
+            fail_msg("%s: CRC failure reported at %u, not in the section", d->name, st.offset);
+        if (d->want == CM_E_LIMIT) {
+            assert_int_equal(st.limit, CM_LIMIT_MAX_FACES);
+            assert_int_equal(st.need, CM_MAX_FACES + 1u);
+            assert_int_equal(st.have, CM_MAX_FACES);
+            /* refused before the body: a decoder fed only the header says the same */
+            cm_status st2;
+            assert_err(decode_bytes(buf, now.H, now.H, &st2), CM_E_LIMIT);
+        }
+        assert_non_null(st.where);
+    }
+}
+
+/* the cases both headers share: cuts, magic, version, CRCs, excess, a need over this build's
+   limit (refused from the header alone), sections rewritten with valid CRCs */
+static const damage shared_cases[] = {
+    {"empty file", CUT, 0, 0, 0, CM_E_TRUNCATED, 0},
+    {"cut inside the header", CUT, 10, 0, 0, CM_E_TRUNCATED, 10},
+    {"not a .cmz (magic)", SET_U8, CM_HDR_MAGIC + 1, 'X', 0, CM_E_MAGIC, CM_HDR_MAGIC + 1},
+    {"7-bit transfer (high bit of the magic lost)", SET_U8, CM_HDR_MAGIC, 0x09, 0, CM_E_MAGIC, CM_HDR_MAGIC},
+    {"newer major version", SET_U8, CM_HDR_MAJOR, CM_FMT_VERSION_MAJOR + 1, 1, CM_E_VERSION, CM_HDR_MAJOR},
+    {"trailer damaged", FLIP_BYTE, -1, 0, 0, CM_E_CRC, -2},
+    {"over this build's face limit", SET_NEED, CM_LIMIT_MAX_FACES, CM_MAX_FACES + 1u, 1, CM_E_LIMIT, -3},
+    {"face section rewritten with valid CRCs", GARBLE_SECTION, 3, 0, 1, CM_OK, -1},
+    {"edge section rewritten with valid CRCs", GARBLE_SECTION, 1, 0, 1, CM_OK, -1},
+    {"vertex section rewritten with valid CRCs", GARBLE_SECTION, 0, 0, 1, CM_OK, -1},
+};
 
 static void test_damaged_files(void **state)
 {
     (void)state;
-    uint32_t H = hdr_len(good), L = (uint32_t)good_len;
-    uint32_t face_sec = sec_off(good, 3);
-    const uint32_t need_faces_at = cm_fmt_need_at(CM_LIMIT_MAX_FACES);
-    const damage cases[] = {
-        {"empty file", CUT, 0, 0, 0, CM_E_TRUNCATED, 0},
-        {"cut inside the header", CUT, 10, 0, 0, CM_E_TRUNCATED, 10},
+    static layout l; /* 16 KB */
+    assert_true(layout_of(good, good_len, good[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR, &l));
+    uint32_t H = l.H, L = (uint32_t)good_len;
+    const damage fixed_cases[] = {
         {"cut inside the body", CUT, (int64_t)L - 9, 0, 0, CM_E_TRUNCATED, (int64_t)L - 9},
         {"cut before the trailer", CUT, (int64_t)L - 4, 0, 0, CM_E_TRUNCATED, (int64_t)L - 4},
-        {"not a .cmz (magic)", SET_U8, CM_HDR_MAGIC + 1, 'X', 0, CM_E_MAGIC, CM_HDR_MAGIC + 1},
-        {"7-bit transfer (high bit of the magic lost)", SET_U8, CM_HDR_MAGIC, 0x09, 0, CM_E_MAGIC, CM_HDR_MAGIC},
-        {"newer major version", SET_U8, CM_HDR_MAJOR, CM_FMT_VERSION_MAJOR + 1, 1, CM_E_VERSION, CM_HDR_MAJOR},
         {"header damaged", FLIP_BYTE, CM_HDR_ORIGIN + 10, 0, 0, CM_E_CRC, (int64_t)H - 4}, /* in the origin's y */
         {"header length absurd", SET_U32, CM_HDR_LENGTH, 0xFFFFFF00u, 0, CM_E_FORMAT, CM_HDR_LENGTH},
         {"file length smaller than the header", SET_U32, CM_HDR_FILE_LENGTH, 8, 1, CM_E_FORMAT, CM_HDR_FILE_LENGTH},
-        {"face section damaged", FLIP_BYTE, face_sec + 3, 0, 0, CM_E_CRC, -2},
-        {"trailer damaged", FLIP_BYTE, -1, 0, 0, CM_E_CRC, (int64_t)L - 4},
+        {"face section damaged", FLIP_BYTE, l.off[3] + 3, 0, 0, CM_E_CRC, -2}, /* its own CRC */
         {"a byte too many", APPEND, 0, 0, 0, CM_E_RANGE, L},
-        {"over this build's face limit", SET_U32, need_faces_at, CM_MAX_FACES + 1u, 1, CM_E_LIMIT, need_faces_at},
-        {"face section rewritten with valid CRCs", GARBLE_SECTION, 3, 0, 1, CM_OK, -1},
-        {"edge section rewritten with valid CRCs", GARBLE_SECTION, 1, 0, 1, CM_OK, -1},
-        {"vertex section rewritten with valid CRCs", GARBLE_SECTION, 0, 0, 1, CM_OK, -1},
+    };
+    /* format 4: H a varint at byte 6, the section lengths varints (their offsets follow), no CRC
+       per section (the file's, checked first, covers them) */
+    uint32_t colr_len_at = 0;
+    if (l.compact) {
+        uint32_t at = CM_FMT_COMPACT_AT_H;
+        uint64_t v;
+        for (uint32_t k = 0; k < 1 + 3 + CM_LIMIT_COUNT + CM_SEC_COUNT - 1; k++)
+            assert_true(cm_fmt_get_varint(good, H, &at, &v));
+        colr_len_at = at; /* H, flags, N, the needs, S, four lengths: the fifth (COLR) is next */
+        assert_true(good[colr_len_at] < 0x7F);
+    }
+    const damage compact_cases[] = {
+        {"cut inside the body", CUT, (int64_t)L - 9, 0, 0, CM_E_TRUNCATED, (int64_t)L - 9},
+        {"cut before the trailer", CUT, (int64_t)L - 4, 0, 0, CM_E_TRUNCATED, (int64_t)L - 4},
+        {"header damaged", FLIP_BYTE, l.need_at[0], 0, 0, CM_E_CRC, (int64_t)H - 4}, /* a need */
+        {"header length below any header", SET_U8, CM_FMT_COMPACT_AT_H, 1, 0, CM_E_FORMAT, CM_FMT_COMPACT_AT_H},
+        {"header length past the bound", SET_U32, CM_FMT_COMPACT_AT_H, 0x7FFFFFFFu, 0, CM_E_FORMAT,
+         CM_FMT_COMPACT_AT_H},
+        {"a section longer than the file", SET_U8, colr_len_at, 0x7F, 1, CM_E_TRUNCATED, L},
+        {"face section damaged", FLIP_BYTE, l.off[3] + 3, 0, 0, CM_E_CRC, (int64_t)L - 4}, /* the file's CRC */
+        {"a byte too many", APPEND, 0, 0, 0, CM_E_RANGE, L},
     };
     uint8_t *buf = malloc(good_len + 16);
     assert_non_null(buf);
-    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        const damage *d = &cases[c];
-        size_t n = good_len;
-        memcpy(buf, good, good_len);
-        size_t at = d->where < 0 ? (size_t)((int64_t)n + d->where) : (size_t)d->where;
-        uint32_t seed = 12345u + (uint32_t)c;
-        switch (d->kind) {
-        case CUT: n = at; break;
-        case FLIP_BYTE: buf[at] ^= 0x5A; break;
-        case SET_U8: buf[at] = (uint8_t)d->value; break;
-        case SET_U32: cm_put_u32(buf + at, d->value); break;
-        case APPEND: buf[n++] = 0; break;
-        case GARBLE_SECTION: {
-            uint32_t so = sec_off(buf, (int)d->where), sl = sec_len(buf, (int)d->where);
-            for (uint32_t i = 0; i < sl; i++)
-                buf[so + i] = (uint8_t)(test_rand(&seed) * 256);
-            break;
-        }
-        }
-        if (d->reseal)
-            reseal(buf, n);
-        /* fed whole, and fed in 3-byte pieces: the same verdict */
-        for (int pass = 0; pass < 2; pass++) {
-            cm_status st;
-            cm_err e = decode_bytes(buf, n, pass ? 3 : (n ? n : 1), &st);
-            if (d->kind == GARBLE_SECTION) {
-                /* random bytes with valid CRCs: any clear refusal, located inside that section */
-                uint32_t so = sec_off(buf, (int)d->where), sl = sec_len(buf, (int)d->where);
-                if (e == CM_OK)
-                    continue; /* random bits may happen to decode to a valid model; then it must also tessellate */
-                if (st.offset == CM_NO_OFFSET || st.offset < so || st.offset > so + sl + 8)
-                    fail_msg("%s: %s at offset %u, outside the section [%u, %u)", d->name, cm_err_name(e), st.offset, so,
-                             so + sl);
-                assert_non_null(st.where);
-                continue;
-            }
-            if (e != d->want)
-                fail_msg("%s: %s (%s), expected %s", d->name, cm_err_name(e), st.where ? st.where : "?",
-                         cm_err_name(d->want));
-            if (d->want_offset >= 0 && st.offset != (uint32_t)d->want_offset)
-                fail_msg("%s: offset %u, expected %lld", d->name, st.offset, (long long)d->want_offset);
-            if (d->want == CM_E_CRC && d->want_offset == -2 && !(st.offset >= face_sec && st.offset < L))
-                fail_msg("%s: CRC failure reported at %u, not in the section", d->name, st.offset);
-            if (d->want == CM_E_LIMIT) {
-                assert_int_equal(st.limit, CM_LIMIT_MAX_FACES);
-                assert_int_equal(st.need, CM_MAX_FACES + 1u);
-                assert_int_equal(st.have, CM_MAX_FACES);
-                /* refused before the body: a decoder fed only the header says the same */
-                cm_status st2;
-                assert_err(decode_bytes(buf, H, H, &st2), CM_E_LIMIT);
-            }
-            assert_non_null(st.where);
-        }
-    }
+    size_t c = 0;
+    for (size_t i = 0; i < sizeof shared_cases / sizeof shared_cases[0]; i++)
+        check_damage(&shared_cases[i], buf, c++, &l);
+    if (l.compact)
+        for (size_t i = 0; i < sizeof compact_cases / sizeof compact_cases[0]; i++)
+            check_damage(&compact_cases[i], buf, c++, &l);
+    else
+        for (size_t i = 0; i < sizeof fixed_cases / sizeof fixed_cases[0]; i++)
+            check_damage(&fixed_cases[i], buf, c++, &l);
     free(buf);
 }
 
@@ -744,6 +876,7 @@ int main(void)
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test(test_refine_skips_passed_pieces),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
+        cmocka_unit_test_setup_teardown(test_damaged_files, setup_good3, teardown_good),
     };
     return cmocka_run_group_tests_name("roundtrip", tests, NULL, NULL);
 }

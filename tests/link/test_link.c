@@ -4,7 +4,9 @@
  * cm_link_term in a temporary directory) and link_send over a socketpair,
  * through the fault decorator.  TAP output.
  *
- *   test_link SEED.cmzf     (a decode fuzz seed: one chunking byte, then a valid .cmz)
+ *   test_link SEED.cmzf     (a decode fuzz seed: one chunking byte, then a valid .cmz; make
+ *                            check-link gives a format 3 one: two tests edit its header by the
+ *                            fixed offsets of format 3's, and the link carries any format alike)
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>

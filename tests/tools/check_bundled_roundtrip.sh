@@ -13,10 +13,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 n=0 fail=0
 size() { stat -c %s "$1" 2>/dev/null || echo 0; }
-# MAX_TRIS's id: its line in --limits (the need table's order); its need is the u32 at byte
-# 60 + 4 id (CM_HDR_NEEDS + 4 i, decoder/include/cm/cm_format.h)
+# MAX_TRIS's id: its line in --limits (the need table's order); its need read from the header by
+# cmz_header.py (format 4's varints or format 3's u32 at 60 + 4 id)
 tris_id=$("$cmz" --limits | awk 'NR > 2 && $1 == "MAX_TRIS" { print NR - 3; exit }')
-declared_tris() { od -An -tu4 -j $((60 + 4 * tris_id)) -N4 "$1" | tr -d ' '; }
+declared_tris() { python3 "$(dirname "$0")/cmz_header.py" need "$1" "$tris_id"; }
 for f in "$@"; do
     n=$((n + 1))
     b=$(basename "$f")

@@ -22,6 +22,9 @@
  *   cmz-table       the section table: the count of sections or of needs, or an entry's tag, offset
  *                   or length set to an extreme value (the header's length kept consistent or not), CRCs
  *                   fixed
+ * Format 4's compact header (varints): cmz-header sets a byte of it, cmz-needs a need and
+ * cmz-table the count of sections or of needs or a section's length (or adds empty sections), the
+ * varints written again around the change and H with them.
  *
  * Deterministic: the same SEED gives the same file.  Exit status 0, or 2 on a usage or I/O error.
  */
@@ -229,31 +232,126 @@ static void iges_mutate(const char *fam, buf *b)
 
 /* ---- .cmz ---- */
 
+/* format 4: the header's varints after H (flags, N, needs, S, lengths, grid, tolerances), 0 if they
+   do not parse */
+#define MAX_FIELDS 600
+static int compact_fields(const buf *b, uint32_t *H, uint64_t *f, uint32_t *nf)
+{
+    uint32_t at = CM_FMT_COMPACT_AT_H;
+    uint64_t h;
+    if (b->n < 12 || b->p[CM_HDR_MAJOR] < CM_FMT_COMPACT_MAJOR || !cm_fmt_get_varint(b->p, (uint32_t)b->n, &at, &h) ||
+        h > b->n || h < at + 4)
+        return 0;
+    *H = (uint32_t)h;
+    *nf = 0;
+    while (at < h - 4 && *nf < MAX_FIELDS)
+        if (!cm_fmt_get_varint(b->p, (uint32_t)h - 4, &at, &f[(*nf)++]))
+            return 0;
+    return at == h - 4;
+}
+
+/* the header H bytes long replaced by one of the fields f (H anew, its CRC left to fix_crcs) */
+static void compact_emit(buf *b, uint32_t H, const uint64_t *f, uint32_t nf)
+{
+    static uint8_t body[MAX_FIELDS * CM_FMT_VARINT_MAX];
+    uint32_t nb = 0;
+    for (uint32_t k = 0; k < nf; k++)
+        nb += cm_fmt_put_varint(body + nb, f[k]);
+    uint8_t hb[CM_FMT_VARINT_MAX];
+    uint32_t nh = 0;
+    for (uint32_t lh = 1; lh <= 5 && !nh; lh++)
+        if (cm_fmt_put_varint(hb, CM_FMT_COMPACT_AT_H + lh + nb + 4u) == lh)
+            nh = CM_FMT_COMPACT_AT_H + lh + nb + 4u;
+    size_t rest = b->n - H, n = nh + rest;
+    uint8_t *p = malloc(n);
+    memcpy(p, b->p, CM_FMT_COMPACT_AT_H);
+    uint32_t lh = cm_fmt_put_varint(p + CM_FMT_COMPACT_AT_H, nh);
+    memcpy(p + CM_FMT_COMPACT_AT_H + lh, body, nb);
+    memcpy(p + nh, b->p + H, rest);
+    free(b->p);
+    b->p = p;
+    b->n = b->cap = n;
+}
+
+/* the header's length, either format (0 if it is no use) */
+static uint32_t header_len(const buf *b)
+{
+    if (b->n >= 12 && b->p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR) {
+        uint32_t at = CM_FMT_COMPACT_AT_H;
+        uint64_t h;
+        return cm_fmt_get_varint(b->p, (uint32_t)b->n, &at, &h) && h <= b->n ? (uint32_t)h : 0;
+    }
+    return b->n >= CM_FMT_FIXED_HEADER ? cm_get_u32(b->p + CM_HDR_LENGTH) : 0;
+}
+
 /* every CRC the file holds made right for its present bytes */
 static void fix_crcs(buf *b)
 {
     if (b->n < CM_FMT_FIXED_HEADER + 8)
         return;
-    uint32_t H = cm_get_u32(b->p + CM_HDR_LENGTH);
-    if (H < CM_FMT_FIXED_HEADER + 4 || H > b->n)
+    uint32_t H = header_len(b);
+    if (H < 16 || H > b->n)
         return;
-    for (uint32_t s = 0; s < b->p[CM_HDR_NSECTIONS]; s++) {
-        uint32_t at = cm_fmt_entry_at(b->p[CM_HDR_NLIMITS], s);
-        if (at + CM_FMT_SECTION_ENTRY > H - 4)
-            break;
-        uint32_t off = cm_get_u32(b->p + at + CM_ENT_OFFSET), len = cm_get_u32(b->p + at + CM_ENT_LENGTH);
-        if (off <= b->n && len <= b->n - off)
-            cm_put_u32(b->p + at + CM_ENT_CRC, cm_crc32(b->p + off, len));
+    if (b->p[CM_HDR_MAJOR] < CM_FMT_COMPACT_MAJOR) {
+        if (H < CM_FMT_FIXED_HEADER + 4)
+            return;
+        for (uint32_t s = 0; s < b->p[CM_HDR_NSECTIONS]; s++) {
+            uint32_t at = cm_fmt_entry_at(b->p[CM_HDR_NLIMITS], s);
+            if (at + CM_FMT_SECTION_ENTRY > H - 4)
+                break;
+            uint32_t off = cm_get_u32(b->p + at + CM_ENT_OFFSET), len = cm_get_u32(b->p + at + CM_ENT_LENGTH);
+            if (off <= b->n && len <= b->n - off)
+                cm_put_u32(b->p + at + CM_ENT_CRC, cm_crc32(b->p + off, len));
+        }
     }
     cm_put_u32(b->p + H - 4, cm_crc32(b->p, H - 4));
     cm_put_u32(b->p + b->n - 4, cm_crc32(b->p, b->n - 4));
+}
+
+/* format 4's cmz-table and cmz-needs: one varint field (a count, a length, a need) changed */
+static void compact_mutate(const char *fam, buf *b)
+{
+    static uint64_t f[MAX_FIELDS + 256];
+    uint32_t H, nf;
+    if (!compact_fields(b, &H, f, &nf) || nf < 3 || f[1] + 3 > nf)
+        return;
+    uint32_t N = (uint32_t)f[1], iS = 2 + N;
+    static const uint64_t vals[] = {0, 1, 4, 6, 24, 200, 255, 256, 0xffffffffu, 0x7fffffffu, 0x10000u, 1ull << 40};
+    uint64_t v = vals[pick(12)];
+    if (strcmp(fam, "cmz-needs") == 0) {
+        static const uint64_t nv[] = {0, 1, 0xffffffffu, 0x100000000ull};
+        if (N)
+            f[2 + pick(N)] = nv[pick(4)];
+    } else {
+        int what = (int)pick(4);
+        if (what == 0)
+            f[iS] = v; /* the section count */
+        else if (what == 1)
+            f[1] = v; /* the need count */
+        else if (what == 2 && iS + 1 + CM_SEC_COUNT <= nf) /* a length: extreme, or off by a little */
+            f[iS + 1 + pick(CM_SEC_COUNT)] = pick(2) ? v : f[iS + 1 + pick(CM_SEC_COUNT)] + pick(64);
+        else if (iS < nf && f[iS] == CM_SEC_COUNT) {
+            /* empty sections after the five: their lengths 0, the count with them */
+            uint32_t extra = pick(2) ? 1 : 1 + (uint32_t)pick(250 - CM_SEC_COUNT), at = iS + 1 + CM_SEC_COUNT;
+            memmove(f + at + extra, f + at, (nf - at) * sizeof *f);
+            memset(f + at, 0, extra * sizeof *f);
+            nf += extra;
+            f[iS] = CM_SEC_COUNT + extra;
+        }
+    }
+    compact_emit(b, H, f, nf);
+    fix_crcs(b);
 }
 
 static void cmz_mutate(const char *fam, buf *b)
 {
     if (b->n < 80)
         return;
-    uint32_t H = cm_get_u32(b->p + CM_HDR_LENGTH);
+    uint32_t H = header_len(b);
+    if (b->p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR && (strcmp(fam, "cmz-table") == 0 || strcmp(fam, "cmz-needs") == 0)) {
+        compact_mutate(fam, b);
+        return;
+    }
     if (strcmp(fam, "cmz-truncate") == 0) {
         b->n = pick(b->n);
     } else if (strcmp(fam, "cmz-flip") == 0 || strcmp(fam, "cmz-flip-crc") == 0) {

@@ -39,6 +39,7 @@
 
 typedef struct cm_dec_section {
     uint8_t tag;
+    uint8_t has_crc; /* formats 1-3: each section has a CRC; format 4 leaves it to the file's */
     uint32_t off, len, crc;
 } cm_dec_section;
 

@@ -21,12 +21,13 @@
 #define CM_FMT_MAGIC1 'C'
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
-#define CM_FMT_VERSION_MAJOR 3     /* the newest this reader knows (3: predicted curve coding) */
+#define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
 #define CM_FMT_VERSION_MINOR 0     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
 #define CM_FMT_PREDICT_MAJOR 3     /* files of 3.0 on code curves and knots predicted (cm_predict.h) */
+#define CM_FMT_COMPACT_MAJOR 4     /* files of 4.0 on have the compact header (cm_fmt_compact_pack) */
 #define CM_FMT_VERSION_MIN_MAJOR 1 /* oldest major version this reader accepts */
 
 #define CM_FMT_FIXED_HEADER 60u   /* bytes before the need table */
@@ -72,7 +73,42 @@ typedef struct cm_fmt_header {
 void cm_fmt_header_pack(uint8_t *b, const cm_fmt_header *h);
 /** Read the fixed header from b[0..CM_FMT_FIXED_HEADER) (nothing checked: the reader does that). */
 void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
-/** Offset of limit i's need, and of section entry s, in a header with nlimits needs. */
+/*
+ * Format 4's compact header (docs/FORMAT.md, "Header, format 4"): magic, major, minor as above, then
+ * unsigned LEB128 varints (signed ones zigzag-mapped): H (the header's length, its CRC included), flags,
+ * N and the N needs, S and the S section lengths (the sections back to back after the header, so
+ * their offsets and the file's length follow; no CRC per section: the file's CRC, checked before
+ * any section is read, covers them), the grid exponent e, the grid origin as three multiples of the
+ * grid step q = 2^e, the chordal tolerance as a multiple m >= 1 of q, the rebuild tolerance as a
+ * multiple of 2^-24; then the u32 CRC of the bytes before it.  A 10 mm cube's header: 58 bytes
+ * where format 3's fixed one takes 248.
+ */
+#define CM_FMT_COMPACT_AT_H 6u   /* offset of the varint H */
+#define CM_FMT_VARINT_MAX 10u    /* bytes of the longest varint (64 bits) */
+#define CM_FMT_REL_TOL_ONE (1u << 24) /* the rebuild tolerance's unit in format 4: 2^-24 */
+/** Append v as an unsigned LEB128 varint at b; returns its bytes (1..CM_FMT_VARINT_MAX). */
+uint32_t cm_fmt_put_varint(uint8_t *b, uint64_t v);
+/** Read a varint from b[*at..end) into *v, advancing *at; 0 when it does not end before `end` or
+    runs past 64 bits (then *at is where it failed). */
+int cm_fmt_get_varint(const uint8_t *b, uint32_t end, uint32_t *at, uint64_t *v);
+static inline uint64_t cm_fmt_zigzag(int64_t v) { return v < 0 ? ((uint64_t)(-(v + 1)) << 1) | 1u : (uint64_t)v << 1; }
+static inline int64_t cm_fmt_unzigzag(uint64_t u) { return (u & 1u) ? -(int64_t)(u >> 1) - 1 : (int64_t)(u >> 1); }
+/** The grid step 2^e mm (e in -60..20, exact). */
+double cm_fmt_grid_step(int q_exp);
+/**
+ * Write format 4's header into b (room for CM_FMT_MAX_HEADER bytes) for h (its header_len and
+ * file_len are set here), nneeds needs and h->nsections section lengths; the origin must be a
+ * multiple of the grid step and the chordal tolerance a positive one (cm_fmt_compact_tess).
+ * Returns the header's length, CRC included, or 0 when it would pass CM_FMT_MAX_HEADER.
+ */
+uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, const uint32_t *sec_len);
+/** The needs a header of any format in b[0..n) declares (nothing checked but that they are in b):
+    the first min(count, cap) of them into need, their number into *count; 0 when they are not in b. */
+int cm_fmt_header_needs(const uint8_t *b, uint32_t n, uint32_t *need, uint32_t cap, uint32_t *count);
+/** The chordal tolerance format 4 can say nearest to tess: a multiple m >= 1 of the grid step. */
+double cm_fmt_compact_tess(double tess, int q_exp);
+
+/** Offset of limit i's need, and of section entry s, in a header with nlimits needs (formats 1-3). */
 static inline uint32_t cm_fmt_need_at(uint32_t i) { return CM_HDR_NEEDS + 4u * i; }
 static inline uint32_t cm_fmt_entry_at(uint32_t nlimits, uint32_t s)
 {

@@ -15,6 +15,12 @@
  *
  * Decoding never reads outside its buffer: past the end it reads zeros and
  * sets `overrun`, which the caller turns into CM_E_TRUNCATED.
+ *
+ * Format 4 trims each stream (cm_ac_enc_finish_trimmed): the first byte, which
+ * this coder always writes as 0, is left out, and the flush ends on a value
+ * whose last bytes are zeros, which are left out too; its reader
+ * (cm_ac_dec_init_trimmed) reads up to CM_AC_TRIM_PAD zeros past the end
+ * before it calls that an overrun.  Four bytes fewer per section.
  */
 #ifndef CM_ARITH_H
 #define CM_ARITH_H
@@ -59,16 +65,24 @@ void cm_ac_enc_uint(cm_ac_enc *e, cm_ac_int *m, uint64_t v);
 void cm_ac_enc_sint(cm_ac_enc *e, cm_ac_int *m, int64_t v);
 /** Flush; returns the number of bytes written (0 and overflow set if cap was too small). */
 size_t cm_ac_enc_finish(cm_ac_enc *e);
+/** Flush format 4's trimmed stream (see above); returns its bytes, which may be 0 (overflow: 0 and
+    overflow set, as above). */
+size_t cm_ac_enc_finish_trimmed(cm_ac_enc *e);
 
 /* ---- decoder (terminal) ---- */
 typedef struct cm_ac_dec {
     const uint8_t *buf;
     size_t len, pos;
     uint32_t range, code;
+    size_t pad;  /* zeros read past the end that are still the stream's (format 4: CM_AC_TRIM_PAD) */
     int overrun; /* tried to read past the end */
 } cm_ac_dec;
 
+#define CM_AC_TRIM_PAD 4 /* the trailing zero bytes a trimmed stream may leave out */
+
 void cm_ac_dec_init(cm_ac_dec *d, const uint8_t *buf, size_t len);
+/** The reader of a trimmed stream (format 4). */
+void cm_ac_dec_init_trimmed(cm_ac_dec *d, const uint8_t *buf, size_t len);
 unsigned cm_ac_dec_bit(cm_ac_dec *d, cm_ac_prob *p);
 uint32_t cm_ac_dec_direct(cm_ac_dec *d, unsigned nbits);
 uint64_t cm_ac_dec_uint(cm_ac_dec *d, cm_ac_int *m);
