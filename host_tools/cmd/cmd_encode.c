@@ -111,8 +111,10 @@ int cmd_encode(int argc, char **argv)
             o.g1fit = 0;
         } else if (strcmp(a, "--no-turning-basis") == 0) {
             o.turning_basis = 0;
-        } else if (strcmp(a, "--budget-steps") == 0) {
+        } else if (strcmp(a, "--budget-steps") == 0) { /* the default since format 4; still accepted */
             o.budget_steps = 1;
+        } else if (strcmp(a, "--no-budget-steps") == 0) {
+            o.budget_steps = 0;
         } else if (strcmp(a, "--format") == 0 && v) {
             if (parse_format(v, &o))
                 return EXIT_USAGE;

@@ -54,9 +54,9 @@ typedef struct encode_opts {
                                     0: format 2's coding, for terminals of format 2) */
     int compact_header;          /* with predicted: format 4's compact header (cm_fmt_compact_pack; default 1;
                                     0: format 3's fixed one, for terminals of format 3) */
-    int budget_steps;            /* with predicted: curves and vertices on steps of their own from the
-                                    tolerance budget (tx_coarsen.c; default 0: about 3 % smaller over
-                                    the corpus for twice the encode time where a face is kept) */
+    int budget_steps;            /* with predicted: curves as the fewest cubic points and on steps of their
+                                    own from the tolerance budget, the vertices on one (tx_coarsen.c;
+                                    default 1; 0: every point on the grid, as in the source) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     int measure_mesh;            /* measure each face's triangles against its source (face_report.mesh_dev;
                                     default 0: it costs a second tessellation and many projections) */
@@ -104,6 +104,7 @@ typedef struct encode_result {
     int faces_left_out; /* faces the encoder left out (model_leave_out_face: warned, in lm->left_out) */
     double q;          /* grid step (mm) */
     int edges_refit, surfs_refit; /* edges and kept surfaces re-approximated to fit the target profile */
+    int edges_reapproximated;     /* curves sent as fewer cubic points within their budget (budget steps) */
     double tess_asked, tess_used; /* recommended chordal tolerance (mm): asked (--tess), written (coarser
                                      when a target profile's tessellation limits needed it, issue 14.5) */
     size_t section_bytes[6];

@@ -66,6 +66,7 @@ typedef struct tx {
     unsigned char *fine; /* per curve mesh edge: 1 keeps it on the grid (it bounds a kept face;
                             enc_keep_fine_edges); NULL: none */
     int no_vstep;       /* 1: the vertices stay on the grid (a face is kept) */
+    int edges_reapproximated; /* curves sent as fewer cubic points within their budget (tx_coarsen.c) */
     int nverts, nedges, nfaces, nsurfs;
     int64_t (*vq)[3];   /* vertices in transmission order */
     tx_edge *edges;     /* in transmission order */
@@ -95,6 +96,8 @@ typedef struct tx {
  * (fit_board.c).  Returns 1 if c was replaced, 0 if not (c unchanged).
  */
 int enc_edge_refit(hcurve *c, int max_degree, int max_ctrl, double tol, cm_status *st);
+/* ... by_length: the samples and the checks at equal steps of the curve's length (tx_coarsen.c) */
+int enc_edge_refit_ex(hcurve *c, int max_degree, int max_ctrl, double tol, int by_length, cm_status *st);
 
 /*
  * Replace polynomial surface s by one of degree at most min(3, max_degree) per direction, at most
@@ -171,6 +174,8 @@ static inline int64_t tx_edge_pred(const tx_edge *X, int linear, int j, int k)
 
 /* the estimate of what one sint costs once the models have learnt (write_sections.c) */
 double enc_sint_bits(int64_t v);
+/* ... and of what curve X costs in EDGE, as sec_edge writes it (write_sections.c) */
+double enc_edge_bits(const tx_edge *X, int predicted);
 
 /*
  * Format 3's precision from the tolerance budget (tx_coarsen.c): the interior control points of
@@ -179,6 +184,11 @@ double enc_sint_bits(int64_t v);
  * is kept for.  Chooses the predictor too.  Nothing changes unless the options say format 3.
  */
 void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm);
+/* Before that (with the budget steps, off the grid's edges): curve c replaced by the uniform cubic
+   B-spline with the fewest control points, fewer than it has (or as many, where it is rational, of
+   another degree or on uneven knots), that stays within a sixteenth of the tolerance of a face its
+   size at every parameter; 1 if it was replaced. */
+int tx_reapproximate_curve(const tx *t, hcurve *c);
 /* After the methods are chosen: the edges of kept faces that were moved are marked to stay on the
    grid (every edge when `all`), the vertices too when a face is kept and they were moved.  Returns
    1 if anything is to change (the edges are then made again and the methods chosen again). */

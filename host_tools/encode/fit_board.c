@@ -126,21 +126,57 @@ static int eval(const hcurve *c, double u, cm_vec3 *p)
     return cm_curve_eval(&v, u, 0, p, &st) == CM_OK;
 }
 
-int enc_edge_refit(hcurve *c, int max_degree, int max_ctrl, double tol, cm_status *st)
+/* by chord length: the parameter of c (on [u0, u1]) at the fraction s of its length, interpolated in
+   a table of `nt` + 1 cumulative chord lengths len[] at equal parameter steps */
+static double u_at_length(const double *len, int nt, double u0, double u1, double s)
+{
+    double target = s * len[nt];
+    int lo = 0, hi = nt;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (len[mid] < target)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    double seg = len[hi] - len[lo], f = seg > 0 ? (target - len[lo]) / seg : 0.0;
+    return u0 + (u1 - u0) * ((double)lo + f) / (double)nt;
+}
+
+int enc_edge_refit_ex(hcurve *c, int max_degree, int max_ctrl, double tol, int by_length, cm_status *st)
 {
     int p = max_degree < 3 ? max_degree : 3, n = max_ctrl;
     if (p < 1 || n < p + 1 || n - 2 > CM_MAX_LSQ_UNKNOWNS || !(tol > 0))
         return 0;
     double u0, u1;
     hcurve_domain(c, &u0, &u1);
-    int m = SAMPLES_PER_CTRL * n, ok = 0;
+    int m = SAMPLES_PER_CTRL * n, ok = 0, nt = by_length ? 16 * CHECKS_PER_SAMPLE * m : 0;
     hcurve f = {0};
     double *smp = malloc((size_t)m * 3 * sizeof *smp), *ctrl = malloc((size_t)n * 3 * sizeof *ctrl);
-    if (!smp || !ctrl || hcurve_alloc(&f, p, n, 0, st) != CM_OK)
+    double *len = by_length ? malloc((size_t)(nt + 1) * sizeof *len) : NULL;
+    if (!smp || !ctrl || (by_length && !len) || hcurve_alloc(&f, p, n, 0, st) != CM_OK)
         goto done;
+    if (by_length) {
+        /* the fit follows the curve's length, not its parameter: a conic's or an uneven spline's
+           speed varies along it, which the same-parameter distance below would count as error */
+        cm_vec3 prev;
+        if (!eval(c, u0, &prev))
+            goto done;
+        len[0] = 0;
+        for (int k = 1; k <= nt; k++) {
+            cm_vec3 q;
+            if (!eval(c, u0 + (u1 - u0) * (double)k / (double)nt, &q))
+                goto done;
+            len[k] = len[k - 1] + cm_dist(prev, q);
+            prev = q;
+        }
+        if (!(len[nt] > 0))
+            goto done;
+    }
     for (int k = 0; k < m; k++) {
         cm_vec3 s;
-        if (!eval(c, u0 + (u1 - u0) * (double)k / (double)(m - 1), &s))
+        double frac = (double)k / (double)(m - 1);
+        if (!eval(c, by_length ? u_at_length(len, nt, u0, u1, frac) : u0 + (u1 - u0) * frac, &s))
             goto done;
         smp[3 * k] = s.x;
         smp[3 * k + 1] = s.y;
@@ -152,11 +188,13 @@ int enc_edge_refit(hcurve *c, int max_degree, int max_ctrl, double tol, cm_statu
         f.knots[i] = u0 + (u1 - u0) * f.knots[i];
     for (int i = 0; i < n; i++)
         f.ctrl[i] = cm_v3(ctrl[3 * i], ctrl[3 * i + 1], ctrl[3 * i + 2]);
-    /* within tol of the original everywhere it is looked at */
+    /* within tol of the original everywhere it is looked at (by length: the original at the
+       parameter where the fit's is, in proportion of length, a monotone matching of the two) */
     for (int k = 0; k < CHECKS_PER_SAMPLE * m; k++) {
-        double u = u0 + (u1 - u0) * (double)k / (double)(CHECKS_PER_SAMPLE * m - 1);
+        double frac = (double)k / (double)(CHECKS_PER_SAMPLE * m - 1), u = u0 + (u1 - u0) * frac;
         cm_vec3 a, b;
-        if (!eval(c, u, &a) || !eval(&f, u, &b) || !(cm_dist(a, b) <= tol))
+        if (!eval(c, by_length ? u_at_length(len, nt, u0, u1, frac) : u, &a) || !eval(&f, u, &b) ||
+            !(cm_dist(a, b) <= tol))
             goto done;
     }
     hcurve_free(c);
@@ -167,7 +205,13 @@ done:
     hcurve_free(&f);
     free(smp);
     free(ctrl);
+    free(len);
     return ok;
+}
+
+int enc_edge_refit(hcurve *c, int max_degree, int max_ctrl, double tol, cm_status *st)
+{
+    return enc_edge_refit_ex(c, max_degree, max_ctrl, tol, 0, st);
 }
 
 /* the net's rows (u direction) re-fitted to n_new control points of degree min(3, max_degree), in

@@ -24,13 +24,20 @@ void tx_face_fault(tx *t, int f, const char *why)
 }
 
 /* drop the transmitted edges and vertices (tx_build_edges makes them again) */
+static void tx_edge_free(tx_edge *X)
+{
+    free(X->kq);
+    free(X->cq);
+    free(X->wq);
+    X->kq = NULL;
+    X->cq = NULL;
+    X->wq = NULL;
+}
+
 void tx_free_edges(tx *t)
 {
-    for (int i = 0; i < t->nedges; i++) {
-        free(t->edges[i].kq);
-        free(t->edges[i].cq);
-        free(t->edges[i].wq);
-    }
+    for (int i = 0; i < t->nedges; i++)
+        tx_edge_free(&t->edges[i]);
     free(t->vq);
     free(t->edges);
     free(t->edge_tx);
@@ -159,6 +166,63 @@ static int is_segment(const hcurve *c, double tol)
     return 1;
 }
 
+/*
+ * X (its vertices and G1 flag set) as curve c on the grid: a line when c is the segment between
+ * distinct vertices, else c's degree, points, weights and knots quantised, then its own step
+ * (tx_coarsen_edge; `fine`: on the grid).  *why says why it cannot be sent, if so (its faces are
+ * then taken out); CM_E_NOMEM only fails.
+ */
+static cm_err tx_edge_fill(const tx *t, tx_edge *X, const hcurve *cv, int fine, const char **why, cm_status *st)
+{
+    const hcurve c = *cv;
+    if (X->v0 != X->v1 && (c.n == 2 || is_segment(&c, t->q))) {
+        X->kind = CM_EDGE_LINE;
+        X->p = 1;
+        X->n = 2;
+    } else {
+        X->kind = CM_EDGE_CURVE;
+        X->p = c.p;
+        X->n = c.n;
+    }
+    int n = X->n, p = X->p, interior = n - p - 1;
+    X->cq = malloc((size_t)n * sizeof *X->cq);
+    X->wq = malloc((size_t)n * sizeof *X->wq);
+    X->kq = malloc((size_t)(interior > 0 ? interior : 1) * sizeof *X->kq);
+    if (!X->cq || !X->wq || !X->kq)
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    memcpy(X->cq[0], t->vq[X->v0], sizeof X->cq[0]);
+    memcpy(X->cq[n - 1], t->vq[X->v1], sizeof X->cq[0]);
+    X->rational = 0;
+    X->uniform = 1;
+    for (int j = 0; j < n; j++)
+        X->wq[j] = WEIGHT_ONE;
+    if (X->kind == CM_EDGE_CURVE) {
+        for (int j = 1; j < n - 1; j++)
+            if (!quantise(t, c.ctrl[j], X->cq[j]))
+                *why = "an edge's control point lies off the coordinate grid";
+        if (c.w)
+            for (int j = 0; j < n; j++) {
+                X->wq[j] = quantise_weight(c.w[j], c.w[0]);
+                if (X->wq[j] == 0)
+                    *why = "an edge's weights cannot be sent (ratio out of range)";
+                if (X->wq[j] != WEIGHT_ONE)
+                    X->rational = 1;
+            }
+        for (int j = 1; j <= interior; j++) {
+            double k = c.knots[p + j];
+            X->kq[j - 1] = llround(k * (double)KNOT_ONE);
+            if (fabs(k - (double)j / (double)(interior + 1)) > 0.5 / (double)KNOT_ONE)
+                X->uniform = 0;
+        }
+        /* format 3: the curve's own step from the tolerance of a face its size, which no face it
+           bounds is below (the face holds the curve) */
+        if (!*why && t->o)
+            tx_coarsen_edge(t, X, fine,
+                            encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, ctrl_box_diag(t, X->cq, n)));
+    }
+    return CM_OK;
+}
+
 cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
 {
     cmesh *cm = &lm->mesh;
@@ -270,54 +334,33 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
             if (enc_edge_refit(&c, (int)L[CM_LIMIT_MAX_DEGREE].value, max_ctrl, tol, &rst))
                 t->edges_refit++;
         }
-        if (X->v0 != X->v1 && (c.n == 2 || is_segment(&c, t->q))) {
-            X->kind = CM_EDGE_LINE;
-            X->p = 1;
-            X->n = 2;
-        } else {
-            X->kind = CM_EDGE_CURVE;
-            X->p = c.p;
-            X->n = c.n;
-        }
-        int n = X->n, p = X->p, interior = n - p - 1;
-        X->cq = malloc((size_t)n * sizeof *X->cq);
-        X->wq = malloc((size_t)n * sizeof *X->wq);
-        X->kq = malloc((size_t)(interior > 0 ? interior : 1) * sizeof *X->kq);
-        if (!X->cq || !X->wq || !X->kq) {
+        int fine = t->fine && t->fine[order[i]];
+        const char *bad = NULL;
+        if ((err = tx_edge_fill(t, X, &c, fine, &bad, st)) != CM_OK) {
             hcurve_free(&c);
-            err = cm_fail(st, CM_E_NOMEM, "out of memory");
             break;
         }
-        memcpy(X->cq[0], t->vq[X->v0], sizeof X->cq[0]);
-        memcpy(X->cq[n - 1], t->vq[X->v1], sizeof X->cq[0]);
-        X->rational = 0;
-        X->uniform = 1;
-        for (int j = 0; j < n; j++)
-            X->wq[j] = WEIGHT_ONE;
-        if (X->kind == CM_EDGE_CURVE) {
-            for (int j = 1; j < n - 1; j++)
-                if (!quantise(t, c.ctrl[j], X->cq[j]))
-                    why[order[i]] = "an edge's control point lies off the coordinate grid";
-            if (c.w)
-                for (int j = 0; j < n; j++) {
-                    X->wq[j] = quantise_weight(c.w[j], c.w[0]);
-                    if (X->wq[j] == 0)
-                        why[order[i]] = "an edge's weights cannot be sent (ratio out of range)";
-                    if (X->wq[j] != WEIGHT_ONE)
-                        X->rational = 1;
-                }
-            for (int j = 1; j <= interior; j++) {
-                double k = c.knots[p + j];
-                X->kq[j - 1] = llround(k * (double)KNOT_ONE);
-                if (fabs(k - (double)j / (double)(interior + 1)) > 0.5 / (double)KNOT_ONE)
-                    X->uniform = 0;
+        /* precision from the budget: the curve as few cubic points within a sixteenth of its faces'
+           tolerance (tx_coarsen.c), sent that way where it costs fewer bits */
+        hcurve alt = {0};
+        cm_status ast;
+        cm_status_init(&ast);
+        if (!bad && t->o && !fine && X->kind == CM_EDGE_CURVE && hcurve_copy(&c, &alt, &ast) == CM_OK &&
+            tx_reapproximate_curve(t, &alt)) {
+            tx_edge A = {.v0 = X->v0, .v1 = X->v1, .g1 = X->g1};
+            const char *abad = NULL;
+            if ((err = tx_edge_fill(t, &A, &alt, 0, &abad, st)) == CM_OK && !abad &&
+                enc_edge_bits(&A, t->o->predicted) < enc_edge_bits(X, t->o->predicted)) {
+                tx_edge_free(X);
+                *X = A;
+                t->edges_reapproximated++;
+            } else {
+                tx_edge_free(&A);
             }
-            /* format 3: the curve's own step from the tolerance of a face its size, which no face it
-               bounds is below (the face holds the curve) */
-            if (!why[order[i]] && t->o)
-                tx_coarsen_edge(t, X, t->fine && t->fine[order[i]],
-                                encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, ctrl_box_diag(t, X->cq, n)));
         }
+        hcurve_free(&alt);
+        if (bad)
+            why[order[i]] = bad;
         hcurve_free(&c);
     }
     for (int f = 0; f < t->nfaces && err == CM_OK; f++) {

@@ -175,6 +175,26 @@ static double est_knot_bits(int predicted, int uniform, const int64_t *kq, int i
     return b;
 }
 
+double enc_edge_bits(const tx_edge *X, int predicted)
+{
+    double b = 2.0; /* kind, g1 */
+    if (X->kind == CM_EDGE_LINE)
+        return b;
+    b += est_uint_bits((uint64_t)(X->p - 1)) + est_uint_bits((uint64_t)(X->n - X->p - 1)) + 1.0;
+    b += est_knot_bits(predicted, X->uniform, X->kq, X->n - X->p - 1);
+    int linear = predicted ? X->linear : 0, step = predicted ? X->step : 0;
+    if (predicted && X->n > 2)
+        b += 1.0 + est_uint_bits((uint64_t)step);
+    for (int j = 1; j < X->n - 1; j++)
+        for (int k = 0; k < 3; k++)
+            b += est_sint_bits((X->cq[j][k] - tx_edge_pred(X, linear, j, k)) / ((int64_t)1 << step));
+    if (X->rational)
+        for (int j = 1; j < X->n; j++)
+            b += est_sint_bits(X->wq[j] - (predicted ? cm_pred_weight(j, X->wq[j - 1], j >= 2 ? X->wq[j - 2] : 0)
+                                                      : X->wq[j - 1]));
+    return b;
+}
+
 double enc_kept_surface_bits(const tx_surf *S, int predicted)
 {
     double b = 4 * est_uint_bits(3) + 1.0 + (predicted ? 1.0 + est_uint_bits(0) : 0.0);

@@ -594,6 +594,99 @@ static void test_net_on_a_step(void **state)
     encode_result_free(&r);
 }
 
+/* the model encoded with the default options but for budget_steps, gregory and (rel > 0) --tol rel */
+static void encode_opts_as(loaded_model *lm, int budget, int gregory, double rel, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    o.budget_steps = budget;
+    if (rel > 0) {
+        o.rel_tol = rel;
+        o.rel_set = 1;
+    }
+    if (!gregory) {
+        o.gregory = 0;
+        o.g1fit = 0;
+        o.nfill = 0;
+    }
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+/*
+ * Curves in their budget's terms (tx_reapproximate_curve): a disc's full circle (a rational
+ * quadratic of 9 points, its weights and double knots), the face held to 5 % of its box (--tol
+ * 0.05), is sent as a uniform cubic B-spline of no more points, no weights, no knots, every point of
+ * it within an eighth of the face's tolerance of the circle (a sixteenth for the fit, a sixteenth
+ * for the step), and the file is smaller than on the grid.  At the default tolerance (1e-3 of the
+ * diagonal) the circle would need more cubic points than its rational form costs (at 2 %: 11
+ * points, 208 bits against 197): it stays so.  A kept face's curves are not touched: the half cylinder kept (planes only) keeps its
+ * rational half circles exactly as they are on the grid.
+ */
+static void test_curves_reapproximated(void **state)
+{
+    (void)state;
+    const double R = 20.0, Z = 3.0;
+    igw w;
+    igw_init(&w);
+    igw_disc_144(&w, R, Z);
+    loaded_model lm;
+    load(&w, "disc", &lm);
+    encode_result rb, rg;
+    encode_opts_as(&lm, 1, 1, 0.0, &rb);
+    assert_int_equal(rb.edges_reapproximated, 0);
+    encode_result_free(&rb);
+    encode_opts_as(&lm, 1, 1, 0.05, &rb);
+    encode_opts_as(&lm, 0, 1, 0.05, &rg);
+    assert_int_equal(rb.faces_by_method[CM_METHOD_PLANE], 1);
+    assert_true(rb.edges_reapproximated >= 1);
+    assert_int_equal(rg.edges_reapproximated, 0);
+    if (!(rb.len < rg.len))
+        fail_msg("re-approximated: %zu bytes, on the grid: %zu", rb.len, rg.len);
+    decode_into(&dec3, rb.bytes, rb.len);
+    decode_into(&dec2, rg.bytes, rg.len);
+    assert_int_equal(dec3.model.nedges, 1);
+    const cm_edge *E = &dec3.model.edges[0], *G = &dec2.model.edges[0];
+    assert_int_equal(G->rational, 1);
+    assert_int_equal(E->rational, 0);
+    assert_int_equal(E->p, 3);
+    assert_true(E->nctrl <= G->nctrl);
+    double tol = 0.05 * 2.0 * R * sqrt(2.0), worst = 0;
+    cm_curve c;
+    cm_model_edge_curve(&dec3.model, 0, &c);
+    for (int k = 0; k <= 720; k++) {
+        cm_vec3 pt;
+        cm_status st;
+        cm_status_init(&st);
+        assert_ok(cm_curve_eval(&c, k / 720.0, 0, &pt, &st));
+        double d = hypot(hypot(pt.x, pt.y) - R, pt.z - Z);
+        worst = d > worst ? d : worst;
+    }
+    if (!(worst <= tol / 8.0))
+        fail_msg("the re-approximated circle strays %g mm, its budget %g mm", worst, tol / 8.0);
+    assert_true(worst > 0); /* not the circle: a cubic near it */
+    encode_result_free(&rb);
+    encode_result_free(&rg);
+    model_free(&lm);
+    /* kept: its edges as on the grid, bit for bit */
+    igw_init(&w);
+    igw_half_cylinder_120(&w, 10.0, 20.0);
+    load(&w, "half-cylinder", &lm);
+    encode_opts_as(&lm, 1, 0, 0.02, &rb);
+    encode_opts_as(&lm, 0, 0, 0.02, &rg);
+    assert_int_equal(rb.faces_by_method[CM_METHOD_KEEP], 1);
+    decode_into(&dec3, rb.bytes, rb.len);
+    decode_into(&dec2, rg.bytes, rg.len);
+    reach seen = {0};
+    assert_same_model(&dec3.model, &dec2.model, 0, &seen);
+    assert_true(seen.rational >= 2);
+    encode_result_free(&rb);
+    encode_result_free(&rg);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -601,6 +694,7 @@ int main(void)
         cmocka_unit_test(test_same_model_smaller_file),
         cmocka_unit_test(test_edges_written_here),
         cmocka_unit_test(test_net_on_a_step),
+        cmocka_unit_test(test_curves_reapproximated),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

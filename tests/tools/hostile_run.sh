@@ -4,12 +4,12 @@
 # The hostile-input run of README ("Hostile input"): every family of tests/tools/mutate.c, TRIES
 # variants of each seed model, each answered by the workstation (`cmz encode` for IGES, `cmz decode`
 # for .cmz) and, for .cmz, by the terminal's decoder (`cmz-decode`, terminal profile).  Every run
-# has 10 s (a hang is a failure).  Each answer is one of:
+# has 30 s (a hang is a failure).  Each answer is one of:
 #   accepted   exit 0, and the output is a whole file (magic and length check out)
 #   clean      exit 1-4 with a message that names the place in the input (IGES: "line N" or "DE N";
 #              .cmz: "byte N"); "unplaced" counts the clean errors that name no place
 #   crash      a signal, a sanitizer report or any other exit status
-#   hang       still running after 10 s
+#   hang       still running after 30 s
 #   data lost  the previous output file was changed by a failed run, or a temporary file was left
 # Prints a Markdown table; exits 1 if there is any crash, hang or lost data.  --tap: TAP lines too.
 set -u
@@ -17,7 +17,7 @@ CMZ=$1 DEC=$2 MUT=$3 OUT=$4 TRIES=$5 TAP=${6:-}
 here=$(cd "$(dirname "$0")/../.." && pwd)
 mkdir -p "$OUT"
 rm -rf "${OUT:?}"/run && mkdir -p "$OUT/run"
-LIMIT=10
+LIMIT=30
 
 iges_seeds=("$here"/tests/fuzz/corpus_iges/box_hole_144.igs "$here"/tests/fuzz/corpus_iges/box_hole_186.igs
     "$here"/tests/fuzz/corpus_iges/split_cylinder_144.igs "$here"/tests/fuzz/corpus_iges/bicubic_128_inch.igs
