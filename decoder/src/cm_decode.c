@@ -488,11 +488,27 @@ static cm_err sec_vert(reader *r)
     int64_t step = 1;
     if (m->predicted && (e = read_step(r, &ctx.step, &step, "vertex step")) != CM_OK)
         return e;
+    /* format 4: per coordinate a bit "one of the axis's recent values" and its place (cm_vcache),
+       else the difference as in format 3 */
+    int recent = d->version_major >= CM_FMT_COMPACT_MAJOR;
+    cm_vcache cache[3] = {{{0}, 0}, {{0}, 0}, {{0}, 0}};
     int64_t prev[3] = {0, 0, 0};
     for (uint32_t i = 0; i < m->nverts; i++) {
         for (int k = 0; k < 3; k++) {
-            if ((e = read_coord(r, &ctx.coord[k], prev[k], step, &d->vq[i][k], "vertex")) != CM_OK)
+            int slot = -1;
+            if (recent && cm_ac_dec_bit(&r->ac, &ctx.repeat[k])) {
+                uint64_t s = cm_ac_dec_uint(&r->ac, &ctx.slot[k]);
+                if (r->ac.overrun)
+                    return rfail(r, CM_E_TRUNCATED, "vertex");
+                if (s >= (uint64_t)cache[k].n)
+                    return rfail(r, CM_E_RANGE, "vertex repeat (past the recent values)");
+                slot = (int)s;
+                d->vq[i][k] = cache[k].v[slot];
+            } else if ((e = read_coord(r, &ctx.coord[k], prev[k], step, &d->vq[i][k], "vertex")) != CM_OK) {
                 return e;
+            }
+            if (recent)
+                cm_vcache_front(&cache[k], slot, d->vq[i][k]);
             prev[k] = d->vq[i][k];
         }
         m->verts[i] = grid_point(m, d->vq[i]);

@@ -12,6 +12,9 @@ void cm_vert_ctx_init(cm_vert_ctx *c)
     cm_ac_int_init(&c->count);
     ints(c->coord, 3);
     cm_ac_int_init(&c->step);
+    ints(c->slot, 3);
+    for (int k = 0; k < 3; k++)
+        cm_ac_prob_init(&c->repeat[k]);
 }
 
 void cm_edge_ctx_init(cm_edge_ctx *c)

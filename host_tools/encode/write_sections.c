@@ -61,10 +61,21 @@ static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     int step = t->o->predicted ? t->vstep : 0;
     if (t->o->predicted)
         cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
+    /* format 4: a coordinate met lately on its axis as its place in the list (cm_vcache) */
+    int recent = t->o->predicted && t->o->compact_header;
+    cm_vcache cache[3] = {{{0}, 0}, {{0}, 0}, {{0}, 0}};
     int64_t prev[3] = {0, 0, 0};
     for (int i = 0; i < t->nverts; i++)
         for (int k = 0; k < 3; k++) {
-            cm_ac_enc_sint(e, &ctx.coord[k], (t->vq[i][k] - prev[k]) / ((int64_t)1 << step));
+            int slot = recent ? cm_vcache_find(&cache[k], t->vq[i][k]) : -1;
+            if (recent)
+                cm_ac_enc_bit(e, &ctx.repeat[k], slot >= 0);
+            if (slot >= 0)
+                cm_ac_enc_uint(e, &ctx.slot[k], (uint64_t)slot);
+            else
+                cm_ac_enc_sint(e, &ctx.coord[k], (t->vq[i][k] - prev[k]) / ((int64_t)1 << step));
+            if (recent)
+                cm_vcache_front(&cache[k], slot, t->vq[i][k]);
             prev[k] = t->vq[i][k];
         }
 }

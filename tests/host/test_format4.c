@@ -1,6 +1,7 @@
 /*
- * test_format4.c - format 4's compact header and trimmed section streams (cm_fmt_compact_pack,
- * cm_ac_enc_finish_trimmed; docs/FORMAT.md): the varints and the coder exactly; synthetic IGES ->
+ * test_format4.c - format 4's compact header, trimmed section streams and vertices among recent
+ * values (cm_fmt_compact_pack, cm_ac_enc_finish_trimmed, cm_vcache; docs/FORMAT.md): the varints
+ * and the coder exactly; synthetic IGES ->
  * encoder -> .cmz as format 4 (the default) and as format 3 -> the terminal's decoder: the same
  * model but for the sub-step shift of the grid's origin, every face rebuilt the same way, the format
  * 4 file smaller by the header; and format 4 headers whose fields are out of place or range, each
@@ -17,6 +18,8 @@
 #include "cm/cm_arith.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
+#include "cm/cm_predict.h"
+#include "cm/cm_sections.h"
 #include "encode/encode.h"
 #include "igs_writer.h"
 #include "model_load.h"
@@ -197,7 +200,8 @@ static void check_both_ways(loaded_model *lm)
             i != CM_LIMIT_MAX_EDGE_SAMPLES)
             assert_int_equal(dec3.need[i], dec4.need[i]);
     assert_int_equal(dec4.need[CM_LIMIT_MAX_FILE_BYTES], r4.len);
-    /* format 3's header: 248 bytes; format 4's well under 100 for these; 4 bytes a stream */
+    /* format 3's header: 248 bytes; format 4's well under 100 for these; 4 bytes a stream; repeated
+       vertex coordinates */
     if (!(r4.len + 150 + 4 * CM_SEC_COUNT <= r3.len + 8))
         fail_msg("format 4: %zu bytes, format 3: %zu", r4.len, r3.len);
     encode_result_free(&r3);
@@ -269,9 +273,19 @@ static int teardown_good(void **state)
     return 0;
 }
 
+static size_t with_header_body(uint8_t *out, const uint64_t *f, uint32_t n, uint32_t H, uint32_t *field_at,
+                               const uint8_t *body_in, size_t body_len);
+
 /* the good file's body behind a header of the fields f (n of them, H computed unless `H` is not 0),
    every CRC valid; *field_at[i] the offset of field i.  Returns the length. */
 static size_t with_header(uint8_t *out, const uint64_t *f, uint32_t n, uint32_t H, uint32_t *field_at)
+{
+    return with_header_body(out, f, n, H, field_at, good + good_H, good_len - good_H);
+}
+
+/* ... with body_in (the sections and 4 bytes for the trailer) after it */
+static size_t with_header_body(uint8_t *out, const uint64_t *f, uint32_t n, uint32_t H, uint32_t *field_at,
+                               const uint8_t *body_in, size_t body_len)
 {
     uint8_t body[CM_FMT_MAX_HEADER * 2];
     uint32_t nb = 0, pos[CM_FMT_MAX_HEADER];
@@ -293,8 +307,7 @@ static size_t with_header(uint8_t *out, const uint64_t *f, uint32_t n, uint32_t 
         field_at[k] = CM_FMT_COMPACT_AT_H + lh + pos[k];
     uint32_t hl = CM_FMT_COMPACT_AT_H + lh + nb + 4u;
     cm_put_u32(out + hl - 4, cm_crc32(out, hl - 4));
-    size_t body_len = good_len - good_H;
-    memcpy(out + hl, good + good_H, body_len);
+    memcpy(out + hl, body_in, body_len);
     size_t total = hl + body_len;
     cm_put_u32(out + total - 4, cm_crc32(out, total - 4));
     return total;
@@ -415,6 +428,52 @@ static void test_hostile_headers(void **state)
 #undef FIELDS_WITH
 }
 
+/*
+ * Format 4's vertices: a coordinate sent as its place among the axis's recent values (cm_vcache).
+ * The box's vertices (two values per axis) decode as format 3's (test_same_model_smaller_file); a
+ * VERT section whose first coordinate names a place in the still empty list is refused by name,
+ * as is one past the values it holds.
+ */
+static void test_vertex_repeats(void **state)
+{
+    (void)state;
+    static uint8_t b[1 << 20], body[1 << 20], sec[4096];
+    static uint32_t at[CM_FMT_MAX_HEADER];
+    static uint64_t f[CM_FMT_MAX_HEADER];
+    const uint32_t iLen = 3 + CM_LIMIT_COUNT;
+    for (int past = 0; past < 2; past++) {
+        cm_ac_enc e;
+        cm_ac_enc_init(&e, sec, sizeof sec);
+        cm_vert_ctx c;
+        cm_vert_ctx_init(&c);
+        cm_ac_enc_uint(&e, &c.count, 8);
+        cm_ac_enc_uint(&e, &c.step, 0);
+        if (past) { /* one vertex by differences, then the second's x at place 1 of a list of 1 */
+            for (int k = 0; k < 3; k++) {
+                cm_ac_enc_bit(&e, &c.repeat[k], 0);
+                cm_ac_enc_sint(&e, &c.coord[k], 100 + k);
+            }
+        }
+        cm_ac_enc_bit(&e, &c.repeat[0], 1);
+        cm_ac_enc_uint(&e, &c.slot[0], (uint64_t)past);
+        size_t n = cm_ac_enc_finish_trimmed(&e);
+        memcpy(f, fields, nfields * sizeof *f);
+        size_t old = fields[iLen];
+        f[iLen] = n;
+        memcpy(body, sec, n);
+        memcpy(body + n, good + good_H + old, good_len - good_H - old);
+        size_t len = with_header_body(b, f, nfields, 0, at, body, n + good_len - good_H - old);
+        cm_status st;
+        cm_status_init(&st);
+        cm_dec_init(&dec4);
+        assert_ok(cm_dec_feed(&dec4, b, len, &st));
+        assert_err(cm_dec_finish(&dec4, &st), CM_E_RANGE);
+        assert_non_null(st.where);
+        if (!strstr(st.where, "vertex repeat"))
+            fail_msg("says \"%s\"", st.where);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -422,6 +481,7 @@ int main(void)
         cmocka_unit_test(test_trimmed_streams),
         cmocka_unit_test(test_same_model_smaller_file),
         cmocka_unit_test_setup_teardown(test_hostile_headers, setup_good, teardown_good),
+        cmocka_unit_test_setup_teardown(test_vertex_repeats, setup_good, teardown_good),
     };
     return cmocka_run_group_tests_name("format4", tests, NULL, NULL);
 }

@@ -53,4 +53,36 @@ static inline int64_t cm_pred_net(int quadratic, const int64_t (*q)[3], int nv, 
     return pred;
 }
 
+/*
+ * Format 4: the values a vertex coordinate took lately, per axis, most recent first.  CAD parts
+ * repeat their coordinates (a box has two per axis; a machined part a few dozen planes): a value met
+ * before is sent as its place in this list instead of a difference.  A value used or newly sent
+ * moves to the front; the list keeps CM_VCACHE of them.
+ */
+#define CM_VCACHE 64
+typedef struct cm_vcache {
+    int64_t v[CM_VCACHE];
+    int n;
+} cm_vcache;
+
+/* the place of v in the list, or -1 */
+static inline int cm_vcache_find(const cm_vcache *c, int64_t v)
+{
+    for (int i = 0; i < c->n; i++)
+        if (c->v[i] == v)
+            return i;
+    return -1;
+}
+
+/* entry i (< n) moved to the front; a new value (i = -1) put there, the last dropped if full */
+static inline void cm_vcache_front(cm_vcache *c, int i, int64_t v)
+{
+    if (i < 0) {
+        i = c->n < CM_VCACHE ? c->n++ : CM_VCACHE - 1;
+    }
+    for (; i > 0; i--)
+        c->v[i] = c->v[i - 1];
+    c->v[0] = v;
+}
+
 #endif /* CM_PREDICT_H */

@@ -14,6 +14,8 @@
 typedef struct cm_vert_ctx {
     cm_ac_int count, coord[3];
     cm_ac_int step; /* format 3: the exponent of the vertices' step */
+    cm_ac_prob repeat[3]; /* format 4: the coordinate is one of the axis's recent values ... */
+    cm_ac_int slot[3];    /* ... this one (cm_vcache) */
 } cm_vert_ctx;
 
 /* EDGE: count; per edge its vertex references, G1 bit, kind, and a curve's degree, size, knots,
