@@ -63,7 +63,7 @@ static void usage(FILE *f)
             "      cheaper, and each curve and the vertices on a step of their own within\n"
             "      the same share; the edges of kept faces stay as they are and the methods\n"
             "      are chosen again on them.  --no-budget-steps: every point on the grid, as\n"
-            "      in the source (about 15 %% larger over the corpus, a third faster).\n"
+            "      in the source (about 19 %% larger over the corpus, a quarter less time).\n"
             "      --profile refuses a file the\n"
             "      named board profile (terminal, host, tiny) cannot load; first, curves and kept\n"
             "      surfaces over its degree or control points are re-approximated within their\n"

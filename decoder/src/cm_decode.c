@@ -211,7 +211,7 @@ static cm_err parse_compact(cm_decoder *d, cm_status *st, header_view *v)
     if ((e = header_varint(d, st, &at, 255, &x, &v->at_nlimits, "need count")) != CM_OK)
         return e;
     v->h.nlimits = (uint8_t)x;
-    v->at_nsec = v->at_nlimits; /* refined below; a short need table is refused at its count */
+    /* a short need table is refused at its count, before its needs are read as other fields */
     if (v->h.nlimits < CM_FMT_MIN_NEEDS)
         return fail(d, st, CM_E_FORMAT, v->at_nlimits, "need table shorter than the 25 needs of format 1.0");
     for (uint32_t i = 0; i < v->h.nlimits; i++) {

@@ -28,7 +28,8 @@ void cm_put_f64(uint8_t *p, double v)
     }
 }
 
-void cm_fmt_header_pack(uint8_t *b, const cm_fmt_header *h)
+/* the six bytes every version starts with: magic, major, minor */
+static void put_magic_version(uint8_t *b, const cm_fmt_header *h)
 {
     b[CM_HDR_MAGIC + 0] = CM_FMT_MAGIC0;
     b[CM_HDR_MAGIC + 1] = CM_FMT_MAGIC1;
@@ -36,6 +37,11 @@ void cm_fmt_header_pack(uint8_t *b, const cm_fmt_header *h)
     b[CM_HDR_MAGIC + 3] = CM_FMT_MAGIC3;
     b[CM_HDR_MAJOR] = h->major;
     b[CM_HDR_MINOR] = h->minor;
+}
+
+void cm_fmt_header_pack(uint8_t *b, const cm_fmt_header *h)
+{
+    put_magic_version(b, h);
     cm_put_u16(b + CM_HDR_FLAGS, h->flags);
     cm_put_u32(b + CM_HDR_LENGTH, h->header_len);
     cm_put_u32(b + CM_HDR_FILE_LENGTH, h->file_len);
@@ -144,12 +150,7 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
     }
     if (H == 0 || H > CM_FMT_MAX_HEADER)
         return 0;
-    b[CM_HDR_MAGIC + 0] = CM_FMT_MAGIC0;
-    b[CM_HDR_MAGIC + 1] = CM_FMT_MAGIC1;
-    b[CM_HDR_MAGIC + 2] = CM_FMT_MAGIC2;
-    b[CM_HDR_MAGIC + 3] = CM_FMT_MAGIC3;
-    b[CM_HDR_MAJOR] = h->major;
-    b[CM_HDR_MINOR] = h->minor;
+    put_magic_version(b, h);
     uint32_t lh = cm_fmt_put_varint(hb, H);
     memmove(b + CM_FMT_COMPACT_AT_H + lh, body, n);
     memcpy(b + CM_FMT_COMPACT_AT_H, hb, lh);

@@ -155,10 +155,15 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 
 cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st);
 
-/* assemble header + sections + trailer; needs may be NULL (all zero) */
+/* format 4's compact header, trimmed streams and recent vertex values: the options say format 4 */
+static inline int enc_compact_header(const encode_opts *o)
+{
+    return o->predicted && o->compact_header;
+}
 /* the chordal tolerance the file can say nearest to tess (format 4: a multiple of the grid step), so
    that what the encoder measures the tessellation with is what the terminal reads */
 double enc_file_tess(const tx *t, double tess);
+/* assemble header + sections + trailer; needs may be NULL (all zero) */
 cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o, const uint32_t *need,
                          encode_result *r, cm_status *st);
 
@@ -185,10 +190,13 @@ double enc_edge_bits(const tx_edge *X, int predicted);
  */
 void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm);
 /* Before that (with the budget steps, off the grid's edges): curve c replaced by the uniform cubic
-   B-spline with the fewest control points, fewer than it has (or as many, where it is rational, of
-   another degree or on uneven knots), that stays within a sixteenth of the tolerance of a face its
-   size at every parameter; 1 if it was replaced. */
+   B-spline with the fewest control points (fewer than it has; as many where its degree differs; up
+   to half as many more where it is rational or on uneven knots) that stays within a sixteenth of the
+   tolerance of a face its size, matched at equal steps of length; 1 if it was replaced. */
 int tx_reapproximate_curve(const tx *t, hcurve *c);
+/* the tolerance (mm) of a face the size of curve c (the box of its control points holds it): no
+   face it bounds is held to less */
+double curve_face_tol(const tx *t, const hcurve *c);
 /* After the methods are chosen: the edges of kept faces that were moved are marked to stay on the
    grid (every edge when `all`), the vertices too when a face is kept and they were moved.  Returns
    1 if anything is to change (the edges are then made again and the methods chosen again). */

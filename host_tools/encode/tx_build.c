@@ -23,7 +23,6 @@ void tx_face_fault(tx *t, int f, const char *why)
     }
 }
 
-/* drop the transmitted edges and vertices (tx_build_edges makes them again) */
 static void tx_edge_free(tx_edge *X)
 {
     free(X->kq);
@@ -34,6 +33,7 @@ static void tx_edge_free(tx_edge *X)
     X->wq = NULL;
 }
 
+/* drop the transmitted edges and vertices (tx_build_edges makes them again) */
 void tx_free_edges(tx *t)
 {
     for (int i = 0; i < t->nedges; i++)
@@ -322,12 +322,7 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
            is (and the profile refuses the model, naming the limit) */
         const cm_limit_info *L = t->o ? t->o->target : NULL;
         if (L && (c.n > (int)L[CM_LIMIT_MAX_EDGE_CTRL].value || c.p > (int)L[CM_LIMIT_MAX_DEGREE].value)) {
-            cm_vec3 lo = c.ctrl[0], hi = c.ctrl[0];
-            for (int j = 1; j < c.n; j++) {
-                lo = cm_v3(fmin(lo.x, c.ctrl[j].x), fmin(lo.y, c.ctrl[j].y), fmin(lo.z, c.ctrl[j].z));
-                hi = cm_v3(fmax(hi.x, c.ctrl[j].x), fmax(hi.y, c.ctrl[j].y), fmax(hi.z, c.ctrl[j].z));
-            }
-            double tol = 0.25 * encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+            double tol = 0.25 * curve_face_tol(t, &c);
             int max_ctrl = c.n < (int)L[CM_LIMIT_MAX_EDGE_CTRL].value ? c.n : (int)L[CM_LIMIT_MAX_EDGE_CTRL].value;
             cm_status rst;
             cm_status_init(&rst);

@@ -95,23 +95,30 @@ void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm)
  * sixteenth of the tolerance of a face their size (the share the step above takes as well: the
  * rebuild, measured on what the terminal decodes, keeps the rest), most of them are a uniform cubic
  * B-spline of a few points, which costs no knots and no weights (a full circle: 9 points, 8 weights
- * and 3 double knots; within the budget of a small face, 9 to 13 cubic points and nothing else).  The fit is enc_edge_refit's (end
- * points kept, least squares over samples at the curve's own parameters, checked at four times as
- * many); the counts tried grow by a quarter, the first that holds wins.  A face the curve bounds
- * that then fails or is kept takes the curve back as it was (enc_keep_fine_edges).
- * Measured over the corpus with the budget steps: 501 967 -> 439 370 bytes (asitus__IAD_v3 -24 %,
- * occt__hammer -39 %, ovt__ship_kvlcc2 -11 %).
+ * and 3 double knots; at a loose tolerance a few cubic points and nothing else, at the default one
+ * more cubic points than its rational form costs, so the caller keeps the circle).  The fit is
+ * enc_edge_refit_ex's by length (end points kept, least squares over samples at equal steps of the
+ * curve's length, checked at four times as many against the curve at the same fraction of its
+ * length: by parameter, a conic's varying speed failed fits that were close); the counts tried grow
+ * by a quarter, the first that holds wins.  A face the curve bounds that then fails or is kept takes
+ * the curve back as it was (enc_keep_fine_edges).  Measured over the corpus with the budget steps:
+ * 501 967 -> 436 465 bytes (asitus__IAD_v3 -24 %, occt__hammer -47 %, ovt__ship_kvlcc2 -18 %).
  */
-int tx_reapproximate_curve(const tx *t, hcurve *c)
+double curve_face_tol(const tx *t, const hcurve *c)
 {
-    if (!t->o->predicted || !t->o->budget_steps || c->n <= 4)
-        return 0;
     cm_vec3 lo = c->ctrl[0], hi = c->ctrl[0];
     for (int j = 1; j < c->n; j++) {
         lo = cm_v3(fmin(lo.x, c->ctrl[j].x), fmin(lo.y, c->ctrl[j].y), fmin(lo.z, c->ctrl[j].z));
         hi = cm_v3(fmax(hi.x, c->ctrl[j].x), fmax(hi.y, c->ctrl[j].y), fmax(hi.z, c->ctrl[j].z));
     }
-    double tol = BUDGET_SHARE * encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+    return encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+}
+
+int tx_reapproximate_curve(const tx *t, hcurve *c)
+{
+    if (!t->o->predicted || !t->o->budget_steps || c->n <= 4)
+        return 0;
+    double tol = BUDGET_SHARE * curve_face_tol(t, c);
     /* fewer points; as many where the degree differs; half as many more where weights or uneven knots
        are saved (the caller sends the curve this way only where it costs fewer bits) */
     int uneven = 0, interior = c->n - c->p - 1;

@@ -62,7 +62,7 @@ static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     if (t->o->predicted)
         cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
     /* format 4: a coordinate met lately on its axis as its place in the list (cm_vcache) */
-    int recent = t->o->predicted && t->o->compact_header;
+    int recent = enc_compact_header(t->o);
     cm_vcache cache[3] = {{{0}, 0}, {{0}, 0}, {{0}, 0}};
     int64_t prev[3] = {0, 0, 0};
     for (int i = 0; i < t->nverts; i++)
@@ -338,7 +338,7 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
         cm_ac_enc_init(&e, buf, cap);
         fn(t, &e, lm);
         /* format 4 trims each stream (cm_arith.h), which may leave no byte at all */
-        size_t n = t->o->predicted && t->o->compact_header ? cm_ac_enc_finish_trimmed(&e) : cm_ac_enc_finish(&e);
+        size_t n = enc_compact_header(t->o) ? cm_ac_enc_finish_trimmed(&e) : cm_ac_enc_finish(&e);
         if (!e.overflow) {
             out->p = buf;
             out->len = n;
@@ -351,7 +351,7 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
 
 double enc_file_tess(const tx *t, double tess)
 {
-    return t->o->predicted && t->o->compact_header ? cm_fmt_compact_tess(tess, t->q_exp) : tess;
+    return enc_compact_header(t->o) ? cm_fmt_compact_tess(tess, t->q_exp) : tess;
 }
 
 /* assemble header + sections + trailer; needs may be NULL (all zero) */
@@ -364,7 +364,7 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     cm_err e = CM_OK;
     for (int s = 0; s < CM_SEC_COUNT && e == CM_OK; s++)
         e = run_section(fns[s], t, lm, &sec[s], st);
-    int compact = t->o->predicted && t->o->compact_header;
+    int compact = enc_compact_header(t->o);
     uint8_t hb[CM_FMT_MAX_HEADER];
     cm_fmt_header h = {0};
     uint32_t seclen[CM_SEC_COUNT];
@@ -409,57 +409,55 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
         e = cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK && total > 0x7fffffffu)
         e = cm_fail(st, CM_E_NOSPACE, "file larger than 2 GiB");
-    if (e == CM_OK && compact) {
-        memcpy(b, hb, H);
-        size_t off = H;
-        for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
-            memcpy(b + off, sec[s].p, sec[s].len);
-            off += sec[s].len;
-        }
-        cm_put_u32(b + total - 4, cm_crc32(b, total - 4));
-        free(r->bytes);
-        r->bytes = b;
-        r->len = total;
-    } else if (e == CM_OK) {
-        /* the oldest version that can say it: format 1 readers still load files of format 1's methods */
-        int major = 1, minor = 0;
-        for (int f = 0; f < t->nfaces; f++) {
-            const cm_method *M = cm_method_of((unsigned)t->method[f]);
-            if (M->since_major > major || (M->since_major == major && M->since_minor > minor)) {
-                major = M->since_major;
-                minor = M->since_minor;
+    if (e == CM_OK) {
+        if (compact) {
+            memcpy(b, hb, H);
+        } else {
+            /* the oldest version that can say it: format 1 readers still load files of format 1's methods */
+            int major = 1, minor = 0;
+            for (int f = 0; f < t->nfaces; f++) {
+                const cm_method *M = cm_method_of((unsigned)t->method[f]);
+                if (M->since_major > major || (M->since_major == major && M->since_minor > minor)) {
+                    major = M->since_major;
+                    minor = M->since_minor;
+                }
+                /* the joined-side layout came with format 2.3 */
+                if (M->layouts && t->layout[f] == CM_GREG_LAYOUT_JOINED && major == 2 && minor < 3)
+                    minor = 3;
+                /* the exact patches' turning basis came with format 2.6 (cm_egreg.h); a face none of whose
+                   sides turns rebuilds the same under 2.5 */
+                if (t->turning[f] && major == 2 && minor < CM_FMT_TURNING_MINOR)
+                    minor = CM_FMT_TURNING_MINOR;
             }
-            /* the joined-side layout came with format 2.3 */
-            if (M->layouts && t->layout[f] == CM_GREG_LAYOUT_JOINED && major == 2 && minor < 3)
-                minor = 3;
-            /* the exact patches' turning basis came with format 2.6 (cm_egreg.h); a face none of whose
-               sides turns rebuilds the same under 2.5 */
-            if (t->turning[f] && major == 2 && minor < CM_FMT_TURNING_MINOR)
-                minor = CM_FMT_TURNING_MINOR;
+            /* format 3 codes the model predicted, on steps from its tolerance budget (tx_coarsen.c) */
+            if (t->o->predicted) {
+                major = CM_FMT_PREDICT_MAJOR;
+                minor = 0;
+            }
+            h.major = (uint8_t)major;
+            h.minor = (uint8_t)minor;
+            h.header_len = (uint32_t)H;
+            h.file_len = (uint32_t)total;
+            cm_fmt_header_pack(b, &h);
+            for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+                cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);
+            size_t off = H;
+            for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+                uint8_t *ent = b + cm_fmt_entry_at(CM_LIMIT_COUNT, s);
+                ent[CM_ENT_TAG] = (uint8_t)(s + 1);
+                cm_put_u32(ent + CM_ENT_OFFSET, (uint32_t)off);
+                cm_put_u32(ent + CM_ENT_LENGTH, (uint32_t)sec[s].len);
+                cm_put_u32(ent + CM_ENT_CRC, cm_crc32(sec[s].p, sec[s].len));
+                off += sec[s].len;
+            }
+            cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
         }
-        /* format 3 codes the model predicted, on steps from its tolerance budget (tx_coarsen.c) */
-        if (t->o->predicted) {
-            major = CM_FMT_PREDICT_MAJOR;
-            minor = 0;
-        }
-        h.major = (uint8_t)major;
-        h.minor = (uint8_t)minor;
-        h.header_len = (uint32_t)H;
-        h.file_len = (uint32_t)total;
-        cm_fmt_header_pack(b, &h);
-        for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
-            cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);
+        /* the sections back to back after the header, then the file's CRC */
         size_t off = H;
         for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
-            uint8_t *ent = b + cm_fmt_entry_at(CM_LIMIT_COUNT, s);
-            ent[CM_ENT_TAG] = (uint8_t)(s + 1);
-            cm_put_u32(ent + CM_ENT_OFFSET, (uint32_t)off);
-            cm_put_u32(ent + CM_ENT_LENGTH, (uint32_t)sec[s].len);
-            cm_put_u32(ent + CM_ENT_CRC, cm_crc32(sec[s].p, sec[s].len));
             memcpy(b + off, sec[s].p, sec[s].len);
             off += sec[s].len;
         }
-        cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
         cm_put_u32(b + total - 4, cm_crc32(b, total - 4));
         free(r->bytes);
         r->bytes = b;

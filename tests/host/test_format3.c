@@ -71,16 +71,21 @@ static void test_predictions_exact(void **state)
 
 /* ---- the same model both ways ---- */
 
-/* predicted: 0 format 2.6, 1 format 3 (the default's coding, its header format 3's), 2 format 3
-   with --budget-steps (format 4's compact header is test_format4.c's) */
-static void encode_as(loaded_model *lm, int predicted, int gregory, encode_result *r)
+/* lm encoded for format major.minor (major 0: the default, format 4), with or without the budget
+   steps, GREGORY and its kin (gregory 0: planes only) and, rel > 0, --tol rel */
+static void encode_with(loaded_model *lm, int major, int minor, int budget, int gregory, double rel, encode_result *r)
 {
     encode_opts o;
     encode_opts_default(&o);
-    encode_opts_for_format(&o, predicted ? CM_FMT_PREDICT_MAJOR : 2, predicted ? 0 : CM_FMT_V2_MINOR);
-    o.budget_steps = predicted == 2;
-    o.gregory = gregory;
+    if (major)
+        encode_opts_for_format(&o, major, minor);
+    o.budget_steps = budget;
+    if (rel > 0) {
+        o.rel_tol = rel;
+        o.rel_set = 1;
+    }
     if (!gregory) {
+        o.gregory = 0;
         o.g1fit = 0;
         o.nfill = 0;
     }
@@ -88,6 +93,14 @@ static void encode_as(loaded_model *lm, int predicted, int gregory, encode_resul
     cm_status_init(&st);
     memset(r, 0, sizeof *r);
     assert_ok(encode_model(lm, &o, r, &st));
+}
+
+/* predicted: 0 format 2.6, 1 format 3 (the default's coding, its header format 3's), 2 format 3
+   with --budget-steps (format 4's compact header is test_format4.c's) */
+static void encode_as(loaded_model *lm, int predicted, int gregory, encode_result *r)
+{
+    encode_with(lm, predicted ? CM_FMT_PREDICT_MAJOR : 2, predicted ? 0 : CM_FMT_V2_MINOR, predicted == 2, gregory, 0.0,
+                r);
 }
 
 static void decode_into(cm_decoder *d, const uint8_t *b, size_t len)
@@ -594,25 +607,10 @@ static void test_net_on_a_step(void **state)
     encode_result_free(&r);
 }
 
-/* the model encoded with the default options but for budget_steps, gregory and (rel > 0) --tol rel */
+/* the default format, with or without the budget steps and GREGORY, --tol rel where rel > 0 */
 static void encode_opts_as(loaded_model *lm, int budget, int gregory, double rel, encode_result *r)
 {
-    encode_opts o;
-    encode_opts_default(&o);
-    o.budget_steps = budget;
-    if (rel > 0) {
-        o.rel_tol = rel;
-        o.rel_set = 1;
-    }
-    if (!gregory) {
-        o.gregory = 0;
-        o.g1fit = 0;
-        o.nfill = 0;
-    }
-    cm_status st;
-    cm_status_init(&st);
-    memset(r, 0, sizeof *r);
-    assert_ok(encode_model(lm, &o, r, &st));
+    encode_with(lm, 0, 0, budget, gregory, rel, r);
 }
 
 /*
