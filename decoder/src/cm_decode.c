@@ -248,20 +248,35 @@ static cm_err parse_compact(cm_decoder *d, cm_status *st, header_view *v)
     if (qe < -60 || qe > 20)
         return fail(d, st, CM_E_RANGE, v->at_qexp, "quantisation exponent (grid step 2^e mm, e in -60..20)");
     v->h.q_exp = (int8_t)qe;
-    double q = cm_fmt_grid_step((int)qe);
+    double q = cm_fmt_grid_step((int)qe), oq = q;
+    int short_origin = v->h.minor >= CM_FMT_SHORT_ORIGIN_MINOR;
+    if (short_origin) {
+        /* format 4.1: the origin's step, 2^shift grid steps */
+        uint32_t fs;
+        if ((e = header_varint(d, st, &at, CM_FMT_MAX_ORIGIN_SHIFT, &x, &fs, "grid origin step")) != CM_OK)
+            return e;
+        oq = cm_fmt_grid_step((int)qe + (int)x);
+    }
     for (uint32_t k = 0; k < 3; k++) {
         if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_origin[k], "grid origin")) != CM_OK)
             return e;
-        /* exact for |k| <= 2^53 (the writer's origin is a multiple of q), deterministic beyond; the
-           range is checked below with the other versions' (|k q| < 2^84 here) */
-        v->h.origin[k] = (double)cm_fmt_unzigzag(x) * q;
+        /* exact for |k| <= 2^53 (the writer's origin is a multiple of the step), deterministic beyond;
+           the range is checked below with the other versions' (|k q| < 2^146 here) */
+        v->h.origin[k] = (double)cm_fmt_unzigzag(x) * oq;
     }
     if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_tess, "chordal tolerance")) != CM_OK)
         return e;
     v->h.tess_tol = (double)x * q;
     if ((e = header_varint(d, st, &at, UINT64_MAX, &x, &v->at_rel, "rebuild tolerance")) != CM_OK)
         return e;
-    v->h.rel_tol = (double)x / (double)CM_FMT_REL_TOL_ONE;
+    if (short_origin) {
+        /* the difference from the default; a negative tolerance is refused by check_header */
+        int64_t r = cm_fmt_unzigzag(x);
+        v->h.rel_tol = r < -(int64_t)CM_FMT_REL_TOL_DEFAULT ? -1.0
+                                                            : (double)(r + (int64_t)CM_FMT_REL_TOL_DEFAULT) / (double)CM_FMT_REL_TOL_ONE;
+    } else {
+        v->h.rel_tol = (double)x / (double)CM_FMT_REL_TOL_ONE;
+    }
     if (at != H - 4u)
         return fail(d, st, CM_E_FORMAT, at, "header length: fields end before the header CRC");
     return CM_OK;
@@ -330,6 +345,9 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
     if (d->len > CM_HDR_MAJOR &&
         (d->buf[CM_HDR_MAJOR] < CM_FMT_VERSION_MIN_MAJOR || d->buf[CM_HDR_MAJOR] > CM_FMT_VERSION_MAJOR))
         return fail(d, st, CM_E_VERSION, CM_HDR_MAJOR, "version");
+    /* a newer minor of the compact header may lay its fields out differently */
+    if (d->len > CM_HDR_MINOR && d->buf[CM_HDR_MAJOR] == CM_FMT_VERSION_MAJOR && d->buf[CM_HDR_MINOR] > CM_FMT_VERSION_MINOR)
+        return fail(d, st, CM_E_VERSION, CM_HDR_MINOR, "version (a minor newer than this reader's)");
     if (d->len < CM_HDR_LENGTH + 4)
         return CM_OK;
     if (d->buf[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR) {

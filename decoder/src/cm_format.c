@@ -137,10 +137,33 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
         sections += sec_len[s];
     }
     n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(h->q_exp));
-    for (int k = 0; k < 3; k++)
-        n += cm_fmt_put_varint(body + n, cm_fmt_zigzag((int64_t)(h->origin[k] / q)));
-    n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
-    n += cm_fmt_put_varint(body + n, (uint64_t)floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5));
+    uint64_t rel = (uint64_t)floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    if (h->minor >= CM_FMT_SHORT_ORIGIN_MINOR) {
+        /* the origin's largest common power-of-two factor of q (the writer may floor it onto a coarse
+           step), then the multiples of that */
+        int64_t m[3];
+        uint32_t shift = CM_FMT_MAX_ORIGIN_SHIFT;
+        for (int k = 0; k < 3; k++) {
+            m[k] = (int64_t)(h->origin[k] / q);
+            uint32_t z = 0;
+            while (m[k] != 0 && z < shift && (m[k] & ((int64_t)1 << z)) == 0)
+                z++;
+            if (m[k] != 0 && z < shift)
+                shift = z;
+        }
+        if (m[0] == 0 && m[1] == 0 && m[2] == 0)
+            shift = 0;
+        n += cm_fmt_put_varint(body + n, shift);
+        for (int k = 0; k < 3; k++)
+            n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(m[k] / ((int64_t)1 << shift)));
+        n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
+        n += cm_fmt_put_varint(body + n, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
+    } else {
+        for (int k = 0; k < 3; k++)
+            n += cm_fmt_put_varint(body + n, cm_fmt_zigzag((int64_t)(h->origin[k] / q)));
+        n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
+        n += cm_fmt_put_varint(body + n, rel);
+    }
     uint8_t hb[CM_FMT_VARINT_MAX];
     uint32_t H = 0;
     for (uint32_t lh = 1; lh <= 5 && !H; lh++) {

@@ -20,6 +20,8 @@ void encode_opts_for_format(encode_opts *o, int major, int minor)
     }
     if (major < CM_FMT_COMPACT_MAJOR)
         o->compact_header = 0;
+    if (major == CM_FMT_COMPACT_MAJOR && minor < (int)CM_FMT_SHORT_ORIGIN_MINOR)
+        o->compact_minor = 0;
     if (major < CM_FMT_PREDICT_MAJOR)
         o->predicted = o->budget_steps = 0;
     if (major > 2)
@@ -51,6 +53,7 @@ void encode_opts_default(encode_opts *o)
     o->turning_basis = 1;
     o->predicted = 1;
     o->compact_header = 1;
+    o->compact_minor = CM_FMT_VERSION_MINOR;
     /* precision from the tolerance budget (tx_coarsen.c): 422 k instead of 502 k bytes over the
        corpus for a third more encode time (a second choice of methods where a face is kept) */
     o->budget_steps = 1;
@@ -134,10 +137,18 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     t.origin[0] = lm->brep.box.lo.x;
     t.origin[1] = lm->brep.box.lo.y;
     t.origin[2] = lm->brep.box.lo.z;
-    /* format 4 sends the origin as a multiple of the grid step (a few bytes, not 24) */
-    if (enc_compact_header(o))
+    /* format 4 sends the origin as a multiple of the grid step (a few bytes, not 24); 4.1 as a
+       multiple of a coarser power-of-two step, the largest within a sixteenth of the diagonal: one
+       byte a coordinate for a model near its own origin (the coordinates, on the same grid, gain a
+       step at most) */
+    if (enc_compact_header(o)) {
+        double step = t.q;
+        while (o->compact_minor >= (int)CM_FMT_SHORT_ORIGIN_MINOR && step * 2.0 <= diag / 16.0 &&
+               step * 2.0 <= ldexp(t.q, (int)CM_FMT_MAX_ORIGIN_SHIFT))
+            step *= 2.0;
         for (int k = 0; k < 3; k++)
-            t.origin[k] = floor(t.origin[k] / t.q) * t.q;
+            t.origin[k] = floor(t.origin[k] / step) * step;
+    }
     t.nfaces = lm->mesh.nfaces;
     t.method = calloc((size_t)t.nfaces + 1, sizeof(int));
     t.layout = calloc((size_t)t.nfaces + 1, sizeof(int));
@@ -164,7 +175,8 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         const brep_face *bf = &lm->brep.faces[lm->mesh.faces[f].brep_face];
         cm_status fst;
         cm_status_init(&fst);
-        e = tx_build_surface(&t, &lm->brep.surfs[bf->surf], &t.surfs[f], &fst);
+        const hsurf *hs = &lm->brep.surfs[bf->surf];
+        e = tx_build_surface(&t, hs, &t.surfs[f], o->budget_steps && (hs->nu > 4 || hs->nv > 4) && tx_face_meets_rim(&lm->mesh, f, hs), &fst);
         if (e == CM_E_NOMEM)
             *st = fst;
         else if (e != CM_OK) {
@@ -220,6 +232,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     r->edges_refit = t.edges_refit;
     r->edges_reapproximated = t.edges_reapproximated;
     r->surfs_refit = t.surfs_refit;
+    r->surfs_reapproximated = t.surfs_reapproximated;
     for (int k = 0; e == CM_OK && t.nfaults == 0 && o->target && k < 4 && tess_over(o->target, r->need); k++) {
         model_opts.tess_rel *= 2;
         t.w->dec.model.tess_tol = enc_file_tess(&t, model_opts.tess_rel * diag);

@@ -54,6 +54,8 @@ typedef struct encode_opts {
                                     0: format 2's coding, for terminals of format 2) */
     int compact_header;          /* with predicted: format 4's compact header (cm_fmt_compact_pack; default 1;
                                     0: format 3's fixed one, for terminals of format 3) */
+    int compact_minor;           /* its minor: 1 (default) codes the origin on a coarse step and the
+                                    rebuild tolerance from the default (format 4.1); 0: format 4.0 */
     int budget_steps;            /* with predicted: curves as the fewest cubic points and on steps of their
                                     own from the tolerance budget, the vertices on one (tx_coarsen.c;
                                     default 1; 0: every point on the grid, as in the source) */
@@ -105,6 +107,7 @@ typedef struct encode_result {
     double q;          /* grid step (mm) */
     int edges_refit, surfs_refit; /* edges and kept surfaces re-approximated to fit the target profile */
     int edges_reapproximated;     /* curves sent as fewer cubic points within their budget (budget steps) */
+    int surfs_reapproximated;     /* kept surfaces likewise */
     double tess_asked, tess_used; /* recommended chordal tolerance (mm): asked (--tess), written (coarser
                                      when a target profile's tessellation limits needed it, issue 14.5) */
     size_t section_bytes[6];

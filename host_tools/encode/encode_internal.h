@@ -88,6 +88,7 @@ typedef struct tx {
     const encode_opts *o; /* the options, as they apply to this model (encode_opts_for_model) */
     int edges_refit;    /* edges re-approximated to fit the target profile (fit_board.c) */
     int surfs_refit;    /* kept surfaces likewise */
+    int surfs_reapproximated; /* kept surfaces sent as fewer cubic points within their budget */
 } tx;
 
 /*
@@ -105,6 +106,10 @@ int enc_edge_refit_ex(hcurve *c, int max_degree, int max_ctrl, double tol, int b
  * Returns 1 if s was replaced, 0 if not (s unchanged).
  */
 int enc_surf_refit(hsurf *s, int max_degree, int max_dir, int max_total, double tol, cm_status *st);
+/* Replace surface s by a uniform cubic one with the fewest control points per direction (searched as
+   tx_reapproximate_curve searches a curve's, the rows within tol / 2, then the columns) that stays
+   within tol (mm) of it at the same parameters; 1 if s was replaced (fit_board.c). */
+int enc_surf_reduce(hsurf *s, double tol, double rim_tol, cm_status *st);
 
 /*
  * A face's record fields from tx's per-face layout and corner: GREGORY's as they are; NFILL's and
@@ -153,7 +158,7 @@ int enc_outward_parts(loaded_model *lm);
 
 cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 
-cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st);
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim_met, cm_status *st);
 
 /* format 4's compact header, trimmed streams and recent vertex values: the options say format 4 */
 static inline int enc_compact_header(const encode_opts *o)
@@ -169,6 +174,8 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
 
 /* Spec §14 step 6, estimated: the bits a kept surface and a GREGORY-FIT record cost in the file
    (write_sections.c says how; the same estimate for both, so they compare) */
+/* the bytes kept net S codes in, alone in a fresh stream (write_sections.c) */
+size_t enc_net_bytes(const tx *t, const tx_surf *S);
 double enc_kept_surface_bits(const tx_surf *S, int predicted);
 /* control point j's prediction in edge X, coordinate k, on predictor `linear` (cm_predict.h; format 2:
    linear = 0, the previous point) */
@@ -197,6 +204,14 @@ int tx_reapproximate_curve(const tx *t, hcurve *c);
 /* the tolerance (mm) of a face the size of curve c (the box of its control points holds it): no
    face it bounds is held to less */
 double curve_face_tol(const tx *t, const hcurve *c);
+/* Likewise a kept surface's net (its parameters on [0,1] both ways): replaced by the uniform cubic
+   one with the fewest control points within a quarter of the tolerance of a face its size (its
+   boundary within a sixteenth where rim_met), when that has fewer; 1 if it was replaced (its net
+   then stays on the grid as every kept net; the caller keeps it where it codes in fewer bytes). */
+int tx_reapproximate_surface(const tx *t, hsurf *s, int rim_met);
+/* whether face f's boundary runs along a boundary curve of surface s (then that curve is held to the
+   curves' share: the kept face's tessellation meets its edges there through the surface) */
+int tx_face_meets_rim(const cmesh *cm, int f, const hsurf *s);
 /* After the methods are chosen: the edges of kept faces that were moved are marked to stay on the
    grid (every edge when `all`), the vertices too when a face is kept and they were moved.  Returns
    1 if anything is to change (the edges are then made again and the methods chosen again). */

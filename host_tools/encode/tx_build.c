@@ -48,17 +48,22 @@ void tx_free_edges(tx *t)
     t->nedges = t->nverts = 0;
 }
 
+static void tx_surf_free(tx_surf *S)
+{
+    free(S->ku);
+    free(S->kv);
+    free(S->cq);
+    free(S->wq);
+    memset(S, 0, sizeof *S);
+}
+
 void tx_free(tx *t)
 {
     tx_free_edges(t);
     free(t->fine);
     t->fine = NULL;
-    for (int i = 0; i < t->nfaces; i++) {
-        free(t->surfs[i].ku);
-        free(t->surfs[i].kv);
-        free(t->surfs[i].cq);
-        free(t->surfs[i].wq);
-    }
+    for (int i = 0; i < t->nfaces; i++)
+        tx_surf_free(&t->surfs[i]);
     free(t->surfs);
     for (int i = 0; t->fit && i < t->nfaces; i++)
         free(t->fit[i]);
@@ -372,7 +377,9 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
     return err;
 }
 
-cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
+static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st);
+
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim_met, cm_status *st)
 {
     hsurf s = {0};
     double u0, u1, v0, v1;
@@ -423,6 +430,37 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
                            (int)L[CM_LIMIT_MAX_SURF_CTRL].value, tol, &rst))
             t->surfs_refit++;
     }
+    /* in the budget's terms (tx_coarsen.c), where that codes in fewer bytes: a smooth net on
+       uniform knots, which its predictor nearly foretells, may cost less whole */
+    hsurf alt = {0};
+    cm_status ast;
+    cm_status_init(&ast);
+    if (hsurf_copy(&s, &alt, &ast) == CM_OK && tx_reapproximate_surface(t, &alt, rim_met)) {
+        tx_surf A = {0};
+        if ((e = fill_surf(t, &s, S, st)) == CM_OK && fill_surf(t, &alt, &A, &ast) == CM_OK) {
+            tx_net_predictor(t, S);
+            tx_net_predictor(t, &A);
+            if (enc_net_bytes(t, &A) < enc_net_bytes(t, S)) {
+                tx_surf_free(S);
+                *S = A;
+                memset(&A, 0, sizeof A);
+                t->surfs_reapproximated++;
+            }
+        }
+        tx_surf_free(&A);
+    } else {
+        e = fill_surf(t, &s, S, st);
+    }
+    hsurf_free(&alt);
+    hsurf_free(&s);
+    return e;
+}
+
+/* S: surface s on the grid (its knots on [0,1]) */
+static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st)
+{
+    const hsurf s = *s_in;
+    cm_err e = CM_OK;
     S->p = s.p;
     S->q = s.q;
     S->nu = s.nu;
@@ -433,10 +471,8 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
     S->kv = malloc((size_t)(nkv > 0 ? nkv : 1) * sizeof(int64_t));
     S->cq = malloc((size_t)total * sizeof *S->cq);
     S->wq = malloc((size_t)total * sizeof *S->wq);
-    if (!S->ku || !S->kv || !S->cq || !S->wq) {
-        hsurf_free(&s);
+    if (!S->ku || !S->kv || !S->cq || !S->wq)
         return cm_fail(st, CM_E_NOMEM, "out of memory");
-    }
     S->uniform_u = S->uniform_v = 1;
     for (int j = 1; j <= nku; j++) {
         double k = s.U[s.p + j];
@@ -463,6 +499,5 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, cm_status *st)
                 S->rational = 1;
         }
     }
-    hsurf_free(&s);
     return e;
 }

@@ -232,6 +232,8 @@ double enc_fit_record_bits(const fit_record *fr)
     return b;
 }
 
+static void put_net(const tx *t, cm_ac_enc *e, cm_surf_ctx *cx, const tx_surf *S);
+
 static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
@@ -244,30 +246,51 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     for (int f = 0; f < t->nfaces; f++) {
         if (!enc_kept(t->method[f]))
             continue;
-        const tx_surf *S = &t->surfs[f];
-        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->p - 1));
-        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nu - S->p - 1));
-        cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(S->q - 1));
-        cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(S->nv - S->q - 1));
-        cm_ac_enc_bit(e, &ctx.rational, (unsigned)S->rational);
-        knot_models km = {&ctx.uniform, &ctx.knot_zero, &ctx.knot, &ctx.knot_delta};
-        put_knots(e, &km, t->o->predicted, S->uniform_u, S->ku, S->nu - S->p - 1);
-        put_knots(e, &km, t->o->predicted, S->uniform_v, S->kv, S->nv - S->q - 1);
-        int nu = S->nu, nv = S->nv, pred = t->o->predicted;
-        int quadratic = pred ? S->quadratic : 0;
-        if (pred) { /* the net's predictor; its step is 0: kept nets stay on the grid (tx_net_predictor) */
-            cm_ac_enc_bit(e, &ctx.quadratic, (unsigned)quadratic);
-            cm_ac_enc_uint(e, &ctx.step, 0);
-        }
-        for (int i = 0; i < nu; i++)
-            for (int j = 0; j < nv; j++) {
-                int idx = i * nv + j;
-                for (int k = 0; k < 3; k++)
-                    cm_ac_enc_sint(e, &ctx.coord[k], surf_coord_residual(S, quadratic, i, j, k));
-                if (S->rational && idx > 0)
-                    cm_ac_enc_sint(e, &ctx.weight, surf_weight_residual(S, i, j));
-            }
+        put_net(t, e, &ctx, &t->surfs[f]);
     }
+}
+
+size_t enc_net_bytes(const tx *t, const tx_surf *S)
+{
+    size_t cap = 64 + 32 * (size_t)S->nu * (size_t)S->nv;
+    uint8_t *buf = malloc(cap);
+    if (!buf)
+        return SIZE_MAX;
+    cm_surf_ctx ctx;
+    cm_surf_ctx_init(&ctx);
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, buf, cap);
+    put_net(t, &e, &ctx, S);
+    size_t n = cm_ac_enc_finish(&e);
+    free(buf);
+    return e.overflow ? SIZE_MAX : n;
+}
+
+/* a kept net: degrees, counts, knots, its predictor and its points */
+static void put_net(const tx *t, cm_ac_enc *e, cm_surf_ctx *cx, const tx_surf *S)
+{
+    cm_ac_enc_uint(e, &cx->degree, (uint64_t)(S->p - 1));
+    cm_ac_enc_uint(e, &cx->ncoef, (uint64_t)(S->nu - S->p - 1));
+    cm_ac_enc_uint(e, &cx->degree, (uint64_t)(S->q - 1));
+    cm_ac_enc_uint(e, &cx->ncoef, (uint64_t)(S->nv - S->q - 1));
+    cm_ac_enc_bit(e, &cx->rational, (unsigned)S->rational);
+    knot_models km = {&cx->uniform, &cx->knot_zero, &cx->knot, &cx->knot_delta};
+    put_knots(e, &km, t->o->predicted, S->uniform_u, S->ku, S->nu - S->p - 1);
+    put_knots(e, &km, t->o->predicted, S->uniform_v, S->kv, S->nv - S->q - 1);
+    int nu = S->nu, nv = S->nv, pred = t->o->predicted;
+    int quadratic = pred ? S->quadratic : 0;
+    if (pred) { /* the net's predictor; its step is 0: kept nets stay on the grid (tx_net_predictor) */
+        cm_ac_enc_bit(e, &cx->quadratic, (unsigned)quadratic);
+        cm_ac_enc_uint(e, &cx->step, 0);
+    }
+    for (int i = 0; i < nu; i++)
+        for (int j = 0; j < nv; j++) {
+            int idx = i * nv + j;
+            for (int k = 0; k < 3; k++)
+                cm_ac_enc_sint(e, &cx->coord[k], surf_coord_residual(S, quadratic, i, j, k));
+            if (S->rational && idx > 0)
+                cm_ac_enc_sint(e, &cx->weight, surf_weight_residual(S, i, j));
+        }
 }
 
 static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
@@ -380,7 +403,7 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     h.flags = (uint16_t)(t->npalette ? 1 : 0);
     if (compact) {
         h.major = CM_FMT_COMPACT_MAJOR;
-        h.minor = 0;
+        h.minor = (uint8_t)t->o->compact_minor;
     }
     size_t H = cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT);
     if (compact) {

@@ -442,6 +442,38 @@ void igw_bicubic_128(igw *w)
     igw_add(w, 128, 0, "%s", buf);
 }
 
+static double dense_knot(int i, int n)
+{
+    int c = i < 4 ? 0 : (i >= n ? n - 3 : i - 3);
+    return pow((double)c / (double)(n - 3), 1.3); /* uneven, as exporters' knots are */
+}
+
+void igw_dense_128(igw *w, int n, double a, double h)
+{
+    size_t cap = 64 * (size_t)n * (size_t)n + 4096;
+    char *buf = malloc(cap);
+    if (!buf)
+        return;
+    int k = snprintf(buf, cap, "%d,%d,3,3,0,0,1,0,0", n - 1, n - 1);
+    for (int dir = 0; dir < 2; dir++)
+        for (int i = 0; i < n + 4; i++)
+            k += snprintf(buf + k, cap - (size_t)k, ",%.10g", dense_knot(i, n));
+    for (int i = 0; i < n * n; i++)
+        k += snprintf(buf + k, cap - (size_t)k, ",1");
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) {
+            /* at the Greville abscissae: the net follows the wave */
+            double gx = (dense_knot(i + 1, n) + dense_knot(i + 2, n) + dense_knot(i + 3, n)) / 3.0;
+            double gy = (dense_knot(j + 1, n) + dense_knot(j + 2, n) + dense_knot(j + 3, n)) / 3.0;
+            double x = a * gx, y = a * gy;
+            double sx = 2.0 * x / a - 1.0, sy = 2.0 * y / a - 1.0;
+            k += snprintf(buf + k, cap - (size_t)k, ",%.10g,%.10g,%.10g", x, y, h * (pow(sx, 8) + pow(sy, 8)));
+        }
+    snprintf(buf + k, cap - (size_t)k, ",0,1,0,1");
+    igw_add(w, 128, 0, "%s", buf);
+    free(buf);
+}
+
 /* counter-clockwise arc of the circle (cx, cy, r) in the plane z from angle a0 to a1 */
 static int arc_100(igw *w, double cx, double cy, double z, double r, double a0, double a1)
 {

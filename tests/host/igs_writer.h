@@ -63,6 +63,10 @@ void igw_square_scrambled_144(igw *w, double a);
 
 /** An untrimmed bicubic 128 patch: P_ij = (i, j, z_ij) with z from a fixed table. */
 void igw_bicubic_128(igw *w);
+/** An untrimmed bicubic 128 of n x n points on uneven knots over [0,a]^2, a dish flat inside and
+ *  steep at its rim (z = h (s^8 + t^8), s and t from -1 to 1, at each point): far more points
+ *  than its shape needs. */
+void igw_dense_128(igw *w, int n, double a, double h);
 /** Half cylinder (radius r, height h, axis z, angles 0..pi) as two 144 quarter faces, each on a
  *  120 surface of revolution, sharing the line at angle pi/2 (spec §17 T5). */
 void igw_split_half_cylinder_144(igw *w, double r, double h);

@@ -131,18 +131,20 @@ static void test_trimmed_streams(void **state)
 
 /* format `major` (0: the default), every point on the grid (the budget steps would move them by
    a share of the tolerance, differently about either origin: the header is what differs here) */
-static void encode_as(loaded_model *lm, int major, encode_result *r)
+static void encode_as_minor(loaded_model *lm, int major, int minor, encode_result *r)
 {
     encode_opts o;
     encode_opts_default(&o);
     o.budget_steps = 0;
     if (major)
-        encode_opts_for_format(&o, major, 0);
+        encode_opts_for_format(&o, major, minor);
     cm_status st;
     cm_status_init(&st);
     memset(r, 0, sizeof *r);
     assert_ok(encode_model(lm, &o, r, &st));
 }
+
+static void encode_as(loaded_model *lm, int major, encode_result *r) { encode_as_minor(lm, major, 0, r); }
 
 static void decode_into(cm_decoder *d, const uint8_t *b, size_t len)
 {
@@ -170,12 +172,28 @@ static void load(igw *w, const char *name, loaded_model *lm)
    its header and streams save */
 static void check_both_ways(loaded_model *lm)
 {
-    encode_result r3, r4;
+    encode_result r3, r4, r41;
     encode_as(lm, 3, &r3);
-    encode_as(lm, 0, &r4);
+    encode_as_minor(lm, 4, 0, &r4);
+    encode_as(lm, 0, &r41);
     assert_int_equal(r3.bytes[CM_HDR_MAJOR], CM_FMT_PREDICT_MAJOR);
     assert_int_equal(r4.bytes[CM_HDR_MAJOR], CM_FMT_COMPACT_MAJOR);
     assert_int_equal(r4.bytes[CM_HDR_MINOR], 0);
+    assert_int_equal(r41.bytes[CM_HDR_MAJOR], CM_FMT_COMPACT_MAJOR);
+    assert_int_equal(r41.bytes[CM_HDR_MINOR], CM_FMT_SHORT_ORIGIN_MINOR);
+    /* format 4.1: the origin on a coarse power-of-two step, the same points (one grid, about
+       either origin), the header shorter */
+    decode_into(&dec3, r4.bytes, r4.len);
+    decode_into(&dec4, r41.bytes, r41.len);
+    assert_int_equal(dec3.model.nverts, dec4.model.nverts);
+    for (uint32_t v = 0; v < dec3.model.nverts; v++)
+        assert_true(cm_dist(dec3.model.verts[v], dec4.model.verts[v]) == 0.0);
+    for (int k = 0; k < 3; k++)
+        assert_true(dec4.model.origin[k] <= dec3.model.origin[k]);
+    assert_true(fabs(dec4.model.rel_tol - dec3.model.rel_tol) == 0.0);
+    if (!(r41.section_bytes[0] < r4.section_bytes[0]))
+        fail_msg("format 4.1's header %zu bytes, 4.0's %zu", r41.section_bytes[0], r4.section_bytes[0]);
+    encode_result_free(&r41);
     decode_into(&dec3, r3.bytes, r3.len);
     decode_into(&dec4, r4.bytes, r4.len);
     const cm_model *a = &dec3.model, *b = &dec4.model;
@@ -253,7 +271,8 @@ static int setup_good(void **state)
     good_len = r.len;
     r.bytes = NULL;
     encode_result_free(&r);
-    /* its fields: H, then flags, N, the needs, S, the lengths, e, the origin, the tolerances */
+    /* its fields (format 4.1): H, then flags, N, the needs, S, the lengths, e, the origin's step and
+       multiples, the tolerances */
     uint32_t at = CM_FMT_COMPACT_AT_H;
     uint64_t v;
     assert_true(cm_fmt_get_varint(good, (uint32_t)good_len, &at, &v));
@@ -262,7 +281,7 @@ static int setup_good(void **state)
     while (at < good_H - 4)
         assert_true(cm_fmt_get_varint(good, good_H - 4, &at, &fields[nfields++]));
     assert_int_equal(at, good_H - 4);
-    assert_int_equal(nfields, 1 + 1 + CM_LIMIT_COUNT + 1 + CM_SEC_COUNT + 1 + 3 + 2);
+    assert_int_equal(nfields, 1 + 1 + CM_LIMIT_COUNT + 1 + CM_SEC_COUNT + 1 + 1 + 3 + 2);
     return 0;
 }
 
@@ -341,7 +360,7 @@ static void test_hostile_headers(void **state)
     static uint64_t f[CM_FMT_MAX_HEADER];
     static uint32_t at[CM_FMT_MAX_HEADER];
     assert_true(good_len < sizeof b - 4096);
-    const uint32_t N = CM_LIMIT_COUNT, iS = 2 + N, iLen = 3 + N, iE = 3 + N + CM_SEC_COUNT, iO = iE + 1,
+    const uint32_t N = CM_LIMIT_COUNT, iS = 2 + N, iLen = 3 + N, iE = 3 + N + CM_SEC_COUNT, iShift = iE + 1, iO = iE + 2,
                    iTess = iO + 3, iRel = iTess + 1;
     /* the good header re-emitted: the same file, which decodes */
     size_t n = with_header(b, fields, nfields, 0, at);
@@ -412,7 +431,19 @@ static void test_hostile_headers(void **state)
     n = with_header(b, fields, nfields - 1, 0, at); /* the rebuild tolerance missing: at the CRC */
     hl = n - (good_len - good_H);
     assert_refused(b, n, hl, CM_E_FORMAT, (uint32_t)hl - 4u, "rebuild tolerance");
-    (void)iRel;
+    /* format 4.1: an origin step past 2^62 grid steps; a rebuild tolerance below zero; a minor
+       this reader does not know */
+    n = with_header(b, FIELDS_WITH(iShift, CM_FMT_MAX_ORIGIN_SHIFT + 1u), nfields, 0, at);
+    assert_refused(b, n, n - (good_len - good_H), CM_E_FORMAT, at[iShift], "grid origin step");
+    n = with_header(b, FIELDS_WITH(iRel, cm_fmt_zigzag(-(int64_t)CM_FMT_REL_TOL_DEFAULT - 1)), nfields, 0, at);
+    assert_refused(b, n, n - (good_len - good_H), CM_E_RANGE, at[iRel], "rebuild tolerance");
+    n = with_header(b, FIELDS_WITH(iRel, cm_fmt_zigzag(-(int64_t)CM_FMT_REL_TOL_DEFAULT)), nfields, 0, at);
+    cm_dec_init(&dec4);
+    cm_status_init(&st);
+    assert_ok(cm_dec_feed(&dec4, b, n, &st)); /* a tolerance of 0: read */
+    n = with_header(b, fields, nfields, 0, at);
+    b[CM_HDR_MINOR] = CM_FMT_VERSION_MINOR + 1;
+    assert_refused(b, n, n - (good_len - good_H), CM_E_VERSION, CM_HDR_MINOR, "minor newer");
     /* H itself: unterminated within five bytes, below any header, past the bound */
     memcpy(b, good, good_len);
     memset(b + CM_FMT_COMPACT_AT_H, 0x80, 6);

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 0     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 1     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -86,6 +86,11 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_COMPACT_AT_H 6u   /* offset of the varint H */
 #define CM_FMT_VARINT_MAX 10u    /* bytes of the longest varint (64 bits) */
 #define CM_FMT_REL_TOL_ONE (1u << 24) /* the rebuild tolerance's unit in format 4: 2^-24 */
+/* format 4.1: the origin as multiples of a coarser power-of-two step (its exponent over the grid's
+   first), the rebuild tolerance as its difference from the default 1 % (167772 / 2^24) */
+#define CM_FMT_SHORT_ORIGIN_MINOR 1u
+#define CM_FMT_REL_TOL_DEFAULT 167772u
+#define CM_FMT_MAX_ORIGIN_SHIFT 62u
 /** Append v as an unsigned LEB128 varint at b; returns its bytes (1..CM_FMT_VARINT_MAX). */
 uint32_t cm_fmt_put_varint(uint8_t *b, uint64_t v);
 /** Read a varint from b[*at..end) into *v, advancing *at; 0 when it does not end before `end` or
