@@ -54,6 +54,7 @@ void encode_opts_default(encode_opts *o)
     o->predicted = 1;
     o->compact_header = 1;
     o->compact_minor = CM_FMT_VERSION_MINOR;
+    o->net_rim_free = 0;
     /* precision from the tolerance budget (tx_coarsen.c): 422 k instead of 502 k bytes over the
        corpus for a third more encode time (a second choice of methods where a face is kept) */
     o->budget_steps = 1;
@@ -105,7 +106,7 @@ static int tess_over(const cm_limit_info *target, const uint32_t *need)
 }
 
 static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *asked, const unsigned char *keep_only,
-                          const char **fault, int *nfaults, encode_result *r, cm_status *st)
+                          const unsigned char *net_whole, const char **fault, int *nfaults, encode_result *r, cm_status *st)
 {
     encode_opts model_opts = *asked;
     const encode_opts *o = &model_opts;
@@ -115,6 +116,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     tx t;
     memset(&t, 0, sizeof t);
     t.keep_only = keep_only;
+    t.net_whole = net_whole;
     t.w = w;
     cm_err e = CM_OK;
     double diag = brep_diag(&lm->brep);
@@ -176,7 +178,11 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         cm_status fst;
         cm_status_init(&fst);
         const hsurf *hs = &lm->brep.surfs[bf->surf];
-        e = tx_build_surface(&t, hs, &t.surfs[f], o->budget_steps && (hs->nu > 4 || hs->nv > 4) && tx_face_meets_rim(&lm->mesh, f, hs), &fst);
+        int rim = net_whole[lm->mesh.faces[f].brep_face] ? TX_NET_WHOLE
+                  : o->budget_steps && !o->net_rim_free && (hs->nu > 4 || hs->nv > 4) && tx_face_meets_rim(&lm->mesh, f, hs)
+                  ? TX_NET_RIM_HELD
+                                                                                                      : TX_NET_RIM_FREE;
+        e = tx_build_surface(&t, hs, &t.surfs[f], rim, &fst);
         if (e == CM_E_NOMEM)
             *st = fst;
         else if (e != CM_OK) {
@@ -281,9 +287,11 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
 {
     int nb = lm->brep.nfaces;
     unsigned char *keep_only = calloc((size_t)nb + 1, 1), *flip0 = malloc((size_t)nb + 1);
+    unsigned char *net_whole = calloc((size_t)nb + 1, 1);
     enc_work *w = calloc(1, sizeof *w);
-    if (!keep_only || !flip0 || !w) {
+    if (!keep_only || !flip0 || !w || !net_whole) {
         free(keep_only);
+        free(net_whole);
         free(flip0);
         free(w);
         memset(r, 0, sizeof *r);
@@ -291,7 +299,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     }
     for (int b = 0; b < nb; b++)
         flip0[b] = (unsigned char)lm->brep.faces[b].flip;
-    int left_out = 0;
+    int left_out = 0, nets_whole = 0;
     cm_err e;
     for (;;) {
         int nf = lm->mesh.nfaces, nfaults = 0;
@@ -300,7 +308,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             e = cm_fail(st, CM_E_NOMEM, "out of memory");
             break;
         }
-        e = encode_pass(w, lm, o, keep_only, fault, &nfaults, r, st);
+        e = encode_pass(w, lm, o, keep_only, net_whole, fault, &nfaults, r, st);
         if (e != CM_OK || nfaults == 0) {
             free(fault);
             break;
@@ -316,7 +324,11 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             if (!fault[f])
                 continue;
             int b = lm->mesh.faces[f].brep_face;
-            if (r->faces && !enc_kept(r->faces[f].method) && !keep_only[b]) {
+            if (fault[f] == enc_net_folds && !net_whole[b]) {
+                net_whole[b] = 1; /* its net whole, as the source has it */
+                nets_whole++;
+                retried++;
+            } else if (r->faces && !enc_kept(r->faces[f].method) && !keep_only[b]) {
                 keep_only[b] = 1;
                 retried++;
             } else {
@@ -362,7 +374,9 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
         }
     }
     r->faces_left_out = left_out;
+    r->nets_whole = nets_whole;
     free(keep_only);
+    free(net_whole);
     free(flip0);
     free(w);
     return e;

@@ -54,6 +54,9 @@ typedef struct encode_opts {
                                     0: format 2's coding, for terminals of format 2) */
     int compact_header;          /* with predicted: format 4's compact header (cm_fmt_compact_pack; default 1;
                                     0: format 3's fixed one, for terminals of format 3) */
+    int net_rim_free;            /* testing: a kept net re-approximated with its boundary as free as inside
+                                    even where the face's edges run along it (default 0); the nets that
+                                    then fold their face's triangles go whole (encode_result.nets_whole) */
     int compact_minor;           /* its minor: 1 (default) codes the origin on a coarse step and the
                                     rebuild tolerance from the default (format 4.1); 0: format 4.0 */
     int budget_steps;            /* with predicted: curves as the fewest cubic points and on steps of their
@@ -108,6 +111,7 @@ typedef struct encode_result {
     int edges_refit, surfs_refit; /* edges and kept surfaces re-approximated to fit the target profile */
     int edges_reapproximated;     /* curves sent as fewer cubic points within their budget (budget steps) */
     int surfs_reapproximated;     /* kept surfaces likewise */
+    int nets_whole;               /* kept nets sent whole: re-approximated, they folded their triangles */
     double tess_asked, tess_used; /* recommended chordal tolerance (mm): asked (--tess), written (coarser
                                      when a target profile's tessellation limits needed it, issue 14.5) */
     size_t section_bytes[6];

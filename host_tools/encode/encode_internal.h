@@ -57,6 +57,7 @@ typedef struct tx_surf {
     int64_t (*cq)[3];
     int64_t *wq;
     int quadratic;      /* format 3: the net's predictor (tx_net_predictor); its step is always 0 */
+    int reapproximated; /* the net is the budget's re-approximation, not the source's (tx_coarsen.c) */
 } tx_surf;
 
 typedef struct tx {
@@ -82,6 +83,7 @@ typedef struct tx {
     int npalette;
     int *color;         /* per face palette index */
     const unsigned char *keep_only; /* per B-rep face: KEEP, a rebuilt surface did not tessellate */
+    const unsigned char *net_whole; /* per B-rep face: its kept net sent whole (re-approximated, it folded) */
     const char **fault; /* per face: why it cannot be sent (NULL: it can); see encode_model */
     int nfaults;
     enc_work *w;        /* the decoder and tessellation storage this encode works in */
@@ -158,7 +160,18 @@ int enc_outward_parts(loaded_model *lm);
 
 cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 
-cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim_met, cm_status *st);
+/* rim: how the net may be re-approximated within its budget: TX_NET_WHOLE not at all, TX_NET_RIM_FREE
+   its boundary within the same quarter as inside, TX_NET_RIM_HELD its boundary within a sixteenth */
+enum { TX_NET_WHOLE, TX_NET_RIM_FREE, TX_NET_RIM_HELD };
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status *st);
+/* the fault a kept face whose re-approximated net folds its triangles gets (needs.c): encode_model
+   sends that face's net whole and makes the file again */
+extern const char enc_net_folds[];
+/* whether one face's triangles, welded by position, use a directed side twice (two triangles on one
+   side of it: a fold).  A kept face's triangles meet its edges' points, the inner ones the
+   surface's: a re-approximated surface a little off its edges may fold them there (needs.c).
+   Returns -1 when out of memory. */
+int enc_face_folds(const cm_mesh *m);
 
 /* format 4's compact header, trimmed streams and recent vertex values: the options say format 4 */
 static inline int enc_compact_header(const encode_opts *o)

@@ -379,7 +379,7 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
 
 static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st);
 
-cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim_met, cm_status *st)
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status *st)
 {
     hsurf s = {0};
     double u0, u1, v0, v1;
@@ -435,7 +435,8 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim_met, cm_st
     hsurf alt = {0};
     cm_status ast;
     cm_status_init(&ast);
-    if (hsurf_copy(&s, &alt, &ast) == CM_OK && tx_reapproximate_surface(t, &alt, rim_met)) {
+    if (rim != TX_NET_WHOLE && hsurf_copy(&s, &alt, &ast) == CM_OK &&
+        tx_reapproximate_surface(t, &alt, rim == TX_NET_RIM_HELD)) {
         tx_surf A = {0};
         if ((e = fill_surf(t, &s, S, st)) == CM_OK && fill_surf(t, &alt, &A, &ast) == CM_OK) {
             tx_net_predictor(t, S);
@@ -443,6 +444,7 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim_met, cm_st
             if (enc_net_bytes(t, &A) < enc_net_bytes(t, S)) {
                 tx_surf_free(S);
                 *S = A;
+                S->reapproximated = 1;
                 memset(&A, 0, sizeof A);
                 t->surfs_reapproximated++;
             }

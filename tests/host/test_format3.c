@@ -19,6 +19,7 @@
 #include "cm/cm_predict.h"
 #include "cm/cm_sections.h"
 #include "encode/encode.h"
+#include "encode/encode_internal.h"
 #include "igs_writer.h"
 #include "model_load.h"
 
@@ -681,6 +682,21 @@ static void test_surfaces_reapproximated(void **state)
     model_free(&lm);
 }
 
+/* the fold check the encoder runs on a kept face with a re-approximated net (needs.c): two
+   triangles on one side of a side fold, also when their corners meet only by position */
+static void test_face_folds(void **state)
+{
+    (void)state;
+    float pos[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}};
+    uint32_t quad[6] = {0, 1, 2, 0, 2, 3}, fold[6] = {0, 1, 2, 0, 1, 3}, welded[6] = {0, 1, 2, 4, 1, 3};
+    cm_mesh m = {pos, NULL, quad, NULL, 5, 5, 6, 6, 0, 0};
+    assert_int_equal(enc_face_folds(&m), 0);
+    m.idx = fold;
+    assert_int_equal(enc_face_folds(&m), 1);
+    m.idx = welded;
+    assert_int_equal(enc_face_folds(&m), 1);
+}
+
 static void test_curves_reapproximated(void **state)
 {
     (void)state;
@@ -752,6 +768,7 @@ int main(void)
         cmocka_unit_test(test_net_on_a_step),
         cmocka_unit_test(test_curves_reapproximated),
         cmocka_unit_test(test_surfaces_reapproximated),
+        cmocka_unit_test(test_face_folds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
