@@ -350,7 +350,7 @@ typedef struct chart {
     const cm_greg_surface *gs; /* GREGORY family: the patches ... */
     int patch;              /* ... and which */
     double sign;            /* the face normal is sign * (Su x Sv) */
-    int off_surface;        /* NURBS rebuilt to a tolerance (NFILL): the loop's points lie up to it off
+    int off_surface;        /* NURBS rebuilt to a tolerance (NFILL, G1FIT; a kept net from 4.1): the loop's points lie up to it off
                                the surface, so the refinement measures from the surface's own points */
 } chart;
 
@@ -974,7 +974,12 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     cm_psurf ps;
     int keep = rb.repr == CM_REPR_NURBS;
     const cm_method *M = cm_method_of(F->method);
-    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign, keep && M && !M->kept_surface};
+    /* a loop off its surface: NFILL's and G1FIT's (rebuilt to a tolerance), and from format 4.1 a
+       kept face's, whose net may be re-approximated: tested against the curve's own points, the
+       refinement crowded points where the loop runs off the surface (asitus__IAD_v3: 78 to 228
+       triangles folded at a quarter of the recommended tolerance) */
+    int off_surface = keep && M && (!M->kept_surface || m->kept_off_edges);
+    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign, off_surface};
     if (keep) {
         if ((e = cm_psurf_init(&ps, &rb.surf, 1e-9 * rb.bbox, st)) != CM_OK)
             return e;

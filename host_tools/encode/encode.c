@@ -54,7 +54,6 @@ void encode_opts_default(encode_opts *o)
     o->predicted = 1;
     o->compact_header = 1;
     o->compact_minor = CM_FMT_VERSION_MINOR;
-    o->net_rim_free = 0;
     /* precision from the tolerance budget (tx_coarsen.c): 422 k instead of 502 k bytes over the
        corpus for a third more encode time (a second choice of methods where a face is kept) */
     o->budget_steps = 1;
@@ -178,10 +177,13 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         cm_status fst;
         cm_status_init(&fst);
         const hsurf *hs = &lm->brep.surfs[bf->surf];
+        /* a terminal older than 4.1 tests a kept face's loop against its edges: there a net's
+           boundary stays within a sixteenth where the face's edges run along it */
         int rim = net_whole[lm->mesh.faces[f].brep_face] ? TX_NET_WHOLE
-                  : o->budget_steps && !o->net_rim_free && (hs->nu > 4 || hs->nv > 4) && tx_face_meets_rim(&lm->mesh, f, hs)
-                  ? TX_NET_RIM_HELD
-                                                                                                      : TX_NET_RIM_FREE;
+                  : o->budget_steps && !(enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_KEPT_OFF_EDGES_MINOR) &&
+                            (hs->nu > 4 || hs->nv > 4) && tx_face_meets_rim(&lm->mesh, f, hs)
+                      ? TX_NET_RIM_HELD
+                      : TX_NET_RIM_FREE;
         e = tx_build_surface(&t, hs, &t.surfs[f], rim, &fst);
         if (e == CM_E_NOMEM)
             *st = fst;

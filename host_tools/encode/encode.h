@@ -54,9 +54,6 @@ typedef struct encode_opts {
                                     0: format 2's coding, for terminals of format 2) */
     int compact_header;          /* with predicted: format 4's compact header (cm_fmt_compact_pack; default 1;
                                     0: format 3's fixed one, for terminals of format 3) */
-    int net_rim_free;            /* testing: a kept net re-approximated with its boundary as free as inside
-                                    even where the face's edges run along it (default 0); the nets that
-                                    then fold their face's triangles go whole (encode_result.nets_whole) */
     int compact_minor;           /* its minor: 1 (default) codes the origin on a coarse step and the
                                     rebuild tolerance from the default (format 4.1); 0: format 4.0 */
     int budget_steps;            /* with predicted: curves as the fewest cubic points and on steps of their

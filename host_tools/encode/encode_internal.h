@@ -222,8 +222,8 @@ double curve_face_tol(const tx *t, const hcurve *c);
    boundary within a sixteenth where rim_met), when that has fewer; 1 if it was replaced (its net
    then stays on the grid as every kept net; the caller keeps it where it codes in fewer bytes). */
 int tx_reapproximate_surface(const tx *t, hsurf *s, int rim_met);
-/* whether face f's boundary runs along a boundary curve of surface s (then that curve is held to the
-   curves' share: the kept face's tessellation meets its edges there through the surface) */
+/* whether face f's boundary runs along a boundary curve of surface s (then, for a terminal older than
+   4.1, that curve is held to the curves' share: its tessellation tests the loop against the edges) */
 int tx_face_meets_rim(const cmesh *cm, int f, const hsurf *s);
 /* After the methods are chosen: the edges of kept faces that were moved are marked to stay on the
    grid (every edge when `all`), the vertices too when a face is kept and they were moved.  Returns

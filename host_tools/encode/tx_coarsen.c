@@ -153,21 +153,23 @@ int tx_reapproximate_curve(const tx *t, hcurve *c)
  * curves), measured against the original at the same parameters on a grid of four checks per
  * point each way, so the kept face's parameters (found by projecting its boundary) stay where
  * they were.
- * Where the face's edges run along the net's boundary (tx_face_meets_rim; nearly every kept face
- * of the corpus), that boundary is held to the curves' share, a sixteenth: the kept face's
- * tessellation takes its boundary points from the edges and its inner ones from the surface, and
- * with the boundary a quarter off, occt__bug22869_Spring's coil folded 54 triangles over its own
- * (the refinement there puts points 0.001 mm apart, inside the 0.022 mm the surface had moved).
- * The new net is taken only where it codes in fewer bytes (enc_net_bytes): a smooth net on uniform
- * knots, which the net's predictor nearly foretells, may cost less whole.  Measured over the
- * corpus: 421 664 -> 338 151 bytes with the compact header of 4.1 (asitus__Pieza1 77 413 -> 33 011,
- * asitus__IAD_v3 161 440 -> 135 667, elif__Motor_case_back 13 842 -> 10 905, ovt__asmo 16 608 ->
- * 13 840); no face of the corpus folds at the recommended tolerance nor at a tenth of it.  With the
- * boundary free too it was 319 643 (the hull 16 407 -> 10 946, median 101.2x instead of 88.2x),
- * the coil's fold caught by the check below, but at a quarter of the recommended tolerance eight
- * of IAD_v3's kept faces folded 78 to 228 triangles: a viewer asking for a finer mesh would see them.
- * Whatever the share, the encoder tessellates every kept face with a re-approximated net as the
- * terminal will, and a net that folds its face's triangles is sent whole (needs.c, encode_model).
+ * The boundary takes the same quarter: the face's edges, which the kept face's triangles meet,
+ * then lie up to that off the surface, and format 4.1's tessellation tests a kept face's loop
+ * against the surface's points (cm_tessellate.c, kept_off_edges; tested against the edges' own
+ * points, the refinement crowded points where the loop runs off the surface, and eight of
+ * asitus__IAD_v3's kept faces folded 78 to 228 triangles at a quarter of the recommended
+ * tolerance).  Writing for an older terminal, whose tessellation still tests against the edges,
+ * the boundary is held to the curves' share, a sixteenth, where the face's edges run along it
+ * (tx_face_meets_rim; nearly every kept face of the corpus).  Either way the encoder tessellates
+ * every kept face with a re-approximated net as the terminal will, and a net that folds its face's
+ * triangles is sent whole (needs.c, encode_model): occt__bug22869_Spring's coil, whose net a
+ * quarter off folded 54 triangles where it meets its end cap.  The new net is taken only where it
+ * codes in fewer bytes (enc_net_bytes): a smooth net on uniform knots, which the net's predictor
+ * nearly foretells, may cost less whole.  Measured over the corpus: 421 664 -> 319 643 bytes with
+ * the compact header of 4.1, median IGES/.cmz 79.7x -> 101.2x (asitus__Pieza1 77 413 -> 31 981,
+ * asitus__IAD_v3 161 440 -> 124 947, ovt__ship_kvlcc2 16 507 -> 10 946, ovt__asmo 16 608 ->
+ * 13 701); no face folds at the recommended tolerance, nor at a quarter or a tenth of it.  With
+ * the boundary held to a sixteenth everywhere: 338 151 bytes, 88.2x (the hull's net kept whole).
  */
 #define RIM_SAMPLES 256  /* points of each of the net's four boundary curves */
 #define EDGE_SAMPLES 16  /* points of each edge of the face */

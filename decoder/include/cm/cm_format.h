@@ -89,6 +89,7 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 /* format 4.1: the origin as multiples of a coarser power-of-two step (its exponent over the grid's
    first), the rebuild tolerance as its difference from the default 1 % (167772 / 2^24) */
 #define CM_FMT_SHORT_ORIGIN_MINOR 1u
+#define CM_FMT_KEPT_OFF_EDGES_MINOR 1u /* 4.1: kept nets re-approximated (cm_model.kept_off_edges) */
 #define CM_FMT_REL_TOL_DEFAULT 167772u
 #define CM_FMT_MAX_ORIGIN_SHIFT 62u
 /** Append v as an unsigned LEB128 varint at b; returns its bytes (1..CM_FMT_VARINT_MAX). */
@@ -214,6 +215,9 @@ typedef struct cm_model {
     double tess_tol;      /* chordal tolerance recommended by the encoder (mm) */
     double rel_tol;       /* the encoder's rebuild tolerance (fraction of a face's size) */
     int turning_basis;    /* format 2.6 on: GREGORY-EXACT/-FIT sides use the turning basis (cm_egreg.h) */
+    int kept_off_edges;   /* format 4.1 on: a kept net may be re-approximated, its boundary up to a
+                             quarter of its face's tolerance off the face's edges: the tessellation's
+                             flatness tests along a kept face's loop take the surface's points */
     int predicted;        /* format 3 on: edges and knots coded with cm_predict.h's predictions */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
        face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
