@@ -196,7 +196,7 @@ $(call bdir,host)/host_tools/profile_table_%.o: host_tools/profile_table.c
 
 # test tool: the decoded mesh's topology (host profile)
 MESH_CHECK := $(call bdir,host)/tests/tools/mesh_check
-$(MESH_CHECK): $(call bdir,host)/tests/tools/mesh_check.o $(call bdir,host)/tests/host/mesh_topo.o \
+$(MESH_CHECK): $(call bdir,host)/tests/tools/mesh_check.o $(call bdir,host)/host_tools/mesh/mesh_topo.o \
 		$(call bdir,host)/platform/cm_decode_file.o $(call bdir,host)/platform/cm_report.o $(call bdir,host)/libcmdecoder.a
 	$(call say,LD      ,$@)
 	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm

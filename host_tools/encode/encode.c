@@ -176,22 +176,12 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         const brep_face *bf = &lm->brep.faces[lm->mesh.faces[f].brep_face];
         cm_status fst;
         cm_status_init(&fst);
-        const hsurf *hs = &lm->brep.surfs[bf->surf];
-        /* a terminal older than 4.1 tests a kept face's loop against its edges: there a net's
-           boundary stays within a sixteenth where the face's edges run along it */
-        int rim = net_whole[lm->mesh.faces[f].brep_face] ? TX_NET_WHOLE
-                  : o->budget_steps && !(enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_KEPT_OFF_EDGES_MINOR) &&
-                            (hs->nu > 4 || hs->nv > 4) && tx_face_meets_rim(&lm->mesh, f, hs)
-                      ? TX_NET_RIM_HELD
-                      : TX_NET_RIM_FREE;
-        e = tx_build_surface(&t, hs, &t.surfs[f], rim, &fst);
+        e = tx_build_surface(&t, &lm->brep.surfs[bf->surf], &t.surfs[f], &lm->mesh, f, &fst);
         if (e == CM_E_NOMEM)
             *st = fst;
         else if (e != CM_OK) {
             tx_face_fault(&t, f, fst.where ? fst.where : cm_strerror(e));
             e = CM_OK;
-        } else {
-            tx_net_predictor(&t, &t.surfs[f]); /* format 3: the net's predictor */
         }
         if (bf->has_color) {
             int k = 1;

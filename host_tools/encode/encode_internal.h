@@ -8,6 +8,7 @@
 #ifndef ENCODE_INTERNAL_H
 #define ENCODE_INTERNAL_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include "cm/cm_arith.h"
@@ -108,6 +109,16 @@ int enc_edge_refit_ex(hcurve *c, int max_degree, int max_ctrl, double tol, int b
  * Returns 1 if s was replaced, 0 if not (s unchanged).
  */
 int enc_surf_refit(hsurf *s, int max_degree, int max_dir, int max_total, double tol, cm_status *st);
+/* whether the interior knots of a degree-p B-spline of n control points (K: n + p + 1 knots) are
+   not equally spaced over its domain */
+static inline int enc_knots_uneven(const double *K, int p, int n)
+{
+    double a = K[p], b = K[n];
+    for (int j = 1; j < n - p; j++)
+        if (fabs(K[p + j] - (a + (b - a) * j / (n - p))) > 1e-9 * (b - a))
+            return 1;
+    return 0;
+}
 /* Replace surface s by a uniform cubic one with the fewest control points per direction (searched as
    tx_reapproximate_curve searches a curve's, the rows within tol / 2, then the columns) that stays
    within tol (mm) of it at the same parameters; 1 if s was replaced (fit_board.c). */
@@ -160,17 +171,17 @@ int enc_outward_parts(loaded_model *lm);
 
 cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
 
-/* rim: how the net may be re-approximated within its budget: TX_NET_WHOLE not at all, TX_NET_RIM_FREE
-   its boundary within the same quarter as inside, TX_NET_RIM_HELD its boundary within a sixteenth */
-enum { TX_NET_WHOLE, TX_NET_RIM_FREE, TX_NET_RIM_HELD };
-cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status *st);
+/* S: face f's surface orig on the grid, as the source has it or re-approximated within its budget
+   (tx_reapproximate_surface; not when t->net_whole says the face's net goes whole), its predictor
+   chosen (tx_net_predictor) */
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, const cmesh *cm, int f, cm_status *st);
 /* the fault a kept face whose re-approximated net folds its triangles gets (needs.c): encode_model
    sends that face's net whole and makes the file again */
 extern const char enc_net_folds[];
 /* whether one face's triangles, welded by position, use a directed side twice (two triangles on one
-   side of it: a fold).  A kept face's triangles meet its edges' points, the inner ones the
-   surface's: a re-approximated surface a little off its edges may fold them there (needs.c).
-   Returns -1 when out of memory. */
+   side of it: a fold; mesh_topo's census, as mesh_check judges the decoded model).  A kept face's
+   triangles meet its edges' points, the inner ones the surface's: a re-approximated surface a
+   little off its edges may fold them there (needs.c).  Returns -1 when out of memory. */
 int enc_face_folds(const cm_mesh *m);
 
 /* format 4's compact header, trimmed streams and recent vertex values: the options say format 4 */
@@ -217,14 +228,14 @@ int tx_reapproximate_curve(const tx *t, hcurve *c);
 /* the tolerance (mm) of a face the size of curve c (the box of its control points holds it): no
    face it bounds is held to less */
 double curve_face_tol(const tx *t, const hcurve *c);
-/* Likewise a kept surface's net (its parameters on [0,1] both ways): replaced by the uniform cubic
-   one with the fewest control points within a quarter of the tolerance of a face its size (its
-   boundary within a sixteenth where rim_met), when that has fewer; 1 if it was replaced (its net
-   then stays on the grid as every kept net; the caller keeps it where it codes in fewer bytes). */
-int tx_reapproximate_surface(const tx *t, hsurf *s, int rim_met);
-/* whether face f's boundary runs along a boundary curve of surface s (then, for a terminal older than
-   4.1, that curve is held to the curves' share: its tessellation tests the loop against the edges) */
-int tx_face_meets_rim(const cmesh *cm, int f, const hsurf *s);
+/* ... and of a face the size of surface s's net */
+double surf_face_tol(const tx *t, const hsurf *s);
+/* Likewise face f's kept net s (its parameters on [0,1] both ways): replaced by the uniform cubic one
+   with the fewest control points within a quarter of the tolerance of a face its size (for a
+   terminal older than 4.1, its boundary within a sixteenth where the face's edges run along it),
+   when that has fewer; 1 if it was replaced (its net then stays on the grid as every kept net; the
+   caller keeps it where it codes in fewer bytes). */
+int tx_reapproximate_surface(const tx *t, hsurf *s, const cmesh *cm, int f);
 /* After the methods are chosen: the edges of kept faces that were moved are marked to stay on the
    grid (every edge when `all`), the vertices too when a face is kept and they were moved.  Returns
    1 if anything is to change (the edges are then made again and the methods chosen again). */

@@ -322,12 +322,9 @@ static int transpose(hsurf *s)
 }
 
 /* the largest distance between s and f at the same parameters, on a grid of CHECKS_PER_SAMPLE
-   samples per control point of either, each way */
-static double surf_gap_ex(const hsurf *s, const hsurf *f, double *rim);
-static double surf_gap(const hsurf *s, const hsurf *f) { return surf_gap_ex(s, f, NULL); }
-
-/* ... and *rim (when not NULL) the largest on the net's four boundary curves */
-static double surf_gap_ex(const hsurf *s, const hsurf *f, double *rim)
+   samples per control point of either, each way; *rim (when not NULL) the largest on the net's
+   four boundary curves */
+static double surf_gap(const hsurf *s, const hsurf *f, double *rim)
 {
     cm_surf a = hsurf_view(s), b = hsurf_view(f);
     int gu = CHECKS_PER_SAMPLE * (s->nu > f->nu ? s->nu : f->nu), gv = CHECKS_PER_SAMPLE * (s->nv > f->nv ? s->nv : f->nv);
@@ -368,7 +365,7 @@ int enc_surf_refit(hsurf *s, int max_degree, int max_dir, int max_total, double 
         ok = refit_rows(&f, max_degree, nu);
     if (ok && (nv < f.nv || f.q > max_degree))
         ok = transpose(&f) && refit_rows(&f, max_degree, nv) && transpose(&f);
-    ok = ok && surf_gap(s, &f) <= tol;
+    ok = ok && surf_gap(s, &f, NULL) <= tol;
     if (ok) {
         hsurf_free(s);
         *s = f;
@@ -388,18 +385,16 @@ int enc_surf_reduce(hsurf *s, double tol, double rim_tol, cm_status *st)
     int changed = 0;
     /* the rows first, within half the tolerance, then the columns, the whole within all of it */
     for (int dir = 0; dir < 2; dir++) {
-        int n0 = dir ? best.nv : best.nu, deg = dir ? best.q : best.p, uneven = 0;
-        const double *K = dir ? best.V : best.U;
-        for (int j = 1; j < n0 - deg; j++)
-            uneven |= fabs(K[deg + j] - (K[deg] + (K[n0] - K[deg]) * j / (n0 - deg))) > 1e-9 * (K[n0] - K[deg]);
-        int most = deg == 3 && !uneven ? n0 - 1 : n0; /* as many where the degree or the knots differ */
+        int n0 = dir ? best.nv : best.nu, deg = dir ? best.q : best.p;
+        /* as many where the degree or the knots differ */
+        int most = deg == 3 && !enc_knots_uneven(dir ? best.V : best.U, deg, n0) ? n0 - 1 : n0;
         for (int n = 4; n <= most; n += 1 + n / 4) {
             hsurf f = {0};
             if (hsurf_copy(&best, &f, st) != CM_OK)
                 break;
             int ok = dir == 0 ? refit_rows(&f, 3, n) : transpose(&f) && refit_rows(&f, 3, n) && transpose(&f);
             double rim = 0;
-            if (ok && surf_gap_ex(s, &f, &rim) <= (dir == 0 ? 0.5 * tol : tol) && rim <= rim_tol) {
+            if (ok && surf_gap(s, &f, &rim) <= (dir == 0 ? 0.5 * tol : tol) && rim <= rim_tol) {
                 hsurf_free(&best);
                 best = f;
                 changed = 1;

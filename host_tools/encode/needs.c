@@ -1,6 +1,7 @@
 /* needs.c - what the terminal will need, measured with its own tessellation (see encode_internal.h). */
 #include "encode_internal.h"
 #include "verify.h"
+#include "mesh/mesh_topo.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -30,48 +31,13 @@ static const char *tess_fault(cm_err e)
 
 const char enc_net_folds[] = "its re-approximated surface folds its triangles";
 
-typedef struct {
-    float p[3];
-    uint32_t i;
-} welded;
-
-static int by_position(const void *a, const void *b) { return memcmp(((const welded *)a)->p, ((const welded *)b)->p, sizeof(float[3])); }
-
-static int by_edge(const void *a, const void *b)
-{
-    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return x < y ? -1 : x > y;
-}
-
 int enc_face_folds(const cm_mesh *m)
 {
-    welded *v = malloc((size_t)(m->nverts ? m->nverts : 1) * sizeof *v);
-    uint32_t *id = malloc((size_t)(m->nverts ? m->nverts : 1) * sizeof *id);
-    uint64_t *side = malloc((size_t)(m->nindex ? m->nindex : 1) * sizeof *side);
-    int folds = -1;
-    if (v && id && side) {
-        for (uint32_t i = 0; i < m->nverts; i++) {
-            memcpy(v[i].p, m->pos[i], sizeof v[i].p);
-            v[i].i = i;
-        }
-        qsort(v, m->nverts, sizeof *v, by_position);
-        for (uint32_t i = 0, k = 0; i < m->nverts; i++) {
-            if (i > 0 && by_position(&v[i], &v[i - 1]) != 0)
-                k++;
-            id[v[i].i] = k;
-        }
-        for (uint32_t t = 0; t + 2 < m->nindex; t += 3)
-            for (int c = 0; c < 3; c++)
-                side[t + (uint32_t)c] = (uint64_t)id[m->idx[t + (uint32_t)c]] << 32 | id[m->idx[t + (uint32_t)(c + 1) % 3]];
-        qsort(side, m->nindex, sizeof *side, by_edge);
-        folds = 0;
-        for (uint32_t i = 1; i < m->nindex && !folds; i++)
-            folds = side[i] == side[i - 1];
-    }
-    free(v);
-    free(id);
-    free(side);
-    return folds;
+    mesh_topo topo;
+    if (mesh_topo_analyse(m, &topo) != 0)
+        return -1;
+    mesh_topo_free(&topo);
+    return topo.duplicate > 0;
 }
 
 /* a face that does not tessellate is a fault of that face (see encode_model), not of the model */

@@ -379,7 +379,7 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
 
 static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st);
 
-cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status *st)
+cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, const cmesh *cm, int f, cm_status *st)
 {
     hsurf s = {0};
     double u0, u1, v0, v1;
@@ -418,12 +418,7 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status
     if (L && (s.p > (int)L[CM_LIMIT_MAX_DEGREE].value || s.q > (int)L[CM_LIMIT_MAX_DEGREE].value ||
               s.nu > (int)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value || s.nv > (int)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value ||
               (long)s.nu * s.nv > (long)L[CM_LIMIT_MAX_SURF_CTRL].value)) {
-        cm_vec3 lo = s.ctrl[0], hi = s.ctrl[0];
-        for (long j = 1; j < (long)s.nu * s.nv; j++) {
-            lo = cm_v3(fmin(lo.x, s.ctrl[j].x), fmin(lo.y, s.ctrl[j].y), fmin(lo.z, s.ctrl[j].z));
-            hi = cm_v3(fmax(hi.x, s.ctrl[j].x), fmax(hi.y, s.ctrl[j].y), fmax(hi.z, s.ctrl[j].z));
-        }
-        double tol = 0.25 * encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+        double tol = 0.25 * surf_face_tol(t, &s);
         cm_status rst;
         cm_status_init(&rst);
         if (enc_surf_refit(&s, (int)L[CM_LIMIT_MAX_DEGREE].value, (int)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value,
@@ -435,8 +430,8 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status
     hsurf alt = {0};
     cm_status ast;
     cm_status_init(&ast);
-    if (rim != TX_NET_WHOLE && hsurf_copy(&s, &alt, &ast) == CM_OK &&
-        tx_reapproximate_surface(t, &alt, rim == TX_NET_RIM_HELD)) {
+    if (!(t->net_whole && t->net_whole[cm->faces[f].brep_face]) && hsurf_copy(&s, &alt, &ast) == CM_OK &&
+        tx_reapproximate_surface(t, &alt, cm, f)) {
         tx_surf A = {0};
         if ((e = fill_surf(t, &s, S, st)) == CM_OK && fill_surf(t, &alt, &A, &ast) == CM_OK) {
             tx_net_predictor(t, S);
@@ -450,8 +445,8 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, int rim, cm_status
             }
         }
         tx_surf_free(&A);
-    } else {
-        e = fill_surf(t, &s, S, st);
+    } else if ((e = fill_surf(t, &s, S, st)) == CM_OK) {
+        tx_net_predictor(t, S); /* format 3: the net's predictor */
     }
     hsurf_free(&alt);
     hsurf_free(&s);

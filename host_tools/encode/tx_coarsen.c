@@ -115,6 +115,16 @@ double curve_face_tol(const tx *t, const hcurve *c)
     return encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
 }
 
+double surf_face_tol(const tx *t, const hsurf *s)
+{
+    cm_vec3 lo = s->ctrl[0], hi = s->ctrl[0];
+    for (long j = 1; j < (long)s->nu * s->nv; j++) {
+        lo = cm_v3(fmin(lo.x, s->ctrl[j].x), fmin(lo.y, s->ctrl[j].y), fmin(lo.z, s->ctrl[j].z));
+        hi = cm_v3(fmax(hi.x, s->ctrl[j].x), fmax(hi.y, s->ctrl[j].y), fmax(hi.z, s->ctrl[j].z));
+    }
+    return encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
+}
+
 int tx_reapproximate_curve(const tx *t, hcurve *c)
 {
     if (!t->o->predicted || !t->o->budget_steps || c->n <= 4)
@@ -122,11 +132,7 @@ int tx_reapproximate_curve(const tx *t, hcurve *c)
     double tol = BUDGET_SHARE * curve_face_tol(t, c);
     /* fewer points; as many where the degree differs; half as many more where weights or uneven knots
        are saved (the caller sends the curve this way only where it costs fewer bits) */
-    int uneven = 0, interior = c->n - c->p - 1;
-    double u0 = c->knots[c->p], u1 = c->knots[c->n];
-    for (int j = 1; j <= interior; j++)
-        uneven |= fabs(c->knots[c->p + j] - (u0 + (u1 - u0) * j / (interior + 1))) > 1e-9 * (u1 - u0);
-    int most = c->w || uneven ? c->n + c->n / 2 : c->p != 3 ? c->n : c->n - 1;
+    int most = c->w || enc_knots_uneven(c->knots, c->p, c->n) ? c->n + c->n / 2 : c->p != 3 ? c->n : c->n - 1;
     for (int n = 4; n <= most; n += 1 + n / 4) {
         hcurve f = {0};
         cm_status st;
@@ -160,7 +166,7 @@ int tx_reapproximate_curve(const tx *t, hcurve *c)
  * asitus__IAD_v3's kept faces folded 78 to 228 triangles at a quarter of the recommended
  * tolerance).  Writing for an older terminal, whose tessellation still tests against the edges,
  * the boundary is held to the curves' share, a sixteenth, where the face's edges run along it
- * (tx_face_meets_rim; nearly every kept face of the corpus).  Either way the encoder tessellates
+ * (face_meets_rim; nearly every kept face of the corpus).  Either way the encoder tessellates
  * every kept face with a re-approximated net as the terminal will, and a net that folds its face's
  * triangles is sent whole (needs.c, encode_model): occt__bug22869_Spring's coil, whose net a
  * quarter off folded 54 triangles where it meets its end cap.  The new net is taken only where it
@@ -175,7 +181,8 @@ int tx_reapproximate_curve(const tx *t, hcurve *c)
 #define EDGE_SAMPLES 16  /* points of each edge of the face */
 #define RIM_NEAR 2e-3    /* of the face's size: an edge point this close to a boundary curve is on it */
 
-int tx_face_meets_rim(const cmesh *cm, int f, const hsurf *s)
+/* whether face f's boundary runs along a boundary curve of net s */
+static int face_meets_rim(const cmesh *cm, int f, const hsurf *s)
 {
     cm_surf sv = hsurf_view(s);
     double u0, u1, v0, v1;
@@ -233,29 +240,26 @@ int tx_face_meets_rim(const cmesh *cm, int f, const hsurf *s)
     return meets;
 }
 
-int tx_reapproximate_surface(const tx *t, hsurf *s, int rim_met)
+int tx_reapproximate_surface(const tx *t, hsurf *s, const cmesh *cm, int f)
 {
     if (!t->o || !t->o->predicted || !t->o->budget_steps || (s->nu <= 4 && s->nv <= 4))
         return 0;
-    cm_vec3 lo = s->ctrl[0], hi = s->ctrl[0];
-    for (long j = 1; j < (long)s->nu * s->nv; j++) {
-        lo = cm_v3(fmin(lo.x, s->ctrl[j].x), fmin(lo.y, s->ctrl[j].y), fmin(lo.z, s->ctrl[j].z));
-        hi = cm_v3(fmax(hi.x, s->ctrl[j].x), fmax(hi.y, s->ctrl[j].y), fmax(hi.z, s->ctrl[j].z));
-    }
-    long before = (long)s->nu * s->nv;
     cm_status st;
     cm_status_init(&st);
-    double face_tol = encode_face_tol(t->o->rel_tol, t->o->rel_set, t->o->abs_tol, cm_dist(lo, hi));
-    hsurf f = {0};
-    if (hsurf_copy(s, &f, &st) != CM_OK)
+    double face_tol = surf_face_tol(t, s);
+    /* a terminal older than 4.1 tests a kept face's loop against its edges */
+    int held = !(enc_compact_header(t->o) && t->o->compact_minor >= (int)CM_FMT_KEPT_OFF_EDGES_MINOR) &&
+               face_meets_rim(cm, f, s);
+    double rim_tol = (held ? BUDGET_SHARE : KEPT_SURFACE_SHARE) * face_tol;
+    hsurf r = {0};
+    if (hsurf_copy(s, &r, &st) != CM_OK)
         return 0;
-    double rim_tol = (rim_met ? BUDGET_SHARE : KEPT_SURFACE_SHARE) * face_tol;
-    if (enc_surf_reduce(&f, KEPT_SURFACE_SHARE * face_tol, rim_tol, &st) && (long)f.nu * f.nv < before) {
+    if (enc_surf_reduce(&r, KEPT_SURFACE_SHARE * face_tol, rim_tol, &st) && (long)r.nu * r.nv < (long)s->nu * s->nv) {
         hsurf_free(s);
-        *s = f;
+        *s = r;
         return 1;
     }
-    hsurf_free(&f);
+    hsurf_free(&r);
     return 0;
 }
 

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "cm/cm_format.h"
 #include "encode/encode.h"
 #include "model_load.h"
 
@@ -18,6 +19,19 @@ static const char *models_dir(void)
 {
     const char *d = getenv("CM_SHARED_MODELS");
     return d ? d : "../shared/models";
+}
+
+/* the shared corpus's file `rel` (path[cap] gets its path), open; the test is skipped, with a
+   message, when it is not there */
+static FILE *open_shared(char *path, size_t cap, const char *rel, const char *mode)
+{
+    snprintf(path, cap, "%s/%s", models_dir(), rel);
+    FILE *f = fopen(path, mode);
+    if (!f) {
+        print_message("SKIP: %s not found (the shared corpus is not beside this checkout)\n", path);
+        skip();
+    }
+    return f;
 }
 
 /* count of entity `type` in a catalog "entity_counts" field like "102:24 110:48 144:10" */
@@ -42,31 +56,24 @@ static void test_folding_nets_go_whole(void **state)
 {
     (void)state;
     char path[1024];
-    snprintf(path, sizeof path, "%s/iges/occt__bug22869_Spring.igs", models_dir());
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        print_message("SKIP: %s not found (the shared corpus is not beside this checkout)\n", path);
-        skip();
-    }
-    fclose(f);
+    fclose(open_shared(path, sizeof path, "iges/occt__bug22869_Spring.igs", "rb"));
     loaded_model lm;
     cm_status st;
     cm_status_init(&st);
     assert_int_equal(model_load(path, &lm, NULL, NULL, &st), CM_OK);
-    for (int free_rim = 0; free_rim < 2; free_rim++) {
+    for (int minor = 0; minor < 2; minor++) {
         encode_opts o;
         encode_opts_default(&o);
-        if (!free_rim)
-            encode_opts_for_format(&o, 4, 0);
+        encode_opts_for_format(&o, 4, minor);
         encode_result r;
         memset(&r, 0, sizeof r);
         cm_status_init(&st);
         assert_int_equal(encode_model(&lm, &o, &r, &st), CM_OK);
-        print_message("  boundary %s: %d nets re-approximated, %d sent whole, %zu bytes\n", free_rim ? "free" : "held",
-                      r.surfs_reapproximated, r.nets_whole, r.len);
+        print_message("  format 4.%d: %d nets re-approximated, %d sent whole, %zu bytes\n", minor, r.surfs_reapproximated,
+                      r.nets_whole, r.len);
         assert_true(r.surfs_reapproximated >= 1);
-        assert_int_equal(r.bytes[5], free_rim ? 1 : 0); /* the minor version */
-        assert_int_equal(r.nets_whole, free_rim ? 1 : 0);
+        assert_int_equal(r.bytes[CM_HDR_MINOR], minor);
+        assert_int_equal(r.nets_whole, minor);
         assert_int_equal(r.faces_left_out, 0);
         encode_result_free(&r);
     }
@@ -77,12 +84,7 @@ static void test_every_corpus_model(void **state)
 {
     (void)state;
     char path[1024];
-    snprintf(path, sizeof path, "%s/CATALOG.tsv", models_dir());
-    FILE *cat = fopen(path, "r");
-    if (!cat) {
-        print_message("SKIP: %s not found (the shared corpus is not beside this checkout)\n", path);
-        skip();
-    }
+    FILE *cat = open_shared(path, sizeof path, "CATALOG.tsv", "r");
     char line[8192];
     int n = 0;
     while (fgets(line, sizeof line, cat)) {

@@ -20,7 +20,7 @@
 #include "encode/encode.h"
 #include "encode/verify.h"
 #include "igs_writer.h"
-#include "mesh_topo.h"
+#include "mesh/mesh_topo.h"
 #include "model_load.h"
 
 static cm_decoder dec;

@@ -23,7 +23,7 @@
 #include "encode/encode.h"
 #include "encode/verify.h"
 #include "igs_writer.h"
-#include "mesh_topo.h"
+#include "mesh/mesh_topo.h"
 #include "model_load.h"
 
 /* the decoder and the tessellation workspace, static as on the terminal */

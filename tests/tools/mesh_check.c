@@ -21,7 +21,7 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_tessellate.h"
 #include "cm_decode_file.h"
-#include "../host/mesh_topo.h"
+#include "mesh/mesh_topo.h"
 
 static cm_decoder dec;
 static cm_tess_ws tess;

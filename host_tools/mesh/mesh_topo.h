@@ -1,9 +1,10 @@
 /*
  * mesh_topo.h - what a viewer sees of a decoded mesh once vertices are
  * welded by position: is it closed, is it consistently oriented, where are
- * its open boundaries.  Used by the round-trip tests and by the corpus
- * check (tests/tools/mesh_check.c); plain C, results reported, nothing
- * asserted here.
+ * its open boundaries.  Used by the encoder's fold check on kept faces
+ * (host_tools/encode/needs.c), the round-trip tests and the corpus check
+ * (tests/tools/mesh_check.c); plain C, results reported, nothing asserted
+ * here.
  */
 #ifndef MESH_TOPO_H
 #define MESH_TOPO_H
