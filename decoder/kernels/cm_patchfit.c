@@ -1,6 +1,8 @@
 /* cm_patchfit.c - the interior correction of a Gregory patch (see cm_patchfit.h). */
 #include "cm/cm_patchfit.h"
 
+#include <stddef.h>
+
 /* Bernstein B^d_k(t) = C(d,k) t^k (1-t)^(d-k), by repeated products (no pow: spec §2 rule 3) */
 static double bernstein(int d, int k, double t)
 {
@@ -57,4 +59,20 @@ double cm_fit_dequantise(int32_t qi, double grid, int exp)
     for (int i = 0; i < exp && i < CM_FIT_MAX_EXP; i++)
         step *= 2.0;
     return (double)qi * step;
+}
+
+/* Greville abscissa of a cubic's control point i: the mean of knots i+1..i+3 */
+static double greville3(const double *K, int i)
+{
+    return (K[i + 1] + K[i + 2] + K[i + 3]) / 3.0;
+}
+
+void cm_fit_net_add(cm_vec3 *ctrl, int nu, int nv, const double *U, const double *V, const cm_vec3 *c, int m)
+{
+    for (int i = 2; i <= nu - 3; i++)
+        for (int j = 2; j <= nv - 3; j++) {
+            cm_vec3 D = cm_v3(0.0, 0.0, 0.0);
+            cm_fit_add(c, m, greville3(U, i), greville3(V, j), &D, NULL, NULL);
+            ctrl[i * nv + j] = cm_add(ctrl[i * nv + j], D);
+        }
 }

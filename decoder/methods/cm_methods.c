@@ -40,9 +40,9 @@ cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx
     case CM_METHOD_GREGORY_FIT:
         return cm_gregory_fit_read_record(ac, ctx, m, F, why);
     case CM_METHOD_NFILL:
-        return cm_nfill_read_record(ac, F, why);
+        return cm_nfill_read_record(ac, ctx, m, F, why);
     case CM_METHOD_G1FIT:
-        return cm_g1fit_read_record(ac, F, why);
+        return cm_g1fit_read_record(ac, ctx, m, F, why);
     default:
         return CM_OK;
     }
@@ -60,10 +60,10 @@ void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx,
         cm_gregory_fit_write_record(ac, ctx, F, fit);
         break;
     case CM_METHOD_NFILL:
-        cm_nfill_write_record(ac, F);
+        cm_nfill_write_record(ac, ctx, F, fit);
         break;
     case CM_METHOD_G1FIT:
-        cm_g1fit_write_record(ac, F);
+        cm_g1fit_write_record(ac, ctx, F, fit);
         break;
     default:
         break;

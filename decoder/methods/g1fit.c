@@ -14,7 +14,7 @@
 #include "cm/cm_g1fit.h"
 #include "cm/cm_limits_info.h"
 
-cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why)
+cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
 {
     uint64_t nu = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
     uint64_t nv = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
@@ -28,16 +28,17 @@ cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why)
     F->fill_nu = (uint8_t)nu;
     F->fill_nv = (uint8_t)nv;
     F->fill_phi = (uint8_t)mode;
-    return CM_OK;
+    return cm_fit_net_read_record(ac, ctx, m, F, why);
 }
 
-void cm_g1fit_write_record(cm_ac_enc *ac, const cm_face *F)
+void cm_g1fit_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F, const cm_fit_q *fit)
 {
     cm_ac_enc_direct(ac, (uint32_t)(F->fill_nu - CM_NFILL_MIN_CTRL), 5);
     cm_ac_enc_direct(ac, (uint32_t)(F->fill_nv - CM_NFILL_MIN_CTRL), 5);
     cm_ac_enc_direct(ac, F->fill_phi & 1u, 1);
     cm_ac_enc_direct(ac, F->checksum & 0xffffu, 16);
     cm_ac_enc_direct(ac, F->checksum >> 16, 16);
+    cm_fit_net_write_record(ac, ctx, fit);
 }
 
 /* what the face's net and loop ask of a build: control points, the faired interior, loop input */
@@ -82,7 +83,7 @@ cm_err cm_g1fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *ou
         return e;
     /* Su x Sv is the loop's turning direction at its corners (side 0 leaves corner 0 along the loop,
        side 3 leaves it against): the face normal n_F when the loop runs counter-clockwise about it */
-    return cm_fit_net_result(&ws->nfill, F, check, out, "G1FIT face rebuilt differently from the encoder", st);
+    return cm_fit_net_result(m, &ws->nfill, F, check, out, "G1FIT face rebuilt differently from the encoder", st);
 }
 
 void cm_g1fit_needs(const cm_model *m, const cm_face *F, uint32_t *need)

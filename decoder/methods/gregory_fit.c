@@ -49,18 +49,26 @@ cm_err cm_gregory_fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, 
         why->need = np;
         return CM_E_LIMIT;
     }
+    return cm_fit_read_coefs(ac, ctx, m, F, (unsigned)fm, (unsigned)np, ex, why);
+}
+
+cm_err cm_fit_read_coefs(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, unsigned fm, unsigned np,
+                         uint64_t ex, cm_method_fault *why)
+{
+    /* np: GREGORY-FIT's patches, or 1 for a net's correction (which the faults then name) */
+    int net = np == 1u && F->method != CM_METHOD_GREGORY_FIT;
     if (ex > CM_FIT_MAX_EXP) {
-        why->what = "GREGORY-FIT step";
+        why->what = net ? "net correction step" : "GREGORY-FIT step";
         return CM_E_RANGE;
     }
-    uint32_t n = (uint32_t)(np * fm * fm);
+    uint32_t n = np * fm * fm;
     if (n > CM_MAX_MODEL_CTRL - m->nctrl) {
-        why->what = "GREGORY-FIT coefficients";
+        why->what = net ? "net correction coefficients" : "GREGORY-FIT coefficients";
         why->limit = CM_LIMIT_MAX_MODEL_CTRL;
         why->need = (uint64_t)m->nctrl + n;
         return CM_E_LIMIT;
     }
-    F->fit = cm_face_fit_pack((unsigned)fm, (unsigned)np);
+    F->fit = cm_face_fit_pack(fm, np);
     F->surf = m->nctrl;
     for (uint32_t i = 0; i < n; i++) {
         double c[3];
@@ -71,7 +79,7 @@ cm_err cm_gregory_fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, 
                 return CM_E_TRUNCATED;
             }
             if (q < -(int64_t)CM_FIT_MAX_INT || q > (int64_t)CM_FIT_MAX_INT) {
-                why->what = "GREGORY-FIT coefficient";
+                why->what = net ? "net correction coefficient" : "GREGORY-FIT coefficient";
                 return CM_E_RANGE;
             }
             c[a] = cm_fit_dequantise((int32_t)q, m->q, (int)ex);
@@ -83,15 +91,20 @@ cm_err cm_gregory_fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, 
     return CM_OK;
 }
 
+void cm_fit_write_coefs(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_fit_q *fit)
+{
+    cm_ac_enc_uint(ac, &ctx->fit_exp, (uint64_t)fit->exp);
+    for (int i = 0; i < fit->patches * fit->m * fit->m; i++)
+        for (int a = 0; a < 3; a++)
+            cm_ac_enc_sint(ac, &ctx->fit_coef, fit->q[i][a]);
+}
+
 void cm_gregory_fit_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F, const cm_fit_q *fit)
 {
     cm_gregory_write_record(ac, ctx, F);
     cm_ac_enc_uint(ac, &ctx->fit_m, (uint64_t)fit->m);
     cm_ac_enc_uint(ac, &ctx->fit_patches, (uint64_t)fit->patches);
-    cm_ac_enc_uint(ac, &ctx->fit_exp, (uint64_t)fit->exp);
-    for (int i = 0; i < fit->patches * fit->m * fit->m; i++)
-        for (int a = 0; a < 3; a++)
-            cm_ac_enc_sint(ac, &ctx->fit_coef, fit->q[i][a]);
+    cm_fit_write_coefs(ac, ctx, fit);
 }
 
 /* GREGORY's rules, and as many corrections as the layout has patches */

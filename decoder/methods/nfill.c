@@ -13,7 +13,7 @@
 #include "cm/cm_corner.h"
 #include "cm/cm_limits_info.h"
 
-cm_err cm_nfill_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why)
+cm_err cm_nfill_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
 {
     uint64_t nu = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
     uint64_t nv = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
@@ -31,16 +31,51 @@ cm_err cm_nfill_read_record(cm_ac_dec *ac, cm_face *F, cm_method_fault *why)
     F->fill_nu = (uint8_t)nu;
     F->fill_nv = (uint8_t)nv;
     F->fill_phi = (uint8_t)phi;
-    return CM_OK;
+    return cm_fit_net_read_record(ac, ctx, m, F, why);
 }
 
-void cm_nfill_write_record(cm_ac_enc *ac, const cm_face *F)
+void cm_nfill_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F, const cm_fit_q *fit)
 {
     cm_ac_enc_direct(ac, (uint32_t)(F->fill_nu - CM_NFILL_MIN_CTRL), 5);
     cm_ac_enc_direct(ac, (uint32_t)(F->fill_nv - CM_NFILL_MIN_CTRL), 5);
     cm_ac_enc_direct(ac, F->fill_phi, 3);
     cm_ac_enc_direct(ac, F->checksum & 0xffffu, 16);
     cm_ac_enc_direct(ac, F->checksum >> 16, 16);
+    cm_fit_net_write_record(ac, ctx, fit);
+}
+
+/* From format 4.2 a net's record ends with its interior correction: m (0: none), then as
+   GREGORY-FIT's of one patch (cm_fit_read_coefs) */
+cm_err cm_fit_net_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
+{
+    if (!ctx->net_fit)
+        return CM_OK;
+    uint64_t fm = cm_ac_dec_uint(ac, &ctx->fit_m);
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    if (fm == 0)
+        return CM_OK;
+    if (fm > CM_FIT_MAX_M) {
+        why->what = "net correction's coefficients per direction";
+        return CM_E_RANGE;
+    }
+    uint64_t ex = cm_ac_dec_uint(ac, &ctx->fit_exp);
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    return cm_fit_read_coefs(ac, ctx, m, F, (unsigned)fm, 1u, ex, why);
+}
+
+void cm_fit_net_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_fit_q *fit)
+{
+    if (!ctx->net_fit)
+        return;
+    cm_ac_enc_uint(ac, &ctx->fit_m, fit ? (uint64_t)fit->m : 0u);
+    if (fit)
+        cm_fit_write_coefs(ac, ctx, fit);
 }
 
 /* what the face's net and loop ask of a build: control points, unknowns, band, loop input */
@@ -114,12 +149,19 @@ cm_err cm_nfill_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_o
                             &ws->nfill_ws, st)) != CM_OK)
         return e;
     /* u along the frame's x, v along its y: Su x Sv along ez, the face normal */
-    return cm_fit_net_result(&ws->nfill, F, check, out, "NFILL face rebuilt differently from the encoder", st);
+    return cm_fit_net_result(m, &ws->nfill, F, check, out, "NFILL face rebuilt differently from the encoder", st);
 }
 
-cm_err cm_fit_net_result(const cm_nfill_surface *net, const cm_face *F, int check, cm_rebuilt *out,
+cm_err cm_fit_net_result(const cm_model *m, cm_nfill_surface *net, const cm_face *F, int check, cm_rebuilt *out,
                          const char *mismatch, cm_status *st)
 {
+    if (F->fit) {
+        unsigned fm = cm_face_fit_m(F);
+        if (fm < 1 || fm > CM_FIT_MAX_M || cm_face_fit_patches(F) != 1u || F->surf > m->nctrl ||
+            fm * fm > m->nctrl - F->surf)
+            return cm_fail(st, CM_E_FORMAT, "net correction");
+        cm_fit_net_add(net->ctrl, net->nu, net->nv, net->U, net->V, &m->ctrl[F->surf], (int)fm);
+    }
     out->repr = CM_REPR_NURBS;
     out->surf = net->surf;
     out->sign = 1.0;

@@ -795,6 +795,7 @@ static cm_err sec_face(reader *r)
     cm_model *m = &r->d->model;
     cm_face_ctx ctx;
     cm_face_ctx_init(&ctx);
+    ctx.net_fit = r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= CM_FMT_NET_FIT_MINOR);
     cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nfaces, "face count");
     if (e != CM_OK)
         return e;

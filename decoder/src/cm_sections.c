@@ -70,6 +70,7 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_int_init(&c->fit_patches);
     cm_ac_int_init(&c->fit_exp);
     cm_ac_int_init(&c->fit_coef);
+    c->net_fit = 0;
 }
 
 void cm_colr_ctx_init(cm_colr_ctx *c)

@@ -38,23 +38,19 @@ cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st)
 /* ---- method choice per face ---- */
 
 /* rebuild face f of the decoded model with a trial record (decoder code, no checksum yet) */
-cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, const cm_fit_q *fit, cm_rebuilt *rb)
+/* face f's record replaced by a trial one, the correction (fit, or none) where the terminal's reader
+   puts it: the control-point pool, here past its end, dequantised as the reader does
+   (cm_fit_dequantise); trial_restore puts the face back */
+static cm_err trial_place(cm_model *m, int f, int method, int layout, int corner, const cm_fit_q *fit)
 {
-    cm_model *m = &w->dec.model;
     cm_face *F = &m->faces[f];
-    cm_face saved = *F;
-    uint32_t nctrl = m->nctrl;
     enc_record_fields(F, method, layout, corner);
     F->fit = 0;
     if (fit) {
-        /* the correction where the terminal's reader puts it: the control-point pool, here past its
-           end, dequantised as the reader does (cm_fit_dequantise) */
         uint32_t n = (uint32_t)(fit->patches * fit->m * fit->m);
         if (fit->m < 1 || fit->m > CM_FIT_MAX_M || fit->patches < 1 || fit->patches > CM_MAX_GREG ||
-            n > CM_MAX_MODEL_CTRL - m->nctrl) {
-            *F = saved;
+            n > CM_MAX_MODEL_CTRL - m->nctrl)
             return CM_E_LIMIT;
-        }
         F->fit = cm_face_fit_pack((unsigned)fit->m, (unsigned)fit->patches);
         F->surf = m->nctrl;
         for (uint32_t i = 0; i < n; i++)
@@ -63,10 +59,51 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
                                           cm_fit_dequantise(fit->q[i][2], m->q, fit->exp));
         m->nctrl += n;
     }
-    cm_err e = cm_rebuild_face_ex(m, (uint32_t)f, 0, rb, &w->rbws, NULL);
-    *F = saved;
+    return CM_OK;
+}
+
+static void trial_restore(cm_model *m, int f, const cm_face *saved, uint32_t nctrl)
+{
+    m->faces[f] = *saved;
     m->nctrl = nctrl;
+}
+
+cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, const cm_fit_q *fit, cm_rebuilt *rb)
+{
+    cm_model *m = &w->dec.model;
+    cm_face saved = m->faces[f];
+    uint32_t nctrl = m->nctrl;
+    cm_err e = trial_place(m, f, method, layout, corner, fit);
+    if (e == CM_OK)
+        e = cm_rebuild_face_ex(m, (uint32_t)f, 0, rb, &w->rbws, NULL);
+    trial_restore(m, f, &saved, nctrl);
     return e;
+}
+
+/* the terminal's mesh of face f with a trial record, measured against the source surface both ways
+   (verify_mesh_face); HUGE_VAL when it does not tessellate or its triangles fold */
+double enc_trial_mesh_dev(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner,
+                          const cm_fit_q *fit, uint32_t checksum, double expect)
+{
+    cm_model *m = &w->dec.model;
+    cm_face saved = m->faces[f];
+    uint32_t nctrl = m->nctrl;
+    if (trial_place(m, f, method, layout, corner, fit) != CM_OK) {
+        trial_restore(m, f, &saved, nctrl);
+        return HUGE_VAL;
+    }
+    m->faces[f].checksum = checksum;
+    cm_mesh_face mf;
+    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1};
+    cm_tess_info info;
+    cm_status st;
+    cm_status_init(&st);
+    cm_err e = cm_tessellate_face(m, (uint32_t)f, m->tess_tol, &mesh, &w->tess_ws, &info, &st);
+    trial_restore(m, f, &saved, nctrl);
+    if (e != CM_OK || enc_face_folds(&mesh) != 0)
+        return HUGE_VAL;
+    double d = verify_mesh_face(lm, f, (const float(*)[3])mesh.pos, mesh.nverts, mesh.idx, mesh.nindex, expect);
+    return d < 0 ? HUGE_VAL : d;
 }
 
 void enc_fit_accept(tx *t, int f, int layout, int corner, int shown, const cm_rebuilt *rb, const face_error *fe,
@@ -103,6 +140,10 @@ static int first_passing(tx *t, const loaded_model *lm, int f, const encode_opts
 {
     for (int i = from; i < CM_METHOD_COUNT; i++) {
         const enc_method *E = enc_method_of(cm_method_table[i]->id);
+        /* a correction is the record of the method that fitted it (a face turned back from
+           GREGORY-FIT by the G1 fix-point must not carry its correction on) */
+        free(t->fit[f]);
+        t->fit[f] = NULL;
         if (E && E->trial && E->trial(t, lm, f, o, rep, fs))
             return cm_method_table[i]->id;
     }

@@ -1,22 +1,78 @@
 /* enc_g1fit.c - the encoder's half of G1FIT (cm_g1fit.h; decoder/methods/g1fit.c). */
 #include "enc_method.h"
+#include "fit_correction.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 #include "cm/cm_const.h"
 #include "cm/cm_g1fit.h"
+#include "cm/cm_gregface.h"
 #include "cm/cm_method.h"
+#include "cm/cm_patchfit.h"
 
 /* nets tried, smallest first (NFILL's sizes, spec 8.9) ... */
 static const int g1fit_ctrl[] = {4, 5, 6, 8, 10, 12, 16, 20, 24};
 /* ... each with the Coons interior, then the faired one (the record's mode) */
 static const int g1fit_modes[] = {0, 1};
+#define G1FIT_TRIES (sizeof g1fit_ctrl / sizeof g1fit_ctrl[0] * sizeof g1fit_modes / sizeof g1fit_modes[0])
+
+/* Format 4.2's correction is tried on the nets that were over the tolerance by at most this factor
+   (a correction of at most 5 x 5 coefficients mends a face that is nearly right, not a wrong one),
+   the CORRECTED_NETS closest first */
+#define CORRECTION_REACH 4.0
+#define CORRECTED_NETS 3
+
+/* half the G1 limit: cos(acos(CM_COS_G1) / 2) */
+#define G1FIT_COS_HALF sqrt(0.5 * (1.0 + CM_COS_G1))
+
+typedef struct g1fit_try {
+    int c, mode;
+    double err; /* §12's error without a correction */
+} g1fit_try;
 
 /*
- * The first (c, mode) whose rebuild passes §12 and whose normals along the face's G1 edges are within
- * half the G1 limit of its source surface's (verify_g1_self): then it meets a kept neighbour, and any
- * rebuilt one that keeps the same promise, within the limit (§13), so the G1 fix-point does not turn
- * it back.  Its record (nu = nv = c, mode) goes to t.
+ * What a rebuild that passed §12 must also keep (rb in fs[f] on success): its normals along the
+ * face's G1 edges within half the G1 limit of its source surface's (verify_g1_self), and, on a face
+ * of more than four edges, the terminal's trimmed mesh within the tolerance (enc_trial_mesh_dev: there
+ * the net passed §12 folded over the extra corners, and the mesh strayed 2.5 to 3.7 % of the face's
+ * size off the model: asitus___C1G0B0O's ten-sided faces of revolution, ovt__asmo's twelve-sided one,
+ * the Open CASCADE round trip of make check).  fe->max becomes what the mesh shows where that is more.
+ * fit: the net's correction (format 4.2), or NULL.
+ */
+static int g1fit_keeps(tx *t, const loaded_model *lm, int f, int corner, uint32_t n, double tol, const cm_rebuilt *rb,
+                       const cm_fit_q *fit, face_error *fe, face_surface *fs, const char **why)
+{
+    enc_work *w = t->w;
+    const cm_model *m = &w->dec.model;
+    double cos_half = G1FIT_COS_HALF;
+    if (!face_surface_set(&fs[f], rb))
+        return 0;
+    if (!(verify_g1_self(lm, m, f, fs) >= cos_half)) {
+        face_surface_free(&fs[f]);
+        *why = "G1FIT off its neighbours' tangent planes at every net";
+        return 0;
+    }
+    if (n > 4) {
+        double tess = m->tess_tol;
+        double dev = enc_trial_mesh_dev(w, lm, f, CM_METHOD_G1FIT, rb->surf.nu, corner, fit, rb->checksum,
+                                        fe->max + tess);
+        if (!(dev <= tol + tess)) {
+            face_surface_free(&fs[f]);
+            *why = "G1FIT's trimmed mesh off the surface at every net";
+            return 0;
+        }
+        if (dev - tess > fe->max)
+            fe->max = dev - tess;
+    }
+    return 1;
+}
+
+/*
+ * The first (c, mode) whose rebuild passes §12 and g1fit_keeps: then it meets a kept neighbour, and
+ * any rebuilt one that keeps the same promise, within the G1 limit (§13), so the G1 fix-point does
+ * not turn it back.  Else, from format 4.2, the nets that came closest with a correction.  Its record
+ * (nu = nv = c, mode, the correction) goes to t.
  */
 static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
                      face_surface *fs)
@@ -25,17 +81,13 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     const cm_model *m = &w->dec.model;
     const cm_face *F = &m->faces[f];
     uint32_t n = m->loops[F->loop0].nuse;
-    /* four edges only, though the format takes 4..12: on faces of more edges the net passed §12
-       folded over their extra corners, and the terminal's trimmed mesh strayed 2.5 to 3.7 % of the
-       face's size off the model (asitus___C1G0B0O's ten-sided faces of revolution, ovt__asmo's
-       twelve-sided one, whose joints are all within 20 degrees of flat: the Open CASCADE round trip
-       of make check); the encoder's §12 does not see a trimmed mesh */
-    if (!o->g1fit || n != 4)
+    if (!o->g1fit || n < CM_G1FIT_MIN_EDGES || n > CM_GREG_JOINED_MAX_EDGES)
         return 0;
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
-    /* half the G1 limit: cos(acos(CM_COS_G1) / 2) */
-    double cos_half = sqrt(0.5 * (1.0 + CM_COS_G1));
     const char *why = "G1FIT over the error at every net";
+    double cos_half = G1FIT_COS_HALF;
+    g1fit_try near[G1FIT_TRIES];
+    int nnear = 0;
     for (size_t i = 0; i < sizeof g1fit_ctrl / sizeof g1fit_ctrl[0]; i++) {
         int c = g1fit_ctrl[i];
         if (c > CM_MAX_FIT_CTRL)
@@ -54,18 +106,55 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
             face_error fe;
             if (!verify_face(lm, m, f, &rb, tol, &fe))
                 return 0;
-            if (!(fe.max < tol))
-                continue;
-            if (!face_surface_set(&fs[f], &rb))
-                return 0;
-            if (!(verify_g1_self(lm, m, f, fs) >= cos_half)) {
-                face_surface_free(&fs[f]);
-                why = "G1FIT off its neighbours' tangent planes at every net";
+            if (!(fe.max < tol)) {
+                /* a candidate for a correction, when the border keeps its promise (the correction
+                   leaves the border rows: a net whose G1 fails here fails corrected) */
+                if (enc_net_fit(o) && fe.max < CORRECTION_REACH * tol && c > 4 && face_surface_set(&fs[f], &rb)) {
+                    if (verify_g1_self(lm, m, f, fs) >= cos_half)
+                        near[nnear++] = (g1fit_try){c, mode, fe.max};
+                    face_surface_free(&fs[f]);
+                }
                 continue;
             }
+            if (!g1fit_keeps(t, lm, f, corner, n, tol, &rb, NULL, &fe, fs, &why))
+                continue;
             enc_fit_accept(t, f, c, corner, mode, &rb, &fe, rep);
             return 1;
         }
+    }
+    /* the closest nets first */
+    for (int i = 1; i < nnear; i++)
+        for (int k = i; k > 0 && near[k].err < near[k - 1].err; k--) {
+            g1fit_try x = near[k];
+            near[k] = near[k - 1];
+            near[k - 1] = x;
+        }
+    for (int i = 0; i < nnear && i < CORRECTED_NETS; i++) {
+        fit_record *fr = malloc(sizeof *fr);
+        face_error fe;
+        if (!fr)
+            return 0;
+        int corner = near[i].c | near[i].mode << 8;
+        cm_rebuilt rb;
+        cm_fit_q view;
+        /* the correction leaves the border rows: the G1 check is the plain net's */
+        if (!enc_net_corrected(w, lm, f, CM_METHOD_G1FIT, near[i].c, corner, tol, fr, &fe, &rb) ||
+            !(view = fit_record_view(fr), g1fit_keeps(t, lm, f, corner, n, tol, &rb, &view, &fe, fs, &why))) {
+            free(fr);
+            continue;
+        }
+        /* spec §14 step 6: not when the correction costs more than the surface it replaces */
+        if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f], o->predicted)) {
+            face_surface_free(&fs[f]);
+            free(fr);
+            why = "record larger than the surface";
+            continue;
+        }
+        free(t->fit[f]);
+        t->fit[f] = fr;
+        enc_fit_accept(t, f, near[i].c, corner, near[i].mode, &rb, &fe, rep);
+        rep->fit_m = fr->m;
+        return 1;
     }
     if (!rep->why)
         rep->why = why;

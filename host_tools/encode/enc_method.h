@@ -34,6 +34,24 @@ extern const enc_method enc_method_plane, enc_method_gregory, enc_method_gregory
 cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner, const cm_fit_q *fit, cm_rebuilt *rb);
 
 /**
+ * Face f with a trial record (fit: its correction, or NULL; its rebuild's checksum) tessellated as the terminal will, at the file's
+ * chordal tolerance, and measured against its source surface both ways (verify_mesh_face, `expect`
+ * its expected distance): what the trimmed mesh the viewer gets strays, which §12 on the untrimmed
+ * surface does not see.  HUGE_VAL when the face does not tessellate or its triangles fold.
+ */
+double enc_trial_mesh_dev(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner,
+                          const cm_fit_q *fit, uint32_t checksum, double expect);
+struct fit_record;
+/**
+ * Format 4.2: face f's net (method NFILL or G1FIT, record layout and corner), over the tolerance by
+ * itself, with an interior correction fitted to the source surface (fit_net_correction, at most as
+ * many coefficients per direction as the net has interior rows).  1 when the corrected rebuild
+ * passes §12 within tol: the record in *fr, the numbers in *fe, the rebuild in *rb (the smallest m
+ * that passes).  The method's own checks are the caller's.
+ */
+int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner, double tol,
+                      struct fit_record *fr, face_error *fe, cm_rebuilt *rb);
+/**
  * A candidate passed (GREGORY family, NFILL, G1FIT): its record fields (layout, corner:
  * enc_record_fields) and checksum to t, its measures to rep (rep->corner shows `shown`: the corner,
  * or the fairing or mode index).

@@ -20,8 +20,8 @@ void encode_opts_for_format(encode_opts *o, int major, int minor)
     }
     if (major < CM_FMT_COMPACT_MAJOR)
         o->compact_header = 0;
-    if (major == CM_FMT_COMPACT_MAJOR && minor < (int)CM_FMT_SHORT_ORIGIN_MINOR)
-        o->compact_minor = 0;
+    if (major == CM_FMT_COMPACT_MAJOR && minor < o->compact_minor)
+        o->compact_minor = minor < 0 ? 0 : minor; /* 4.0: the long origin; 4.1: no net corrections */
     if (major < CM_FMT_PREDICT_MAJOR)
         o->predicted = o->budget_steps = 0;
     if (major > 2)

@@ -54,7 +54,8 @@ typedef struct encode_opts {
                                     0: format 2's coding, for terminals of format 2) */
     int compact_header;          /* with predicted: format 4's compact header (cm_fmt_compact_pack; default 1;
                                     0: format 3's fixed one, for terminals of format 3) */
-    int compact_minor;           /* its minor: 1 (default) codes the origin on a coarse step and the
+    int compact_minor;           /* its minor: 2 (default) lets NFILL and G1FIT nets carry an interior
+                                    correction (format 4.2); 1 codes the origin on a coarse step and the
                                     rebuild tolerance from the default (format 4.1); 0: format 4.0 */
     int budget_steps;            /* with predicted: curves as the fewest cubic points and on steps of their
                                     own from the tolerance budget, the vertices on one (tx_coarsen.c;

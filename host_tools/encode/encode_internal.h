@@ -189,6 +189,11 @@ static inline int enc_compact_header(const encode_opts *o)
 {
     return o->predicted && o->compact_header;
 }
+/* format 4.2 on: NFILL and G1FIT nets may carry an interior correction (cm_fit_net_add) */
+static inline int enc_net_fit(const encode_opts *o)
+{
+    return enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_NET_FIT_MINOR;
+}
 /* the chordal tolerance the file can say nearest to tess (format 4: a multiple of the grid step), so
    that what the encoder measures the tessellation with is what the terminal reads */
 double enc_file_tess(const tx *t, double tess);

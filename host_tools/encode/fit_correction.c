@@ -213,31 +213,39 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
     if (!(worst < tol))
         ok = 0;
     if (ok) {
-        /* the step: the grid's times the largest power of two at most tol / 256 */
-        int e = (int)floor(log2(tol / 256.0 / grid));
-        if (e < 0)
-            e = 0;
-        if (e > CM_FIT_MAX_EXP)
-            e = CM_FIT_MAX_EXP;
-        double step = ldexp(grid, e);
-        out->m = m;
-        out->npatch = gs->npatch;
-        out->exp = e;
-        memset(out->q, 0, sizeof out->q);
-        for (int kk = 0; kk < gs->npatch && ok; kk++)
-            for (int i = 0; i < m * m; i++) {
-                double c[3] = {gs->corr[kk][i].x, gs->corr[kk][i].y, gs->corr[kk][i].z};
-                for (int a = 0; a < 3; a++) {
-                    double r = nearbyint(c[a] / step);
-                    if (!(fabs(r) <= CM_FIT_MAX_INT)) {
-                        ok = 0;
-                        break;
-                    }
-                    out->q[kk * m * m + i][a] = (int32_t)r;
-                }
-            }
+        cm_vec3 *c = malloc(sizeof *c * (size_t)(gs->npatch * m * m));
+        for (int kk = 0; c && kk < gs->npatch; kk++)
+            for (int i = 0; i < m * m; i++)
+                c[kk * m * m + i] = gs->corr[kk][i];
+        ok = c && fit_record_quantise(out, c, m, gs->npatch, tol, grid);
+        free(c);
     }
     free(gs);
     free(pr);
     return ok;
+}
+
+int fit_record_quantise(fit_record *out, const cm_vec3 *c, int m, int npatch, double tol, double grid)
+{
+    /* the step: the grid's times the largest power of two at most tol / 256 */
+    int e = (int)floor(log2(tol / 256.0 / grid));
+    if (e < 0)
+        e = 0;
+    if (e > CM_FIT_MAX_EXP)
+        e = CM_FIT_MAX_EXP;
+    double step = ldexp(grid, e);
+    out->m = m;
+    out->npatch = npatch;
+    out->exp = e;
+    memset(out->q, 0, sizeof out->q);
+    for (int i = 0; i < npatch * m * m; i++) {
+        double x[3] = {c[i].x, c[i].y, c[i].z};
+        for (int a = 0; a < 3; a++) {
+            double r = nearbyint(x[a] / step);
+            if (!(fabs(r) <= CM_FIT_MAX_INT))
+                return 0;
+            out->q[i][a] = (int32_t)r;
+        }
+    }
+    return 1;
 }

@@ -44,6 +44,20 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs,
  * inner curves cutting across a surface they do not follow (the outer sides are the curve mesh's
  * edges, on the surface).  1 otherwise, or when the face has no source domain (no verdict).
  */
+/**
+ * A fitted net's interior correction (NFILL, G1FIT from format 4.2; cm_fit_net_add): m per
+ * direction, fitted to face `bface`'s source surface for the bicubic net `net` (rebuilt without
+ * one; m at most its interior rows, nu - 4 and nv - 4), quantised as fit_correction does.  Returns 1
+ * and the record (one patch); 0 when the face has no source domain or the corrected net still
+ * misses a point of the source grid by tol or more.  fit_net.c.
+ */
+int fit_net_correction(const loaded_model *lm, int bface, const cm_surf *net, int m, double tol, double grid,
+                       fit_record *out);
+
+/** The coefficients c (npatch * m * m) as the record sends them: a step of the model grid (`grid`
+    mm) times the largest power of two at most tol/256.  0 when one is beyond CM_FIT_MAX_INT. */
+int fit_record_quantise(fit_record *out, const cm_vec3 *c, int m, int npatch, double tol, double grid);
+
 int fit_sides_within(const loaded_model *lm, int bface, const cm_greg_surface *gs, double tol);
 
 #endif /* FIT_CORRECTION_H */

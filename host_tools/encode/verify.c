@@ -317,6 +317,20 @@ static double surf_dist(surf_walk *w, cm_vec3 p)
     return d;
 }
 
+double verify_surf_foot(const cm_surf *s, double accept, cm_vec3 p, int *have, double *u, double *v)
+{
+    surf_walk w;
+    surf_walk_init(&w, s, accept);
+    w.have = *have;
+    w.u = *u;
+    w.v = *v;
+    double d = surf_dist(&w, p);
+    *have = w.have;
+    *u = w.u;
+    *v = w.v;
+    return d;
+}
+
 static double face_dist(const cm_rebuilt *rb, greg_walk *w, surf_walk *sw, cm_vec3 p)
 {
     if (rb->repr == CM_REPR_NURBS)

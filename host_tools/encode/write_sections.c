@@ -298,6 +298,7 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     const cmesh *cm = &lm->mesh;
     cm_face_ctx ctx;
     cm_face_ctx_init(&ctx);
+    ctx.net_fit = enc_net_fit(t->o);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nfaces);
     int enext = 0;
     for (int f = 0; f < t->nfaces; f++) {

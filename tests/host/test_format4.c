@@ -175,7 +175,7 @@ static void check_both_ways(loaded_model *lm)
     encode_result r3, r4, r41;
     encode_as(lm, 3, &r3);
     encode_as_minor(lm, 4, 0, &r4);
-    encode_as(lm, 0, &r41);
+    encode_as_minor(lm, 4, CM_FMT_SHORT_ORIGIN_MINOR, &r41);
     assert_int_equal(r3.bytes[CM_HDR_MAJOR], CM_FMT_PREDICT_MAJOR);
     assert_int_equal(r4.bytes[CM_HDR_MAJOR], CM_FMT_COMPACT_MAJOR);
     assert_int_equal(r4.bytes[CM_HDR_MINOR], 0);

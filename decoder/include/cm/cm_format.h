@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 1     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 2     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -90,6 +90,7 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
    first), the rebuild tolerance as its difference from the default 1 % (167772 / 2^24) */
 #define CM_FMT_SHORT_ORIGIN_MINOR 1u
 #define CM_FMT_KEPT_OFF_EDGES_MINOR 1u /* 4.1: kept nets re-approximated (cm_model.kept_off_edges) */
+#define CM_FMT_NET_FIT_MINOR 2u        /* 4.2: NFILL and G1FIT records may carry an interior correction */
 #define CM_FMT_REL_TOL_DEFAULT 167772u
 #define CM_FMT_MAX_ORIGIN_SHIFT 62u
 /** Append v as an unsigned LEB128 varint at b; returns its bytes (1..CM_FMT_VARINT_MAX). */
@@ -191,12 +192,14 @@ typedef struct cm_face {
     uint8_t method, flip, color; /* color: palette index, 0 = none */
     uint8_t layout;       /* GREGORY record (spec 15.2): layout 0..3 */
     uint16_t corner;      /* and layout 2's vertex j, or layout 3's corner bits (up to 12 edges) */
-    uint8_t fit;          /* GREGORY-FIT: coefficients per direction m (bits 0-2) and patches (bits
-                             3-7) of its correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
+    uint8_t fit;          /* GREGORY-FIT, and NFILL and G1FIT from format 4.2: coefficients per
+                             direction m (bits 0-2) and patches (bits 3-7; a net: 1) of its
+                             correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
     uint8_t fill_nu, fill_nv, fill_phi; /* NFILL, G1FIT record (spec 15.2): control points per direction
                              and NFILL's fairing weight's index (cm_nfill_phi) or G1FIT's mode; else 0 */
-    uint32_t surf;        /* KEEP: index of its kept surface; GREGORY-FIT: index in ctrl[] of its
-                             first correction coefficient (patch k's (i,j) at surf + (k m + i) m + j) */
+    uint32_t surf;        /* KEEP: index of its kept surface; a face with a correction (fit != 0):
+                             index in ctrl[] of its first coefficient (patch k's (i,j) at
+                             surf + (k m + i) m + j) */
     uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */
     uint32_t rec_off;     /* byte offset in the file where the face's record starts (the range
                              coder's read position then): errors about the face name it */

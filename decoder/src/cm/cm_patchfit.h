@@ -53,4 +53,14 @@ void cm_fit_add(const cm_vec3 *c, int m, double u, double v, cm_vec3 *S, cm_vec3
  */
 double cm_fit_dequantise(int32_t qi, double grid, int exp);
 
+/**
+ * A fitted net's interior correction (NFILL, G1FIT; format 4.2): the same D with m per direction,
+ * over the net's parameters, added to a clamped bicubic net of nu x nv points (row-major in u,
+ * knots U and V): point (i,j), 2 <= i <= nu-3 and 2 <= j <= nv-3, moves by D(xi_i, eta_j) at its
+ * Greville abscissae.  Rows and columns 0, 1, n-2 and n-1 stay: the border, and the cross
+ * derivatives along it that G1 with the neighbours was built from, are the net's own.  The
+ * surface stays one B-spline net, evaluated and tessellated as before.
+ */
+void cm_fit_net_add(cm_vec3 *ctrl, int nu, int nv, const double *U, const double *V, const cm_vec3 *c, int m);
+
 #endif /* CM_PATCHFIT_H */

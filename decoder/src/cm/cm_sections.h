@@ -43,7 +43,9 @@ typedef struct cm_surf_ctx {
 typedef struct cm_face_ctx {
     cm_ac_int count, method, loops, uses, back, layout, corner;
     cm_ac_prob flip, is_new, rev_new, rev_old;
-    cm_ac_int fit_m, fit_patches, fit_exp, fit_coef; /* GREGORY-FIT's correction */
+    cm_ac_int fit_m, fit_patches, fit_exp, fit_coef; /* GREGORY-FIT's correction (and the nets') */
+    int net_fit; /* format 4.2 on: NFILL and G1FIT records end with a correction's field (not a
+                    coder context: set by the reader and the writer from the version) */
 } cm_face_ctx;
 
 /* COLR: palette size, then a palette index per face */

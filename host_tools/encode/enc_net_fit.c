@@ -1,0 +1,56 @@
+/* enc_net_fit.c - a fitted net (NFILL, G1FIT) with format 4.2's interior correction, tried (see
+   enc_method.h, enc_net_corrected; the fit itself: fit_net.c). */
+#include "enc_method.h"
+#include "fit_correction.h"
+
+#include <stdlib.h>
+
+#include "cm/cm_patchfit.h"
+
+/*
+ * The functions of a smaller m are combinations of those of the largest (Bernstein degree
+ * elevation), so the largest the net's interior takes is fitted first and the net given up when it
+ * fails (most trials fail: this is the encoder's time); then m = 1, 2, ... for a smaller record.
+ */
+int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner, double tol,
+                      fit_record *fr, face_error *fe, cm_rebuilt *rb)
+{
+    const cm_model *m = &w->dec.model;
+    int bface = lm->mesh.faces[f].brep_face;
+    face_surface base = {0}; /* the plain net (the next rebuild reuses the workspace) */
+    fit_record *best = malloc(sizeof *best);
+    int ok = best && enc_trial_rebuild(w, f, method, layout, corner, NULL, rb) == CM_OK && rb->repr == CM_REPR_NURBS &&
+             face_surface_set(&base, rb);
+    int top = ok ? base.nurbs.nu - 4 : 0;
+    if (ok && base.nurbs.nv - 4 < top)
+        top = base.nurbs.nv - 4;
+    if (top > CM_FIT_MAX_M)
+        top = CM_FIT_MAX_M;
+    ok = ok && top >= 1 && fit_net_correction(lm, bface, &base.nurbs, top, tol, m->q, best);
+    cm_fit_q view;
+    if (ok) {
+        view = fit_record_view(best);
+        ok = enc_trial_rebuild(w, f, method, layout, corner, &view, rb) == CM_OK &&
+             verify_face(lm, m, f, rb, tol, fe) && fe->max < tol;
+    }
+    int smaller = 0;
+    for (int k = 1; ok && k < top && !smaller; k++) {
+        if (!fit_net_correction(lm, bface, &base.nurbs, k, tol, m->q, fr))
+            continue;
+        view = fit_record_view(fr);
+        face_error e;
+        smaller = enc_trial_rebuild(w, f, method, layout, corner, &view, rb) == CM_OK &&
+                  verify_face(lm, m, f, rb, tol, &e) && e.max < tol;
+        if (smaller)
+            *fe = e;
+    }
+    if (ok && !smaller) {
+        /* the largest after all: rebuilt again (the tries since reused the workspace) */
+        *fr = *best;
+        view = fit_record_view(fr);
+        ok = enc_trial_rebuild(w, f, method, layout, corner, &view, rb) == CM_OK;
+    }
+    face_surface_free(&base);
+    free(best);
+    return ok;
+}
