@@ -218,6 +218,56 @@ static void test_half_cylinder_end_to_end(void **state)
 }
 
 /*
+ * A face of more than four edges: the half cylinder's first quarter with its bottom arc cut in two
+ * (igw_t_vertex_half_cylinder_144, five edges), next to the plain second quarter.  G1FIT takes both:
+ * the five-edged one because the terminal's trimmed mesh of its net, measured by the encoder against
+ * the cylinder both ways, stays within the tolerance (enc_trial_mesh_dev); the report's mesh says
+ * so, and the decoded mesh lies on the cylinder.
+ */
+static void test_five_edges_by_the_mesh(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_t_vertex_half_cylinder_144(&w, R, H, 2, 0);
+    cm_status st;
+    assert_ok(igw_load(&w, "t_vertex_cylinder", &lm, &st));
+    assert_int_equal(lm.mesh.nfaces, 2);
+    encode_opts o;
+    encode_opts_default(&o);
+    o.gregory = 0;
+    o.nfill = 0;
+    o.measure_mesh = 1;
+    cm_status_init(&st);
+    memset(&r, 0, sizeof r);
+    assert_ok(encode_model(&lm, &o, &r, &st));
+    int five = -1;
+    for (int f = 0; f < 2; f++) {
+        assert_int_equal(r.faces[f].method, CM_METHOD_G1FIT);
+        five = lm.mesh.loops[lm.mesh.faces[f].first_loop].n == 5 ? f : five;
+        double tol = 0.01 * r.faces[f].bbox;
+        if (!(r.faces[f].mesh_dev >= 0 && r.faces[f].mesh_dev <= tol + r.tess_used))
+            fail_msg("face %d: its mesh %.4g mm off the cylinder's face, tolerance %.4g + %.4g", f, r.faces[f].mesh_dev,
+                     tol, r.tess_used);
+    }
+    assert_true(five >= 0);
+    decode(&r);
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8};
+    cm_mesh_clear(&mesh);
+    cm_status_init(&st);
+    assert_ok(cm_tessellate_face(&dec.model, (uint32_t)five, dec.model.tess_tol, &mesh, &tess, NULL, &st));
+    double worst = 0;
+    for (uint32_t i = 0; i < mesh.nverts; i++)
+        worst = fmax(worst, off_cylinder(cm_v3((double)pos[i][0], (double)pos[i][1], (double)pos[i][2])));
+    if (!(worst < 0.01 * r.faces[five].bbox))
+        fail_msg("the five-edged face's mesh %.4g mm off the cylinder", worst);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+/*
  * Spec T5's split half cylinder (two quarters sharing a tangent line): both quarters G1FIT, within
  * the tolerance, and the shared edge G1 on the final surfaces (spec §13, as the encoder's fix-point
  * measures it), the file decoding with both checksums.
@@ -295,6 +345,7 @@ int main(void)
         cmocka_unit_test(test_edge_normals_half_circle),
         cmocka_unit_test(test_kernel_half_cylinder),
         cmocka_unit_test(test_half_cylinder_end_to_end),
+        cmocka_unit_test(test_five_edges_by_the_mesh),
         cmocka_unit_test(test_split_cylinder_g1),
         cmocka_unit_test(test_periodic_face_refused),
     };
