@@ -1,6 +1,7 @@
 /* cm_g1fit.c - method G1FIT's surface (spec §9 as this project builds it; see cm_g1fit.h). */
 #include "cm/cm_g1fit.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -108,12 +109,33 @@ cm_err cm_g1fit_edge_normals(const cm_greg_side *gs, cm_vec3 *N, cm_status *st)
     return CM_OK;
 }
 
+/* side k's sine at inner sample j (1..9): three to a point (cm_g1fit_build) */
+static double twist_sine(const cm_vec3 *twist, int k, int j)
+{
+    cm_vec3 t = twist[3 * k + (j - 1) / 3];
+    int c = (j - 1) % 3;
+    return c == 0 ? t.x : (c == 1 ? t.y : t.z);
+}
+
+/* N turned about the unit tangent along d by the angle of sine s (|s| < 1): sqrt(1 - s^2) N + s unit(T x N) */
+static cm_vec3 twisted(cm_vec3 N, cm_vec3 d, double s, double eps)
+{
+    int ok;
+    cm_vec3 T = cm_unit_or(d, eps, cm_v3(0.0, 0.0, 0.0), &ok);
+    if (!ok || s == 0.0)
+        return N;
+    cm_vec3 B = cm_unit_or(cm_cross(T, N), CM_GREG_EPS_DIR, cm_v3(0.0, 0.0, 0.0), &ok);
+    if (!ok)
+        return N;
+    return cm_add(cm_scale(N, sqrt(1.0 - s * s)), cm_scale(B, s));
+}
+
 /*
  * The samples of the chain of sides from..to-1 (cyclic), in loop order, reversed when `reverse`:
  * points, unit normals (cm_g1fit_edge_normals) and chord-length parameters on [0, 1].
  */
-static cm_err chain_samples(const cm_greg_input *in, int from, int to, int reverse, cm_g1fit_ws *ws, int *count,
-                            cm_status *st)
+static cm_err chain_samples(const cm_greg_input *in, int from, int to, int reverse, const cm_vec3 *twist,
+                            cm_g1fit_ws *ws, int *count, cm_status *st)
 {
     int m = 0, n = in->n, s = from;
     do {
@@ -128,10 +150,12 @@ static cm_err chain_samples(const cm_greg_input *in, int from, int to, int rever
                 break; /* the next edge's first sample */
             double u = (double)j / (double)CM_FMT_SEG_PER_EDGE;
             cm_vec3 q[CM_MAX_DERS + 1];
-            if ((e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, 0, q, st)) != CM_OK)
+            if ((e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, 1, q, st)) != CM_OK)
                 return e;
             ws->p[m] = q[0];
             ws->N[m] = N[j];
+            if (twist && j > 0 && j < CM_FMT_SEG_PER_EDGE)
+                ws->N[m] = twisted(N[j], gs->rev ? cm_neg(q[1]) : q[1], twist_sine(twist, s, j), in->eps_len);
             m++;
         }
         s = (s + 1) % n;
@@ -199,8 +223,8 @@ static cm_vec3 restrict_point(cm_vec3 Q, const cm_vec3 *b, const cm_vec3 *n, int
     return cm_sub(cm_sub(Q, cm_scale(n[0], a1)), cm_scale(n[1], a2));
 }
 
-cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, cm_nfill_surface *out, cm_g1fit_ws *ws,
-                      cm_status *st)
+cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, const cm_vec3 *twist, cm_nfill_surface *out,
+                      cm_g1fit_ws *ws, cm_status *st)
 {
     cm_err e;
     if (nu > CM_MAX_FIT_CTRL || nv > CM_MAX_FIT_CTRL)
@@ -225,7 +249,7 @@ cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, cm_nfil
         return e;
     for (int s = 0; s < 4; s++) {
         int m = 0, n = (s & 1) ? nv : nu;
-        if ((e = chain_samples(in, corner[s], corner[(s + 1) % 4], s >= 2, ws, &m, st)) != CM_OK)
+        if ((e = chain_samples(in, corner[s], corner[(s + 1) % 4], s >= 2, twist, ws, &m, st)) != CM_OK)
             return e;
         const double *kn = (s & 1) ? out->V : out->U;
         if ((e = cm_fit_curve(ws->p, ws->t, NULL, m, 3, n, kn, &ws->p[0], &ws->p[m - 1], ws->side[s], NULL, &ws->fit,

@@ -14,6 +14,84 @@
 #include "cm/cm_g1fit.h"
 #include "cm/cm_limits_info.h"
 
+/*
+ * Format 4.2: the twists along the outer loop's edges (cm_g1fit.h).  A bit: any; then the count of
+ * uses (the loop follows the record: its length is checked against it in cm_g1fit_check_loops), and
+ * per use a bit and, when set, each inner sample's quantised sine as its change from the sample
+ * before (0 before the first).  In the model's pool after the correction's coefficients, three
+ * samples a point (zeros for a use without); F->fill_phi's bit 1 says so, F->corner holds the count.
+ */
+static cm_err read_twists(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
+{
+    if (!cm_ac_dec_bit(ac, &ctx->twist_on))
+        return ac->overrun ? (why->what = "face record", CM_E_TRUNCATED) : CM_OK;
+    uint64_t n = cm_ac_dec_uint(ac, &ctx->twist_n);
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    if (n < CM_G1FIT_MIN_EDGES || n > CM_GREG_JOINED_MAX_EDGES) {
+        why->what = "G1FIT twists' count";
+        return CM_E_RANGE;
+    }
+    uint32_t need = 3u * (uint32_t)n;
+    if (need > CM_MAX_MODEL_CTRL - m->nctrl) {
+        why->what = "G1FIT twists";
+        why->limit = CM_LIMIT_MAX_MODEL_CTRL;
+        why->need = (uint64_t)m->nctrl + need;
+        return CM_E_LIMIT;
+    }
+    if (!F->fit)
+        F->surf = m->nctrl;
+    for (uint32_t k = 0; k < n; k++) {
+        double s[CM_TWIST_N] = {0};
+        if (cm_ac_dec_bit(ac, &ctx->twist_use)) {
+            int64_t q = 0;
+            for (int j = 0; j < CM_TWIST_N; j++) {
+                q += cm_ac_dec_sint(ac, &ctx->twist);
+                if (ac->overrun) {
+                    why->what = "face record";
+                    return CM_E_TRUNCATED;
+                }
+                if (q < -CM_TWIST_MAX || q > CM_TWIST_MAX) {
+                    why->what = "G1FIT twist";
+                    return CM_E_RANGE;
+                }
+                s[j] = (double)q / (double)CM_TWIST_ONE;
+            }
+        }
+        for (int i = 0; i < 3; i++) {
+            m->ctrl[m->nctrl] = cm_v3(s[3 * i], s[3 * i + 1], s[3 * i + 2]);
+            m->w[m->nctrl] = 1.0;
+            m->nctrl++;
+        }
+    }
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    F->fill_phi |= CM_G1FIT_TWISTED;
+    F->corner = (uint16_t)n;
+    return CM_OK;
+}
+
+static void write_twists(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_fit_q *fit)
+{
+    int n = fit ? fit->ntwist : 0;
+    cm_ac_enc_bit(ac, &ctx->twist_on, n > 0);
+    if (n == 0)
+        return;
+    cm_ac_enc_uint(ac, &ctx->twist_n, (uint64_t)n);
+    for (int k = 0; k < n; k++) {
+        int any = 0;
+        for (int j = 0; j < CM_TWIST_N; j++)
+            any |= fit->twist[k][j] != 0;
+        cm_ac_enc_bit(ac, &ctx->twist_use, (unsigned)any);
+        for (int j = 0; any && j < CM_TWIST_N; j++)
+            cm_ac_enc_sint(ac, &ctx->twist, (int64_t)fit->twist[k][j] - (j ? fit->twist[k][j - 1] : 0));
+    }
+}
+
 cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
 {
     uint64_t nu = cm_ac_dec_direct(ac, 5) + CM_NFILL_MIN_CTRL;
@@ -28,7 +106,10 @@ cm_err cm_g1fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_fac
     F->fill_nu = (uint8_t)nu;
     F->fill_nv = (uint8_t)nv;
     F->fill_phi = (uint8_t)mode;
-    return cm_fit_net_read_record(ac, ctx, m, F, why);
+    cm_err e = cm_fit_net_read_record(ac, ctx, m, F, why);
+    if (e != CM_OK || !ctx->net_fit)
+        return e;
+    return read_twists(ac, ctx, m, F, why);
 }
 
 void cm_g1fit_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F, const cm_fit_q *fit)
@@ -39,6 +120,8 @@ void cm_g1fit_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F, co
     cm_ac_enc_direct(ac, F->checksum & 0xffffu, 16);
     cm_ac_enc_direct(ac, F->checksum >> 16, 16);
     cm_fit_net_write_record(ac, ctx, fit);
+    if (ctx->net_fit)
+        write_twists(ac, ctx, fit);
 }
 
 /* what the face's net and loop ask of a build: control points, the faired interior, loop input */
@@ -46,7 +129,7 @@ static void g1fit_need(const cm_model *m, const cm_face *F, uint32_t need[CM_LIM
 {
     uint32_t n = m->loops[F->loop0].nuse, nu = F->fill_nu, nv = F->fill_nv;
     need[CM_LIMIT_MAX_FIT_CTRL] = nu > nv ? nu : nv;
-    if (F->fill_phi == 1) {
+    if ((F->fill_phi & 1u) == 1) {
         uint32_t K = (nu - 4u) * (nv - 4u), w = 2u * (nv - 4u);
         need[CM_LIMIT_MAX_LSQ_UNKNOWNS] = K;
         need[CM_LIMIT_MAX_LSQ_BAND] = K == 0 ? 0 : (w < K - 1u ? w : K - 1u);
@@ -65,6 +148,8 @@ cm_err cm_g1fit_check_loops(const cm_model *m, const cm_face *F, cm_method_fault
         why->what = "G1FIT face with fewer than 4 edges";
     else if (n > CM_GREG_JOINED_MAX_EDGES)
         why->what = "G1FIT loop of more than 12 edges";
+    else if ((F->fill_phi & CM_G1FIT_TWISTED) && F->corner != n)
+        why->what = "G1FIT twists do not fit the loop";
     if (why->what)
         return CM_E_FORMAT;
     uint32_t need[CM_LIMIT_COUNT] = {0};
@@ -79,7 +164,16 @@ cm_err cm_g1fit_rebuild(const cm_model *m, uint32_t f, int check, cm_rebuilt *ou
     cm_err e = cm_greg_input_build(m, f, 1, &ws->gin, &ws->corner, st);
     if (e != CM_OK)
         return e;
-    if ((e = cm_g1fit_build(&ws->gin, F->fill_nu, F->fill_nv, F->fill_phi, &ws->nfill, &ws->g1fit_ws, st)) != CM_OK)
+    /* the twists follow the correction's coefficients in the pool (read_twists) */
+    const cm_vec3 *twist = NULL;
+    if (F->fill_phi & CM_G1FIT_TWISTED) {
+        uint32_t at = F->surf + (F->fit ? cm_face_fit_m(F) * cm_face_fit_m(F) : 0u);
+        if ((int)F->corner != ws->gin.n || at > m->nctrl || 3u * F->corner > m->nctrl - at)
+            return cm_fail(st, CM_E_FORMAT, "G1FIT twists");
+        twist = &m->ctrl[at];
+    }
+    if ((e = cm_g1fit_build(&ws->gin, F->fill_nu, F->fill_nv, F->fill_phi & 1u, twist, &ws->nfill, &ws->g1fit_ws,
+                            st)) != CM_OK)
         return e;
     /* Su x Sv is the loop's turning direction at its corners (side 0 leaves corner 0 along the loop,
        side 3 leaves it against): the face normal n_F when the loop runs counter-clockwise about it */

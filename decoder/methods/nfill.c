@@ -73,8 +73,9 @@ void cm_fit_net_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_fit_q *fi
 {
     if (!ctx->net_fit)
         return;
-    cm_ac_enc_uint(ac, &ctx->fit_m, fit ? (uint64_t)fit->m : 0u);
-    if (fit)
+    uint64_t fm = fit ? (uint64_t)fit->m : 0u; /* G1FIT's twists alone: m = 0 */
+    cm_ac_enc_uint(ac, &ctx->fit_m, fm);
+    if (fm > 0)
         cm_fit_write_coefs(ac, ctx, fit);
 }
 

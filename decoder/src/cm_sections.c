@@ -70,6 +70,10 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_int_init(&c->fit_patches);
     cm_ac_int_init(&c->fit_exp);
     cm_ac_int_init(&c->fit_coef);
+    cm_ac_prob_init(&c->twist_on);
+    cm_ac_prob_init(&c->twist_use);
+    cm_ac_int_init(&c->twist_n);
+    cm_ac_int_init(&c->twist);
     c->net_fit = 0;
 }
 

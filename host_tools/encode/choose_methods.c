@@ -13,6 +13,7 @@
 #include "cm/cm_corner.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_cubic_convert.h"
+#include "cm/cm_g1fit.h"
 #include "cm/cm_method.h"
 #include "cm/cm_sections.h"
 
@@ -46,9 +47,14 @@ static cm_err trial_place(cm_model *m, int f, int method, int layout, int corner
     cm_face *F = &m->faces[f];
     enc_record_fields(F, method, layout, corner);
     F->fit = 0;
-    if (fit) {
+    if (fit && fit->ntwist > 0) {
+        /* G1FIT's twists after the correction's coefficients, as read_twists places them */
+        if (fit->ntwist > CM_GREG_MAX_INPUT || 3u * (uint32_t)fit->ntwist + CM_FIT_MAX_COEF > CM_MAX_MODEL_CTRL - m->nctrl)
+            return CM_E_LIMIT;
+    }
+    if (fit && fit->m > 0) {
         uint32_t n = (uint32_t)(fit->patches * fit->m * fit->m);
-        if (fit->m < 1 || fit->m > CM_FIT_MAX_M || fit->patches < 1 || fit->patches > CM_MAX_GREG ||
+        if (fit->m > CM_FIT_MAX_M || fit->patches < 1 || fit->patches > CM_MAX_GREG ||
             n > CM_MAX_MODEL_CTRL - m->nctrl)
             return CM_E_LIMIT;
         F->fit = cm_face_fit_pack((unsigned)fit->m, (unsigned)fit->patches);
@@ -58,6 +64,17 @@ static cm_err trial_place(cm_model *m, int f, int method, int layout, int corner
                                           cm_fit_dequantise(fit->q[i][1], m->q, fit->exp),
                                           cm_fit_dequantise(fit->q[i][2], m->q, fit->exp));
         m->nctrl += n;
+    }
+    if (fit && fit->ntwist > 0) {
+        if (!F->fit)
+            F->surf = m->nctrl;
+        for (int k = 0; k < fit->ntwist; k++)
+            for (int i = 0; i < 3; i++)
+                m->ctrl[m->nctrl++] = cm_v3((double)fit->twist[k][3 * i] / CM_TWIST_ONE,
+                                            (double)fit->twist[k][3 * i + 1] / CM_TWIST_ONE,
+                                            (double)fit->twist[k][3 * i + 2] / CM_TWIST_ONE);
+        F->fill_phi |= CM_G1FIT_TWISTED;
+        F->corner = (uint16_t)fit->ntwist;
     }
     return CM_OK;
 }

@@ -4,8 +4,10 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "cm/cm_const.h"
+#include "cm/cm_corner.h"
 #include "cm/cm_g1fit.h"
 #include "cm/cm_gregface.h"
 #include "cm/cm_method.h"
@@ -68,6 +70,71 @@ static int g1fit_keeps(tx *t, const loaded_model *lm, int f, int corner, uint32_
     return 1;
 }
 
+/* a twist below this (1/4096 of a radian's sine each: about 0.1 degree) is not worth its bits */
+#define TWIST_MIN 8
+
+/*
+ * Format 4.2: the twists of face f's G1 edges (cm_g1fit.h, cm_g1fit_build).  Along such an edge the
+ * carried normals are rotation-minimising, but the surface's normal may twist about the edge: on
+ * asitus__Pieza1's G1 faces the nets' normals were 10 to 80 degrees off the source's there at every
+ * net, and with the source's normals at the edge samples 19 of its 61 G1FIT candidates pass where 6
+ * did.  At each inner sample of each G1 edge: the sine of the angle, about the edge's unit tangent,
+ * from the carried normal N (cm_g1fit_edge_normals, as the terminal computes it) to the source's
+ * normal (turned to N's side), quantised to 1/4096.  A record of m = 0 with the twists, or NULL
+ * when no edge twists by TWIST_MIN or more (or out of memory).
+ */
+static fit_record *g1fit_twists(enc_work *w, const loaded_model *lm, int f)
+{
+    const cm_model *m = &w->dec.model;
+    const cm_loop *L = &m->loops[m->faces[f].loop0];
+    cm_greg_input *in = malloc(sizeof *in);
+    cm_corner_ws *cw = malloc(sizeof *cw);
+    fit_record *tw = calloc(1, sizeof *tw);
+    int any = 0;
+    if (!in || !cw || !tw || cm_greg_input_build(m, (uint32_t)f, 1, in, cw, NULL) != CM_OK || in->n != (int)L->nuse)
+        goto done;
+    for (int k = 0; k < in->n; k++) {
+        uint32_t e = m->uses[L->use0 + (uint32_t)k].edge;
+        int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
+        const cm_greg_side *gs = &in->side[k];
+        cm_vec3 N[CM_FMT_SEG_PER_EDGE + 1];
+        (void)a;
+        (void)b;
+        if (cm_g1fit_edge_normals(gs, N, NULL) != CM_OK)
+            continue;
+        for (int j = 1; j <= CM_TWIST_N; j++) {
+            double u = (double)j / (double)CM_FMT_SEG_PER_EDGE;
+            cm_vec3 q[CM_MAX_DERS + 1], ns;
+            if (cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, 1, q, NULL) != CM_OK ||
+                !verify_source_normal(lm, f, q[0], &ns))
+                continue;
+            cm_vec3 T = cm_unit(gs->rev ? cm_neg(q[1]) : q[1]), B = cm_cross(T, N[j]);
+            if (!(cm_norm(B) > 0.5))
+                continue;
+            if (cm_dot(ns, N[j]) < 0)
+                ns = cm_neg(ns);
+            double s = nearbyint(cm_dot(cm_unit(B), ns) * CM_TWIST_ONE);
+            s = s > CM_TWIST_MAX ? CM_TWIST_MAX : (s < -CM_TWIST_MAX ? -CM_TWIST_MAX : s);
+            tw->twist[k][j - 1] = (int16_t)s;
+        }
+        int most = 0;
+        for (int j = 0; j < CM_TWIST_N; j++)
+            most = abs(tw->twist[k][j]) > most ? abs(tw->twist[k][j]) : most;
+        if (most < TWIST_MIN)
+            memset(tw->twist[k], 0, sizeof tw->twist[k]); /* untwisted: a bit */
+        any |= most >= TWIST_MIN;
+    }
+    tw->ntwist = in->n;
+done:
+    free(in);
+    free(cw);
+    if (!any) {
+        free(tw);
+        return NULL;
+    }
+    return tw;
+}
+
 /*
  * The first (c, mode) whose rebuild passes §12 and g1fit_keeps: then it meets a kept neighbour, and
  * any rebuilt one that keeps the same promise, within the G1 limit (§13), so the G1 fix-point does
@@ -88,6 +155,11 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     double cos_half = G1FIT_COS_HALF;
     g1fit_try near[G1FIT_TRIES];
     int nnear = 0;
+    /* format 4.2: the surface's twist along the G1 edges, sent where the carried normals miss it */
+    fit_record *tw = NULL;
+    cm_fit_q tview;
+    if (enc_net_fit(o) && (tw = g1fit_twists(w, lm, f)) != NULL)
+        tview = fit_record_view(tw);
     for (size_t i = 0; i < sizeof g1fit_ctrl / sizeof g1fit_ctrl[0]; i++) {
         int c = g1fit_ctrl[i];
         if (c > CM_MAX_FIT_CTRL)
@@ -95,17 +167,20 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
         for (size_t j = 0; j < sizeof g1fit_modes / sizeof g1fit_modes[0]; j++) {
             int mode = g1fit_modes[j], corner = c | mode << 8;
             cm_rebuilt rb;
-            cm_err e = enc_trial_rebuild(w, f, CM_METHOD_G1FIT, c, corner, NULL, &rb);
+            cm_err e = enc_trial_rebuild(w, f, CM_METHOD_G1FIT, c, corner, tw ? &tview : NULL, &rb);
             if (e == CM_E_DEGENERATE || e == CM_E_UNSUPPORTED || e == CM_E_RANGE) {
                 if (!rep->why)
                     rep->why = "G1FIT: a side of no length";
+                free(tw);
                 return 0;
             }
             if (e != CM_OK)
                 continue;
             face_error fe;
-            if (!verify_face(lm, m, f, &rb, tol, &fe))
+            if (!verify_face(lm, m, f, &rb, tol, &fe)) {
+                free(tw);
                 return 0;
+            }
             if (!(fe.max < tol)) {
                 /* a candidate for a correction, when the border keeps its promise (the correction
                    leaves the border rows: a net whose G1 fails here fails corrected) */
@@ -116,9 +191,11 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
                 }
                 continue;
             }
-            if (!g1fit_keeps(t, lm, f, corner, n, tol, &rb, NULL, &fe, fs, &why))
+            if (!g1fit_keeps(t, lm, f, corner, n, tol, &rb, tw ? &tview : NULL, &fe, fs, &why))
                 continue;
             enc_fit_accept(t, f, c, corner, mode, &rb, &fe, rep);
+            free(t->fit[f]);
+            t->fit[f] = tw; /* the twists travel in the record (a correction of m = 0) */
             return 1;
         }
     }
@@ -132,13 +209,15 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     for (int i = 0; i < nnear && i < CORRECTED_NETS; i++) {
         fit_record *fr = malloc(sizeof *fr);
         face_error fe;
-        if (!fr)
+        if (!fr) {
+            free(tw);
             return 0;
+        }
         int corner = near[i].c | near[i].mode << 8;
         cm_rebuilt rb;
         cm_fit_q view;
         /* the correction leaves the border rows: the G1 check is the plain net's */
-        if (!enc_net_corrected(w, lm, f, CM_METHOD_G1FIT, near[i].c, corner, tol, fr, &fe, &rb) ||
+        if (!enc_net_corrected(w, lm, f, CM_METHOD_G1FIT, near[i].c, corner, tol, tw, fr, &fe, &rb) ||
             !(view = fit_record_view(fr), g1fit_keeps(t, lm, f, corner, n, tol, &rb, &view, &fe, fs, &why))) {
             free(fr);
             continue;
@@ -154,8 +233,10 @@ static int try_g1fit(tx *t, const loaded_model *lm, int f, const encode_opts *o,
         t->fit[f] = fr;
         enc_fit_accept(t, f, near[i].c, corner, near[i].mode, &rb, &fe, rep);
         rep->fit_m = fr->m;
+        free(tw);
         return 1;
     }
+    free(tw);
     if (!rep->why)
         rep->why = why;
     return 0;

@@ -47,10 +47,11 @@ struct fit_record;
  * itself, with an interior correction fitted to the source surface (fit_net_correction, at most as
  * many coefficients per direction as the net has interior rows).  1 when the corrected rebuild
  * passes §12 within tol: the record in *fr, the numbers in *fe, the rebuild in *rb (the smallest m
- * that passes).  The method's own checks are the caller's.
+ * that passes).  base: G1FIT's twists (a record of m = 0; NULL: none), in every record tried.  The
+ * method's own checks are the caller's.
  */
 int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner, double tol,
-                      struct fit_record *fr, face_error *fe, cm_rebuilt *rb);
+                      const struct fit_record *base, struct fit_record *fr, face_error *fe, cm_rebuilt *rb);
 /**
  * A candidate passed (GREGORY family, NFILL, G1FIT): its record fields (layout, corner:
  * enc_record_fields) and checksum to t, its measures to rep (rep->corner shows `shown`: the corner,

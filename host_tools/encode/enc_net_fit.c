@@ -4,8 +4,17 @@
 #include "fit_correction.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 #include "cm/cm_patchfit.h"
+
+/* G1FIT's twists (base, or none) in a correction's record */
+static void with_twists(fit_record *fr, const fit_record *base)
+{
+    fr->ntwist = base ? base->ntwist : 0;
+    if (base)
+        memcpy(fr->twist, base->twist, sizeof fr->twist);
+}
 
 /*
  * The functions of a smaller m are combinations of those of the largest (Bernstein degree
@@ -13,20 +22,25 @@
  * fails (most trials fail: this is the encoder's time); then m = 1, 2, ... for a smaller record.
  */
 int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner, double tol,
-                      fit_record *fr, face_error *fe, cm_rebuilt *rb)
+                      const fit_record *base, fit_record *fr, face_error *fe, cm_rebuilt *rb)
 {
     const cm_model *m = &w->dec.model;
     int bface = lm->mesh.faces[f].brep_face;
-    face_surface base = {0}; /* the plain net (the next rebuild reuses the workspace) */
+    face_surface net = {0}; /* the plain net (the next rebuild reuses the workspace) */
     fit_record *best = malloc(sizeof *best);
-    int ok = best && enc_trial_rebuild(w, f, method, layout, corner, NULL, rb) == CM_OK && rb->repr == CM_REPR_NURBS &&
-             face_surface_set(&base, rb);
-    int top = ok ? base.nurbs.nu - 4 : 0;
-    if (ok && base.nurbs.nv - 4 < top)
-        top = base.nurbs.nv - 4;
+    cm_fit_q bview;
+    if (base)
+        bview = fit_record_view(base);
+    int ok = best && enc_trial_rebuild(w, f, method, layout, corner, base ? &bview : NULL, rb) == CM_OK &&
+             rb->repr == CM_REPR_NURBS && face_surface_set(&net, rb);
+    int top = ok ? net.nurbs.nu - 4 : 0;
+    if (ok && net.nurbs.nv - 4 < top)
+        top = net.nurbs.nv - 4;
     if (top > CM_FIT_MAX_M)
         top = CM_FIT_MAX_M;
-    ok = ok && top >= 1 && fit_net_correction(lm, bface, &base.nurbs, top, tol, m->q, best);
+    ok = ok && top >= 1 && fit_net_correction(lm, bface, &net.nurbs, top, tol, m->q, best);
+    if (ok)
+        with_twists(best, base);
     cm_fit_q view;
     if (ok) {
         view = fit_record_view(best);
@@ -35,8 +49,9 @@ int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, in
     }
     int smaller = 0;
     for (int k = 1; ok && k < top && !smaller; k++) {
-        if (!fit_net_correction(lm, bface, &base.nurbs, k, tol, m->q, fr))
+        if (!fit_net_correction(lm, bface, &net.nurbs, k, tol, m->q, fr))
             continue;
+        with_twists(fr, base);
         view = fit_record_view(fr);
         face_error e;
         smaller = enc_trial_rebuild(w, f, method, layout, corner, &view, rb) == CM_OK &&
@@ -50,7 +65,7 @@ int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, in
         view = fit_record_view(fr);
         ok = enc_trial_rebuild(w, f, method, layout, corner, &view, rb) == CM_OK;
     }
-    face_surface_free(&base);
+    face_surface_free(&net);
     free(best);
     return ok;
 }

@@ -87,7 +87,7 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
         int corner = near[i].c | near[i].phi << 8;
         cm_rebuilt rb;
         face_error fe;
-        if (!enc_net_corrected(w, lm, f, CM_METHOD_NFILL, near[i].c, corner, tol, fr, &fe, &rb)) {
+        if (!enc_net_corrected(w, lm, f, CM_METHOD_NFILL, near[i].c, corner, tol, NULL, fr, &fe, &rb)) {
             free(fr);
             continue;
         }

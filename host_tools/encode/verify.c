@@ -639,6 +639,11 @@ static int source_normal_at(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n
     return 1;
 }
 
+int verify_source_normal(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n)
+{
+    return source_normal_at(lm, f, P, n);
+}
+
 /* unit normal of face f's final surface near P (0 where it cannot be had); a Gregory face's foot
  * point is walked along from the previous point of the same edge (w), a NURBS face's too (sw) */
 static int normal_at(const loaded_model *lm, int f, const face_surface *fs, greg_walk *w, surf_walk *sw, cm_vec3 P,

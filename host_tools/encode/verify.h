@@ -75,6 +75,9 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
  * (*have then 1).  Returns the distance.
  */
 double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int *have, int *k, double *u, double *v);
+/** The unit normal of face f's source surface at the foot of P (found from the nearest boundary
+    sample: P near the face's loop); 0 where it cannot be had. */
+int verify_source_normal(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n);
 /** The same on a (non-periodic) B-spline surface over its whole domain: what verify_face measures
     a NURBS rebuild with. */
 double verify_surf_foot(const cm_surf *s, double accept, cm_vec3 p, int *have, double *u, double *v);

@@ -229,6 +229,11 @@ double enc_fit_record_bits(const fit_record *fr)
     for (int i = 0; i < fr->npatch * fr->m * fr->m; i++)
         for (int a = 0; a < 3; a++)
             b += est_sint_bits(fr->q[i][a]);
+    for (int k = 0; k < fr->ntwist; k++) {
+        b += 1.0;
+        for (int j = 0; j < CM_TWIST_N; j++)
+            b += est_sint_bits((int64_t)fr->twist[k][j] - (j ? fr->twist[k][j - 1] : 0));
+    }
     return b;
 }
 

@@ -693,6 +693,53 @@ void igw_l_shape_144(igw *w)
     igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 6)));
 }
 
+/* a cubic Bezier (126) through control points p[0..3] */
+static int cubic_126(igw *w, const v3 p[4])
+{
+    int de = igw_add(w, 126, 0,
+                     "3,3,0,0,1,0,0,0,0,0,1,1,1,1,1,1,1,1,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                     "%.17g,%.17g,0,1,0,0,1",
+                     p[0].x, p[0].y, p[0].z, p[1].x, p[1].y, p[1].z, p[2].x, p[2].y, p[2].z, p[3].x, p[3].y, p[3].z);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+void igw_twisted_pair_144(igw *w, double a, double h)
+{
+    /* z = h (x/a) (y/a)^3: linear in x, so its Bernstein coefficients in u are its values at x_i;
+       (y/a)^3 = (2v - 1)^3 has the coefficients -1, 1, -1, 1 (its blossom at 0s and 1s) */
+    static const double c[4] = {-1.0, 1.0, -1.0, 1.0};
+    for (int half = 0; half < 2; half++) {
+        double x0 = half ? 0.0 : -a, x1 = half ? a : 0.0;
+        char buf[4096];
+        int k = snprintf(buf, sizeof buf, "3,3,3,3,0,0,1,0,0,0,0,0,0,1,1,1,1,0,0,0,0,1,1,1,1");
+        for (int i = 0; i < 16; i++)
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
+        for (int j = 0; j < 4; j++)     /* v index outer */
+            for (int i = 0; i < 4; i++) { /* u index runs fastest in the file */
+                double x = x0 + (x1 - x0) * i / 3.0;
+                k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", x, -a + 2.0 * a * j / 3.0,
+                              h * (x / a) * c[j]);
+            }
+        snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+        int surf = igw_add(w, 128, 0, "%s", buf);
+        igw_set(w, surf, 1, 0, 0);
+        /* the loop, counter-clockwise seen from +z: bottom, right, top, left; the edges along y are
+           cubics (a line where x = 0: the shared edge) */
+        v3 up[4], down[4];
+        for (int j = 0; j < 4; j++) {
+            up[j] = (v3){x1, -a + 2.0 * a * j / 3.0, h * (x1 / a) * c[j]};
+            down[j] = (v3){x0, a - 2.0 * a * j / 3.0, h * (x0 / a) * c[3 - j]};
+        }
+        int m[4];
+        m[0] = line(w, (v3){x0, -a, -h * x0 / a}, (v3){x1, -a, -h * x1 / a});
+        m[1] = x1 == 0.0 ? line(w, up[0], up[3]) : cubic_126(w, up);
+        m[2] = line(w, (v3){x1, a, h * x1 / a}, (v3){x0, a, h * x0 / a});
+        m[3] = x0 == 0.0 ? line(w, down[0], down[3]) : cubic_126(w, down);
+        igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, 4)));
+    }
+}
+
 cm_err igw_load(igw *w, const char *name, loaded_model *lm, cm_status *st)
 {
     size_t len = 0;

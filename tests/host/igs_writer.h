@@ -81,6 +81,10 @@ void igw_bump_144(igw *w, double a, double h);
 /** The bump's three-sided sibling: a biquartic 128 over the right triangle (0,0), (a,0), (0,a), flat
  *  with its cross slopes on all three straight edges, h high at the centroid; one 144. */
 void igw_tri_bump_144(igw *w, double a, double h);
+/** Two faces of z = h (x/a) (y/a)^3 over [-a, 0] and [0, a] x [-a, a] (a bicubic 128 each, their
+ *  edges along y cubics, along x lines), sharing the line x = 0: along it the surface's normal
+ *  (-h/a (y/a)^3, 0, 1) twists about the edge, where a normal carried from the ends stays put. */
+void igw_twisted_pair_144(igw *w, double a, double h);
 /** The model w holds, imported as `name` (w freed): model_load_data's result. */
 cm_err igw_load(igw *w, const char *name, loaded_model *lm, cm_status *st);
 

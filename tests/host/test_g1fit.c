@@ -135,7 +135,7 @@ static void test_kernel_half_cylinder(void **state)
     assert_ok(cm_greg_input_build(&dec.model, 0, 1, &in, &cws, &st));
     assert_int_equal(in.n, 4);
     static cm_vec3 coons[8 * 8];
-    assert_ok(cm_g1fit_build(&in, 8, 8, 0, &s, &ws, &st));
+    assert_ok(cm_g1fit_build(&in, 8, 8, 0, NULL, &s, &ws, &st));
     memcpy(coons, s.ctrl, sizeof coons);
     double worst = 0;
     for (int i = 0; i <= 20; i++)
@@ -147,7 +147,7 @@ static void test_kernel_half_cylinder(void **state)
         }
     if (!(worst < 2e-3 * R))
         fail_msg("net %.4g mm off the cylinder", worst);
-    assert_ok(cm_g1fit_build(&in, 8, 8, 1, &s, &ws, &st));
+    assert_ok(cm_g1fit_build(&in, 8, 8, 1, NULL, &s, &ws, &st));
     int moved = 0;
     for (int i = 0; i < 8; i++)
         for (int j = 0; j < 8; j++) {
@@ -158,8 +158,8 @@ static void test_kernel_half_cylinder(void **state)
             moved += inner && !same;
         }
     assert_true(moved > 0);
-    assert_int_equal(cm_g1fit_build(&in, 3, 8, 0, &s, &ws, &st), CM_E_RANGE);
-    assert_int_equal(cm_g1fit_build(&in, CM_MAX_FIT_CTRL + 1, 8, 0, &s, &ws, &st), CM_E_LIMIT);
+    assert_int_equal(cm_g1fit_build(&in, 3, 8, 0, NULL, &s, &ws, &st), CM_E_RANGE);
+    assert_int_equal(cm_g1fit_build(&in, CM_MAX_FIT_CTRL + 1, 8, 0, NULL, &s, &ws, &st), CM_E_LIMIT);
     encode_result_free(&r);
     model_free(&lm);
 }
@@ -330,7 +330,7 @@ static void test_periodic_face_refused(void **state)
         assert_ok(cm_greg_input_build(&dec.model, f, 1, &in, &cws, &st));
         if (in.n != 4)
             continue;
-        assert_int_equal(cm_g1fit_build(&in, 8, 8, 0, &s, &ws, &st), CM_E_DEGENERATE);
+        assert_int_equal(cm_g1fit_build(&in, 8, 8, 0, NULL, &s, &ws, &st), CM_E_DEGENERATE);
         assert_non_null(strstr(st.where, "closes on itself"));
         tried++;
     }

@@ -13,6 +13,7 @@
 
 #include "cm/cm_arith.h"
 #include "cm/cm_bspline.h"
+#include "cm/cm_const.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_method.h"
@@ -66,9 +67,11 @@ static void test_net_add_keeps_border(void **state)
 
 /* ---- the record's field ---- */
 
-/* a G1FIT record (8 x 8, mode 0) as the format writes it, then the correction's field: m, and when
-   m > 0 the step and every coordinate of m x m coefficients as q */
-static size_t g1fit_record(uint8_t *buf, size_t cap, int with_field, uint64_t m, uint64_t exp, int64_t q)
+/* a G1FIT record (8 x 8, mode 0) as the format writes it, then (from 4.2) the correction's field: m,
+   and when m > 0 the step and every coordinate of m x m coefficients as q; then the twists: none
+   (twist_n 0), or twist_n uses each with every sample's sine tq / 4096 */
+static size_t g1fit_record(uint8_t *buf, size_t cap, int with_field, uint64_t m, uint64_t exp, int64_t q,
+                           uint64_t twist_n, int64_t tq)
 {
     cm_ac_enc e;
     cm_face_ctx c;
@@ -85,6 +88,15 @@ static size_t g1fit_record(uint8_t *buf, size_t cap, int with_field, uint64_t m,
             cm_ac_enc_uint(&e, &c.fit_exp, exp);
             for (uint64_t i = 0; i < 3 * m * m; i++)
                 cm_ac_enc_sint(&e, &c.fit_coef, q);
+        }
+        cm_ac_enc_bit(&e, &c.twist_on, twist_n > 0);
+        if (twist_n > 0) {
+            cm_ac_enc_uint(&e, &c.twist_n, twist_n);
+            for (uint64_t k = 0; k < twist_n; k++) {
+                cm_ac_enc_bit(&e, &c.twist_use, 1);
+                for (int j = 0; j < CM_TWIST_N; j++)
+                    cm_ac_enc_sint(&e, &c.twist, j ? 0 : tq);
+            }
         }
     }
     cm_ac_enc_uint(&e, &c.count, 77); /* what follows the record */
@@ -129,7 +141,7 @@ static void test_net_records(void **state)
     cm_dec_init(&dec);
     dec.model.q = 0.001;
     /* a correction of 2 x 2 lands in the model's pool, dequantised: -7 * 2^3 grid steps */
-    size_t n = g1fit_record(buf, sizeof buf, 1, 2, 3, -7);
+    size_t n = g1fit_record(buf, sizeof buf, 1, 2, 3, -7, 0, 0);
     assert_ok(read_record(buf, n, 1, &F, &why, &after));
     assert_int_equal(after, 77);
     assert_int_equal(cm_face_fit_m(&F), 2);
@@ -138,26 +150,60 @@ static void test_net_records(void **state)
     assert_true(dec.model.ctrl[F.surf + 3].z == -7.0 * 8.0 * 0.001);
     /* m = 0: none, and nothing more read */
     dec.model.nctrl = 0;
-    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0);
+    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0, 0, 0);
     assert_ok(read_record(buf, n, 1, &F, &why, &after));
     assert_int_equal(after, 77);
     assert_int_equal(F.fit, 0);
     /* before 4.2 there is no field: a 4.1 record is read whole, and what follows is next */
-    n = g1fit_record(buf, sizeof buf, 0, 0, 0, 0);
+    n = g1fit_record(buf, sizeof buf, 0, 0, 0, 0, 0, 0);
     assert_ok(read_record(buf, n, 0, &F, &why, &after));
     assert_int_equal(after, 77);
     assert_int_equal(F.fit, 0);
     /* every value beyond the format or the build, by name */
-    n = g1fit_record(buf, sizeof buf, 1, CM_FIT_MAX_M + 1, 0, 0);
+    n = g1fit_record(buf, sizeof buf, 1, CM_FIT_MAX_M + 1, 0, 0, 0, 0);
     assert_record_refused(buf, n, CM_E_RANGE, "net correction's coefficients per direction");
-    n = g1fit_record(buf, sizeof buf, 1, 1, CM_FIT_MAX_EXP + 1, 0);
+    n = g1fit_record(buf, sizeof buf, 1, 1, CM_FIT_MAX_EXP + 1, 0, 0, 0);
     assert_record_refused(buf, n, CM_E_RANGE, "net correction step");
-    n = g1fit_record(buf, sizeof buf, 1, 1, 0, (int64_t)CM_FIT_MAX_INT + 1);
+    n = g1fit_record(buf, sizeof buf, 1, 1, 0, (int64_t)CM_FIT_MAX_INT + 1, 0, 0);
     assert_record_refused(buf, n, CM_E_RANGE, "net correction coefficient");
-    n = g1fit_record(buf, sizeof buf, 1, 2, 0, 1);
+    n = g1fit_record(buf, sizeof buf, 1, 2, 0, 1, 0, 0);
     assert_record_refused(buf, 6, CM_E_TRUNCATED, "face record");
     dec.model.nctrl = CM_MAX_MODEL_CTRL - 3; /* the pool holds 3 more: 4 asked for */
     assert_record_refused(buf, n, CM_E_LIMIT, "net correction coefficients");
+    dec.model.nctrl = 0;
+    /* twists: 4 uses, each sample's sine 100 / 4096, three to a point after the correction's */
+    n = g1fit_record(buf, sizeof buf, 1, 2, 3, -7, 4, 100);
+    assert_ok(read_record(buf, n, 1, &F, &why, &after));
+    assert_int_equal(after, 77);
+    assert_true(F.fill_phi & 2u);
+    assert_int_equal(F.corner, 4);
+    assert_int_equal(dec.model.nctrl - F.surf, 4 + 12);
+    assert_true(dec.model.ctrl[F.surf + 4 + 11].z == 100.0 / 4096.0);
+    dec.model.nctrl = 0;
+    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0, 5, -3);
+    assert_ok(read_record(buf, n, 1, &F, &why, &after));
+    assert_int_equal(F.fit, 0);
+    assert_int_equal(dec.model.nctrl - F.surf, 15);
+    assert_true(dec.model.ctrl[F.surf].x == -3.0 / 4096.0);
+    /* ... the loop must have as many uses (checked when the loops are read) */
+    cm_method_fault lw = {0};
+    dec.model.loops[0] = (cm_loop){0, 4};
+    F.loop0 = 0;
+    assert_int_equal(cm_method_check_loops(cm_method_of(CM_METHOD_G1FIT), &dec.model, &F, &lw), CM_E_FORMAT);
+    assert_string_equal(lw.what, "G1FIT twists do not fit the loop");
+    dec.model.loops[0].nuse = 5;
+    assert_ok(cm_method_check_loops(cm_method_of(CM_METHOD_G1FIT), &dec.model, &F, &lw));
+    /* ... and out of range, by name */
+    dec.model.nctrl = 0;
+    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0, 3, 1);
+    assert_record_refused(buf, n, CM_E_RANGE, "G1FIT twists' count");
+    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0, 13, 1);
+    assert_record_refused(buf, n, CM_E_RANGE, "G1FIT twists' count");
+    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0, 4, CM_TWIST_MAX + 1);
+    assert_record_refused(buf, n, CM_E_RANGE, "G1FIT twist");
+    n = g1fit_record(buf, sizeof buf, 1, 0, 0, 0, 4, 1);
+    dec.model.nctrl = CM_MAX_MODEL_CTRL - 11; /* 12 asked for */
+    assert_record_refused(buf, n, CM_E_LIMIT, "G1FIT twists");
     dec.model.nctrl = 0;
 }
 
@@ -278,12 +324,109 @@ static void test_bump_corrected_net(void **state)
     model_free(&lm);
 }
 
+/* ---- twists ---- */
+
+#define TW_A 10.0 /* the twisted pair's half width */
+#define TW_H 3.0  /* and height: the normal turns 17 degrees each way along the shared edge */
+
+static void encode_g1fit_minor(loaded_model *lm, int minor, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    encode_opts_for_format(&o, 4, minor);
+    o.gregory = 0; /* planes, then G1FIT only */
+    o.nfill = 0;
+    o.rel_tol = 0.01; /* 1 % of each face's box (--tol 0.01): the twist, not the tolerance, is the test */
+    o.rel_set = 1;
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+/* the largest angle (degrees) between the rebuilt face f's normal and the true one at the shared
+   edge's inner points (0, y, 0) at `steps` even steps */
+static double edge_normal_off(const cm_model *m, uint32_t f, int steps)
+{
+    cm_rebuilt rb;
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_rebuild_face(m, f, &rb, &rbws, &st));
+    assert_int_equal(rb.repr, CM_REPR_NURBS);
+    double worst = 0;
+    int have = 0;
+    double u = 0.5, v = 0.5;
+    for (int j = 1; j < steps; j++) {
+        double y = -TW_A + 2.0 * TW_A * j / steps, t = y / TW_A;
+        cm_vec3 P = cm_v3(0, y, 0);
+        verify_surf_foot(&rb.surf, 1e-6, P, &have, &u, &v);
+        cm_vec3 D[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+        assert_ok(cm_surf_eval(&rb.surf, u, v, 1, D, &st));
+        cm_vec3 nr = cm_unit(cm_cross(D[1][0], D[0][1])), truth = cm_unit(cm_v3(-TW_H / TW_A * t * t * t, 0, 1));
+        double c = fabs(cm_dot(nr, truth));
+        worst = fmax(worst, acos(c > 1 ? 1 : c) * 180 / M_PI);
+    }
+    return worst;
+}
+
+/*
+ * Two faces of z = h (x/a)(y/a)^3 sharing the line x = 0, along which the surface's normal twists
+ * by 90 degrees (igw_twisted_pair_144).  Normals carried from the edge's ends cannot follow: in
+ * format 4.1 G1FIT cannot keep its promise there.  Format 4.2 sends the twist: both faces G1FIT, a
+ * record that says so, within the tolerance and 0.5 degree of the true normal along the edge.
+ */
+static void test_twisted_edge(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r, r41;
+    igw w;
+    igw_init(&w);
+    igw_twisted_pair_144(&w, TW_A, TW_H);
+    cm_status st;
+    assert_ok(igw_load(&w, "twisted_pair", &lm, &st));
+    assert_int_equal(lm.mesh.nfaces, 2);
+    encode_g1fit_minor(&lm, 1, &r41);
+    encode_g1fit_minor(&lm, 2, &r);
+    for (int f = 0; f < 2; f++) {
+        if (r.faces[f].method != CM_METHOD_G1FIT)
+            fail_msg("face %d went %s (%s)", f, cm_method_name((unsigned)r.faces[f].method),
+                     r.faces[f].why ? r.faces[f].why : "-");
+        if (!(r.faces[f].g1_cos >= CM_COS_G1))
+            fail_msg("face %d: %.3f deg across the edge", f, acos(r.faces[f].g1_cos) * 180 / M_PI);
+    }
+    decode(r.bytes, r.len);
+    for (uint32_t f = 0; f < 2; f++) {
+        assert_true(dec.model.faces[f].fill_phi & 2u); /* the record carries twists */
+        /* at the edge's samples, where the twist is sent, within G1FIT's promise; between them the
+           net's own shape */
+        double at = edge_normal_off(&dec.model, f, 10), between = edge_normal_off(&dec.model, f, 40);
+        if (!(at < 0.5 && between < 2.0))
+            fail_msg("4.2, face %u: normal %.3f deg off at the edge's samples, %.3f between", f, at, between);
+    }
+    /* 4.1: no twist; a face that still went G1FIT is far off along the edge */
+    decode(r41.bytes, r41.len);
+    int worse = 0;
+    for (uint32_t f = 0; f < 2; f++) {
+        if (r41.faces[f].method != CM_METHOD_G1FIT) {
+            worse = 1;
+            continue;
+        }
+        worse |= edge_normal_off(&dec.model, f, 10) > 2.0;
+    }
+    assert_true(worse);
+    encode_result_free(&r);
+    encode_result_free(&r41);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_net_add_keeps_border),
         cmocka_unit_test(test_net_records),
         cmocka_unit_test(test_bump_corrected_net),
+        cmocka_unit_test(test_twisted_edge),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -54,6 +54,8 @@
 #define CM_G1FIT_MAX_CHAIN (CM_G1FIT_MAX_EDGES * CM_FMT_SEG_PER_EDGE + 1)
 /** Interiors the record's mode names: 0 the Coons net's, 1 the faired net's. */
 #define CM_G1FIT_MODES 2
+/** cm_face.fill_phi's bit for a G1FIT face with twists (format 4.2; its bit 0 is the mode). */
+#define CM_G1FIT_TWISTED 2u
 
 /** Scratch of one build. */
 typedef struct cm_g1fit_ws {
@@ -92,10 +94,14 @@ CM_NODISCARD cm_err cm_g1fit_corners(const cm_greg_input *in, int corner[4], cm_
  * The surface of the face whose outer loop is `in`.
  * @param nu, nv  control points per direction, CM_NFILL_MIN_CTRL..CM_MAX_FIT_CTRL
  * @param mode    0: Coons interior, 1: faired interior
+ * @param twist   NULL, or per side k of the loop 3 points holding the sines s_j (j = 1..9, in x y z
+ *                order) by which the carried normal N at the side's inner sample j is turned about
+ *                the edge's unit tangent T: sqrt(1 - s^2) N + s unit(T x N) (format 4.2: the
+ *                surface's normal twists along an edge where the carried one cannot)
  * @return CM_E_LIMIT over fixedcfg's limits, CM_E_DEGENERATE on a chain of no length,
  *         CM_E_SINGULAR when a fit or the solve fails
  */
-CM_NODISCARD cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, cm_nfill_surface *out,
-                                   cm_g1fit_ws *ws, cm_status *st);
+CM_NODISCARD cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, const cm_vec3 *twist,
+                                   cm_nfill_surface *out, cm_g1fit_ws *ws, cm_status *st);
 
 #endif /* CM_G1FIT_H */

@@ -48,12 +48,21 @@ typedef struct cm_method {
  * no function pointers, so that the stack gate sees every call the decoder makes.
  */
 
-/** GREGORY-FIT's correction as the writer sends it: coefficient = q * 2^exp * the model's grid step. */
+/** A G1FIT edge's twist (format 4.2): the sine of the angle by which the surface's normal at each of
+    the edge's inner samples is turned about the edge from the carried one, in 1/4096 */
+#define CM_TWIST_N 9        /* inner samples of an edge: CM_FMT_SEG_PER_EDGE - 1 */
+#define CM_TWIST_ONE 4096   /* the sine's unit */
+#define CM_TWIST_MAX 4095   /* |quantised sine| at most this (the cosine stays positive) */
+
+/** GREGORY-FIT's correction as the writer sends it: coefficient = q * 2^exp * the model's grid step
+    (and, from format 4.2, a net's: m = 0 none; G1FIT's twists along its edges). */
 typedef struct cm_fit_q {
-    int m;                 /* coefficients per direction, 1..CM_FIT_MAX_M */
+    int m;                 /* coefficients per direction, 1..CM_FIT_MAX_M (a net's: 0 = none) */
     int patches;           /* patches, 1..CM_MAX_GREG */
     int exp;               /* 0..CM_FIT_MAX_EXP */
     const int32_t (*q)[3]; /* patch k's coefficient (i,j): q[(k m + i) m + j] */
+    int ntwist;            /* G1FIT: uses of the outer loop with a twist (0: none; else all of them) */
+    const int16_t (*twist)[CM_TWIST_N]; /* per use, its samples' quantised sines (all 0: untwisted) */
 } cm_fit_q;
 
 /**

@@ -44,6 +44,8 @@ typedef struct cm_face_ctx {
     cm_ac_int count, method, loops, uses, back, layout, corner;
     cm_ac_prob flip, is_new, rev_new, rev_old;
     cm_ac_int fit_m, fit_patches, fit_exp, fit_coef; /* GREGORY-FIT's correction (and the nets') */
+    cm_ac_prob twist_on, twist_use;                  /* G1FIT's twists (format 4.2): any, per use */
+    cm_ac_int twist_n, twist;                        /* ... their count, and each sample's change */
     int net_fit; /* format 4.2 on: NFILL and G1FIT records end with a correction's field (not a
                     coder context: set by the reader and the writer from the version) */
 } cm_face_ctx;
