@@ -150,7 +150,7 @@ static cm_err chain_samples(const cm_greg_input *in, int from, int to, int rever
                 break; /* the next edge's first sample */
             double u = (double)j / (double)CM_FMT_SEG_PER_EDGE;
             cm_vec3 q[CM_MAX_DERS + 1];
-            if ((e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, 1, q, st)) != CM_OK)
+            if ((e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, twist ? 1 : 0, q, st)) != CM_OK)
                 return e;
             ws->p[m] = q[0];
             ws->N[m] = N[j];

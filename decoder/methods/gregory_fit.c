@@ -55,8 +55,7 @@ cm_err cm_gregory_fit_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, 
 cm_err cm_fit_read_coefs(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, unsigned fm, unsigned np,
                          uint64_t ex, cm_method_fault *why)
 {
-    /* np: GREGORY-FIT's patches, or 1 for a net's correction (which the faults then name) */
-    int net = np == 1u && F->method != CM_METHOD_GREGORY_FIT;
+    int net = F->method != CM_METHOD_GREGORY_FIT; /* a net's correction (the faults name it) */
     if (ex > CM_FIT_MAX_EXP) {
         why->what = net ? "net correction step" : "GREGORY-FIT step";
         return CM_E_RANGE;

@@ -42,6 +42,23 @@ cm_err enc_trial_rebuild(enc_work *w, int f, int method, int layout, int corner,
 double enc_trial_mesh_dev(enc_work *w, const loaded_model *lm, int f, int method, int layout, int corner,
                           const cm_fit_q *fit, uint32_t checksum, double expect);
 struct fit_record;
+/** Format 4.2: a net over the tolerance by itself, a candidate for a correction. */
+typedef struct enc_net_near {
+    int c, variant; /* its size, and its mode (G1FIT) or fairing weight (NFILL) */
+    double err;     /* §12's error without a correction */
+} enc_net_near;
+/* the correction is tried on the nets over the tolerance by at most ENC_NET_REACH times it (at most
+   5 x 5 coefficients mend a face that is nearly right, not a wrong one), the ENC_NET_TRIED closest */
+#define ENC_NET_REACH 4.0
+#define ENC_NET_TRIED 3
+/** The candidates, closest first. */
+void enc_net_near_sort(enc_net_near *near, int n);
+/**
+ * A corrected net passed (rb, fe): sent unless its record costs as much as the kept surface (spec §14
+ * step 6: then 0, fr freed, rep->why says so); else fr goes to t->fit[f] and the record to t.
+ */
+int enc_net_take(tx *t, int f, struct fit_record *fr, int layout, int corner, int shown, const cm_rebuilt *rb,
+                 const face_error *fe, face_report *rep);
 /**
  * Format 4.2: face f's net (method NFILL or G1FIT, record layout and corner), over the tolerance by
  * itself, with an interior correction fitted to the source surface (fit_net_correction, at most as

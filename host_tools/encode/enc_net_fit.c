@@ -69,3 +69,28 @@ int enc_net_corrected(enc_work *w, const loaded_model *lm, int f, int method, in
     free(best);
     return ok;
 }
+
+void enc_net_near_sort(enc_net_near *near, int n)
+{
+    for (int i = 1; i < n; i++)
+        for (int k = i; k > 0 && near[k].err < near[k - 1].err; k--) {
+            enc_net_near x = near[k];
+            near[k] = near[k - 1];
+            near[k - 1] = x;
+        }
+}
+
+int enc_net_take(tx *t, int f, fit_record *fr, int layout, int corner, int shown, const cm_rebuilt *rb,
+                 const face_error *fe, face_report *rep)
+{
+    if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f], t->o->predicted)) {
+        free(fr);
+        rep->why = "record larger than the surface";
+        return 0;
+    }
+    free(t->fit[f]);
+    t->fit[f] = fr;
+    enc_fit_accept(t, f, layout, corner, shown, rb, fe, rep);
+    rep->fit_m = fr->m;
+    return 1;
+}

@@ -14,16 +14,6 @@ static const int nfill_ctrl[] = {4, 5, 6, 8, 10, 12, 16, 20, 24};
 static const int nfill_phi_order[] = {2, 3, 1, 4};
 #define NFILL_TRIES (sizeof nfill_ctrl / sizeof nfill_ctrl[0] * sizeof nfill_phi_order / sizeof nfill_phi_order[0])
 
-/* format 4.2's correction (enc_net_corrected) is tried on the nets over the tolerance by at most this
-   factor, the CORRECTED_NETS closest first (as G1FIT's) */
-#define CORRECTION_REACH 4.0
-#define CORRECTED_NETS 3
-
-typedef struct nfill_try {
-    int c, phi;
-    double err; /* §12's error without a correction */
-} nfill_try;
-
 /*
  * Spec §8.9: the first (c, phi) in that order whose rebuild passes §12 wins; its record (nu = nv = c,
  * phi) goes to t.  A loop NFILL cannot take, or rays that leave a side of the rectangle with fewer
@@ -44,7 +34,7 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
     double tol = encode_face_tol(o->rel_tol, o->rel_set, o->abs_tol, rep->bbox);
     /* boundary samples, and at most 3 ray samples for each of the outer loop's */
     int data = (int)(all + 3 * n) * CM_FMT_SEG_PER_EDGE;
-    nfill_try near[NFILL_TRIES];
+    enc_net_near near[NFILL_TRIES];
     int nnear = 0;
     for (size_t i = 0; i < sizeof nfill_ctrl / sizeof nfill_ctrl[0]; i++) {
         int c = nfill_ctrl[i];
@@ -65,47 +55,34 @@ static int try_nfill(tx *t, const loaded_model *lm, int f, const encode_opts *o,
             if (!verify_face(lm, m, f, &rb, tol, &fe))
                 return 0;
             if (!(fe.max < tol)) {
-                if (enc_net_fit(o) && fe.max < CORRECTION_REACH * tol && c > 4)
-                    near[nnear++] = (nfill_try){c, phi, fe.max};
+                if (enc_net_fit(o) && fe.max < ENC_NET_REACH * tol && c > 4)
+                    near[nnear++] = (enc_net_near){c, phi, fe.max};
                 continue;
             }
             enc_fit_accept(t, f, c, corner, phi, &rb, &fe, rep);
             return face_surface_set(&fs[f], &rb);
         }
     }
-    for (int i = 1; i < nnear; i++)
-        for (int k = i; k > 0 && near[k].err < near[k - 1].err; k--) {
-            nfill_try x = near[k];
-            near[k] = near[k - 1];
-            near[k - 1] = x;
-        }
+    enc_net_near_sort(near, nnear);
     rep->why = "NFILL over the error at every net";
-    for (int i = 0; i < nnear && i < CORRECTED_NETS; i++) {
+    for (int i = 0; i < nnear && i < ENC_NET_TRIED; i++) {
         fit_record *fr = malloc(sizeof *fr);
         if (!fr)
             return 0;
-        int corner = near[i].c | near[i].phi << 8;
+        int corner = near[i].c | near[i].variant << 8;
         cm_rebuilt rb;
         face_error fe;
         if (!enc_net_corrected(w, lm, f, CM_METHOD_NFILL, near[i].c, corner, tol, NULL, fr, &fe, &rb)) {
             free(fr);
             continue;
         }
-        /* spec §14 step 6: not when the correction costs more than the surface it replaces */
-        if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f], o->predicted)) {
-            free(fr);
-            rep->why = "record larger than the surface";
-            continue;
-        }
         if (!face_surface_set(&fs[f], &rb)) {
             free(fr);
             return 0;
         }
-        free(t->fit[f]);
-        t->fit[f] = fr;
-        enc_fit_accept(t, f, near[i].c, corner, near[i].phi, &rb, &fe, rep);
-        rep->fit_m = fr->m;
-        return 1;
+        if (enc_net_take(t, f, fr, near[i].c, corner, near[i].variant, &rb, &fe, rep))
+            return 1;
+        face_surface_free(&fs[f]);
     }
     return 0;
 }
