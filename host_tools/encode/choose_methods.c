@@ -208,10 +208,12 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
             rep->why = "rebuilt surface did not tessellate";
             continue;
         }
+        t->nchosen = f;
         t->method[f] = first_passing(t, lm, f, o, rep, fs, 0);
         if (enc_kept(t->method[f]))
             face_surface_free(&fs[f]);
     }
+    t->nchosen = nf;
     /* each G1 edge is measured once, and again only when one of its faces went back to KEEP */
     double *ecos = malloc(((size_t)m->nedges + 1) * sizeof *ecos);
     int *eworse = malloc(((size_t)m->nedges + 1) * sizeof *eworse);

@@ -76,6 +76,7 @@ typedef struct tx {
     int *vert_tx;       /* cmesh vertex -> transmission number */
     tx_surf *surfs;     /* one per face (used for KEEP faces) */
     int *method;        /* per face */
+    int nchosen;        /* faces 0..nchosen-1 have their method (choose_methods: in order, then all) */
     int *layout, *corner; /* per GREGORY or NFILL face: its record (spec 15.2; enc_record_fields) */
     uint32_t *checksum;
     unsigned char *turning; /* per face: its exact patches turn a basis (the file is then format 2.6) */

@@ -688,9 +688,10 @@ int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm
     return normal_at(lm, f, fs, &w, &sw, P, n);
 }
 
-double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs)
+double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs,
+                      const unsigned char *kept, double *worst_kept)
 {
-    double worst = 1.0;
+    double worst = 1.0, worst_k = 1.0;
     const cm_face *F = &m->faces[f];
     const face_surface *S = &fs[f];
     for (uint32_t l = 0; l < F->nloops; l++) {
@@ -700,6 +701,7 @@ double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const fa
             int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
             if (!m->edges[e].g1 || a < 0 || b < 0 || a == b)
                 continue;
+            int to_kept = kept && kept[a == f ? b : a];
             cm_curve c;
             cm_model_edge_curve(m, e, &c);
             greg_walk walk = {NULL, S->greg ? 1e-3 * S->bbox : 0, 0, 0, 0, 0, 0};
@@ -710,15 +712,23 @@ double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const fa
                 memset(&swalk, 0, sizeof swalk);
             for (int j = 1; j <= 9; j++) {
                 cm_vec3 d3[1], n, ns;
-                if (cm_curve_eval(&c, j / 10.0, 0, d3, NULL) != CM_OK)
+                if (cm_curve_eval(&c, j / 10.0, 0, d3, NULL) != CM_OK) {
+                    if (worst_kept)
+                        *worst_kept = 0.0;
                     return 0.0;
+                }
                 if (!normal_at(lm, f, fs, &walk, &swalk, d3[0], &n) || !source_normal_at(lm, f, d3[0], &ns))
                     continue; /* a pole or collapsed corner: verify_g1_edge decides */
                 double cs = fabs(cm_dot(n, ns));
-                worst = cs < worst ? cs : worst;
+                if (to_kept)
+                    worst_k = cs < worst_k ? cs : worst_k;
+                else
+                    worst = cs < worst ? cs : worst;
             }
         }
     }
+    if (worst_kept)
+        *worst_kept = worst_k;
     return worst;
 }
 

@@ -93,8 +93,12 @@ int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm
  * The worst |cos| between face f's final surface (fs[f]) and its own source surface, at the points of
  * verify_g1_edge along each of its G1 edges: a face within half the G1 limit of its source there meets
  * any neighbour that is too (the angles add).  1 without G1 edges.
+ * kept: NULL, or per face 1 where that face keeps its surface for good; the G1 edges to those faces
+ * are then left out and their worst |cos| goes to *worst_kept (1 without): there the source's normal
+ * is the neighbour's own, and the whole G1 limit is the face's to use.
  */
-double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs);
+double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs,
+                      const unsigned char *kept, double *worst_kept);
 
 /**
  * Spec §13 for edge e of m: at t = k/10, k = 1..9, the unit normals of the

@@ -19,6 +19,7 @@
 #include "cm/cm_rebuild.h"
 #include "cm/cm_tessellate.h"
 #include "encode/encode.h"
+#include "encode/verify.h"
 #include "igs_writer.h"
 #include "model_load.h"
 
@@ -300,6 +301,46 @@ static void test_split_cylinder_g1(void **state)
 }
 
 /*
+ * The G1 promise a G1FIT net is held to along each edge (enc_g1fit.c): half the G1 limit of its own
+ * source's normal where the neighbour may be rebuilt too, 0.9 of it where the neighbour keeps its
+ * surface for good.  verify_g1_self measures the two kinds of edge apart: on the split half
+ * cylinder, quarter 0's rebuilt net against its source along the tangent edge it shares with
+ * quarter 1 counts with the rebuilt edges, or alone with the kept ones when quarter 1 keeps its
+ * surface.
+ */
+static void test_g1_self_by_neighbour(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_split_half_cylinder_144(&w, R, H);
+    cm_status st;
+    assert_ok(igw_load(&w, "split_cylinder", &lm, &st));
+    encode_g1fit_only(&lm, 1, &r);
+    assert_int_equal(r.faces_by_method[CM_METHOD_G1FIT], 2);
+    decode(&r);
+    cm_rebuilt rb;
+    assert_ok(cm_rebuild_face(&dec.model, 0, &rb, &rbws, &st));
+    face_surface fs[2];
+    memset(fs, 0, sizeof fs);
+    assert_true(face_surface_set(&fs[0], &rb));
+    double kept_worst = -1.0;
+    double all = verify_g1_self(&lm, &dec.model, 0, fs, NULL, &kept_worst);
+    assert_true(all < 1.0 && all >= CM_COS_G1); /* the tangent edge was measured, within the limit */
+    assert_true(kept_worst == 1.0);
+    const unsigned char rebuilt[2] = {0, 0}, kept[2] = {0, 1};
+    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, rebuilt, &kept_worst) == all);
+    assert_true(kept_worst == 1.0);
+    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, kept, &kept_worst) == 1.0);
+    assert_true(kept_worst == all);
+    face_surface_free(&fs[0]);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+/*
  * A periodic face - the hole's full cylinder in a box, its loop a circle, the seam, the other circle
  * and the seam again - has sides that close on themselves: G1FIT refuses it (its tube's trimming
  * refined without end: occt__OCC8842_cylinder_Ideas 288 -> 4612 triangles), and the encoder sends
@@ -347,6 +388,7 @@ int main(void)
         cmocka_unit_test(test_half_cylinder_end_to_end),
         cmocka_unit_test(test_five_edges_by_the_mesh),
         cmocka_unit_test(test_split_cylinder_g1),
+        cmocka_unit_test(test_g1_self_by_neighbour),
         cmocka_unit_test(test_periodic_face_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
