@@ -193,6 +193,14 @@
 #  define CM_MAX_EDGE_SAMPLES 1024
 #endif
 
+/* Placed copies of a model's parts (format 4.3: a part placed several times travels once, with a
+ * transform per further placement).  Unit: copies.  Hard bound 2^24-1.  104 bytes each in the
+ * decoder's model; the corpus's assemblies place 3 to 14 copies, a large vault assembly (fasteners
+ * placed one by one) a few hundred. */
+#ifndef CM_MAX_PLACEMENTS
+#  define CM_MAX_PLACEMENTS 1024
+#endif
+
 /* ---- stack (checked from -fstack-usage / -fcallgraph-info=su) ---- */
 
 /* Stack frame of one decoder or kernel function.  Unit: bytes.  Hard bound

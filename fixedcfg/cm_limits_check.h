@@ -79,6 +79,8 @@ _Static_assert(CM_TESS_PASS_SLOTS >= 2 && CM_TESS_PASS_SLOTS <= (1 << 24) &&
 _Static_assert(CM_MAX_TESS_POINTS < (1 << 21), "the refinement's pass keys hold a point index in 21 bits");
 _Static_assert(CM_MAX_EDGE_SAMPLES >= 2 && CM_MAX_EDGE_SAMPLES <= CM_HARD_MAX_COUNT16,
                "CM_MAX_EDGE_SAMPLES must be in [2, 65535]");
+_Static_assert(CM_MAX_PLACEMENTS >= 0 && CM_MAX_PLACEMENTS <= CM_HARD_MAX_COUNT24,
+               "CM_MAX_PLACEMENTS must be in [0, 16777215]");
 _Static_assert(CM_STACK_FN_MAX >= 1024 && CM_STACK_FN_MAX <= CM_STACK_BUDGET,
                "CM_STACK_FN_MAX must be in [1024, CM_STACK_BUDGET]");
 _Static_assert(CM_STACK_BUDGET <= CM_HARD_MAX_STACK,

@@ -59,6 +59,8 @@
     X(MAX_MODEL_USES, CM_MAX_MODEL_USES, CM_HARD_MAX_COUNT24, "uses",                          \
       "edge uses of all loops of a model")                                                    \
     X(MAX_EDGE_SAMPLES, CM_MAX_EDGE_SAMPLES, CM_HARD_MAX_COUNT16, "points",                    \
-      "points sampled on one edge for tessellation")
+      "points sampled on one edge for tessellation")                                          \
+    X(MAX_PLACEMENTS, CM_MAX_PLACEMENTS, CM_HARD_MAX_COUNT24, "copies",                        \
+      "placed copies of a model's parts (instances, format 4.3)")
 
 #endif /* CM_LIMITS_LIST_H */

@@ -25,11 +25,14 @@ static cm_err note_left_out(loaded_model *lm, int w)
 }
 
 /* everything after the IGES file is in lm->iges */
-static cm_err load_rest(loaded_model *lm, int include_blanked, model_progress progress, void *ctx, cm_status *st)
+static cm_err load_rest(loaded_model *lm, int flags, model_progress progress, void *ctx, cm_status *st)
 {
     double t = now();
     cm_err e;
-    e = iges_to_brep(&lm->iges, &lm->brep, &lm->stats, include_blanked, st);
+    lm->load_flags = flags;
+    e = iges_to_brep(&lm->iges, &lm->brep, &lm->stats, (flags & MODEL_LOAD_BLANKED) != 0, st);
+    if (e == CM_OK && (flags & MODEL_LOAD_FOLD))
+        e = brep_fold_instances(&lm->brep, &lm->instances_folded, st);
     lm->seconds_brep = now() - t;
     if (e != CM_OK)
         return e;
@@ -80,8 +83,7 @@ cm_err model_load(const char *path, loaded_model *lm, model_progress progress, v
     return model_load_ex(path, lm, 0, progress, ctx, st);
 }
 
-cm_err model_load_ex(const char *path, loaded_model *lm, int include_blanked, model_progress progress, void *ctx,
-                     cm_status *st)
+cm_err model_load_ex(const char *path, loaded_model *lm, int flags, model_progress progress, void *ctx, cm_status *st)
 {
     memset(lm, 0, sizeof *lm);
     double t = now();
@@ -89,11 +91,17 @@ cm_err model_load_ex(const char *path, loaded_model *lm, int include_blanked, mo
     lm->seconds_read = now() - t;
     if (e != CM_OK)
         return e;
-    return load_rest(lm, include_blanked, progress, ctx, st);
+    return load_rest(lm, flags, progress, ctx, st);
 }
 
 cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm, model_progress progress,
                        void *ctx, cm_status *st)
+{
+    return model_load_data_ex(name, data, len, lm, 0, progress, ctx, st);
+}
+
+cm_err model_load_data_ex(const char *name, const char *data, size_t len, loaded_model *lm, int flags,
+                          model_progress progress, void *ctx, cm_status *st)
 {
     memset(lm, 0, sizeof *lm);
     double t = now();
@@ -102,7 +110,7 @@ cm_err model_load_data(const char *name, const char *data, size_t len, loaded_mo
     lm->seconds_read = now() - t;
     if (e != CM_OK)
         return e;
-    return load_rest(lm, 0, progress, ctx, st);
+    return load_rest(lm, flags, progress, ctx, st);
 }
 
 cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status *st)
@@ -131,6 +139,7 @@ cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status
     m->box = hbox_empty();
     for (int s = 0; s < m->nsegs; s++)
         hbox_add_curve(&m->box, &m->segs[s]);
+    /* (the placed copies' box, m->placed_box, stays: the model's diagonal is the whole's) */
     cmesh_free(&lm->mesh);
     return cmesh_build(m, lm->fds, &lm->mesh, st);
 }

@@ -24,6 +24,8 @@ typedef struct loaded_model {
     double max_gap;      /* largest boundary-to-surface distance seen */
     int *left_out;       /* indices into iges.warn: one warning per face left out of the model */
     int nleft_out;       /* (import, parameter domain or encoder: each names the face's entity) */
+    int load_flags;      /* MODEL_LOAD_* it was loaded with */
+    int instances_folded; /* placed copies folded out (MODEL_LOAD_FOLD; lm->brep.placements) */
     cmesh mesh;
     double seconds_read, seconds_brep, seconds_domains, seconds_mesh;
 } loaded_model;
@@ -37,9 +39,14 @@ typedef void (*model_progress)(const char *stage, int done, int total, void *ctx
  */
 CM_NODISCARD cm_err model_load(const char *path, loaded_model *lm, model_progress progress, void *ctx,
                                cm_status *st);
-/** The same, blanked (hidden) entities imported too when include_blanked (model_load leaves them out). */
-CM_NODISCARD cm_err model_load_ex(const char *path, loaded_model *lm, int include_blanked, model_progress progress,
-                                  void *ctx, cm_status *st);
+/** model_load_ex flags: import blanked (hidden) entities too (model_load leaves them out) ... */
+#define MODEL_LOAD_BLANKED 1
+/** ... fold an assembly's placed copies out (brep_fold_instances: format 4.3 sends a part once) */
+#define MODEL_LOAD_FOLD 2
+
+/** The same, with MODEL_LOAD_* flags. */
+CM_NODISCARD cm_err model_load_ex(const char *path, loaded_model *lm, int flags, model_progress progress, void *ctx,
+                                  cm_status *st);
 
 /** The same from an IGES file already in memory (`name` is used in messages; the fuzzer uses this). */
 CM_NODISCARD cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm,
@@ -52,6 +59,10 @@ CM_NODISCARD cm_err model_load_data(const char *name, const char *data, size_t l
  * the ones the face domains were built with (the encoder undoes its own turns first).
  */
 CM_NODISCARD cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status *st);
+
+/** model_load_data with MODEL_LOAD_* flags. */
+CM_NODISCARD cm_err model_load_data_ex(const char *name, const char *data, size_t len, loaded_model *lm, int flags,
+                                       model_progress progress, void *ctx, cm_status *st);
 
 void model_free(loaded_model *lm);
 

@@ -129,7 +129,12 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
         if (m->faces[f].method < CM_METHOD_COUNT)
             sum->faces_by_method[m->faces[f].method]++;
     }
+    /* format 4.3: each placed copy of a part, from the part's triangles */
+    cm_err pe = cm_mesh_place(m, mesh, st);
+    if (pe != CM_OK)
+        return pe;
     sum->faces = m->nfaces;
+    sum->placed_faces = mesh->nfaces;
     sum->triangles = mesh->nindex / 3;
     sum->vertices = mesh->nverts;
     if (sum->faces_left_out > 0 && mesh->nindex == 0) {

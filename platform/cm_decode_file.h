@@ -14,6 +14,7 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_decode_state.h"
 #include "cm/cm_out.h"
+#include "cm/cm_place.h"
 #include "cm/cm_tessellate.h"
 
 /** Faces left out whose reasons a summary keeps (the count goes on beyond). */
@@ -21,6 +22,7 @@
 
 typedef struct cm_decode_summary {
     uint32_t faces, triangles, vertices;       /* faces: of the model; triangles, vertices: of the mesh */
+    uint32_t placed_faces;                     /* faces of the mesh: the model's and its placed copies' (4.3) */
     uint32_t faces_by_method[CM_METHOD_COUNT]; /* faces in the mesh, by method number */
     uint32_t faces_left_out;                   /* faces whose tessellation failed: not in the mesh */
     cm_status left_out[CM_DECODE_LEFT_OUT_LIST]; /* why, for the first of them: code, face, byte offset */

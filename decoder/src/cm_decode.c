@@ -1,6 +1,7 @@
 /* cm_decode.c - the .cmz reader, formats 1 to 4 (see cm_decode.h and docs/FORMAT.md). */
 #include "cm/cm_decode.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "cm/cm_arith.h"
@@ -41,6 +42,7 @@ void cm_dec_init(cm_decoder *d)
     d->nsec = 0;
     d->nlimits = 0;
     d->model.nverts = d->model.nedges = d->model.nfaces = 0;
+    d->model.nplacements = 0;
 }
 
 int cm_dec_header_ok(const cm_decoder *d)
@@ -790,12 +792,69 @@ static cm_err sec_surf(reader *r)
     return CM_OK;
 }
 
+/* a double sent as its 64 bits, most significant first (a placement's entries: exact on every machine) */
+static double read_double(cm_ac_dec *ac)
+{
+    uint64_t b = 0;
+    for (int i = 0; i < 4; i++)
+        b = (b << 16) | cm_ac_dec_direct(ac, 16);
+    double v;
+    memcpy(&v, &b, sizeof v);
+    return v;
+}
+
+/*
+ * Format 4.3: the placed copies after the faces (cm_placement): their count, then per copy its
+ * first face, its face count less one, the nine entries of its linear part row by row (each a uint
+ * class: 0 is 0, 1 is 1, 2 is -1, 3 a double's 64 bits follow) and its translation in grid steps
+ * (three sints).  A copy must name faces of the model, its linear part must be finite, within
+ * CM_FMT_PLACE_MAX_LINEAR per entry and invertible, its translation within CM_FMT_PLACE_MAX_SHIFT mm.
+ */
+static cm_err read_placements(reader *r, cm_face_ctx *ctx)
+{
+    cm_model *m = &r->d->model;
+    cm_err e = read_count(r, &ctx->place_n, CM_LIMIT_MAX_PLACEMENTS, CM_MAX_PLACEMENTS, &m->nplacements,
+                          "placement count");
+    if (e != CM_OK)
+        return e;
+    for (uint32_t k = 0; k < m->nplacements; k++) {
+        cm_placement *P = &m->placements[k];
+        uint64_t first = cm_ac_dec_uint(&r->ac, &ctx->place_first);
+        uint64_t count = cm_ac_dec_uint(&r->ac, &ctx->place_count) + 1u;
+        for (int i = 0; i < 12; i++) {
+            if (i % 4 == 3)
+                continue;
+            uint64_t cls = cm_ac_dec_uint(&r->ac, &ctx->place_entry);
+            if (cls > 3)
+                return rfail(r, r->ac.overrun ? CM_E_TRUNCATED : CM_E_RANGE, "placement's transform");
+            P->m[i] = cls == 0 ? 0.0 : cls == 1 ? 1.0 : cls == 2 ? -1.0 : read_double(&r->ac);
+        }
+        for (int i = 3; i < 12; i += 4) {
+            int64_t s = cm_ac_dec_sint(&r->ac, &ctx->place_shift);
+            if (s > COORD_MAX || s < -COORD_MAX)
+                return rfail(r, CM_E_RANGE, "placement's translation");
+            P->m[i] = (double)s * m->q;
+        }
+        if (r->ac.overrun)
+            return rfail(r, CM_E_TRUNCATED, "placement");
+        if (first >= m->nfaces || count > m->nfaces - first)
+            return rfail(r, CM_E_RANGE, "placement's faces");
+        P->first = (uint32_t)first;
+        P->count = (uint32_t)count;
+        const char *fault = cm_fmt_placement_fault(P->m);
+        if (fault)
+            return rfail(r, CM_E_RANGE, fault);
+    }
+    return CM_OK;
+}
+
 static cm_err sec_face(reader *r)
 {
     cm_model *m = &r->d->model;
     cm_face_ctx ctx;
     cm_face_ctx_init(&ctx);
     ctx.net_fit = r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= CM_FMT_NET_FIT_MINOR);
+    ctx.placements = r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= CM_FMT_PLACE_MINOR);
     cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nfaces, "face count");
     if (e != CM_OK)
         return e;
@@ -895,6 +954,8 @@ static cm_err sec_face(reader *r)
         return rfail(r, CM_E_TRUNCATED, "faces");
     if (enext != m->nedges || snext != m->nsurfs)
         return rfail(r, CM_E_FORMAT, "unused edges or surfaces");
+    if (ctx.placements && (e = read_placements(r, &ctx)) != CM_OK)
+        return e;
     cm_model_adjacency(m);
     return CM_OK;
 }

@@ -269,3 +269,15 @@ int32_t cm_model_partner(const cm_model *m, uint32_t e, uint32_t f)
         return CM_NO_FACE; /* free, non-manifold, or a seam of one face */
     return ef[0] == (int32_t)f ? ef[1] : (ef[1] == (int32_t)f ? ef[0] : CM_NO_FACE);
 }
+
+const char *cm_fmt_placement_fault(const double m[12])
+{
+    for (int i = 0; i < 12; i++) {
+        double lim = i % 4 == 3 ? CM_FMT_PLACE_MAX_SHIFT : CM_FMT_PLACE_MAX_LINEAR;
+        if (!(fabs(m[i]) <= lim))
+            return i % 4 == 3 ? "placement's translation" : "placement's transform";
+    }
+    double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+                 m[2] * (m[4] * m[9] - m[5] * m[8]);
+    return fabs(det) >= CM_FMT_PLACE_MIN_DET ? NULL : "placement's transform (singular)";
+}

@@ -74,7 +74,13 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_prob_init(&c->twist_use);
     cm_ac_int_init(&c->twist_n);
     cm_ac_int_init(&c->twist);
+    cm_ac_int_init(&c->place_n);
+    cm_ac_int_init(&c->place_first);
+    cm_ac_int_init(&c->place_count);
+    cm_ac_int_init(&c->place_entry);
+    cm_ac_int_init(&c->place_shift);
     c->net_fit = 0;
+    c->placements = 0;
 }
 
 void cm_colr_ctx_init(cm_colr_ctx *c)

@@ -31,6 +31,7 @@
 #define CM_MAX_MODEL_LOOPS 4194304
 #define CM_MAX_MODEL_USES 4194304
 #define CM_MAX_EDGE_SAMPLES 4096
+#define CM_MAX_PLACEMENTS 65536
 #define CM_STACK_FN_MAX 8192
 #define CM_STACK_BUDGET 131072
 /* 3.25 GiB for 3.05 GiB on x86-64 (beyond a 32-bit address space: see cm_decode_state.h) */

@@ -30,6 +30,7 @@
 #define CM_MAX_MODEL_LOOPS 16
 #define CM_MAX_MODEL_USES 64
 #define CM_MAX_EDGE_SAMPLES 32
+#define CM_MAX_PLACEMENTS 4
 #define CM_STACK_FN_MAX 8192
 #define CM_STACK_BUDGET 65536
 /* 72 KiB for 65 KiB on x86-64 (GREGORY-FIT's corrections added 2 x 2.4 KiB: MAX_GREG patches of

@@ -14,12 +14,19 @@ void brep_free(brep_model *m)
     free(m->segs);
     free(m->faces);
     free(m->loops);
+    free(m->instances);
+    free(m->placements);
     memset(m, 0, sizeof *m);
 }
 
 double brep_diag(const brep_model *m)
 {
-    return m->box.empty ? 0.0 : cm_dist(m->box.lo, m->box.hi);
+    hbox b = m->box;
+    if (m->nplacements > 0 && !m->placed_box.empty) {
+        hbox_add(&b, m->placed_box.lo);
+        hbox_add(&b, m->placed_box.hi);
+    }
+    return b.empty ? 0.0 : cm_dist(b.lo, b.hi);
 }
 
 double brep_tolerance(const brep_model *m)
@@ -70,6 +77,14 @@ cm_err brep_add_loop(brep_model *m, int first_seg, int nseg, cm_status *st)
     m->loops[m->nloops].first = first_seg;
     m->loops[m->nloops].n = nseg;
     m->nloops++;
+    return CM_OK;
+}
+
+cm_err brep_add_instance(brep_model *m, const brep_instance *in, cm_status *st)
+{
+    if (grow((void **)&m->instances, &m->capinstances, m->ninstances, sizeof *m->instances))
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
+    m->instances[m->ninstances++] = *in;
     return CM_OK;
 }
 

@@ -40,6 +40,21 @@ typedef struct brep_face {
     int instance;         /* outermost subfigure instance (408) placing it, 0 for none */
 } brep_face;
 
+/* an outermost subfigure instance (IGES 408) as imported: its faces carry its id */
+typedef struct brep_instance {
+    int id;      /* brep_face.instance of the faces it places */
+    int def_de;  /* the DE of its subfigure definition (308) */
+    haffine xf;  /* definition -> model (millimetres) */
+} brep_instance;
+
+/* a copy of an instance's faces folded out of the model (brep_fold_instances): the faces of instance
+   `proto`, placed by xf (model -> model), are the copy */
+typedef struct brep_placement {
+    int proto;   /* the instance id (brep_face.instance) of the faces placed */
+    int nfaces;  /* how many faces the copy had */
+    haffine xf;
+} brep_placement;
+
 typedef struct brep_model {
     hsurf *surfs;
     int nsurfs, capsurfs;
@@ -53,6 +68,12 @@ typedef struct brep_model {
     hbox box;             /* of all boundary curves (millimetres) */
     double resolution_mm; /* the file's minimum resolution, converted; 0 if none */
     int faces_failed;     /* faces skipped because they could not be built (warned) */
+    brep_instance *instances; /* outermost subfigure instances, in import order */
+    int ninstances, capinstances;
+    brep_placement *placements; /* copies folded out (brep_fold_instances) */
+    int nplacements;
+    int placed_faces;     /* faces those copies had */
+    hbox placed_box;      /* the box of the model before folding (its diagonal stays the model's) */
     int entities_failed;  /* solids, shells and instances left out because they could not be read (warned) */
 } brep_model;
 
@@ -73,6 +94,18 @@ CM_NODISCARD cm_err brep_add_surf(brep_model *m, hsurf *s, int *index, cm_status
 CM_NODISCARD cm_err brep_add_seg(brep_model *m, hcurve *c, cm_status *st);             /* moves c */
 CM_NODISCARD cm_err brep_add_loop(brep_model *m, int first_seg, int nseg, cm_status *st);
 CM_NODISCARD cm_err brep_add_face(brep_model *m, const brep_face *f, cm_status *st);
+
+CM_NODISCARD cm_err brep_add_instance(brep_model *m, const brep_instance *in, cm_status *st);
+
+/**
+ * Fold placed copies out of m: of the outermost instances of one subfigure definition, the first
+ * stays (the prototype) and every other whose faces are the prototype's moved by one affine map
+ * (the same entities in the same order, surfaces and boundary curves within the model's tolerance,
+ * the same colours and sides) is removed and listed in m->placements.  Instances whose faces differ
+ * (one failed to import, a member's own colour) stay as they are.  The model's box stays the
+ * whole's (m->placed_box).  Returns the copies folded in *folded (may be NULL).
+ */
+CM_NODISCARD cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st);
 
 /** Roll the model back to the given counts (drops a half-built face). */
 void brep_truncate(brep_model *m, int nsurfs, int nfaces, int nloops, int nsegs);

@@ -23,6 +23,8 @@ extern const char cmd_prog[];
 extern int cmd_quiet;
 /** --include-blanked: import blanked (hidden) IGES entities too (cmd_load). */
 extern int cmd_include_blanked;
+/** Fold an assembly's placed copies out of the model (cmd_load; format 4.3 sends a part once). */
+extern int cmd_fold_instances;
 
 int cmd_info(int argc, char **argv);
 int cmd_sample(int argc, char **argv);

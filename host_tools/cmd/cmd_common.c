@@ -18,6 +18,7 @@ const char cmd_prog[] = "cmz";
 
 int cmd_quiet;
 int cmd_include_blanked;
+int cmd_fold_instances;
 
 void cmd_progress(const char *stage, int done, int total, void *ctx)
 {
@@ -40,7 +41,8 @@ int cmd_load(const char *path, loaded_model *lm)
 {
     cm_status st;
     cm_status_init(&st);
-    if (model_load_ex(path, lm, cmd_include_blanked, cmd_progress, NULL, &st) == CM_OK)
+    int flags = (cmd_include_blanked ? MODEL_LOAD_BLANKED : 0) | (cmd_fold_instances ? MODEL_LOAD_FOLD : 0);
+    if (model_load_ex(path, lm, flags, cmd_progress, NULL, &st) == CM_OK)
         return EXIT_OK;
     if (lm->iges.err[0])
         fprintf(stderr, "%s: %s:%s%s\n", cmd_prog, path, lm->iges.err_line ? "" : " ", lm->iges.err);

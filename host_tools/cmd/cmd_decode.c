@@ -88,7 +88,11 @@ int cmd_decode(int argc, char **argv)
     for (;;) {
         mesh.cap_verts = (uint32_t)(3 * tris);
         mesh.cap_index = (uint32_t)(3 * tris);
-        mesh.cap_faces = decoder->model.nfaces ? decoder->model.nfaces : 1;
+        /* the model's faces and their placed copies (format 4.3) */
+        uint64_t copies = 0;
+        for (uint32_t k = 0; k < decoder->model.nplacements; k++)
+            copies += decoder->model.placements[k].count;
+        mesh.cap_faces = (uint32_t)(decoder->model.nfaces + copies ? decoder->model.nfaces + copies : 1);
         free(mesh.pos);
         free(mesh.nrm);
         free(mesh.idx);
@@ -131,8 +135,12 @@ int cmd_decode(int argc, char **argv)
                 snprintf(left, sizeof left, ", %lu left out", (unsigned long)sum.faces_left_out);
             char methods[128];
             cm_report_method_counts(methods, sizeof methods, sum.faces_by_method, 0);
-            printf("%s -> %s: %u faces (%s%s), %u triangles, %u vertices, chordal tolerance %.3g mm, %llu bytes\n",
-                   path, out, sum.faces, methods, left, sum.triangles, sum.vertices, sum.tess_tol,
+            char placed[96] = "";
+            if (decoder->model.nplacements > 0)
+                snprintf(placed, sizeof placed, "; %u rebuilt, the rest as %u placed copies", sum.faces,
+                         decoder->model.nplacements);
+            printf("%s -> %s: %u faces (%s%s%s), %u triangles, %u vertices, chordal tolerance %.3g mm, %llu bytes\n",
+                   path, out, sum.placed_faces, methods, left, placed, sum.triangles, sum.vertices, sum.tess_tol,
                    (unsigned long long)bytes);
         }
     }

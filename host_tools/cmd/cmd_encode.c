@@ -109,6 +109,8 @@ int cmd_encode(int argc, char **argv)
             o.nfill = 0;
         } else if (strcmp(a, "--no-g1fit") == 0) {
             o.g1fit = 0;
+        } else if (strcmp(a, "--no-instances") == 0) {
+            o.instances = 0;
         } else if (strcmp(a, "--no-turning-basis") == 0) {
             o.turning_basis = 0;
         } else if (strcmp(a, "--budget-steps") == 0) { /* the default since format 4; still accepted */
@@ -146,6 +148,8 @@ int cmd_encode(int argc, char **argv)
         }
     }
     loaded_model lm;
+    /* format 4.3: an assembly's part placed several times travels once, each copy as a transform */
+    cmd_fold_instances = encode_places(&o);
     int loaded = cmd_load(path, &lm);
     if (loaded != EXIT_OK)
         return loaded;
@@ -240,8 +244,13 @@ int cmd_encode(int argc, char **argv)
                      "(see warnings)", lm.brep.entities_failed);
         char methods[128];
         cm_report_method_counts(methods, sizeof methods, r.faces_by_method, 0);
-        printf("%s -> %s: %d faces (%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the IGES (%ld bytes)\n",
-               path, out, lm.mesh.nfaces, methods, left,
+        /* format 4.3: the faces the model shows, those sent and those placed again as copies */
+        char placed[128] = "";
+        if (r.placements > 0)
+            snprintf(placed, sizeof placed, "; %d sent, %u as %u placed copies of parts", lm.mesh.nfaces,
+                     r.placed_faces, r.placements);
+        printf("%s -> %s: %d faces (%s%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the IGES (%ld bytes)\n",
+               path, out, lm.mesh.nfaces + (int)r.placed_faces, methods, left, placed,
                r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0, isize);
         if (r.edges_refit + r.surfs_refit > 0)
             fprintf(stderr, "%s: %s: note: %d edge curves and %d surfaces re-approximated within a quarter of "

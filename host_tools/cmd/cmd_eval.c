@@ -31,7 +31,7 @@ static cm_rebuild_ws eval_ws; /* large: static storage, as on the terminal */
 static cm_err match_left_out(const char *path, const cm_model *m, loaded_model *lm, int *left_out, cm_status *st)
 {
     loaded_model again;
-    cm_err e = model_load(path, &again, NULL, NULL, st);
+    cm_err e = model_load_ex(path, &again, lm->load_flags, NULL, NULL, st);
     encode_opts o;
     encode_opts_default(&o);
     double diag = brep_diag(&again.brep);
@@ -110,11 +110,40 @@ int cmd_eval(int argc, char **argv)
         return cmd_exit_for(st.code);
     }
     loaded_model lm;
+    /* a file with placed copies (format 4.3) is measured against the model folded as the encoder
+       folded it: the part's faces once, and each copy's transform against the model's own */
+    cmd_fold_instances = decoder->model.nplacements > 0;
     int loaded = cmd_load(paths[0], &lm);
     if (loaded != EXIT_OK)
         return loaded;
     cm_err e = CM_OK;
+    int fails = 0;
     const cm_model *m = &decoder->model;
+    if ((int)m->nplacements != lm.brep.nplacements) {
+        fprintf(stderr, "%s eval: %s places %u copies, %s folds %d: not the same model\n", cmd_prog, paths[1],
+                m->nplacements, paths[0], lm.brep.nplacements);
+        model_free(&lm);
+        return EXIT_INPUT;
+    }
+    for (uint32_t k = 0; k < m->nplacements; k++) {
+        /* the linear part travels exactly, the translation on the grid (half a step off at most) */
+        const haffine *x = &lm.brep.placements[k].xf;
+        double worst = 0.0, shift = 0.0;
+        for (int i = 0; i < 3; i++) {
+            const double t[3] = {x->t.x, x->t.y, x->t.z};
+            for (int j = 0; j < 3; j++) {
+                double d = fabs(m->placements[k].m[4 * i + j] - x->R[i][j]);
+                worst = d > worst ? d : worst;
+            }
+            double d = fabs(m->placements[k].m[4 * i + 3] - t[i]);
+            shift = d > shift ? d : shift;
+        }
+        if (!(worst == 0.0 && shift <= 0.5 * m->q * (1.0 + 1e-9))) {
+            fprintf(stderr, "%s eval: %s: copy %u is not placed as in %s (%.3g, %.3g mm off)\n", cmd_prog, paths[1], k,
+                    paths[0], worst, shift);
+            fails++;
+        }
+    }
     if (!rel_set)
         rel = m->rel_tol > 0 ? m->rel_tol : 0.01;
     /* the encoder's default (encode_opts_for_model): with neither --tol nor --tol-abs, a face's
@@ -138,7 +167,7 @@ int cmd_eval(int argc, char **argv)
         model_free(&lm);
         return EXIT_INPUT;
     }
-    int nf = (int)m->nfaces, rc = EXIT_OK, fails = 0;
+    int nf = (int)m->nfaces, rc = EXIT_OK;
     face_surface *fs = calloc((size_t)nf + 1, sizeof *fs);
     face_error *fe = calloc((size_t)nf + 1, sizeof *fe);
     double *g1c = malloc(((size_t)nf + 1) * sizeof *g1c);

@@ -57,6 +57,7 @@ void encode_opts_default(encode_opts *o)
     /* precision from the tolerance budget (tx_coarsen.c): 422 k instead of 502 k bytes over the
        corpus for a third more encode time (a second choice of methods where a face is kept) */
     o->budget_steps = 1;
+    o->instances = 1;
     o->strict = 0;
     o->measure_mesh = 0;
     o->abs_tol = 0;
@@ -66,6 +67,11 @@ void encode_opts_default(encode_opts *o)
     o->model_tol_rel = 1e-3;
     o->progress = NULL;
     o->progress_ctx = NULL;
+}
+
+int encode_places(const encode_opts *o)
+{
+    return o->instances && o->predicted && o->compact_header && o->compact_minor >= (int)CM_FMT_PLACE_MINOR;
 }
 
 double encode_face_tol(double rel_tol, int rel_set, double abs_tol, double bbox)
@@ -253,6 +259,13 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     }
     if (e == CM_OK)
         e = enc_decode_back(t.w, r, st); /* the final bytes must decode: any inconsistency is ours */
+    if (e == CM_OK) {
+        const cm_model *dm = &t.w->dec.model;
+        r->placements = dm->nplacements;
+        r->placed_faces = 0;
+        for (uint32_t k = 0; k < dm->nplacements; k++)
+            r->placed_faces += dm->placements[k].count;
+    }
     tx_free(&t);
     if (e != CM_OK)
         return e;
@@ -277,6 +290,10 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
  */
 cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm_status *st)
 {
+    if (lm->brep.nplacements > 0 && !encode_places(o)) {
+        memset(r, 0, sizeof *r);
+        return cm_fail(st, CM_E_ARG, "a model loaded with its placed copies folded out needs format 4.3");
+    }
     int nb = lm->brep.nfaces;
     unsigned char *keep_only = calloc((size_t)nb + 1, 1), *flip0 = malloc((size_t)nb + 1);
     unsigned char *net_whole = calloc((size_t)nb + 1, 1);

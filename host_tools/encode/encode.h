@@ -60,6 +60,8 @@ typedef struct encode_opts {
     int budget_steps;            /* with predicted: curves as the fewest cubic points and on steps of their
                                     own from the tolerance budget, the vertices on one (tx_coarsen.c;
                                     default 1; 0: every point on the grid, as in the source) */
+    int instances;               /* a model loaded with its placed copies folded out (MODEL_LOAD_FOLD) sends
+                                    each copy as a transform (format 4.3; default 1: see encode_places) */
     int strict;                  /* a face that cannot be sent fails the model (default: left out, warned) */
     int measure_mesh;            /* measure each face's triangles against its source (face_report.mesh_dev;
                                     default 0: it costs a second tessellation and many projections) */
@@ -68,6 +70,10 @@ typedef struct encode_opts {
 } encode_opts;
 
 void encode_opts_default(encode_opts *o);
+
+/** Whether o writes placed copies (format 4.3 on, instances on): a caller loads the model with
+    MODEL_LOAD_FOLD then, and encode_model refuses a folded model otherwise. */
+int encode_places(const encode_opts *o);
 
 /** Leave out what a reader of format major.minor (at most) cannot read: the coding, methods and the
     turning basis newer than it, so that the file is written as that version or older. */
@@ -105,6 +111,7 @@ typedef struct encode_result {
     int edges_line, edges_curve;
     int faces_flipped; /* faces turned to make every part consistently oriented */
     int faces_left_out; /* faces the encoder left out (model_leave_out_face: warned, in lm->left_out) */
+    uint32_t placements, placed_faces; /* format 4.3: copies of parts sent as transforms, and their faces */
     double q;          /* grid step (mm) */
     int edges_refit, surfs_refit; /* edges and kept surfaces re-approximated to fit the target profile */
     int edges_reapproximated;     /* curves sent as fewer cubic points within their budget (budget steps) */

@@ -190,6 +190,13 @@ static inline int enc_compact_header(const encode_opts *o)
 {
     return o->predicted && o->compact_header;
 }
+/* format 4.3 on: the FACE section ends with the placed copies (their count, 0 without) */
+static inline int enc_placement_tail(const encode_opts *o)
+{
+    return enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_PLACE_MINOR;
+}
+/* the placed copies' faces must travel together (write_sections.c); CM_E_FORMAT when not */
+cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st);
 /* format 4.2 on: NFILL and G1FIT nets may carry an interior correction (cm_fit_net_add) */
 static inline int enc_net_fit(const encode_opts *o)
 {

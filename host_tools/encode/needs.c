@@ -13,6 +13,7 @@
 #include "cm/cm_crc32.h"
 #include "cm/cm_cubic_convert.h"
 #include "cm/cm_method.h"
+#include "cm/cm_place.h"
 #include "cm/cm_sections.h"
 
 /* ---- needs ---- */
@@ -51,6 +52,10 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const
     cm_mesh_face mf;
     cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1};
     uint64_t tris = 0;
+    /* per face its triangles: the placed copies' (format 4.3) are the same again */
+    uint32_t *face_tris = calloc((size_t)m->nfaces + 1, sizeof *face_tris);
+    if (!face_tris)
+        return cm_fail(st, CM_E_NOMEM, "out of memory");
     for (uint32_t f = 0; f < m->nfaces; f++) {
         if (o->progress)
             o->progress("tessellating", (int)f + 1, (int)m->nfaces, o->progress_ctx);
@@ -61,6 +66,7 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const
         cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &w->tess_ws, &info, &fst);
         if (e == CM_E_NOMEM) {
             *st = fst;
+            free(face_tris);
             return e;
         }
         if (measure && (int)f < t->nfaces)
@@ -74,19 +80,26 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const
         }
         if ((int)f < t->nfaces && t->surfs[f].reapproximated && enc_kept(t->method[f])) {
             int folds = enc_face_folds(&mesh);
-            if (folds < 0)
+            if (folds < 0) {
+                free(face_tris);
                 return cm_fail(st, CM_E_NOMEM, "out of memory");
+            }
             if (folds) {
                 tx_face_fault(t, (int)f, enc_net_folds);
                 continue;
             }
         }
         tris += (uint64_t)info.triangles;
+        face_tris[f] = (uint32_t)info.triangles;
         if ((uint32_t)info.points > need[CM_LIMIT_MAX_TESS_POINTS])
             need[CM_LIMIT_MAX_TESS_POINTS] = (uint32_t)info.points;
         if ((uint32_t)info.max_edge_samples > need[CM_LIMIT_MAX_EDGE_SAMPLES])
             need[CM_LIMIT_MAX_EDGE_SAMPLES] = (uint32_t)info.max_edge_samples;
     }
+    uint64_t copy_tris = 0, copy_faces = 0;
+    cm_place_counts(m, face_tris, &copy_tris, &copy_faces);
+    free(face_tris);
+    tris += copy_tris;
     need[CM_LIMIT_MAX_TRIS] = tris > UINT32_MAX ? UINT32_MAX : (uint32_t)tris;
     return CM_OK;
 }
@@ -125,7 +138,12 @@ void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need
         }
         NEED(MAX_FACE_EDGES, uses);
     }
-    NEED(MAX_FACES, m->nfaces);
+    /* the mesh holds the placed copies' faces too (format 4.3) */
+    uint64_t copies = 0;
+    for (uint32_t k = 0; k < m->nplacements; k++)
+        copies += m->placements[k].count;
+    NEED(MAX_FACES, m->nfaces + copies);
+    NEED(MAX_PLACEMENTS, m->nplacements);
     NEED(MAX_EDGES, m->nedges);
     NEED(MAX_VERTICES, m->nverts);
     NEED(MAX_FILE_BYTES, r->len);

@@ -298,12 +298,92 @@ static void put_net(const tx *t, cm_ac_enc *e, cm_surf_ctx *cx, const tx_surf *S
         }
 }
 
+/*
+ * Format 4.3: copy k of lm's placed copies places the faces of instance proto, which the model sends
+ * as its faces [first, first + count) (the importer adds an instance's faces together and nothing
+ * reorders them; faces left out leave the rest in order).  0 when none of them is left (the copy
+ * is left out with them), -1 when they are not together (then the file cannot say it).
+ */
+static int placement_faces(const tx *t, const loaded_model *lm, int k, uint32_t *first, uint32_t *count)
+{
+    int proto = lm->brep.placements[k].proto, f0 = -1, n = 0;
+    for (int f = 0; f < t->nfaces; f++)
+        if (lm->brep.faces[lm->mesh.faces[f].brep_face].instance == proto) {
+            if (f0 < 0)
+                f0 = f;
+            else if (f != f0 + n)
+                return -1;
+            n++;
+        }
+    *first = (uint32_t)(f0 < 0 ? 0 : f0);
+    *count = (uint32_t)n;
+    return n > 0;
+}
+
+/* a double as its 64 bits, most significant first (read_double, cm_decode.c) */
+static void write_double(cm_ac_enc *e, double v)
+{
+    uint64_t b;
+    memcpy(&b, &v, sizeof b);
+    for (int i = 3; i >= 0; i--)
+        cm_ac_enc_direct(e, (uint32_t)(b >> (16 * i)) & 0xffffu, 16);
+}
+
+/* format 4.3: the placed copies after the faces (docs/FORMAT.md, FACE) */
+static void write_placements(const tx *t, cm_ac_enc *e, const loaded_model *lm, cm_face_ctx *ctx)
+{
+    uint32_t n = 0, first, count;
+    for (int k = 0; k < lm->brep.nplacements; k++)
+        n += placement_faces(t, lm, k, &first, &count) > 0;
+    cm_ac_enc_uint(e, &ctx->place_n, n);
+    for (int k = 0; k < lm->brep.nplacements; k++) {
+        if (placement_faces(t, lm, k, &first, &count) <= 0)
+            continue;
+        cm_ac_enc_uint(e, &ctx->place_first, first);
+        cm_ac_enc_uint(e, &ctx->place_count, count - 1u);
+        const haffine *x = &lm->brep.placements[k].xf;
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double v = x->R[i][j];
+                unsigned cls = v == 0.0 ? 0u : v == 1.0 ? 1u : v == -1.0 ? 2u : 3u;
+                cm_ac_enc_uint(e, &ctx->place_entry, cls);
+                if (cls == 3u)
+                    write_double(e, v == 0.0 ? 0.0 : v); /* (-0 is 0) */
+            }
+        /* the translation on the model's grid (its vertices' precision) */
+        const double t3[3] = {x->t.x, x->t.y, x->t.z};
+        for (int i = 0; i < 3; i++)
+            cm_ac_enc_sint(e, &ctx->place_shift, (int64_t)llround(t3[i] / t->q));
+    }
+}
+
+cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st)
+{
+    uint32_t first, count;
+    for (int k = 0; k < lm->brep.nplacements; k++) {
+        if (placement_faces(t, lm, k, &first, &count) < 0)
+            return cm_fail(st, CM_E_FORMAT, "a placed part's faces are not sent together");
+        const haffine *x = &lm->brep.placements[k].xf;
+        double m[12];
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < 3; j++)
+                m[4 * i + j] = x->R[i][j];
+            m[4 * i + 3] = i == 0 ? x->t.x : i == 1 ? x->t.y : x->t.z;
+        }
+        const char *fault = cm_fmt_placement_fault(m);
+        if (fault)
+            return cm_fail(st, CM_E_RANGE, fault);
+    }
+    return CM_OK;
+}
+
 static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     const cmesh *cm = &lm->mesh;
     cm_face_ctx ctx;
     cm_face_ctx_init(&ctx);
     ctx.net_fit = enc_net_fit(t->o);
+    ctx.placements = enc_placement_tail(t->o);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nfaces);
     int enext = 0;
     for (int f = 0; f < t->nfaces; f++) {
@@ -340,6 +420,8 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
             }
         }
     }
+    if (ctx.placements)
+        write_placements(t, e, lm, &ctx);
 }
 
 static void sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
@@ -390,7 +472,7 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     static const section_fn fns[CM_SEC_COUNT] = {sec_vert, sec_edge, sec_surf, sec_face, sec_colr};
     outbuf sec[CM_SEC_COUNT];
     memset(sec, 0, sizeof sec);
-    cm_err e = CM_OK;
+    cm_err e = enc_check_placements(t, lm, st);
     for (int s = 0; s < CM_SEC_COUNT && e == CM_OK; s++)
         e = run_section(fns[s], t, lm, &sec[s], st);
     int compact = enc_compact_header(t->o);
@@ -399,7 +481,12 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     uint32_t seclen[CM_SEC_COUNT];
     for (int s = 0; s < CM_SEC_COUNT; s++)
         seclen[s] = (uint32_t)sec[s].len;
-    h.nlimits = CM_LIMIT_COUNT;
+    /* the needs up to the last that is not 0, at least format 1.0's 25: format 4.3's MAX_PLACEMENTS
+       only with copies (a file without stays as it was, byte for byte) */
+    h.nlimits = CM_FMT_MIN_NEEDS;
+    for (uint32_t i = CM_FMT_MIN_NEEDS; need && i < CM_LIMIT_COUNT; i++)
+        if (need[i])
+            h.nlimits = (uint8_t)(i + 1);
     h.nsections = CM_SEC_COUNT;
     h.q_exp = (int8_t)t->q_exp;
     for (int k = 0; k < 3; k++)
@@ -411,7 +498,7 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
         h.major = CM_FMT_COMPACT_MAJOR;
         h.minor = (uint8_t)t->o->compact_minor;
     }
-    size_t H = cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT);
+    size_t H = cm_fmt_header_len(h.nlimits, CM_SEC_COUNT);
     if (compact) {
         /* the file's own length is one of its needs, and in format 4 the needs' varints size the
            header: packed again until the declared length is the length (twice, at most thrice) */
@@ -468,11 +555,11 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
             h.header_len = (uint32_t)H;
             h.file_len = (uint32_t)total;
             cm_fmt_header_pack(b, &h);
-            for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+            for (uint32_t i = 0; i < h.nlimits; i++)
                 cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);
             size_t off = H;
             for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
-                uint8_t *ent = b + cm_fmt_entry_at(CM_LIMIT_COUNT, s);
+                uint8_t *ent = b + cm_fmt_entry_at(h.nlimits, s);
                 ent[CM_ENT_TAG] = (uint8_t)(s + 1);
                 cm_put_u32(ent + CM_ENT_OFFSET, (uint32_t)off);
                 cm_put_u32(ent + CM_ENT_LENGTH, (uint32_t)sec[s].len);

@@ -995,9 +995,13 @@ static cm_err instance_408(importer *im, const iges_entity *e, const haffine *pa
      * subfigures (and even one shell per face), which together form one body */
     int saved = im->instance;
     im->stats->instances++;
-    if (depth == 0)
-        im->instance = im->stats->instances;
     cm_err err = CM_OK;
+    if (depth == 0) {
+        im->instance = im->stats->instances;
+        /* what brep_fold_instances needs to send a part placed several times once */
+        brep_instance bi = {im->instance, def, m};
+        err = brep_add_instance(im->m, &bi, im->st);
+    }
     for (int i = 0; i < n && err == CM_OK; i++) {
         int mde;
         if (iges_ptr(f, d, 3 + i, 0, &mde)) {

@@ -282,11 +282,6 @@ static int encode_for(const char *path, const cm_link_hello *h, const cm_limit_i
     loaded_model lm;
     cm_status st;
     cm_status_init(&st);
-    if (model_load(path, &lm, NULL, NULL, &st) != CM_OK) {
-        cm_report_status(stderr, "cmz send", path, &st);
-        model_free(&lm);
-        return -1;
-    }
     encode_opts o;
     encode_opts_default(&o);
     o.target = tab;
@@ -296,6 +291,12 @@ static int encode_for(const char *path, const cm_link_hello *h, const cm_limit_i
         o.rel_set = 1;
     }
     encode_opts_for_format(&o, h->fmt_major_max, h->fmt_minor_max); /* what the terminal reads */
+    /* a part placed several times travels once where the terminal reads format 4.3 */
+    if (model_load_ex(path, &lm, encode_places(&o) ? MODEL_LOAD_FOLD : 0, NULL, NULL, &st) != CM_OK) {
+        cm_report_status(stderr, "cmz send", path, &st);
+        model_free(&lm);
+        return -1;
+    }
     encode_result r;
     cm_status_init(&st);
     cm_err e = encode_model(&lm, &o, &r, &st);

@@ -628,6 +628,28 @@ int igw_subfigure_dag(igw *w, int levels, int fan)
     return igw_add(w, 408, 0, "%d,0,0,0,1", def);
 }
 
+int igw_placed_boxes(igw *w, int copies, const double (*xform)[12])
+{
+    int from = w->n;
+    igw_box_with_hole_144(w, 40, 30, 20, 5);
+    int members[16], n = 0;
+    for (int i = from; i < w->n && n < 16; i++)
+        if (w->e[i].type == 144) {
+            members[n++] = 2 * i + 1;
+            w->e[i].subord = 1;
+        }
+    char buf[512];
+    repeat_list(buf, sizeof buf, "0,3HBOX,", n, members);
+    int def = igw_add(w, 308, 0, "%s", buf);
+    igw_set(w, def, 1, 0, 0);
+    for (int k = 0; k < copies; k++) {
+        int x = igw_transform_124(w, xform[k]);
+        int inst = igw_add(w, 408, 0, "%d,0,0,0,1", def);
+        igw_set(w, inst, 0, x, 0);
+    }
+    return def;
+}
+
 int igw_composite_dag_144(igw *w, int levels, int fan)
 {
     v3 p00 = {0, 0, 0}, p10 = {10, 0, 0}, p11 = {10, 10, 0}, p01 = {0, 10, 0};

@@ -125,6 +125,13 @@ int igw_transform_124(igw *w, const double m[12]);
 int igw_subfigure_dag(igw *w, int levels, int fan);
 
 /**
+ * An assembly: the box with a hole (igw_box_with_hole_144, 40 x 30 x 20, r 5) as one subfigure
+ * definition (308), placed `copies` times by top-level 408 instances, copy k under the 124
+ * xform[k] (row-major 3 x 4: {R11, R12, R13, T1, R21, ...}).  Returns the 308's DE.
+ */
+int igw_placed_boxes(igw *w, int copies, const double (*xform)[12]);
+
+/**
  * A trimmed square whose hole is a composite-curve DAG: composite 0 is a full circle (100),
  * composite k (1..levels) lists composite k-1 `fan` times, so the hole flattens into fan^levels
  * pieces.  Returns the DE of the 144.

@@ -102,7 +102,7 @@ static void test_every_corpus_model(void **state)
         cm_status_init(&st);
         /* blanked entities included: every face entity the catalog counts must import (by default
            Shelt_channel_5's 190 entities placed only by blanked subfigure instances are left out) */
-        cm_err e = model_load_ex(path, &lm, 1, NULL, NULL, &st);
+        cm_err e = model_load_ex(path, &lm, MODEL_LOAD_BLANKED, NULL, NULL, &st);
         if (e != CM_OK)
             fail_msg("%s: %s (%s)", file, lm.iges.err, cm_err_name(e));
         if (lm.stats.face_entities != expect || lm.brep.faces_failed != 0 || lm.domains_failed != 0)

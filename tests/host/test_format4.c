@@ -281,7 +281,8 @@ static int setup_good(void **state)
     while (at < good_H - 4)
         assert_true(cm_fmt_get_varint(good, good_H - 4, &at, &fields[nfields++]));
     assert_int_equal(at, good_H - 4);
-    assert_int_equal(nfields, 1 + 1 + CM_LIMIT_COUNT + 1 + CM_SEC_COUNT + 1 + 1 + 3 + 2);
+    /* (a model without placed copies declares format 1.0's 25 needs: MAX_PLACEMENTS, the 26th, is 0) */
+    assert_int_equal(nfields, 1 + 1 + CM_FMT_MIN_NEEDS + 1 + CM_SEC_COUNT + 1 + 1 + 3 + 2);
     return 0;
 }
 
@@ -360,7 +361,7 @@ static void test_hostile_headers(void **state)
     static uint64_t f[CM_FMT_MAX_HEADER];
     static uint32_t at[CM_FMT_MAX_HEADER];
     assert_true(good_len < sizeof b - 4096);
-    const uint32_t N = CM_LIMIT_COUNT, iS = 2 + N, iLen = 3 + N, iE = 3 + N + CM_SEC_COUNT, iShift = iE + 1, iO = iE + 2,
+    const uint32_t N = CM_FMT_MIN_NEEDS, iS = 2 + N, iLen = 3 + N, iE = 3 + N + CM_SEC_COUNT, iShift = iE + 1, iO = iE + 2,
                    iTess = iO + 3, iRel = iTess + 1;
     /* the good header re-emitted: the same file, which decodes */
     size_t n = with_header(b, fields, nfields, 0, at);
@@ -378,16 +379,19 @@ static void test_hostile_headers(void **state)
     hl = n - (good_len - good_H);
     assert_refused(b, n, hl, CM_E_LIMIT, at[2 + CM_LIMIT_MAX_FACES], "header needs");
     {
+        /* the needs this build knows beyond the file's (0), then one it does not know (1) */
+        const uint32_t extra = CM_LIMIT_COUNT + 1u - N;
         uint64_t g[CM_FMT_MAX_HEADER];
         memcpy(g, fields, 2 * sizeof *g);
-        g[1] = N + 1;
+        g[1] = N + extra;
         memcpy(g + 2, fields + 2, N * sizeof *g);
-        g[2 + N] = 1; /* the extra need */
-        memcpy(g + 3 + N, fields + 2 + N, (nfields - 2 - N) * sizeof *g);
-        n = with_header(b, g, nfields + 1, 0, at);
-        assert_refused(b, n, n - (good_len - good_H), CM_E_VERSION, at[2 + N], "unknown limit");
-        g[2 + N] = 0; /* needed 0: read */
-        n = with_header(b, g, nfields + 1, 0, at);
+        for (uint32_t i = 0; i < extra; i++)
+            g[2 + N + i] = i + 1 == extra; /* the unknown need */
+        memcpy(g + 2 + N + extra, fields + 2 + N, (nfields - 2 - N) * sizeof *g);
+        n = with_header(b, g, nfields + extra, 0, at);
+        assert_refused(b, n, n - (good_len - good_H), CM_E_VERSION, at[2 + N + extra - 1], "unknown limit");
+        g[2 + N + extra - 1] = 0; /* needed 0: read */
+        n = with_header(b, g, nfields + extra, 0, at);
         cm_dec_init(&dec4);
         assert_ok(cm_dec_feed(&dec4, b, n, &st));
         assert_ok(cm_dec_finish(&dec4, &st));
@@ -471,7 +475,7 @@ static void test_vertex_repeats(void **state)
     static uint8_t b[1 << 20], body[1 << 20], sec[4096];
     static uint32_t at[CM_FMT_MAX_HEADER];
     static uint64_t f[CM_FMT_MAX_HEADER];
-    const uint32_t iLen = 3 + CM_LIMIT_COUNT;
+    const uint32_t iLen = 3 + CM_FMT_MIN_NEEDS;
     for (int past = 0; past < 2; past++) {
         cm_ac_enc e;
         cm_ac_enc_init(&e, sec, sizeof sec);

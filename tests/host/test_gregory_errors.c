@@ -246,7 +246,8 @@ static int write_minor;
 
 /**
  * Write model m as a .cmz file of major version `major` (minor write_minor) with the need table `need`
- * (CM_LIMIT_COUNT entries; NULL: all 0, which every build accepts) and every CRC computed.
+ * (CM_FMT_MIN_NEEDS entries, as the encoder declares a model without placed copies; NULL: all 0,
+ * which every build accepts) and every CRC computed.
  * Returns the malloc'd file; *len its length.
  */
 static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, size_t *len)
@@ -255,7 +256,7 @@ static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, si
                                                          put_colours};
     uint8_t *sec[CM_SEC_COUNT];
     size_t seclen[CM_SEC_COUNT];
-    const size_t H = cm_fmt_header_len(CM_LIMIT_COUNT, CM_SEC_COUNT);
+    const size_t H = cm_fmt_header_len(CM_FMT_MIN_NEEDS, CM_SEC_COUNT);
     size_t total = H + 4u;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
         sec[s] = malloc(SECTION_CAP);
@@ -278,7 +279,7 @@ static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, si
     h.flags = (uint16_t)(m->npalette ? 1 : 0);
     h.header_len = (uint32_t)H;
     h.file_len = (uint32_t)total;
-    h.nlimits = CM_LIMIT_COUNT;
+    h.nlimits = CM_FMT_MIN_NEEDS;
     h.nsections = CM_SEC_COUNT;
     h.q_exp = (int8_t)qe;
     for (int k = 0; k < 3; k++)
@@ -286,11 +287,11 @@ static uint8_t *write_cmz(const cm_model *m, int major, const uint32_t *need, si
     h.tess_tol = m->tess_tol;
     h.rel_tol = m->rel_tol;
     cm_fmt_header_pack(b, &h);
-    for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+    for (uint32_t i = 0; i < CM_FMT_MIN_NEEDS; i++)
         cm_put_u32(b + cm_fmt_need_at(i), need ? need[i] : 0);
     size_t off = H;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
-        uint8_t *ent = b + cm_fmt_entry_at(CM_LIMIT_COUNT, (uint32_t)s);
+        uint8_t *ent = b + cm_fmt_entry_at(CM_FMT_MIN_NEEDS, (uint32_t)s);
         ent[CM_ENT_TAG] = (uint8_t)(s + 1);
         cm_put_u32(ent + CM_ENT_OFFSET, (uint32_t)off);
         cm_put_u32(ent + CM_ENT_LENGTH, (uint32_t)seclen[s]);

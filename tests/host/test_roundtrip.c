@@ -834,7 +834,7 @@ static void test_damaged_files(void **state)
     if (l.compact) {
         uint32_t at = CM_FMT_COMPACT_AT_H;
         uint64_t v;
-        for (uint32_t k = 0; k < 1 + 3 + CM_LIMIT_COUNT + CM_SEC_COUNT - 1; k++)
+        for (uint32_t k = 0; k < 1 + 3 + CM_FMT_MIN_NEEDS + CM_SEC_COUNT - 1; k++) /* (no placed copies: 25 needs) */
             assert_true(cm_fmt_get_varint(good, H, &at, &v));
         colr_len_at = at; /* H, flags, N, the needs, S, four lengths: the fifth (COLR) is next */
         assert_true(good[colr_len_at] < 0x7F);

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 2     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 3     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -91,6 +91,11 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_SHORT_ORIGIN_MINOR 1u
 #define CM_FMT_KEPT_OFF_EDGES_MINOR 1u /* 4.1: kept nets re-approximated (cm_model.kept_off_edges) */
 #define CM_FMT_NET_FIT_MINOR 2u        /* 4.2: NFILL and G1FIT records may carry an interior correction */
+#define CM_FMT_PLACE_MINOR 3u          /* 4.3: the FACE section ends with the placed copies (cm_placement) */
+/* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
+#define CM_FMT_PLACE_MAX_LINEAR 1e3
+#define CM_FMT_PLACE_MAX_SHIFT 1e9
+#define CM_FMT_PLACE_MIN_DET 1e-9 /* |det M|: a copy scaled by less than 1e-3 is no copy */
 #define CM_FMT_REL_TOL_DEFAULT 167772u
 #define CM_FMT_MAX_ORIGIN_SHIFT 62u
 /** Append v as an unsigned LEB128 varint at b; returns its bytes (1..CM_FMT_VARINT_MAX). */
@@ -114,6 +119,14 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
 int cm_fmt_header_needs(const uint8_t *b, uint32_t n, uint32_t *need, uint32_t cap, uint32_t *count);
 /** The chordal tolerance format 4 can say nearest to tess: a multiple m >= 1 of the grid step. */
 double cm_fmt_compact_tess(double tess, int q_exp);
+
+/**
+ * Format 4.3: what is wrong with a placement's transform m (cm_placement.m), or NULL when the format
+ * can say it: its linear part finite, within CM_FMT_PLACE_MAX_LINEAR per entry and invertible (|det|
+ * at least CM_FMT_PLACE_MIN_DET), its translation within CM_FMT_PLACE_MAX_SHIFT mm.  The reader and
+ * the writer apply the same rule.
+ */
+const char *cm_fmt_placement_fault(const double m[12]);
 
 /** Offset of limit i's need, and of section entry s, in a header with nlimits needs (formats 1-3). */
 static inline uint32_t cm_fmt_need_at(uint32_t i) { return CM_HDR_NEEDS + 4u * i; }
@@ -212,6 +225,16 @@ static inline unsigned cm_face_fit_patches(const cm_face *F) { return (unsigned)
 #define CM_NO_FACE (-1)   /* edge_face: no face on that side */
 #define CM_MANY_FACES (-2) /* edge_face[e][1]: a third face uses the edge (non-manifold) */
 
+/**
+ * Format 4.3: a copy of faces [first, first + count) (a part placed once more: its faces travel
+ * once), placed by x -> M x + t, m = {M11, M12, M13, t1, M21, ..., t3} (millimetres).  The decoder
+ * rebuilds and tessellates the part once and appends the placed triangles (cm_place.h).
+ */
+typedef struct cm_placement {
+    uint32_t first, count;
+    double m[12];
+} cm_placement;
+
 /** The decoded model: everything the reconstruction reads (spec §2 rule 5). */
 typedef struct cm_model {
     double origin[3], q;  /* quantisation grid: p = origin + q * integer */
@@ -242,6 +265,8 @@ typedef struct cm_model {
     double w[CM_MAX_MODEL_CTRL];
     double knots[CM_MAX_MODEL_KNOTS];
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
+    uint32_t nplacements; /* format 4.3 */
+    cm_placement placements[CM_MAX_PLACEMENTS > 0 ? CM_MAX_PLACEMENTS : 1];
 } cm_model;
 
 /** Little-endian loads and stores (no host-endianness assumption). */

@@ -46,8 +46,11 @@ typedef struct cm_face_ctx {
     cm_ac_int fit_m, fit_patches, fit_exp, fit_coef; /* GREGORY-FIT's correction (and the nets') */
     cm_ac_prob twist_on, twist_use;                  /* G1FIT's twists (format 4.2): any, per use */
     cm_ac_int twist_n, twist;                        /* ... their count, and each sample's change */
+    cm_ac_int place_n, place_first, place_count;     /* format 4.3: the placed copies ... */
+    cm_ac_int place_entry, place_shift;              /* ... their linear parts' entries, translations */
     int net_fit; /* format 4.2 on: NFILL and G1FIT records end with a correction's field (not a
                     coder context: set by the reader and the writer from the version) */
+    int placements; /* format 4.3 on: the section ends with the placed copies (likewise) */
 } cm_face_ctx;
 
 /* COLR: palette size, then a palette index per face */

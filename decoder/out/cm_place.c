@@ -1,0 +1,123 @@
+/* cm_place.c - a model's placed copies appended to its mesh (see cm_place.h). */
+#include "cm/cm_place.h"
+
+#include <math.h>
+
+#include "cm/cm_limits_info.h"
+
+/* the first mesh face in [0, n) whose source face is >= f (the model's faces are in face order) */
+static uint32_t first_mesh_face(const cm_mesh *mesh, uint32_t n, uint32_t f)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (mesh->faces[mid].source_face < f)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+void cm_place_counts(const cm_model *m, const uint32_t *tris, uint64_t *add_tris, uint64_t *add_faces)
+{
+    uint64_t t = 0, f = 0;
+    for (uint32_t k = 0; k < m->nplacements; k++) {
+        const cm_placement *P = &m->placements[k];
+        for (uint32_t i = P->first; i < P->first + P->count && i < m->nfaces; i++)
+            t += tris[i];
+        f += P->count;
+    }
+    *add_tris = t;
+    *add_faces = f;
+}
+
+/* the cofactor matrix of M's linear part, signed by det M: it maps normals as M maps the surface;
+   returns det M */
+static double normal_map(const double *a, double c[9])
+{
+    c[0] = a[5] * a[10] - a[6] * a[9];
+    c[1] = a[6] * a[8] - a[4] * a[10];
+    c[2] = a[4] * a[9] - a[5] * a[8];
+    c[3] = a[2] * a[9] - a[1] * a[10];
+    c[4] = a[0] * a[10] - a[2] * a[8];
+    c[5] = a[1] * a[8] - a[0] * a[9];
+    c[6] = a[1] * a[6] - a[2] * a[5];
+    c[7] = a[2] * a[4] - a[0] * a[6];
+    c[8] = a[0] * a[5] - a[1] * a[4];
+    double det = a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
+    if (det < 0.0)
+        for (int i = 0; i < 9; i++)
+            c[i] = -c[i];
+    return det;
+}
+
+cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
+{
+    const cm_mesh_mark mark = cm_mesh_save(mesh);
+    const uint32_t n = mesh->nfaces;
+    for (uint32_t k = 0; k < m->nplacements; k++) {
+        const cm_placement *P = &m->placements[k];
+        const double *a = P->m;
+        double c[9];
+        const int mirror = normal_map(a, c) < 0.0;
+        for (uint32_t i = first_mesh_face(mesh, n, P->first); i < n && mesh->faces[i].source_face < P->first + P->count;
+             i++) {
+            const cm_mesh_face src = mesh->faces[i];
+            if (mesh->nfaces >= mesh->cap_faces) {
+                cm_mesh_rollback(mesh, &mark);
+                return cm_fail_limit(st, CM_LIMIT_MAX_FACES, (uint64_t)mesh->nfaces + 1u, mesh->cap_faces,
+                                     "placed copies (mesh faces)");
+            }
+            if (src.nverts > mesh->cap_verts - mesh->nverts || src.nindex > mesh->cap_index - mesh->nindex) {
+                uint64_t need = (uint64_t)(mesh->nindex + src.nindex) / 3u;
+                cm_mesh_rollback(mesh, &mark);
+                return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, need, mesh->cap_index / 3u, "placed copies");
+            }
+            cm_mesh_face *dst = &mesh->faces[mesh->nfaces];
+            *dst = src;
+            dst->first_vert = mesh->nverts;
+            dst->first_index = mesh->nindex;
+            for (uint32_t v = 0; v < src.nverts; v++) {
+                const float *p = mesh->pos[src.first_vert + v], *q = mesh->nrm[src.first_vert + v];
+                double x = (double)p[0], y = (double)p[1], z = (double)p[2];
+                double nx = (double)q[0], ny = (double)q[1], nz = (double)q[2];
+                double X = a[0] * x + a[1] * y + a[2] * z + a[3];
+                double Y = a[4] * x + a[5] * y + a[6] * z + a[7];
+                double Z = a[8] * x + a[9] * y + a[10] * z + a[11];
+                double NX = c[0] * nx + c[1] * ny + c[2] * nz;
+                double NY = c[3] * nx + c[4] * ny + c[5] * nz;
+                double NZ = c[6] * nx + c[7] * ny + c[8] * nz;
+                double len = sqrt(NX * NX + NY * NY + NZ * NZ);
+                if (!(fabs(X) <= 3.0e38 && fabs(Y) <= 3.0e38 && fabs(Z) <= 3.0e38)) {
+                    cm_mesh_rollback(mesh, &mark);
+                    return cm_fail(st, CM_E_NONFINITE, "placed copies: a vertex beyond float range");
+                }
+                float *o = mesh->pos[mesh->nverts + v], *on = mesh->nrm[mesh->nverts + v];
+                o[0] = (float)X;
+                o[1] = (float)Y;
+                o[2] = (float)Z;
+                if (len > 0.0) {
+                    on[0] = (float)(NX / len);
+                    on[1] = (float)(NY / len);
+                    on[2] = (float)(NZ / len);
+                } else {
+                    on[0] = q[0];
+                    on[1] = q[1];
+                    on[2] = q[2];
+                }
+            }
+            for (uint32_t t = 0; t + 2 < src.nindex; t += 3) {
+                uint32_t *o = &mesh->idx[mesh->nindex + t];
+                const uint32_t *s = &mesh->idx[src.first_index + t];
+                o[0] = s[0] - src.first_vert + dst->first_vert;
+                o[1] = s[mirror ? 2 : 1] - src.first_vert + dst->first_vert;
+                o[2] = s[mirror ? 1 : 2] - src.first_vert + dst->first_vert;
+            }
+            mesh->nverts += src.nverts;
+            mesh->nindex += src.nindex;
+            mesh->nfaces++;
+        }
+    }
+    return CM_OK;
+}
