@@ -169,6 +169,36 @@ static void test_copies_placed(void **state)
     model_free(&lm);
 }
 
+/* a mesh too small for the copies: refused by name (MAX_FACES, then MAX_TRIS), the part's own faces
+   left as they were */
+static void test_copies_over_the_mesh(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    load(3, MODEL_LOAD_FOLD, &lm);
+    encode_result r;
+    encode(&lm, 1, &r);
+    cm_mesh mesh;
+    decode_mesh(&r, &mesh); /* all 21 faces fit */
+    const uint32_t part_index = mesh.faces[7].first_index;
+    for (int which = 0; which < 2; which++) {
+        cm_mesh small = mesh;
+        cm_mesh_rollback(&small, &(cm_mesh_mark){mesh.faces[7].first_vert, part_index, 7});
+        if (which == 0)
+            small.cap_faces = 10; /* the first copy does not fit */
+        else
+            small.cap_index = part_index + 3u; /* one triangle more than the part */
+        cm_status st;
+        cm_status_init(&st);
+        assert_int_equal(cm_mesh_place(&dec.model, &small, &st), CM_E_LIMIT);
+        assert_int_equal(st.limit, which == 0 ? CM_LIMIT_MAX_FACES : CM_LIMIT_MAX_TRIS);
+        assert_int_equal(small.nfaces, 7);
+        assert_int_equal(small.nindex, part_index);
+    }
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 /* --no-instances (or a model loaded without MODEL_LOAD_FOLD): every face sent, no copy, 4.3 says 0 */
 static void test_without_instances(void **state)
 {
@@ -252,6 +282,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_copies_placed),
+        cmocka_unit_test(test_copies_over_the_mesh),
         cmocka_unit_test(test_without_instances),
         cmocka_unit_test(test_bad_transforms_refused),
         cmocka_unit_test(test_different_copy_not_folded),
