@@ -19,18 +19,32 @@
  * up: glTF (x, y, z) = 0.001 * (x, z, -y) in CAD terms, i.e. a rotation of
  * -90 degrees about X and a scale of 0.001.
  *
+ * A mesh with placed copies (format 4.3, cm_mesh.nplace): the buffers hold
+ * the model's own faces only; the root node gets a child per copy, whose
+ * matrix is the copy's placement (CAD millimetres, under the root's turn),
+ * and whose mesh lists the primitives of its part's faces (the same
+ * accessors: nothing is stored twice); consecutive copies of one face range
+ * share one mesh.  A copy with a negative determinant turns the triangles'
+ * winding by glTF's own rule.
+ *
  * The GLB header needs the total length before the first byte is written:
  * cm_glb_begin runs the JSON stages once on a copy of the state only to
  * count their bytes (the same functions write them later).
  */
 #include <string.h>
 
+#include "cm/cm_format.h"
 #include "cm_out_priv.h"
 
 enum {
     GLB_HEADER,      /* file header + JSON chunk header */
-    GLB_JSON_HEAD,   /* asset, scene, node, start of the mesh */
+    GLB_JSON_HEAD,   /* asset, scene, root node */
+    GLB_JSON_CHILD,  /* item = copy: the root's children */
+    GLB_JSON_NODE,   /* item = copy: its node; count = part meshes so far */
+    GLB_JSON_MESH,   /* start of the meshes */
     GLB_JSON_PRIM,   /* item = face; count = primitives so far */
+    GLB_JSON_PART_HEAD, /* item = the first copy of a run of one face range: its mesh */
+    GLB_JSON_PART,   /* item as above, sub = mesh face, ibase = its primitive's number */
     GLB_JSON_MAT_HEAD,
     GLB_JSON_MAT,    /* item = material (the default grey last) */
     GLB_JSON_ACC_HEAD,
@@ -92,25 +106,104 @@ static uint32_t face_material(const cm_out *w, const cm_mesh_face *fc)
 
 /* ---- JSON pieces ---- */
 
-static void json_head(cm_buf *b)
+static void json_head(cm_out *w, cm_buf *b)
 {
     cm_buf_str(b, "{\"asset\":{\"version\":\"2.0\",\"generator\":\"curvemesh\"},"
                   "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
                   /* column-major: columns are the images of CAD x, y, z in glTF: (s,0,0), (0,0,-s), (0,s,0) */
                   "\"nodes\":[{\"name\":\"model\",\"mesh\":0,"
-                  "\"matrix\":[0.001,0,0,0,0,0,-0.001,0,0,0.001,0,0,0,0,0,1]}],"
-                  "\"meshes\":[{\"name\":\"model\",\"primitives\":[");
+                  "\"matrix\":[0.001,0,0,0,0,0,-0.001,0,0,0.001,0,0,0,0,0,1]");
+    if (w->whole) {
+        cm_buf_str(b, ",\"children\":[");
+        set_stage(w, GLB_JSON_CHILD);
+    } else {
+        cm_buf_str(b, "}");
+        set_stage(w, GLB_JSON_MESH);
+    }
 }
 
-static void json_prim(cm_out *w, cm_buf *b)
+/* the first mesh face (of the model's own) whose source face is >= f */
+static uint32_t first_face_from(const cm_mesh *m, uint32_t f)
 {
-    if (!skip_empty_faces(w)) {
-        set_stage(w, GLB_JSON_MAT_HEAD);
+    uint32_t lo = 0, hi = m->nfaces;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (m->faces[mid].source_face < f)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* copy k's part has a triangle (else its node has no mesh: a glTF mesh needs a primitive) */
+static int part_has_tris(const cm_out *w, uint32_t k)
+{
+    const cm_placement *P = &w->whole->place[k];
+    const cm_mesh *m = w->m;
+    for (uint32_t i = first_face_from(m, P->first); i < m->nfaces && m->faces[i].source_face - P->first < P->count; i++)
+        if (m->faces[i].nindex > 0)
+            return 1;
+    return 0;
+}
+
+/* copy k starts a run (its face range differs from copy k-1's) */
+static int starts_run(const cm_out *w, uint32_t k)
+{
+    const cm_placement *P = w->whole->place;
+    return k == 0 || P[k].first != P[k - 1].first || P[k].count != P[k - 1].count;
+}
+
+static void json_child(cm_out *w, cm_buf *b)
+{
+    if (w->item >= w->whole->nplace) {
+        cm_buf_str(b, "]}");
+        set_stage(w, GLB_JSON_NODE);
         return;
     }
-    const cm_mesh_face *fc = &w->m->faces[w->item];
-    uint64_t a = 3u * (uint64_t)w->count;
-    if (w->count > 0)
+    if (w->item > 0)
+        cm_buf_str(b, ",");
+    cm_buf_u64(b, 1u + (uint64_t)w->item);
+    w->item++;
+}
+
+/* copy k's node: its part's mesh (1 + the runs with triangles before its own) and its placement */
+static void json_node(cm_out *w, cm_buf *b)
+{
+    uint32_t k = w->item;
+    if (k >= w->whole->nplace) {
+        w->part_meshes = w->count;
+        set_stage(w, GLB_JSON_MESH);
+        return;
+    }
+    /* count = runs with triangles so far; sub = 1 while the current run has them */
+    if (starts_run(w, k)) {
+        w->sub = (uint32_t)part_has_tris(w, k);
+        w->count += w->sub;
+    }
+    const double *a = w->whole->place[k].m;
+    cm_buf_str(b, ",{\"name\":\"copy\"");
+    if (w->sub) {
+        cm_buf_str(b, ",\"mesh\":");
+        cm_buf_u64(b, w->count);
+    }
+    cm_buf_str(b, ",\"matrix\":[");
+    for (int c = 0; c < 4; c++)
+        for (int r = 0; r < 4; r++) {
+            if (c + r > 0)
+                cm_buf_str(b, ",");
+            double v = r == 3 ? (c == 3 ? 1.0 : 0.0) : a[4 * r + c];
+            cm_buf_f32(b, (float)v);
+        }
+    cm_buf_str(b, "]}");
+    w->item++;
+}
+
+/* a face's primitive: accessors 3a, 3a+1, 3a+2 */
+static void prim_json(const cm_out *w, cm_buf *b, const cm_mesh_face *fc, uint64_t a, int first)
+{
+    a *= 3u;
+    if (!first)
         cm_buf_str(b, ",");
     cm_buf_str(b, "{\"attributes\":{\"POSITION\":");
     cm_buf_u64(b, a);
@@ -123,8 +216,58 @@ static void json_prim(cm_out *w, cm_buf *b)
     cm_buf_str(b, ",\"mode\":4,\"extras\":{\"face\":");
     cm_buf_u64(b, fc->source_face);
     cm_buf_str(b, "}}");
+}
+
+static void json_prim(cm_out *w, cm_buf *b)
+{
+    if (!skip_empty_faces(w)) {
+        set_stage(w, w->whole ? GLB_JSON_PART_HEAD : GLB_JSON_MAT_HEAD);
+        return;
+    }
+    prim_json(w, b, &w->m->faces[w->item], w->count, w->count == 0);
     w->count++;
     w->item++;
+}
+
+/* the next run of copies at or after item that has triangles; 0 when none is left */
+static int next_run(cm_out *w)
+{
+    while (w->item < w->whole->nplace && (!starts_run(w, w->item) || !part_has_tris(w, w->item)))
+        w->item++;
+    return w->item < w->whole->nplace;
+}
+
+static void json_part_head(cm_out *w, cm_buf *b)
+{
+    if (!next_run(w)) {
+        set_stage(w, GLB_JSON_MAT_HEAD);
+        return;
+    }
+    const cm_mesh *m = w->m;
+    w->sub = first_face_from(m, w->whole->place[w->item].first);
+    w->ibase = 0; /* the primitive number of face sub: the faces with triangles before it */
+    for (uint32_t i = 0; i < w->sub; i++)
+        w->ibase += m->faces[i].nindex > 0;
+    w->count = 0;
+    cm_buf_str(b, "]},{\"name\":\"part\",\"primitives\":[");
+    w->stage = GLB_JSON_PART;
+}
+
+static void json_part(cm_out *w, cm_buf *b)
+{
+    const cm_mesh *m = w->m;
+    const cm_placement *P = &w->whole->place[w->item];
+    while (w->sub < m->nfaces && m->faces[w->sub].source_face - P->first < P->count && m->faces[w->sub].nindex == 0)
+        w->sub++;
+    if (w->sub >= m->nfaces || m->faces[w->sub].source_face - P->first >= P->count) {
+        w->item++;
+        w->stage = GLB_JSON_PART_HEAD;
+        return;
+    }
+    prim_json(w, b, &m->faces[w->sub], w->ibase, w->count == 0);
+    w->count++;
+    w->ibase++;
+    w->sub++;
 }
 
 static void json_material(cm_out *w, cm_buf *b)
@@ -285,11 +428,26 @@ void cm_glb_fill(cm_out *w, cm_buf *b)
         set_stage(w, GLB_JSON_HEAD);
         break;
     case GLB_JSON_HEAD:
-        json_head(b);
+        json_head(w, b);
+        break;
+    case GLB_JSON_CHILD:
+        json_child(w, b);
+        break;
+    case GLB_JSON_NODE:
+        json_node(w, b);
+        break;
+    case GLB_JSON_MESH:
+        cm_buf_str(b, "],\"meshes\":[{\"name\":\"model\",\"primitives\":[");
         set_stage(w, GLB_JSON_PRIM);
         break;
     case GLB_JSON_PRIM:
         json_prim(w, b);
+        break;
+    case GLB_JSON_PART_HEAD:
+        json_part_head(w, b);
+        break;
+    case GLB_JSON_PART:
+        json_part(w, b);
         break;
     case GLB_JSON_MAT_HEAD:
         cm_buf_str(b, "]}],\"materials\":[");
@@ -361,6 +519,8 @@ cm_err cm_glb_begin(cm_out *w, cm_status *st)
     set_stage(&t, GLB_JSON_HEAD);
     uint64_t json = 0;
     uint64_t max_steps = 4u * (uint64_t)w->m->nfaces + 2u * CM_OUT_MAX_MATERIALS + 16u;
+    if (w->whole) /* children, nodes, and per run a head and its faces */
+        max_steps += 4u * (uint64_t)w->whole->nplace + 2u * (uint64_t)w->whole->nplace * ((uint64_t)w->m->nfaces + 2u);
     for (uint64_t k = 0; k < max_steps && t.stage != GLB_JSON_PAD; k++) {
         cm_buf b;
         cm_buf_init(&b, t.pending, CM_OUT_PENDING);

@@ -10,6 +10,8 @@ void cm_mesh_clear(cm_mesh *m)
     m->nverts = 0;
     m->nindex = 0;
     m->nfaces = 0;
+    m->nplace = 0;
+    m->place = NULL;
 }
 
 cm_mesh_mark cm_mesh_save(const cm_mesh *m)
@@ -27,6 +29,10 @@ void cm_mesh_rollback(cm_mesh *m, const cm_mesh_mark *mark)
         m->nindex = mark->nindex;
     if (mark->nfaces < m->nfaces)
         m->nfaces = mark->nfaces;
+    if (m->nplace && (m->nfaces < m->nbase_faces || m->nverts < m->nbase_verts || m->nindex < m->nbase_index)) {
+        m->nplace = 0; /* the copies went with the faces they place */
+        m->place = NULL;
+    }
 }
 
 /*

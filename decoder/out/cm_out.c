@@ -168,6 +168,18 @@ cm_err cm_out_begin(cm_out *w, cm_out_format fmt, const cm_mesh *m, cm_status *s
         return e;
     w->fmt = fmt;
     w->m = m;
+    if (fmt == CM_OUT_GLB && m->nplace > 0 && m->place != NULL && m->nbase_faces <= m->nfaces &&
+        m->nbase_verts <= m->nverts && m->nbase_index <= m->nindex) {
+        /* the copies as nodes: the model's own faces are the file's triangles (validated above) */
+        w->whole = m;
+        w->base = *m;
+        w->base.nfaces = m->nbase_faces;
+        w->base.nverts = m->nbase_verts;
+        w->base.nindex = m->nbase_index;
+        if ((e = check_faces(&w->base, &w->ntris, &w->nprims, st)) != CM_OK)
+            return e;
+        w->m = &w->base;
+    }
     switch (fmt) {
     case CM_OUT_GLB:
         e = cm_glb_begin(w, st);

@@ -119,5 +119,12 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
             mesh->nfaces++;
         }
     }
+    if (m->nplacements > 0) {
+        mesh->nbase_faces = mark.nfaces;
+        mesh->nbase_verts = mark.nverts;
+        mesh->nbase_index = mark.nindex;
+        mesh->nplace = m->nplacements;
+        mesh->place = m->placements;
+    }
     return CM_OK;
 }

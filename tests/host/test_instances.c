@@ -13,6 +13,7 @@
 #include <stdlib.h>
 
 #include "cm/cm_decode.h"
+#include "cm/cm_out.h"
 #include "cm/cm_place.h"
 #include "cm/cm_tessellate.h"
 #include "encode/encode.h"
@@ -67,7 +68,7 @@ static void decode_mesh(const encode_result *r, cm_mesh *mesh)
     cm_dec_init(&dec);
     assert_ok(cm_dec_feed(&dec, r->bytes, r->len, &st));
     assert_ok(cm_dec_finish(&dec, &st));
-    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, 3 * MAX_TRIS, 0, 3 * MAX_TRIS, 0, 256};
+    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, 3 * MAX_TRIS, 0, 3 * MAX_TRIS, 0, 256, 0, 0, 0, 0, NULL};
     for (uint32_t f = 0; f < dec.model.nfaces; f++) {
         cm_tess_info info;
         assert_ok(cm_tessellate_face(&dec.model, f, dec.model.tess_tol, mesh, &tess, &info, &st));
@@ -166,6 +167,62 @@ static void test_copies_placed(void **state)
     cm_status st;
     cm_status_init(&st);
     assert_int_equal(encode_model(&lm, &o, &r, &st), CM_E_ARG);
+    model_free(&lm);
+}
+
+/* the whole file a writer makes of mesh (static storage, as the terminal's) */
+static uint8_t file[1 << 22];
+static size_t write_all(cm_out_format fmt, const cm_mesh *mesh)
+{
+    static cm_out w;
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_out_begin(&w, fmt, mesh, &st));
+    size_t n = 0;
+    for (int done = 0; !done;) {
+        size_t got = 0;
+        assert_true(n + 4096 <= sizeof file);
+        assert_ok(cm_out_next(&w, file + n, 4096, &got, &done, &st));
+        n += got;
+    }
+    return n;
+}
+
+/*
+ * The GLB shares the part between nodes: its buffers hold the model's own 7 faces, the root node has
+ * a child per copy whose matrix is the copy's placement (column-major) and whose mesh lists the
+ * part's primitives; STL holds every copy's triangles (binary STL: 84 bytes + 50 per triangle).
+ */
+static void test_glb_nodes(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    load(4, MODEL_LOAD_FOLD, &lm);
+    encode_result r;
+    encode(&lm, 1, &r);
+    cm_mesh mesh;
+    decode_mesh(&r, &mesh);
+    assert_int_equal(mesh.nplace, 3);
+    assert_int_equal(mesh.nbase_faces, 7);
+    size_t n = write_all(CM_OUT_STL, &mesh);
+    assert_int_equal(n, 84u + 50u * (mesh.nindex / 3u));
+    n = write_all(CM_OUT_GLB, &mesh);
+    uint32_t json_len = (uint32_t)file[12] | (uint32_t)file[13] << 8 | (uint32_t)file[14] << 16 | (uint32_t)file[15] << 24;
+    char *json = malloc(json_len + 1);
+    memcpy(json, file + 20, json_len);
+    json[json_len] = '\0';
+    assert_non_null(strstr(json, "\"children\":[1,2,3]}"));
+    /* copy 2: moved up by 50.25 mm; copy 3 mirrored (x -> -x) and moved by -10 */
+    assert_non_null(strstr(json, "{\"name\":\"copy\",\"mesh\":1,\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,50.25,1]}"));
+    assert_non_null(strstr(json, "{\"name\":\"copy\",\"mesh\":1,\"matrix\":[-1,0,0,0,0,1,0,0,0,0,1,0,-10,0,0,1]}"));
+    assert_non_null(strstr(json, "{\"name\":\"part\",\"primitives\":["));
+    assert_null(strstr(json, "\"mesh\":2"));
+    /* the binary chunk: the model's own vertices (positions, normals) and indices only */
+    uint32_t bin_len = (uint32_t)file[20 + ((json_len + 3u) & ~3u)] | (uint32_t)file[21 + ((json_len + 3u) & ~3u)] << 8 |
+                       (uint32_t)file[22 + ((json_len + 3u) & ~3u)] << 16;
+    assert_int_equal(bin_len, 24u * mesh.nbase_verts + 4u * mesh.nbase_index);
+    free(json);
+    encode_result_free(&r);
     model_free(&lm);
 }
 
@@ -282,6 +339,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_copies_placed),
+        cmocka_unit_test(test_glb_nodes),
         cmocka_unit_test(test_copies_over_the_mesh),
         cmocka_unit_test(test_without_instances),
         cmocka_unit_test(test_bad_transforms_refused),

@@ -34,6 +34,11 @@ typedef struct cm_mesh {
     uint32_t nverts, cap_verts;
     uint32_t nindex, cap_index;
     uint32_t nfaces, cap_faces;
+    /* format 4.3 (cm_mesh_place, cm_place.h): faces [0, nbase_faces), vertices [0, nbase_verts) and
+       indices [0, nbase_index) are the model's own, the rest its nplace placed copies, copy k placed
+       by place[k] (the GLB writer writes the model's own and shares them between nodes instead) */
+    uint32_t nbase_faces, nbase_verts, nbase_index, nplace;
+    const struct cm_placement *place;
 } cm_mesh;
 
 /** Set the mesh empty (keeps the caller's arrays and capacities). */
