@@ -24,6 +24,22 @@ void cm_report_limits(FILE *f)
     unsigned long long size = (unsigned long long)sizeof(cm_decode_state);
     fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", "decode state", size, "", "bytes",
             "static storage of one decode: decoder, triangulator, mesh", (double)size / 1048576.0);
+    /* where it goes (issue 15: what a smaller board must give up first) */
+    const cm_decode_state *s = NULL;
+    const struct {
+        const char *name, *doc;
+        unsigned long long bytes;
+    } part[] = {
+        {"  file", "the received .cmz, held whole (MAX_FILE_BYTES)", sizeof s->dec.buf},
+        {"  model", "the decoded model: curves, pools, faces, copies", sizeof s->dec.model},
+        {"  predictors", "vertices and one kept net on the integer grid", sizeof s->dec.vq + sizeof s->dec.sq + sizeof s->dec.sw},
+        {"  triangulator", "one face's tessellation workspace", sizeof s->tess},
+        {"  output mesh", "positions, normals, indices, faces of the whole model (MAX_TRIS)",
+         sizeof s->pos + sizeof s->nrm + sizeof s->idx + sizeof s->faces},
+    };
+    for (size_t i = 0; i < sizeof part / sizeof part[0]; i++)
+        fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", part[i].name, part[i].bytes, "", "bytes", part[i].doc,
+                (double)part[i].bytes / 1048576.0);
 #else
     fprintf(f, "%-18s %12s %12s  %-10s %s\n", "decode state", "-", "", "bytes",
             "larger than this target's address space: not declared here");
