@@ -122,26 +122,12 @@ static void json_head(cm_out *w, cm_buf *b)
     }
 }
 
-/* the first mesh face (of the model's own) whose source face is >= f */
-static uint32_t first_face_from(const cm_mesh *m, uint32_t f)
-{
-    uint32_t lo = 0, hi = m->nfaces;
-    while (lo < hi) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (m->faces[mid].source_face < f)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 /* copy k's part has a triangle (else its node has no mesh: a glTF mesh needs a primitive) */
 static int part_has_tris(const cm_out *w, uint32_t k)
 {
     const cm_placement *P = &w->whole->place[k];
     const cm_mesh *m = w->m;
-    for (uint32_t i = first_face_from(m, P->first); i < m->nfaces && m->faces[i].source_face - P->first < P->count; i++)
+    for (uint32_t i = cm_mesh_face_from(m, m->nfaces, P->first); i < m->nfaces && m->faces[i].source_face - P->first < P->count; i++)
         if (m->faces[i].nindex > 0)
             return 1;
     return 0;
@@ -244,7 +230,7 @@ static void json_part_head(cm_out *w, cm_buf *b)
         return;
     }
     const cm_mesh *m = w->m;
-    w->sub = first_face_from(m, w->whole->place[w->item].first);
+    w->sub = cm_mesh_face_from(m, m->nfaces, w->whole->place[w->item].first);
     w->ibase = 0; /* the primitive number of face sub: the faces with triangles before it */
     for (uint32_t i = 0; i < w->sub; i++)
         w->ibase += m->faces[i].nindex > 0;

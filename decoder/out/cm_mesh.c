@@ -35,6 +35,19 @@ void cm_mesh_rollback(cm_mesh *m, const cm_mesh_mark *mark)
     }
 }
 
+uint32_t cm_mesh_face_from(const cm_mesh *m, uint32_t n, uint32_t f)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (m->faces[mid].source_face < f)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 /*
  * Bounds of positions [0, nverts).  NaN coordinates never win a comparison,
  * so they are ignored unless the first vertex holds one (the writers reject

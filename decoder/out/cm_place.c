@@ -5,20 +5,6 @@
 
 #include "cm/cm_limits_info.h"
 
-/* the first mesh face in [0, n) whose source face is >= f (the model's faces are in face order) */
-static uint32_t first_mesh_face(const cm_mesh *mesh, uint32_t n, uint32_t f)
-{
-    uint32_t lo = 0, hi = n;
-    while (lo < hi) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (mesh->faces[mid].source_face < f)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 void cm_place_counts(const cm_model *m, const uint32_t *tris, uint64_t *add_tris, uint64_t *add_faces)
 {
     uint64_t t = 0, f = 0;
@@ -61,7 +47,7 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
         const double *a = P->m;
         double c[9];
         const int mirror = normal_map(a, c) < 0.0;
-        for (uint32_t i = first_mesh_face(mesh, n, P->first); i < n && mesh->faces[i].source_face < P->first + P->count;
+        for (uint32_t i = cm_mesh_face_from(mesh, n, P->first); i < n && mesh->faces[i].source_face < P->first + P->count;
              i++) {
             const cm_mesh_face src = mesh->faces[i];
             if (mesh->nfaces >= mesh->cap_faces) {

@@ -55,6 +55,9 @@ cm_mesh_mark cm_mesh_save(const cm_mesh *m);
 /** Back to a fill taken by cm_mesh_save (everything appended since is dropped). */
 void cm_mesh_rollback(cm_mesh *m, const cm_mesh_mark *mark);
 
+/** The first of faces [0, n) whose source face is at least f (the faces in source order: binary search). */
+uint32_t cm_mesh_face_from(const cm_mesh *m, uint32_t n, uint32_t f);
+
 /** Bounds of all positions (lo/hi untouched when the mesh is empty; returns 0 then, else 1). */
 int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3]);
 
