@@ -158,7 +158,6 @@ static void json_node(cm_out *w, cm_buf *b)
 {
     uint32_t k = w->item;
     if (k >= w->whole->nplace) {
-        w->part_meshes = w->count;
         set_stage(w, GLB_JSON_MESH);
         return;
     }
@@ -231,9 +230,13 @@ static void json_part_head(cm_out *w, cm_buf *b)
     }
     const cm_mesh *m = w->m;
     w->sub = cm_mesh_face_from(m, m->nfaces, w->whole->place[w->item].first);
-    w->ibase = 0; /* the primitive number of face sub: the faces with triangles before it */
-    for (uint32_t i = 0; i < w->sub; i++)
-        w->ibase += m->faces[i].nindex > 0;
+    /* the primitive number of face sub: the faces with triangles before it, counted on from the
+       last run's (the ranges only go forwards: glb_nodes_fit) */
+    if (w->sub < w->ord_face)
+        w->ord_face = w->ord = 0;
+    for (; w->ord_face < w->sub; w->ord_face++)
+        w->ord += m->faces[w->ord_face].nindex > 0;
+    w->ibase = w->ord;
     w->count = 0;
     cm_buf_str(b, "]},{\"name\":\"part\",\"primitives\":[");
     w->stage = GLB_JSON_PART;

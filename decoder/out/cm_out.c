@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "cm/cm_numfmt.h"
+#include "cm/cm_format.h"
 #include "cm_out_priv.h"
 
 /* ---- cm_buf ---- */
@@ -147,6 +148,33 @@ static cm_err check_finite(const cm_mesh *m, int check_normals, cm_status *st)
     return CM_OK;
 }
 
+/*
+ * A GLB can show m's copies as nodes: their list is the decoder's (each transform one the format
+ * says: finite, invertible), a glTF node matrix (translation, rotation, scale: its columns square to
+ * each other), their face ranges in increasing order (the part meshes' primitives are counted
+ * forwards).  Else the GLB holds every copy's triangles, as STL and OBJ do.
+ */
+static int glb_nodes_fit(const cm_mesh *m)
+{
+    if (m->nplace == 0 || m->place == NULL || m->nbase_faces > m->nfaces || m->nbase_verts > m->nverts ||
+        m->nbase_index > m->nindex)
+        return 0;
+    for (uint32_t k = 0; k < m->nplace; k++) {
+        const double *a = m->place[k].m;
+        if (cm_fmt_placement_fault(a) || (k > 0 && a != NULL && m->place[k].first < m->place[k - 1].first))
+            return 0;
+        for (int i = 0; i < 3; i++)
+            for (int j = i + 1; j < 3; j++) {
+                double dot = a[i] * a[j] + a[4 + i] * a[4 + j] + a[8 + i] * a[8 + j];
+                double ni = a[i] * a[i] + a[4 + i] * a[4 + i] + a[8 + i] * a[8 + i];
+                double nj = a[j] * a[j] + a[4 + j] * a[4 + j] + a[8 + j] * a[8 + j];
+                if (!(dot * dot <= 1e-18 * ni * nj))
+                    return 0;
+            }
+    }
+    return 1;
+}
+
 /* ---- public ---- */
 
 cm_err cm_out_begin(cm_out *w, cm_out_format fmt, const cm_mesh *m, cm_status *st)
@@ -168,8 +196,7 @@ cm_err cm_out_begin(cm_out *w, cm_out_format fmt, const cm_mesh *m, cm_status *s
         return e;
     w->fmt = fmt;
     w->m = m;
-    if (fmt == CM_OUT_GLB && m->nplace > 0 && m->place != NULL && m->nbase_faces <= m->nfaces &&
-        m->nbase_verts <= m->nverts && m->nbase_index <= m->nindex) {
+    if (fmt == CM_OUT_GLB && glb_nodes_fit(m)) {
         /* the copies as nodes: the model's own faces are the file's triangles (validated above) */
         w->whole = m;
         w->base = *m;

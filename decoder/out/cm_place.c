@@ -56,7 +56,7 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                                      "placed copies (mesh faces)");
             }
             if (src.nverts > mesh->cap_verts - mesh->nverts || src.nindex > mesh->cap_index - mesh->nindex) {
-                uint64_t need = (uint64_t)(mesh->nindex + src.nindex) / 3u;
+                uint64_t need = ((uint64_t)mesh->nindex + src.nindex) / 3u;
                 cm_mesh_rollback(mesh, &mark);
                 return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, need, mesh->cap_index / 3u, "placed copies");
             }
@@ -93,12 +93,12 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                     on[2] = q[2];
                 }
             }
-            for (uint32_t t = 0; t + 2 < src.nindex; t += 3) {
-                uint32_t *o = &mesh->idx[mesh->nindex + t];
-                const uint32_t *s = &mesh->idx[src.first_index + t];
-                o[0] = s[0] - src.first_vert + dst->first_vert;
-                o[1] = s[mirror ? 2 : 1] - src.first_vert + dst->first_vert;
-                o[2] = s[mirror ? 1 : 2] - src.first_vert + dst->first_vert;
+            for (uint32_t t = 0; t < src.nindex; t++) {
+                /* a mirrored copy's triangles reversed: its second and third vertices swapped */
+                uint32_t from = mirror && t % 3u ? t + (t % 3u == 1u ? 1u : 0u) - (t % 3u == 2u ? 1u : 0u) : t;
+                if (from >= src.nindex)
+                    from = t;
+                mesh->idx[mesh->nindex + t] = mesh->idx[src.first_index + from] - src.first_vert + dst->first_vert;
             }
             mesh->nverts += src.nverts;
             mesh->nindex += src.nindex;

@@ -806,8 +806,8 @@ static double read_double(cm_ac_dec *ac)
 /*
  * Format 4.3: the placed copies after the faces (cm_placement): their count, then per copy its
  * first face, its face count less one, the nine entries of its linear part row by row (each a uint
- * class: 0 is 0, 1 is 1, 2 is -1, 3 a double's 64 bits follow) and its translation in grid steps
- * (three sints).  A copy must name faces of the model, its linear part must be finite, within
+ * class: 0 is 0, 1 is 1, 2 is -1, 3 a double's 64 bits follow) and its translation as the grid
+ * origin's displacement in grid steps (three sints).  A copy must name faces of the model, its linear part must be finite, within
  * CM_FMT_PLACE_MAX_LINEAR per entry and invertible, its translation within CM_FMT_PLACE_MAX_SHIFT mm.
  */
 static cm_err read_placements(reader *r, cm_face_ctx *ctx)
@@ -829,11 +829,13 @@ static cm_err read_placements(reader *r, cm_face_ctx *ctx)
                 return rfail(r, r->ac.overrun ? CM_E_TRUNCATED : CM_E_RANGE, "placement's transform");
             P->m[i] = cls == 0 ? 0.0 : cls == 1 ? 1.0 : cls == 2 ? -1.0 : read_double(&r->ac);
         }
-        for (int i = 3; i < 12; i += 4) {
-            int64_t s = cm_ac_dec_sint(&r->ac, &ctx->place_shift);
-            if (s > COORD_MAX || s < -COORD_MAX)
-                return rfail(r, CM_E_RANGE, "placement's translation");
-            P->m[i] = (double)s * m->q;
+        /* the translation as where the copy puts the grid origin o, less o, in grid steps (as
+           bounded as the model's own coordinates): t = d q + o - M o */
+        for (int i = 0; i < 3; i++) {
+            int64_t d = cm_ac_dec_sint(&r->ac, &ctx->place_shift);
+            const double *a = &P->m[4 * i];
+            P->m[4 * i + 3] = (double)d * m->q + m->origin[i] -
+                              (a[0] * m->origin[0] + a[1] * m->origin[1] + a[2] * m->origin[2]);
         }
         if (r->ac.overrun)
             return rfail(r, CM_E_TRUNCATED, "placement");

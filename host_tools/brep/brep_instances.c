@@ -123,7 +123,10 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
         free(pl);
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
-    double tol = brep_tolerance(m);
+    /* the copies are the same entities moved by their own transforms at import: they agree to
+       rounding, far inside spec 5.1's vertex tolerance (not the file's resolution, which
+       brep_tolerance may take: a copy is not measured again after it is folded) */
+    double tol = 1e-6 * brep_diag(m);
     int npl = 0, nface = 0;
     for (int i = 0; i < m->ninstances; i++) {
         const brep_instance *I = &m->instances[i];
@@ -163,6 +166,15 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
         pl[npl].xf = x;
         npl++;
         nface += n;
+    }
+    /* the copies of one part one after another (by the part's place in the model: insertion sort,
+       stable), so a GLB shares one mesh between them */
+    for (int i = 1; i < npl; i++) {
+        brep_placement p = pl[i];
+        int j = i;
+        for (; j > 0 && pl[j - 1].proto > p.proto; j--)
+            pl[j] = pl[j - 1];
+        pl[j] = p;
     }
     cm_err e = CM_OK;
     if (npl > 0) {

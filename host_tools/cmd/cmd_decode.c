@@ -92,7 +92,8 @@ int cmd_decode(int argc, char **argv)
         uint64_t copies = 0;
         for (uint32_t k = 0; k < decoder->model.nplacements; k++)
             copies += decoder->model.placements[k].count;
-        mesh.cap_faces = (uint32_t)(decoder->model.nfaces + copies ? decoder->model.nfaces + copies : 1);
+        copies += decoder->model.nfaces;
+        mesh.cap_faces = (uint32_t)(copies == 0 ? 1 : copies > CM_MAX_FACES ? CM_MAX_FACES : copies);
         free(mesh.pos);
         free(mesh.nrm);
         free(mesh.idx);

@@ -174,6 +174,19 @@ int cmd_encode(int argc, char **argv)
         return EXIT_INPUT;
     }
     cm_err e = encode_model(&lm, &o, &r, &st);
+    if (e == CM_E_LIMIT && st.limit == CM_LIMIT_MAX_PLACEMENTS && lm.brep.nplacements > 0 && o.target) {
+        /* the board places fewer copies than the model has: every placed face sent as a face of
+           its own (MAX_FACES counts the copies either way) */
+        encode_result_free(&r);
+        model_free(&lm);
+        cmd_fold_instances = 0;
+        if ((loaded = cmd_load(path, &lm)) != EXIT_OK)
+            return loaded;
+        fprintf(stderr, "%s: %s: note: profile %s places at most %u copies: every placed face sent as a face\n",
+                cmd_prog, path, profile, (unsigned)o.target[CM_LIMIT_MAX_PLACEMENTS].value);
+        cm_status_init(&st);
+        e = encode_model(&lm, &o, &r, &st);
+    }
     int rc = EXIT_OK;
     /* every face left out, by the import or the encoder, is named; so is every solid, shell or
        instance the import left out, and every member pointer it skipped */

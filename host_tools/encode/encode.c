@@ -259,6 +259,8 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     }
     if (e == CM_OK)
         e = enc_decode_back(t.w, r, st); /* the final bytes must decode: any inconsistency is ours */
+    if (e == CM_OK)
+        e = enc_placements_decoded(&t, lm, &t.w->dec.model, st); /* and say the copies it meant */
     if (e == CM_OK) {
         const cm_model *dm = &t.w->dec.model;
         r->placements = dm->nplacements;

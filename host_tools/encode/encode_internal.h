@@ -197,6 +197,9 @@ static inline int enc_placement_tail(const encode_opts *o)
 }
 /* the placed copies' faces must travel together (write_sections.c); CM_E_FORMAT when not */
 cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st);
+/* the decoded file's copies are lm's (faces, linear part exactly, translation within half a grid
+   step): CM_E_FORMAT naming the copy when not (an encoder bug) */
+cm_err enc_placements_decoded(const tx *t, const loaded_model *lm, const cm_model *dm, cm_status *st);
 /* format 4.2 on: NFILL and G1FIT nets may carry an interior correction (cm_fit_net_add) */
 static inline int enc_net_fit(const encode_opts *o)
 {

@@ -320,6 +320,20 @@ static int placement_faces(const tx *t, const loaded_model *lm, int k, uint32_t 
     return n > 0;
 }
 
+/* copy x's displacement of the grid origin o along axis i, in grid steps: x(o) - o = R o + t - o,
+   which for a copy inside the model's box is as bounded as the model's coordinates (its t need
+   not be: a part turned far from the world's origin) */
+static double placement_shift_mm(const tx *t, const haffine *x, int i)
+{
+    const double tt[3] = {x->t.x, x->t.y, x->t.z};
+    return x->R[i][0] * t->origin[0] + x->R[i][1] * t->origin[1] + x->R[i][2] * t->origin[2] + tt[i] - t->origin[i];
+}
+
+static int64_t placement_shift(const tx *t, const haffine *x, int i)
+{
+    return (int64_t)llround(placement_shift_mm(t, x, i) / t->q);
+}
+
 /* a double as its 64 bits, most significant first (read_double, cm_decode.c) */
 static void write_double(cm_ac_enc *e, double v)
 {
@@ -348,12 +362,11 @@ static void write_placements(const tx *t, cm_ac_enc *e, const loaded_model *lm, 
                 unsigned cls = v == 0.0 ? 0u : v == 1.0 ? 1u : v == -1.0 ? 2u : 3u;
                 cm_ac_enc_uint(e, &ctx->place_entry, cls);
                 if (cls == 3u)
-                    write_double(e, v == 0.0 ? 0.0 : v); /* (-0 is 0) */
+                    write_double(e, v);
             }
-        /* the translation on the model's grid (its vertices' precision) */
-        const double t3[3] = {x->t.x, x->t.y, x->t.z};
+        /* the translation as the grid origin's displacement on the grid (read_placements) */
         for (int i = 0; i < 3; i++)
-            cm_ac_enc_sint(e, &ctx->place_shift, (int64_t)llround(t3[i] / t->q));
+            cm_ac_enc_sint(e, &ctx->place_shift, placement_shift(t, x, i));
     }
 }
 
@@ -371,10 +384,35 @@ cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st)
             m[4 * i + 3] = i == 0 ? x->t.x : i == 1 ? x->t.y : x->t.z;
         }
         const char *fault = cm_fmt_placement_fault(m);
+        for (int i = 0; i < 3 && !fault; i++)
+            if (!(fabs(placement_shift_mm(t, x, i) / t->q) <= (double)CM_FMT_PLACE_MAX_STEPS))
+                fault = "placement's translation (beyond the grid)";
         if (fault)
             return cm_fail(st, CM_E_RANGE, fault);
     }
     return CM_OK;
+}
+
+cm_err enc_placements_decoded(const tx *t, const loaded_model *lm, const cm_model *dm, cm_status *st)
+{
+    uint32_t first, count, k = 0;
+    for (int j = 0; j < lm->brep.nplacements; j++) {
+        if (placement_faces(t, lm, j, &first, &count) <= 0)
+            continue;
+        const haffine *x = &lm->brep.placements[j].xf;
+        int same = k < dm->nplacements && dm->placements[k].first == first && dm->placements[k].count == count;
+        for (int i = 0; i < 3 && same; i++) {
+            const double *a = &dm->placements[k].m[4 * i];
+            const double tt[3] = {x->t.x, x->t.y, x->t.z};
+            same = a[0] == x->R[i][0] && a[1] == x->R[i][1] && a[2] == x->R[i][2] &&
+                   fabs(a[3] - tt[i]) <= 0.5 * t->q * (1.0 + 1e-6) + 1e-12 * (1.0 + fabs(tt[i]) + fabs(t->origin[i]));
+        }
+        if (!same)
+            return cm_fail(st, CM_E_FORMAT, "the encoder's check of its own file: a placed copy decodes "
+                                            "elsewhere (an encoder bug: please report it with the model)");
+        k++;
+    }
+    return k == dm->nplacements ? CM_OK : cm_fail(st, CM_E_FORMAT, "the encoder's check of its own file: placed copies");
 }
 
 static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)

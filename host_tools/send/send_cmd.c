@@ -300,6 +300,22 @@ static int encode_for(const char *path, const cm_link_hello *h, const cm_limit_i
     encode_result r;
     cm_status_init(&st);
     cm_err e = encode_model(&lm, &o, &r, &st);
+    if (e == CM_E_LIMIT && st.limit == CM_LIMIT_MAX_PLACEMENTS && lm.brep.nplacements > 0) {
+        /* more copies than the terminal places: every face sent as its own (a whole-model limit
+           is the only kind that may refuse, and MAX_FACES counts the copies either way) */
+        encode_result_free(&r);
+        model_free(&lm);
+        cm_status_init(&st);
+        if (model_load(path, &lm, NULL, NULL, &st) != CM_OK) {
+            cm_report_status(stderr, "cmz send", path, &st);
+            model_free(&lm);
+            return -1;
+        }
+        if (!quiet)
+            fprintf(stderr, "cmz send: %s: '%s' places at most %u copies: every placed face sent as a face\n", path,
+                    h->name, (unsigned)tab[CM_LIMIT_MAX_PLACEMENTS].value);
+        e = encode_model(&lm, &o, &r, &st);
+    }
     int rc = 0;
     if (e == CM_E_LIMIT && r.refusal[0]) {
         fprintf(stderr, "cmz send: %s: refused before sending: %s\n", path, r.refusal);

@@ -96,6 +96,8 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
 #define CM_FMT_PLACE_MIN_DET 1e-9 /* |det M|: a copy scaled by less than 1e-3 is no copy */
+#define CM_FMT_PLACE_MAX_STEPS (1ll << 32) /* a copy's displacement of the grid origin, in grid steps (the
+                                              writer's bound: the coder carries up to 2^33 - 1) */
 #define CM_FMT_REL_TOL_DEFAULT 167772u
 #define CM_FMT_MAX_ORIGIN_SHIFT 62u
 /** Append v as an unsigned LEB128 varint at b; returns its bytes (1..CM_FMT_VARINT_MAX). */

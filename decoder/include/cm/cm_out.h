@@ -53,11 +53,11 @@ typedef struct cm_out {
     uint32_t material_rgb[CM_OUT_MAX_MATERIALS];
     uint8_t default_material;   /* GLB: some face uses the default grey */
     /* GLB of a mesh with placed copies (cm_mesh.nplace): the model's own faces as the view `base`
-       (w->m points at it), each copy a node sharing its part's primitives; consecutive copies of one
-       part share one mesh (the encoder writes them so) */
+       (w->m points at it: a cm_out is not moved once begun), each copy a node sharing its part's
+       primitives; consecutive copies of one part share one mesh (the encoder writes them so) */
     const cm_mesh *whole;
     cm_mesh base;
-    uint32_t part_meshes;       /* meshes after "model": one per run of copies of one face range */
+    uint32_t ord_face, ord;     /* GLB part meshes: face ord_face is primitive ord (counted forwards) */
 } cm_out;
 
 /**
