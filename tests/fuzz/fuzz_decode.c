@@ -21,6 +21,7 @@
 
 #include "cm/cm_decode.h"
 #include "cm/cm_decode_state.h"
+#include "cm/cm_place.h"
 #include "cm/cm_out.h"
 #include "cm/cm_tessellate.h"
 
@@ -108,6 +109,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             break; /* the model's too: cm_decode_mesh stops here */
         }
     }
+    /* the placed copies (format 4.3) of what there is, as cm_decode_mesh places them: within the
+       mesh's capacities, or nothing of them kept */
+    cm_status_init(&st);
+    cm_mesh_mark before = cm_mesh_save(&mesh);
+    if (cm_mesh_place(&state.dec.model, &mesh, &st) != CM_OK &&
+        (mesh.nverts != before.nverts || mesh.nindex != before.nindex || mesh.nfaces != before.nfaces))
+        __builtin_trap();
     /* every index the tessellator wrote points at a vertex it wrote */
     for (uint32_t i = 0; i < mesh.nindex; i++)
         if (mesh.idx[i] >= mesh.nverts)
