@@ -161,7 +161,7 @@ static int glb_nodes_fit(const cm_mesh *m)
         return 0;
     for (uint32_t k = 0; k < m->nplace; k++) {
         const double *a = m->place[k].m;
-        if (cm_fmt_placement_fault(a) || (k > 0 && a != NULL && m->place[k].first < m->place[k - 1].first))
+        if (cm_fmt_placement_fault(a) || (k > 0 && m->place[k].first < m->place[k - 1].first))
             return 0;
         for (int i = 0; i < 3; i++)
             for (int j = i + 1; j < 3; j++) {

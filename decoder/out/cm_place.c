@@ -10,7 +10,7 @@ void cm_place_counts(const cm_model *m, const uint32_t *tris, uint64_t *add_tris
     uint64_t t = 0, f = 0;
     for (uint32_t k = 0; k < m->nplacements; k++) {
         const cm_placement *P = &m->placements[k];
-        for (uint32_t i = P->first; i < P->first + P->count && i < m->nfaces; i++)
+        for (uint32_t i = P->first; tris && i < P->first + P->count && i < m->nfaces; i++)
             t += tris[i];
         f += P->count;
     }
@@ -94,8 +94,9 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                 }
             }
             for (uint32_t t = 0; t < src.nindex; t++) {
-                /* a mirrored copy's triangles reversed: its second and third vertices swapped */
-                uint32_t from = mirror && t % 3u ? t + (t % 3u == 1u ? 1u : 0u) - (t % 3u == 2u ? 1u : 0u) : t;
+                /* a mirrored copy's triangles reversed: each one's second and third vertices swapped
+                   (corner r of 1, 2 takes corner 3 - r; a trailing part triangle stays as it is) */
+                uint32_t r = t % 3u, from = mirror && r ? t - r + (3u - r) : t;
                 if (from >= src.nindex)
                     from = t;
                 mesh->idx[mesh->nindex + t] = mesh->idx[src.first_index + from] - src.first_vert + dst->first_vert;

@@ -807,8 +807,8 @@ static double read_double(cm_ac_dec *ac)
  * Format 4.3: the placed copies after the faces (cm_placement): their count, then per copy its
  * first face, its face count less one, the nine entries of its linear part row by row (each a uint
  * class: 0 is 0, 1 is 1, 2 is -1, 3 a double's 64 bits follow) and its translation as the grid
- * origin's displacement in grid steps (three sints).  A copy must name faces of the model, its linear part must be finite, within
- * CM_FMT_PLACE_MAX_LINEAR per entry and invertible, its translation within CM_FMT_PLACE_MAX_SHIFT mm.
+ * origin's displacement in grid steps (three sints).  A copy must name faces of the model, and its
+ * transform pass cm_fmt_placement_fault (the writer's rule too).
  */
 static cm_err read_placements(reader *r, cm_face_ctx *ctx)
 {
@@ -850,13 +850,19 @@ static cm_err read_placements(reader *r, cm_face_ctx *ctx)
     return CM_OK;
 }
 
+/* the file is format 4.minor or newer */
+static int at_least_4(const reader *r, unsigned minor)
+{
+    return r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= minor);
+}
+
 static cm_err sec_face(reader *r)
 {
     cm_model *m = &r->d->model;
     cm_face_ctx ctx;
     cm_face_ctx_init(&ctx);
-    ctx.net_fit = r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= CM_FMT_NET_FIT_MINOR);
-    ctx.placements = r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= CM_FMT_PLACE_MINOR);
+    ctx.net_fit = at_least_4(r, CM_FMT_NET_FIT_MINOR);
+    ctx.placements = at_least_4(r, CM_FMT_PLACE_MINOR);
     cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nfaces, "face count");
     if (e != CM_OK)
         return e;

@@ -17,29 +17,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* x -> m x inverted; 0 when m's linear part is singular */
-static int haffine_invert(const haffine *m, haffine *out)
-{
-    const double(*R)[3] = m->R;
-    double c[3][3] = {{R[1][1] * R[2][2] - R[1][2] * R[2][1], R[0][2] * R[2][1] - R[0][1] * R[2][2],
-                       R[0][1] * R[1][2] - R[0][2] * R[1][1]},
-                      {R[1][2] * R[2][0] - R[1][0] * R[2][2], R[0][0] * R[2][2] - R[0][2] * R[2][0],
-                       R[0][2] * R[1][0] - R[0][0] * R[1][2]},
-                      {R[1][0] * R[2][1] - R[1][1] * R[2][0], R[0][1] * R[2][0] - R[0][0] * R[2][1],
-                       R[0][0] * R[1][1] - R[0][1] * R[1][0]}};
-    double det = R[0][0] * c[0][0] + R[0][1] * c[1][0] + R[0][2] * c[2][0];
-    if (!(fabs(det) > 1e-12))
-        return 0;
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            out->R[i][j] = c[i][j] / det;
-    cm_vec3 t = m->t;
-    out->t = cm_v3(-(out->R[0][0] * t.x + out->R[0][1] * t.y + out->R[0][2] * t.z),
-                   -(out->R[1][0] * t.x + out->R[1][1] * t.y + out->R[1][2] * t.z),
-                   -(out->R[2][0] * t.x + out->R[2][1] * t.y + out->R[2][2] * t.z));
-    return 1;
-}
-
 /* the faces [first, first + n) of instance id, contiguous in face order; 0 when it has none or
    they are not contiguous (then it is not folded) */
 static int instance_faces(const brep_model *m, int id, int *first, int *n)
@@ -118,11 +95,18 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
         return CM_OK;
     unsigned char *drop = calloc((size_t)m->nfaces + 1, 1);
     brep_placement *pl = malloc((size_t)m->ninstances * sizeof *pl);
-    if (!drop || !pl) {
+    int *ifirst = malloc((size_t)m->ninstances * sizeof *ifirst), *inum = malloc((size_t)m->ninstances * sizeof *inum);
+    if (!drop || !pl || !ifirst || !inum) {
         free(drop);
         free(pl);
+        free(ifirst);
+        free(inum);
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     }
+    /* each instance's faces, once (0 faces: none, or not together: not folded) */
+    for (int i = 0; i < m->ninstances; i++)
+        if (!instance_faces(m, m->instances[i].id, &ifirst[i], &inum[i]))
+            inum[i] = 0;
     /* the copies are the same entities moved by their own transforms at import: they agree to
        rounding, far inside spec 5.1's vertex tolerance (not the file's resolution, which
        brep_tolerance may take: a copy is not measured again after it is folded) */
@@ -130,28 +114,24 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
     int npl = 0, nface = 0;
     for (int i = 0; i < m->ninstances; i++) {
         const brep_instance *I = &m->instances[i];
-        int first, n, pfirst, pn;
-        if (!instance_faces(m, I->id, &first, &n))
+        int first = ifirst[i], n = inum[i];
+        if (n == 0)
             continue;
         /* the prototype: the first instance of the same definition that has faces and stays */
         int proto = -1;
         for (int j = 0; j < i && proto < 0; j++)
-            if (m->instances[j].def_de == I->def_de && instance_faces(m, m->instances[j].id, &pfirst, &pn) &&
-                !drop[pfirst])
+            if (m->instances[j].def_de == I->def_de && inum[j] > 0 && !drop[ifirst[j]])
                 proto = j;
-        if (proto < 0 || pn != n)
+        if (proto < 0 || inum[proto] != n)
             continue;
+        int pfirst = ifirst[proto];
         haffine inv, x;
         if (!haffine_invert(&m->instances[proto].xf, &inv))
             continue;
         x = haffine_compose(&I->xf, &inv); /* prototype -> copy */
         /* what format 4.3 can say (the rule its reader applies) */
         double xm[12];
-        for (int r = 0; r < 3; r++) {
-            for (int c = 0; c < 3; c++)
-                xm[4 * r + c] = x.R[r][c];
-            xm[4 * r + 3] = r == 0 ? x.t.x : r == 1 ? x.t.y : x.t.z;
-        }
+        haffine_rows(&x, xm);
         if (cm_fmt_placement_fault(xm))
             continue;
         int same = 1;
@@ -193,5 +173,7 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
     }
     free(pl);
     free(drop);
+    free(ifirst);
+    free(inum);
     return e;
 }

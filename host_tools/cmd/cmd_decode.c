@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "cm/cm_format.h"
+#include "cm/cm_place.h"
 #include "cm_decode_file.h"
 #include "cm_report.h"
 
@@ -89,9 +90,8 @@ int cmd_decode(int argc, char **argv)
         mesh.cap_verts = (uint32_t)(3 * tris);
         mesh.cap_index = (uint32_t)(3 * tris);
         /* the model's faces and their placed copies (format 4.3) */
-        uint64_t copies = 0;
-        for (uint32_t k = 0; k < decoder->model.nplacements; k++)
-            copies += decoder->model.placements[k].count;
+        uint64_t no_tris, copies;
+        cm_place_counts(&decoder->model, NULL, &no_tris, &copies);
         copies += decoder->model.nfaces;
         mesh.cap_faces = (uint32_t)(copies == 0 ? 1 : copies > CM_MAX_FACES ? CM_MAX_FACES : copies);
         free(mesh.pos);

@@ -154,20 +154,8 @@ int cmd_eval(int argc, char **argv)
             continue;
         if (k >= m->nplacements)
             break;
-        const haffine *x = &lm.brep.placements[jp].xf;
-        double worst = 0.0, shift = 0.0;
-        for (int i = 0; i < 3; i++) {
-            const double t[3] = {x->t.x, x->t.y, x->t.z};
-            for (int j = 0; j < 3; j++) {
-                double d = fabs(m->placements[k].m[4 * i + j] - x->R[i][j]);
-                worst = d > worst ? d : worst;
-            }
-            double d = fabs(m->placements[k].m[4 * i + 3] - t[i]);
-            shift = d > shift ? d : shift;
-        }
-        if (!(worst == 0.0 && shift <= 0.5 * m->q * (1.0 + 1e-6) + 1e-12 * (1.0 + brep_diag(&lm.brep)))) {
-            fprintf(stderr, "%s eval: %s: copy %u is not placed as in %s (%.3g, %.3g mm off)\n", cmd_prog, paths[1], k,
-                    paths[0], worst, shift);
+        if (!encode_placement_is(m->placements[k].m, &lm.brep.placements[jp].xf, m->q, m->origin)) {
+            fprintf(stderr, "%s eval: %s: copy %u is not placed as in %s\n", cmd_prog, paths[1], k, paths[0]);
             fails++;
         }
         k++;

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "cm/cm_method.h"
+#include "cm/cm_place.h"
 
 
 void encode_opts_for_format(encode_opts *o, int major, int minor)
@@ -263,10 +264,10 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         e = enc_placements_decoded(&t, lm, &t.w->dec.model, st); /* and say the copies it meant */
     if (e == CM_OK) {
         const cm_model *dm = &t.w->dec.model;
+        uint64_t no_tris, placed;
+        cm_place_counts(dm, NULL, &no_tris, &placed);
         r->placements = dm->nplacements;
-        r->placed_faces = 0;
-        for (uint32_t k = 0; k < dm->nplacements; k++)
-            r->placed_faces += dm->placements[k].count;
+        r->placed_faces = (uint32_t)placed;
     }
     tx_free(&t);
     if (e != CM_OK)

@@ -75,6 +75,10 @@ void encode_opts_default(encode_opts *o);
     MODEL_LOAD_FOLD then, and encode_model refuses a folded model otherwise. */
 int encode_places(const encode_opts *o);
 
+/** Whether a decoded copy's transform m (cm_placement.m) is x as format 4.3 sends it: the linear part
+    exactly, the translation within half a grid step q (the grid origin's rounding too). */
+int encode_placement_is(const double m[12], const haffine *x, double q, const double origin[3]);
+
 /** Leave out what a reader of format major.minor (at most) cannot read: the coding, methods and the
     turning basis newer than it, so that the file is written as that version or older. */
 void encode_opts_for_format(encode_opts *o, int major, int minor);

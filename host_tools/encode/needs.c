@@ -139,9 +139,8 @@ void enc_compute_needs(const enc_work *w, const encode_result *r, uint32_t *need
         NEED(MAX_FACE_EDGES, uses);
     }
     /* the mesh holds the placed copies' faces too (format 4.3) */
-    uint64_t copies = 0;
-    for (uint32_t k = 0; k < m->nplacements; k++)
-        copies += m->placements[k].count;
+    uint64_t no_tris, copies;
+    cm_place_counts(m, NULL, &no_tris, &copies);
     NEED(MAX_FACES, m->nfaces + copies);
     NEED(MAX_PLACEMENTS, m->nplacements);
     NEED(MAX_EDGES, m->nedges);

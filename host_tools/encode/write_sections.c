@@ -378,11 +378,7 @@ cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st)
             return cm_fail(st, CM_E_FORMAT, "a placed part's faces are not sent together");
         const haffine *x = &lm->brep.placements[k].xf;
         double m[12];
-        for (int i = 0; i < 3; i++) {
-            for (int j = 0; j < 3; j++)
-                m[4 * i + j] = x->R[i][j];
-            m[4 * i + 3] = i == 0 ? x->t.x : i == 1 ? x->t.y : x->t.z;
-        }
+        haffine_rows(x, m);
         const char *fault = cm_fmt_placement_fault(m);
         for (int i = 0; i < 3 && !fault; i++)
             if (!(fabs(placement_shift_mm(t, x, i) / t->q) <= (double)CM_FMT_PLACE_MAX_STEPS))
@@ -393,20 +389,28 @@ cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st)
     return CM_OK;
 }
 
+int encode_placement_is(const double m[12], const haffine *x, double q, const double origin[3])
+{
+    double want[12];
+    haffine_rows(x, want);
+    for (int i = 0; i < 12; i++) {
+        if (i % 4 != 3 && m[i] != want[i])
+            return 0;
+        if (i % 4 == 3 && !(fabs(m[i] - want[i]) <= 0.5 * q * (1.0 + 1e-6) +
+                                                    1e-12 * (1.0 + fabs(want[i]) + fabs(origin[i / 4]))))
+            return 0;
+    }
+    return 1;
+}
+
 cm_err enc_placements_decoded(const tx *t, const loaded_model *lm, const cm_model *dm, cm_status *st)
 {
     uint32_t first, count, k = 0;
     for (int j = 0; j < lm->brep.nplacements; j++) {
         if (placement_faces(t, lm, j, &first, &count) <= 0)
             continue;
-        const haffine *x = &lm->brep.placements[j].xf;
-        int same = k < dm->nplacements && dm->placements[k].first == first && dm->placements[k].count == count;
-        for (int i = 0; i < 3 && same; i++) {
-            const double *a = &dm->placements[k].m[4 * i];
-            const double tt[3] = {x->t.x, x->t.y, x->t.z};
-            same = a[0] == x->R[i][0] && a[1] == x->R[i][1] && a[2] == x->R[i][2] &&
-                   fabs(a[3] - tt[i]) <= 0.5 * t->q * (1.0 + 1e-6) + 1e-12 * (1.0 + fabs(tt[i]) + fabs(t->origin[i]));
-        }
+        int same = k < dm->nplacements && dm->placements[k].first == first && dm->placements[k].count == count &&
+                   encode_placement_is(dm->placements[k].m, &lm->brep.placements[j].xf, t->q, t->origin);
         if (!same)
             return cm_fail(st, CM_E_FORMAT, "the encoder's check of its own file: a placed copy decodes "
                                             "elsewhere (an encoder bug: please report it with the model)");

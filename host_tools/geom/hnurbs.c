@@ -881,6 +881,35 @@ cm_vec3 haffine_apply_dir(const haffine *m, cm_vec3 x)
                  m->R[2][0] * x.x + m->R[2][1] * x.y + m->R[2][2] * x.z);
 }
 
+int haffine_invert(const haffine *m, haffine *out)
+{
+    const double(*R)[3] = m->R;
+    double c[3][3] = {{R[1][1] * R[2][2] - R[1][2] * R[2][1], R[0][2] * R[2][1] - R[0][1] * R[2][2],
+                       R[0][1] * R[1][2] - R[0][2] * R[1][1]},
+                      {R[1][2] * R[2][0] - R[1][0] * R[2][2], R[0][0] * R[2][2] - R[0][2] * R[2][0],
+                       R[0][2] * R[1][0] - R[0][0] * R[1][2]},
+                      {R[1][0] * R[2][1] - R[1][1] * R[2][0], R[0][1] * R[2][0] - R[0][0] * R[2][1],
+                       R[0][0] * R[1][1] - R[0][1] * R[1][0]}};
+    double det = R[0][0] * c[0][0] + R[0][1] * c[1][0] + R[0][2] * c[2][0];
+    if (!(fabs(det) > 1e-12))
+        return 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            out->R[i][j] = c[i][j] / det;
+    out->t = cm_scale(haffine_apply_dir(out, m->t), -1.0);
+    return 1;
+}
+
+void haffine_rows(const haffine *m, double rows[12])
+{
+    const double t[3] = {m->t.x, m->t.y, m->t.z};
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++)
+            rows[4 * i + j] = m->R[i][j];
+        rows[4 * i + 3] = t[i];
+    }
+}
+
 haffine haffine_identity(void)
 {
     haffine m;

@@ -217,5 +217,9 @@ haffine haffine_compose(const haffine *a, const haffine *b);
 cm_vec3 haffine_apply(const haffine *m, cm_vec3 x);
 /** R x (no translation): for directions. */
 cm_vec3 haffine_apply_dir(const haffine *m, cm_vec3 x);
+/** m inverted into *out; 0 (out untouched) when R is singular (|det| <= 1e-12). */
+int haffine_invert(const haffine *m, haffine *out);
+/** m as rows {R11, R12, R13, t1, R21, ..., t3} (cm_placement.m's layout). */
+void haffine_rows(const haffine *m, double rows[12]);
 
 #endif /* HNURBS_H */

@@ -335,11 +335,32 @@ static void test_different_copy_not_folded(void **state)
     model_free(&lm);
 }
 
+/* the check cmz eval and the encoder's own decode make of a copy: linear part exact, translation
+   within half a grid step */
+static void test_placement_is(void **state)
+{
+    (void)state;
+    haffine x = haffine_identity();
+    x.R[0][0] = 0.0, x.R[0][1] = -1.0, x.R[1][0] = 1.0, x.R[1][1] = 0.0;
+    x.t = cm_v3(100.0, 20.0, -3.0);
+    double m[12], q = 1.0 / 1024.0, origin[3] = {-50.0, 0.0, 7.0};
+    haffine_rows(&x, m);
+    assert_true(encode_placement_is(m, &x, q, origin));
+    m[3] += 0.4 * q;
+    assert_true(encode_placement_is(m, &x, q, origin));
+    m[3] += 0.2 * q; /* 0.6 of a step off */
+    assert_false(encode_placement_is(m, &x, q, origin));
+    haffine_rows(&x, m);
+    m[1] = nextafter(m[1], 0.0); /* the linear part travels exactly */
+    assert_false(encode_placement_is(m, &x, q, origin));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_copies_placed),
         cmocka_unit_test(test_glb_nodes),
+        cmocka_unit_test(test_placement_is),
         cmocka_unit_test(test_copies_over_the_mesh),
         cmocka_unit_test(test_without_instances),
         cmocka_unit_test(test_bad_transforms_refused),

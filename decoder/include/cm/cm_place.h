@@ -34,7 +34,8 @@ CM_NODISCARD cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *s
 
 /**
  * The triangles and mesh faces the copies add to a mesh of the model's faces whose face k has
- * tris[k] triangles (the encoder's needs: MAX_TRIS and MAX_FACES of the header).
+ * tris[k] triangles (the encoder's needs: MAX_TRIS and MAX_FACES of the header); tris NULL: the
+ * faces only (*add_tris 0).
  */
 void cm_place_counts(const cm_model *m, const uint32_t *tris, uint64_t *add_tris, uint64_t *add_faces);
 
