@@ -1,6 +1,7 @@
 /* brep.c - storage of the workstation B-rep (see brep.h). */
 #include "brep.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -179,4 +180,64 @@ done:
     free(nloop);
     free(nseg);
     return e;
+}
+
+double brep_curve_length(const hcurve *c)
+{
+    cm_curve v = hcurve_view(c);
+    double t0, t1, len = 0;
+    hcurve_domain(c, &t0, &t1);
+    cm_vec3 prev = cm_v3(0, 0, 0);
+    for (int k = 0; k <= 64; k++) {
+        cm_vec3 d[1];
+        if (cm_curve_eval(&v, t0 + (t1 - t0) * k / 64.0, 0, d, NULL) != CM_OK)
+            return 0;
+        if (k)
+            len += cm_dist(d[0], prev);
+        prev = d[0];
+    }
+    return len;
+}
+
+cm_err brep_add_rect_loop(brep_model *m, int surf, hbox *box, cm_status *st)
+{
+    /* counter-clockwise in (u,v): v=v0, u=u1, v=v1 back, u=u0 back */
+    const hsurf *sf = &m->surfs[surf];
+    double u0, u1, v0, v1;
+    cm_err e;
+    hsurf_domain(sf, &u0, &u1, &v0, &v1);
+    hcurve side[4] = {{0}, {0}, {0}, {0}};
+    if ((e = hsurf_iso_v(sf, v0, &side[0], st)) != CM_OK || (e = hsurf_iso_u(sf, u1, &side[1], st)) != CM_OK ||
+        (e = hsurf_iso_v(sf, v1, &side[2], st)) != CM_OK || (e = hsurf_iso_u(sf, u0, &side[3], st)) != CM_OK) {
+        for (int i = 0; i < 4; i++)
+            hcurve_free(&side[i]);
+        return e;
+    }
+    hcurve_reverse(&side[2]);
+    hcurve_reverse(&side[3]);
+    for (int i = 0; i < 4; i++)
+        hbox_add_curve(box, &side[i]);
+    double diag = box->empty ? 0 : cm_dist(box->lo, box->hi);
+    int first = m->nsegs;
+    for (int i = 0; i < 4 && e == CM_OK; i++) {
+        if (brep_curve_length(&side[i]) <= 1e-9 * diag) { /* a collapsed side (a pole) */
+            hcurve_free(&side[i]);
+            continue;
+        }
+        e = brep_add_seg(m, &side[i], st);
+    }
+    for (int i = 0; i < 4; i++)
+        hcurve_free(&side[i]);
+    if (e == CM_OK)
+        e = brep_add_loop(m, first, m->nsegs - first, st);
+    return e;
+}
+
+const char *brep_face_source(const brep_face *f, char *buf, size_t cap)
+{
+    if (f->src_type == BREP_SRC_STEP_FACE)
+        snprintf(buf, cap, "STEP face #%d", f->src_de);
+    else
+        snprintf(buf, cap, "entity %d (DE %d)", f->src_type, f->src_de);
+    return buf;
 }

@@ -18,6 +18,7 @@
 #ifndef BREP_H
 #define BREP_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "geom/hbox.h"
@@ -27,6 +28,9 @@ typedef struct brep_loop {
     int first, n; /* segments [first, first + n) */
 } brep_loop;
 
+/* brep_face.src_type of a face read from STEP (src_de is then its #n) */
+#define BREP_SRC_STEP_FACE (-1)
+
 typedef struct brep_face {
     int surf;             /* index into surfs */
     int first_loop, nloops; /* loops[first_loop] is the outer loop */
@@ -34,7 +38,8 @@ typedef struct brep_face {
     int flip;             /* face normal = -(Su x Sv) */
     int has_color;
     uint32_t rgb;         /* 0xRRGGBB when has_color */
-    int src_de, src_type; /* the IGES entity that made the face (144, 143, 510, or a surface) */
+    int src_de, src_type; /* the IGES entity that made the face (144, 143, 510, or a surface; its DE),
+                             or BREP_SRC_STEP_FACE and the STEP face's #n */
     int surf_type;        /* IGES type of its base surface (128, 120, 190, ...) */
     int shell;            /* index of its shell (186/514), -1 if none */
     int instance;         /* outermost subfigure instance (408) placing it, 0 for none */
@@ -79,6 +84,12 @@ typedef struct brep_model {
 
 void brep_free(brep_model *m);
 
+/**
+ * What made face f, for messages: "entity 144 (DE 57)" for IGES, "ADVANCED_FACE #57" for STEP.
+ * Returns buf.
+ */
+const char *brep_face_source(const brep_face *f, char *buf, size_t cap);
+
 /** Diagonal of the model box (0 for an empty model). */
 double brep_diag(const brep_model *m);
 
@@ -94,6 +105,14 @@ CM_NODISCARD cm_err brep_add_surf(brep_model *m, hsurf *s, int *index, cm_status
 CM_NODISCARD cm_err brep_add_seg(brep_model *m, hcurve *c, cm_status *st);             /* moves c */
 CM_NODISCARD cm_err brep_add_loop(brep_model *m, int first_seg, int nseg, cm_status *st);
 CM_NODISCARD cm_err brep_add_face(brep_model *m, const brep_face *f, cm_status *st);
+
+/**
+ * The loop of a face bounded by its surface's parameter rectangle (an untrimmed surface): the four
+ * iso-curves counter-clockwise in (u, v), collapsed sides (poles) left out; box grows by them.
+ */
+CM_NODISCARD cm_err brep_add_rect_loop(brep_model *m, int surf, hbox *box, cm_status *st);
+/** Length of a curve by 64 chords (for "is this boundary piece degenerate"). */
+double brep_curve_length(const hcurve *c);
 
 CM_NODISCARD cm_err brep_add_instance(brep_model *m, const brep_instance *in, cm_status *st);
 

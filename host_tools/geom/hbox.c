@@ -37,3 +37,33 @@ void hbox_add_curve(hbox *b, const hcurve *c)
             hbox_add(b, d[0]);
     }
 }
+
+/* X, Y completing Z to a right-handed frame; X along `ref` when given (not parallel to Z) */
+void hbox_frame(cm_vec3 Z, const cm_vec3 *ref, cm_vec3 *X, cm_vec3 *Y)
+{
+    cm_vec3 x = ref ? cm_sub(*ref, cm_scale(Z, cm_dot(*ref, Z))) : cm_v3(0, 0, 0);
+    if (!(cm_norm(x) > 1e-9)) {
+        x = cm_cross(Z, cm_v3(1, 0, 0));
+        if (cm_norm(x) < 0.1)
+            x = cm_cross(Z, cm_v3(0, 1, 0));
+    }
+    *X = cm_unit(x);
+    *Y = cm_cross(Z, *X);
+}
+
+/* extent of the face along an axis/in a plane: the 8 corners of its box, 10 % margin */
+void hbox_axis_range(const hbox *b, cm_vec3 o, cm_vec3 dir, double *lo, double *hi)
+{
+    *lo = HUGE_VAL;
+    *hi = -HUGE_VAL;
+    for (int k = 0; k < 8; k++) {
+        cm_vec3 c = cm_v3(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z);
+        double t = cm_dot(cm_sub(c, o), dir);
+        *lo = fmin(*lo, t);
+        *hi = fmax(*hi, t);
+    }
+    double span = *hi - *lo, diag = cm_dist(b->lo, b->hi);
+    double margin = 0.1 * (span > 0 ? span : diag) + 1e-9 * diag;
+    *lo -= margin;
+    *hi += margin;
+}

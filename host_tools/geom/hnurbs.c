@@ -1488,3 +1488,28 @@ cm_err hsurf_subrange(const hsurf *s, double u0, double u1, double v0, double v1
         hsurf_free(&a);
     return e;
 }
+
+/* ---- lists ---- */
+
+void hcurve_list_free(hcurve_list *l)
+{
+    for (int i = 0; i < l->n; i++)
+        hcurve_free(&l->c[i]);
+    free(l->c);
+    memset(l, 0, sizeof *l);
+}
+
+cm_err hcurve_list_push(hcurve_list *l, hcurve *c, cm_status *st)
+{
+    if (l->n == l->cap) {
+        int cap = l->cap ? 2 * l->cap : 8;
+        hcurve *q = realloc(l->c, (size_t)cap * sizeof *q);
+        if (!q)
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
+        l->c = q;
+        l->cap = cap;
+    }
+    l->c[l->n++] = *c;
+    memset(c, 0, sizeof *c);
+    return CM_OK;
+}

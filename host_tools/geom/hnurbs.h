@@ -200,6 +200,17 @@ CM_NODISCARD cm_err hsurf_iso_v(const hsurf *s, double v, hcurve *out, cm_status
 int hsurf_closed_u(const hsurf *s, double tol);
 int hsurf_closed_v(const hsurf *s, double tol);
 
+/* ---- lists ---- */
+/** A growable list of owned curves (the pieces of a composite curve). */
+typedef struct hcurve_list {
+    hcurve *c;
+    int n, cap;
+} hcurve_list;
+
+void hcurve_list_free(hcurve_list *l);
+/** Move `c` into the list (c is left empty). */
+CM_NODISCARD cm_err hcurve_list_push(hcurve_list *l, hcurve *c, cm_status *st);
+
 /* ---- testing ---- */
 /**
  * Fault injection for the tests: after `n` more successful allocations by

@@ -288,24 +288,6 @@ static void face_failed(importer *im, const iges_entity *e, int nsurfs, int nfac
         cm_status_init(im->st);
 }
 
-/* length of a curve by 64 chords */
-static double curve_length(const hcurve *c)
-{
-    cm_curve v = hcurve_view(c);
-    double t0, t1, len = 0;
-    hcurve_domain(c, &t0, &t1);
-    cm_vec3 prev = cm_v3(0, 0, 0);
-    for (int k = 0; k <= 64; k++) {
-        cm_vec3 d[1];
-        if (cm_curve_eval(&v, t0 + (t1 - t0) * k / 64.0, 0, d, NULL) != CM_OK)
-            return 0;
-        if (k)
-            len += cm_dist(d[0], prev);
-        prev = d[0];
-    }
-    return len;
-}
-
 static cm_vec3 curve_end(const hcurve *c, int at_end)
 {
     double t0, t1;
@@ -428,36 +410,8 @@ static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const h
     }
     if ((e = brep_add_surf(m, &s, &face.surf, im->st)) != CM_OK)
         return e;
-    const hsurf *sf = &m->surfs[face.surf];
     if (natural) {
-        /* the parameter rectangle, counter-clockwise in (u,v): v=v0, u=u1, v=v1 back, u=u0 back */
-        double u0, u1, v0, v1;
-        hsurf_domain(sf, &u0, &u1, &v0, &v1);
-        hcurve side[4] = {{0}, {0}, {0}, {0}};
-        if ((e = hsurf_iso_v(sf, v0, &side[0], im->st)) != CM_OK || (e = hsurf_iso_u(sf, u1, &side[1], im->st)) != CM_OK ||
-            (e = hsurf_iso_v(sf, v1, &side[2], im->st)) != CM_OK || (e = hsurf_iso_u(sf, u0, &side[3], im->st)) != CM_OK) {
-            for (int i = 0; i < 4; i++)
-                hcurve_free(&side[i]);
-            return e;
-        }
-        hcurve_reverse(&side[2]);
-        hcurve_reverse(&side[3]);
-        for (int i = 0; i < 4; i++)
-            hbox_add_curve(&box, &side[i]);
-        double diag = box.empty ? 0 : cm_dist(box.lo, box.hi);
-        int first = m->nsegs;
-        for (int i = 0; i < 4 && e == CM_OK; i++) {
-            if (curve_length(&side[i]) <= 1e-9 * diag) { /* a collapsed side (a pole) */
-                hcurve_free(&side[i]);
-                continue;
-            }
-            e = brep_add_seg(m, &side[i], im->st);
-        }
-        for (int i = 0; i < 4; i++)
-            hcurve_free(&side[i]);
-        if (e == CM_OK)
-            e = brep_add_loop(m, first, m->nsegs - first, im->st);
-        if (e != CM_OK)
+        if ((e = brep_add_rect_loop(m, face.surf, &box, im->st)) != CM_OK)
             return e;
         face.nloops = 1;
     }
@@ -468,7 +422,7 @@ static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const h
                       fe->de, l + 1);
         int first = m->nsegs;
         for (int i = 0; i < loops[l].n; i++) {
-            if (curve_length(&loops[l].c[i]) <= 1e-9 * diag)
+            if (brep_curve_length(&loops[l].c[i]) <= 1e-9 * diag)
                 continue; /* degenerate boundary piece (exporters write them at poles) */
             if ((e = brep_add_seg(m, &loops[l].c[i], im->st)) != CM_OK)
                 return e;

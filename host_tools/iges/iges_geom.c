@@ -43,31 +43,6 @@ static const char *xform_note(const iges_entity *e, char *buf, size_t cap)
     return buf;
 }
 
-/* ---- lists and boxes ---- */
-
-void hcurve_list_free(hcurve_list *l)
-{
-    for (int i = 0; i < l->n; i++)
-        hcurve_free(&l->c[i]);
-    free(l->c);
-    memset(l, 0, sizeof *l);
-}
-
-cm_err hcurve_list_push(hcurve_list *l, hcurve *c, cm_status *st)
-{
-    if (l->n == l->cap) {
-        int cap = l->cap ? 2 * l->cap : 8;
-        hcurve *q = realloc(l->c, (size_t)cap * sizeof *q);
-        if (!q)
-            return cm_fail(st, CM_E_NOMEM, "out of memory");
-        l->c = q;
-        l->cap = cap;
-    }
-    l->c[l->n++] = *c;
-    memset(c, 0, sizeof *c);
-    return CM_OK;
-}
-
 /* ---- transformations ---- */
 
 int iges_entity_xform(iges_file *f, const iges_entity *e, haffine *out)
@@ -712,36 +687,6 @@ static double map_scale(const haffine *m)
     return cbrt(fabs(det));
 }
 
-/* X, Y completing Z to a right-handed frame; X along `ref` when given (not parallel to Z) */
-static void frame_from(cm_vec3 Z, const cm_vec3 *ref, cm_vec3 *X, cm_vec3 *Y)
-{
-    cm_vec3 x = ref ? cm_sub(*ref, cm_scale(Z, cm_dot(*ref, Z))) : cm_v3(0, 0, 0);
-    if (!(cm_norm(x) > 1e-9)) {
-        x = cm_cross(Z, cm_v3(1, 0, 0));
-        if (cm_norm(x) < 0.1)
-            x = cm_cross(Z, cm_v3(0, 1, 0));
-    }
-    *X = cm_unit(x);
-    *Y = cm_cross(Z, *X);
-}
-
-/* extent of the face along an axis/in a plane: the 8 corners of its box, 10 % margin */
-static void extent_range(const hbox *b, cm_vec3 o, cm_vec3 dir, double *lo, double *hi)
-{
-    *lo = HUGE_VAL;
-    *hi = -HUGE_VAL;
-    for (int k = 0; k < 8; k++) {
-        cm_vec3 c = cm_v3(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z);
-        double t = cm_dot(cm_sub(c, o), dir);
-        *lo = fmin(*lo, t);
-        *hi = fmax(*hi, t);
-    }
-    double span = *hi - *lo, diag = cm_dist(b->lo, b->hi);
-    double margin = 0.1 * (span > 0 ? span : diag) + 1e-9 * diag;
-    *lo -= margin;
-    *hi += margin;
-}
-
 static cm_err plane_patch(iges_file *f, const iges_entity *e, cm_vec3 P, cm_vec3 N, const cm_vec3 *ref,
                           const hbox *extent, hsurf *out, cm_status *st)
 {
@@ -749,10 +694,10 @@ static cm_err plane_patch(iges_file *f, const iges_entity *e, cm_vec3 P, cm_vec3
         return iges_entity_error(f, e, "plane used without a bounded face: cannot size it"),
                cm_fail(st, CM_E_IGES, "plane");
     cm_vec3 X, Y;
-    frame_from(N, ref, &X, &Y);
+    hbox_frame(N, ref, &X, &Y);
     double x0, x1, y0, y1;
-    extent_range(extent, P, X, &x0, &x1);
-    extent_range(extent, P, Y, &y0, &y1);
+    hbox_axis_range(extent, P, X, &x0, &x1);
+    hbox_axis_range(extent, P, Y, &y0, &y1);
     return hsurf_plane(P, X, Y, x0, x1, y0, y1, out, st);
 }
 
@@ -885,9 +830,9 @@ static cm_err surface_rec(iges_file *f, int de, const haffine *parent, const hbo
         if (!extent || extent->empty)
             return iges_entity_error(f, e, "unbounded surface used without a bounded face"),
                    cm_fail(st, CM_E_IGES, "cylinder/cone");
-        frame_from(Z, r == 0 ? &ref : NULL, &X, &Y);
+        hbox_frame(Z, r == 0 ? &ref : NULL, &X, &Y);
         double v0, v1;
-        extent_range(extent, P, Z, &v0, &v1);
+        hbox_axis_range(extent, P, Z, &v0, &v1);
         if (e->type == 192) {
             err = hsurf_cylinder(P, X, Y, Z, rad * sc, 0, 2 * M_PI, v0, v1, out, st);
         } else {
@@ -911,7 +856,7 @@ static cm_err surface_rec(iges_file *f, int de, const haffine *parent, const hbo
             return cm_fail(st, CM_E_IGES, "sphere/torus");
         if (!(r1 > 0) || (e->type == 198 && !(r2 > 0)))
             return iges_entity_error(f, e, "non-positive radius"), cm_fail(st, CM_E_IGES, "sphere/torus");
-        frame_from(Z, r == 0 ? &ref : NULL, &X, &Y);
+        hbox_frame(Z, r == 0 ? &ref : NULL, &X, &Y);
         if (e->type == 196)
             err = hsurf_sphere(P, X, Y, Z, r1 * sc, 0, 2 * M_PI, -M_PI / 2, M_PI / 2, out, st);
         else

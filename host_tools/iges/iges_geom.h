@@ -62,15 +62,6 @@ extern long long iges_max_placed_faces;
  */
 int iges_coords_sane(const cm_vec3 *p, long n, double *worst);
 
-/** A growable list of owned curves (the pieces of a composite curve). */
-typedef struct hcurve_list {
-    hcurve *c;
-    int n, cap;
-} hcurve_list;
-
-void hcurve_list_free(hcurve_list *l);
-/** Move `c` into the list (c is left empty). */
-CM_NODISCARD cm_err hcurve_list_push(hcurve_list *l, hcurve *c, cm_status *st);
 
 /**
  * The affine map from entity `de`'s definition space to the space of its
