@@ -338,6 +338,7 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
     /* 2. redraw pole runs along the pole line; shift what follows to stay continuous */
     double shift_u = 0, shift_v = 0;
     int last = -1; /* last non-pole point */
+    int tie = -1, tie_u = 0; /* the last exit from a pole turning half a period (either way as short) */
     for (int i = 0; i <= n; i++) {
         uv[i].x += shift_u;
         uv[i].y += shift_v;
@@ -356,6 +357,10 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
             double delta = free_u ? uv[i].x - uv[last].x : uv[i].y - uv[last].y, period = free_u ? pu : pv;
             int closed = free_u ? ps->closed_u : ps->closed_v;
             double adj = closed ? -period * floor(delta / period + 0.5) : 0.0;
+            if (closed && fabs(fabs(delta + adj) - 0.5 * period) <= 1e-6 * period) {
+                tie = i;
+                tie_u = free_u;
+            }
             if (free_u) {
                 shift_u += adj;
                 uv[i].x += adj;
@@ -366,6 +371,27 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
         }
         last = i;
     }
+    /*
+     * 2b. a loop through a pole never needs to wind round the pole's free direction: the pole closes
+     * it.  Where an exit turned exactly half a period (a half cone or hemisphere, as CATIA splits
+     * them), either turn is as short, and the one that makes the loop wind one turn is the wrong one:
+     * the other is taken.
+     */
+    if (tie >= 0) {
+        double period = tie_u ? pu : pv;
+        double turns = floor(((tie_u ? uv[n].x - uv[0].x : uv[n].y - uv[0].y)) / period + 0.5);
+        if (fabs(turns) == 1.0)
+            for (int i = tie; i <= n; i++) {
+                if (tie_u)
+                    uv[i].x -= turns * period;
+                else
+                    uv[i].y -= turns * period;
+            }
+    }
+    /* a loop that starts (so ends) at a pole closes along the pole line: arriving a period (or less)
+       away from where it left is no turn round the surface */
+    int start_pole_u = pole[0] == 1 && pole[n] == 1 && fabs(uv[n].x - uv[0].x) <= pu * (1 + 1e-9);
+    int start_pole_v = pole[0] == 2 && pole[n] == 2 && fabs(uv[n].y - uv[0].y) <= pv * (1 + 1e-9);
     /* 3. emit: the last point of a pole run appears twice, with the arrival and the departure parameter */
     int k = 0;
     for (int i = 0; i < n; i++) {
@@ -387,8 +413,8 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
     *nout = k;
     /* the turns round each closed direction, as an int only when it is one: a hostile surface's
        projection can run off by 7e10 periods (fuzz-decode-crc, a float-to-int overflow under UBSan) */
-    double wu = ps->closed_u ? floor((uv[n].x - uv[0].x) / pu + 0.5) : 0.0;
-    double wv = ps->closed_v ? floor((uv[n].y - uv[0].y) / pv + 0.5) : 0.0;
+    double wu = ps->closed_u && !start_pole_u ? floor((uv[n].x - uv[0].x) / pu + 0.5) : 0.0;
+    double wv = ps->closed_v && !start_pole_v ? floor((uv[n].y - uv[0].y) / pv + 0.5) : 0.0;
     if (!(fabs(wu) <= CM_PARAM_MAX_WINDING) || !(fabs(wv) <= CM_PARAM_MAX_WINDING))
         return cm_fail(st, CM_E_RANGE, "a loop that winds round a closed surface beyond any count");
     *wind_u = (int)wu;
@@ -436,4 +462,37 @@ cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, d
     }
     *nout = k;
     return CM_OK;
+}
+
+void cm_loops_align(const cm_psurf *ps, cm_vec2 *uv, const int *loop_start, int nloops)
+{
+    if (nloops < 2 || (!ps->closed_u && !ps->closed_v) || loop_start[1] <= loop_start[0])
+        return;
+    double pu = ps->u1 - ps->u0, pv = ps->v1 - ps->v0;
+    double lo_u = HUGE_VAL, hi_u = -HUGE_VAL, lo_v = HUGE_VAL, hi_v = -HUGE_VAL;
+    for (int i = loop_start[0]; i < loop_start[1]; i++) {
+        lo_u = uv[i].x < lo_u ? uv[i].x : lo_u;
+        hi_u = uv[i].x > hi_u ? uv[i].x : hi_u;
+        lo_v = uv[i].y < lo_v ? uv[i].y : lo_v;
+        hi_v = uv[i].y > hi_v ? uv[i].y : hi_v;
+    }
+    double cu = 0.5 * (lo_u + hi_u), cv = 0.5 * (lo_v + hi_v);
+    for (int l = 1; l < nloops; l++) {
+        int n = loop_start[l + 1] - loop_start[l];
+        if (n <= 0)
+            continue;
+        double mu = 0, mv = 0;
+        for (int i = loop_start[l]; i < loop_start[l + 1]; i++) {
+            mu += uv[i].x / n;
+            mv += uv[i].y / n;
+        }
+        double ku = ps->closed_u && pu > 0 ? floor((cu - mu) / pu + 0.5) : 0.0;
+        double kv = ps->closed_v && pv > 0 ? floor((cv - mv) / pv + 0.5) : 0.0;
+        if (!(fabs(ku) <= CM_PARAM_MAX_WINDING) || !(fabs(kv) <= CM_PARAM_MAX_WINDING) || (ku == 0 && kv == 0))
+            continue;
+        for (int i = loop_start[l]; i < loop_start[l + 1]; i++) {
+            uv[i].x += ku * pu;
+            uv[i].y += kv * pv;
+        }
+    }
 }

@@ -215,8 +215,10 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
     ws->loop_start[F->nloops] = k;
     *npts = k;
     *nloops_out = (int)F->nloops;
-    if (nwind == 0)
+    if (nwind == 0) {
+        cm_loops_align(ps, ws->uv, ws->loop_start, (int)F->nloops);
         return CM_OK;
+    }
     int along_u = ws->wind_u[a] != 0;
     if (nwind > 2 || (b >= 0 && (along_u ? ws->wind_u[b] == 0 : ws->wind_v[b] == 0)))
         return cm_fail(st, CM_E_UNSUPPORTED, "loops winding around the surface in two directions");
@@ -254,7 +256,7 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
         reverse_pts(plo, slo, nlo);
     if (hi >= 0 && (along_u ? ws->wind_u[hi] : ws->wind_v[hi]) > 0)
         reverse_pts(phi, shi, nhi);
-    if (hi < 0 && w_lo < 0) /* a lone loop running -x bounds the band below it */
+    if (hi < 0 && !cm_winding_cap_high(w_lo, F->flip, along_u)) /* the band below a lone loop */
         cap_coord = along_u ? ps->v0 : ps->u0;
     int nj, hi_start = 0;
     cm_err e = cm_join_winding(plo, nlo, hi >= 0 ? phi : NULL, nhi, period, cap_coord, ws->tmp, ws->point_cap,
@@ -295,6 +297,7 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
         ws->uv[i] = ws->tmp[i];
         ws->src[i] = ws->src2[i];
     }
+    cm_loops_align(ps, ws->uv, ws->loop_start, nl);
     *npts = out;
     *nloops_out = nl;
     return CM_OK;

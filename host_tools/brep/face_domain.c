@@ -255,7 +255,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                 int np = 0;
                 if (!bad) {
                     double vcap = (along_u ? fd->ps.v1 : fd->ps.u1);
-                    if (b < 0 && lo_dir < 0)
+                    if (b < 0 && !cm_winding_cap_high(lo_dir, f->flip, along_u))
                         vcap = along_u ? fd->ps.v0 : fd->ps.u0;
                     poly = malloc((size_t)(nlo + nhi + 3) * sizeof *poly);
                     bad = !poly || cm_join_winding(rl ? rl : lo, nlo, b >= 0 ? rh : NULL, nhi, period, vcap, poly,
@@ -325,6 +325,22 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                 if (!fd->joined_seam)
                     reverse_model_loop(m, &m->loops[f->first_loop + l]);
             }
+        }
+        /* holes on the outer polygon's periodic copy (as the terminal does: cm_tessellate.c); the
+           loops need not be stored one after the other (a joined outer polygon comes last) */
+        for (int l = 1; l < fd->nloops && e == CM_OK; l++) {
+            int n0 = fd->loops[0].n, nl = fd->loops[l].n;
+            cm_vec2 *tmp = malloc((size_t)(n0 + nl) * sizeof *tmp);
+            if (!tmp) {
+                e = cm_fail(st, CM_E_NOMEM, "out of memory");
+                break;
+            }
+            memcpy(tmp, fd->uv + fd->loops[0].first, (size_t)n0 * sizeof *tmp);
+            memcpy(tmp + n0, fd->uv + fd->loops[l].first, (size_t)nl * sizeof *tmp);
+            int starts[3] = {0, n0, n0 + nl};
+            cm_loops_align(&fd->ps, tmp, starts, 2);
+            memcpy(fd->uv + fd->loops[l].first, tmp + n0, (size_t)nl * sizeof *tmp);
+            free(tmp);
         }
         fd->umin = fd->vmin = HUGE_VAL;
         fd->umax = fd->vmax = -HUGE_VAL;

@@ -100,4 +100,25 @@ CM_NODISCARD cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, do
 CM_NODISCARD cm_err cm_join_winding(const cm_vec2 *lo, int nlo, const cm_vec2 *hi, int nhi, double period,
                                     double cap_coord, cm_vec2 *out, int cap, int *nout, int *hi_start, cm_status *st);
 
+/**
+ * Which side of a lone loop winding round a closed surface the face lies on (spec §1: the material
+ * on the left of the loop, seen with the face normal towards the viewer): 1 the side of the high
+ * parameter (the band between the loop and the domain's v1, or u1), 0 the low side.  `dir` is the
+ * loop's winding (+1 running +u for along_u, +v otherwise), `flip` the face's (normal = -(Su x Sv)).
+ * Walking +u, Su x Sv on the left is +v; walking +v it is -u; a flipped face mirrors both.
+ */
+static inline int cm_winding_cap_high(int dir, int flip, int along_u)
+{
+    return (dir > 0) ^ (flip != 0) ^ (along_u == 0);
+}
+
+/**
+ * Each loop is projected on its own, from wherever its first point's search lands, so on a closed
+ * surface a hole can come out a period away from the outer polygon (a cylinder face running
+ * [-pi, 0] with its hole found at [3.7, 4.7]): outside it, the hole would be lost.  Move every
+ * loop after the first (uv[loop_start[l]] .. uv[loop_start[l + 1]]) by whole periods of the
+ * closed directions so its mean lies nearest the middle of the first loop's box.
+ */
+void cm_loops_align(const cm_psurf *ps, cm_vec2 *uv, const int *loop_start, int nloops);
+
 #endif /* CM_PARAM_H */
