@@ -364,7 +364,42 @@ void verify_nearest_boundary(const face_domain *fd, cm_vec3 p, double *best2, cm
  */
 /* the distance of S from the source surface, the foot started from the nearest grid or boundary
    point (HUGE_VAL where it cannot be had) */
-static double point_to_source(const face_domain *fd, const grid_pts *g, cm_vec3 S, double again)
+/* S's distance to the boundary curves of face fd (the nearest point of a trimmed face to a point
+   whose foot lies outside it is on its boundary) */
+static double boundary_dist(const brep_model *m, const face_domain *fd, cm_vec3 S)
+{
+    const brep_face *F = &m->faces[fd->face];
+    double best = HUGE_VAL;
+    for (int l = 0; l < F->nloops; l++) {
+        const brep_loop *L = &m->loops[F->first_loop + l];
+        for (int k = 0; k < L->n; k++) {
+            const hcurve *c = &m->segs[L->first + k];
+            cm_curve cv = hcurve_view(c);
+            double t0, t1, t, d;
+            hcurve_domain(c, &t0, &t1);
+            if (cm_curve_project(&cv, t0, t1, S, &t, &d, NULL) == CM_OK && d < best)
+                best = d;
+        }
+    }
+    return best;
+}
+
+/* 1 if (u, v) or its copy a period away lies in the face */
+static int foot_inside(const face_domain *fd, double u, double v)
+{
+    double pu = fd->ps.u1 - fd->ps.u0, pv = fd->ps.v1 - fd->ps.v0;
+    for (int i = -1; i <= 1; i++)
+        for (int j = -1; j <= 1; j++) {
+            if ((i && !fd->ps.closed_u) || (j && !fd->ps.closed_v))
+                continue;
+            if (face_domain_inside(fd, cm_v2(u + i * pu, v + j * pv)))
+                return 1;
+        }
+    return 0;
+}
+
+static double point_to_source(const brep_model *m, const face_domain *fd, const grid_pts *g, cm_vec3 S, double again,
+                              int trimmed)
 {
     double best = HUGE_VAL, u = 0, v = 0, d;
     for (int q = 0; q < g->n; q++) {
@@ -383,12 +418,25 @@ static double point_to_source(const face_domain *fd, const grid_pts *g, cm_vec3 
         return HUGE_VAL;
     double dg, ug, vg;
     /* a foot stuck in a local minimum only overstates the distance: search again */
-    if (!(d < again) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)
+    if (!(d < again) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d) {
         d = dg;
+        u = ug;
+        v = vg;
+    }
+    /* `trimmed` (a point that is shown: a mesh vertex, a Gregory patch's point, the patches being
+       bounded by the face's own edges): the face, not its whole surface.  A point off the face's
+       region (a patch hanging past a short side, gmsh__Block's seven-sided cylinder face: 0.02 mm off
+       the cylinder, 0.27 mm off the face) is as far as the face's boundary.  (A G1FIT net is cut by
+       the face's loop when shown: for its points the surface.) */
+    if (trimmed && !foot_inside(fd, u, v)) {
+        double db = boundary_dist(m, fd, S);
+        d = db < HUGE_VAL && db > d ? db : d;
+    }
     return d;
 }
 
-static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs, const grid_pts *g, double again)
+static double patches_to_source(const brep_model *m, const face_domain *fd, const cm_greg_surface *gs,
+                                const grid_pts *g, double again)
 {
     double worst = 0;
     for (int k = 0; k < gs->npatch; k++)
@@ -397,7 +445,7 @@ static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs
                 cm_vec3 S;
                 if (cm_greg_surface_eval(gs, k, i / 6.0, j / 6.0, &S, NULL, NULL) != CM_OK)
                     return HUGE_VAL;
-                double d = point_to_source(fd, g, S, again);
+                double d = point_to_source(m, fd, g, S, again, 1); /* all of a patch is shown */
                 worst = d > worst ? d : worst;
             }
     return worst;
@@ -409,7 +457,8 @@ static double patches_to_source(const face_domain *fd, const cm_greg_surface *gs
    geo_example measured 0.178 mm where Open CASCADE found the decoded face 0.325 mm off its B-rep,
    past the 0.199 mm tolerance (1e-3 of the diagonal): a narrow ridge between the samples */
 #define NET_SAMPLES 40
-static double net_to_source(const face_domain *fd, const cm_surf *s, const grid_pts *g, double again, double tol)
+static double net_to_source(const brep_model *m, const face_domain *fd, const cm_surf *s, const grid_pts *g,
+                            double again, double tol)
 {
     double worst = 0;
     for (int i = 0; i <= NET_SAMPLES; i++)
@@ -417,7 +466,7 @@ static double net_to_source(const face_domain *fd, const cm_surf *s, const grid_
             cm_vec3 D[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
             if (cm_surf_eval(s, (double)i / NET_SAMPLES, (double)j / NET_SAMPLES, 0, D, NULL) != CM_OK)
                 return HUGE_VAL;
-            double d = point_to_source(fd, g, D[0][0], again);
+            double d = point_to_source(m, fd, g, D[0][0], again, 0);
             worst = d > worst ? d : worst;
             if (!(worst < tol))
                 return worst; /* failed: the rest cannot save it */
@@ -501,11 +550,11 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
        extends past the face (NFILL's rectangle contains it), so only its points inside the face's
        trimmed region would mean anything, and telling those apart needs the loops projected on it */
     if (rb->repr == CM_REPR_PATCHES) {
-        double back = patches_to_source(fd, rb->greg, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
+        double back = patches_to_source(&lm->brep, fd, rb->greg, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox);
         out->back = back;
         worst = back > worst ? back : worst;
     } else if (rb->method == CM_METHOD_G1FIT) {
-        double back = net_to_source(fd, &rb->surf, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox, tol);
+        double back = net_to_source(&lm->brep, fd, &rb->surf, grid, tol < HUGE_VAL ? 0.5 * tol : 5e-3 * rb->bbox, tol);
         out->back = back;
         worst = back > worst ? back : worst;
     }
@@ -605,7 +654,7 @@ double verify_mesh_face(const loaded_model *lm, int f, const float (*pos)[3], ui
        surface (a foot stuck in a local minimum only overstates) */
     double again = 2.0 * expect;
     for (uint32_t k = 0; k < nverts; k++) {
-        double d = point_to_source(fd, grid, mesh_pt(pos, k), again);
+        double d = point_to_source(&lm->brep, fd, grid, mesh_pt(pos, k), again, 1);
         if (d < HUGE_VAL) /* a foot that cannot be had is not a distance */
             worst = d > worst ? d : worst;
     }
