@@ -17,6 +17,7 @@ static int cmp_pos(const void *a, const void *b)
 
 typedef struct dedge {
     uint32_t a, b;
+    uint32_t t; /* its triangle */
 } dedge;
 
 static int cmp_dedge(const void *x, const void *y)
@@ -32,6 +33,15 @@ static int cmp_dedge(const void *x, const void *y)
 static cm_vec3 vpos(const cm_mesh *m, uint32_t i)
 {
     return cm_v3f(m->pos[i]);
+}
+
+/* 1 if triangles s and t face apart (their normals' dot product is negative) */
+static int opposed(const cm_mesh *m, uint32_t s, uint32_t t)
+{
+    const uint32_t *a = m->idx + 3 * (size_t)s, *b = m->idx + 3 * (size_t)t;
+    cm_vec3 na = cm_cross(cm_sub(vpos(m, a[1]), vpos(m, a[0])), cm_sub(vpos(m, a[2]), vpos(m, a[0])));
+    cm_vec3 nb = cm_cross(cm_sub(vpos(m, b[1]), vpos(m, b[0])), cm_sub(vpos(m, b[2]), vpos(m, b[0])));
+    return cm_dot(na, nb) < 0;
 }
 
 int mesh_topo_analyse(const cm_mesh *m, mesh_topo *out)
@@ -71,15 +81,40 @@ int mesh_topo_analyse(const cm_mesh *m, mesh_topo *out)
             continue;
         }
         for (int k = 0; k < 3; k++)
-            de[nd++] = (dedge){v[k], v[(k + 1) % 3]};
+            de[nd++] = (dedge){v[k], v[(k + 1) % 3], (uint32_t)t};
     }
     qsort(de, nd, sizeof *de, cmp_dedge);
     for (size_t i = 0; i < nd; i++) {
         if (i > 0 && cmp_dedge(&de[i - 1], &de[i]) == 0) {
+            /*
+             * A chord through a thin lens: two faces whose surfaces meet along two shared edges
+             * enclose a sliver (tail_section_asm: a 3 mm extrusion face on a cylinder, 0.013 mm
+             * apart), and a chord between points of those edges can be in both faces' triangles,
+             * each face using it both ways, the two triangles facing apart.  That is the model's
+             * shape, not an overlap: exactly two uses each way, the triangles' normals opposed.
+             */
+            size_t first = i - 1, run = 0;
+            while (first > 0 && cmp_dedge(&de[first - 1], &de[i]) == 0)
+                first--;
+            while (first + run < nd && cmp_dedge(&de[first], &de[first + run]) == 0)
+                run++;
+            dedge rev = {de[i].b, de[i].a, 0};
+            const dedge *r = bsearch(&rev, de, nd, sizeof *de, cmp_dedge);
+            size_t rrun = 0;
+            if (r) {
+                while (r > de && cmp_dedge(r - 1, &rev) == 0)
+                    r--;
+                while (r + rrun < de + nd && cmp_dedge(r + rrun, &rev) == 0)
+                    rrun++;
+            }
+            if (run == 2 && rrun == 2 && opposed(m, de[first].t, de[first + 1].t)) {
+                out->lens_chords++;
+                continue;
+            }
             out->duplicate++;
             continue;
         }
-        dedge rev = {de[i].b, de[i].a};
+        dedge rev = {de[i].b, de[i].a, 0};
         if (!bsearch(&rev, de, nd, sizeof *de, cmp_dedge)) {
             out->bnd[2 * out->unpaired] = vpos(m, rep[de[i].a]);
             out->bnd[2 * out->unpaired + 1] = vpos(m, rep[de[i].b]);

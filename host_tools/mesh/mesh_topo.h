@@ -19,6 +19,8 @@ typedef struct mesh_topo {
     size_t welded_vertices;  /* distinct positions */
     size_t degenerate;       /* triangles with two corners at one position */
     size_t duplicate;        /* directed edges used more than once: overlap or misorientation */
+    size_t lens_chords;      /* ... but for chords through a thin lens between two faces (each used
+                                twice both ways by triangles facing apart: the model's shape) */
     size_t unpaired;         /* directed edges without their reverse: open boundary */
     cm_vec3 *bnd;            /* 2 * unpaired end points of the unpaired edges (malloc'd) */
     double volume;           /* signed volume (meaningful when closed) */

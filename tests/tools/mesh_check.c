@@ -88,7 +88,7 @@ int main(int argc, char **argv)
         memset(uses, 0, m->nedges * sizeof *uses);
         for (uint32_t u = 0; u < m->nuses; u++)
             uses[m->uses[u].edge]++;
-        size_t nparts = 0, parts_bad = 0, tri = 0, degenerate = 0, duplicate = 0, unpaired = 0, expect = 0;
+        size_t nparts = 0, parts_bad = 0, tri = 0, degenerate = 0, duplicate = 0, unpaired = 0, expect = 0, lens = 0;
         size_t nonmanifold_parts = 0;
         double volume = 0;
         char worst[256] = "";
@@ -136,6 +136,7 @@ int main(int argc, char **argv)
             tri += t.triangles;
             degenerate += t.degenerate;
             duplicate += t.duplicate;
+            lens += t.lens_chords;
             if (!nonmanifold) {
                 unpaired += t.unpaired;
                 expect += expect_free;
@@ -143,9 +144,12 @@ int main(int argc, char **argv)
             volume += t.volume;
             mesh_topo_free(&t);
         }
-        printf("%s - %s: %u faces, %zu parts, %zu triangles; %zu degenerate, %zu overlapping; "
+        char lens_note[96] = "";
+        if (lens)
+            snprintf(lens_note, sizeof lens_note, " (%zu chords through thin lenses between faces)", lens);
+        printf("%s - %s: %u faces, %zu parts, %zu triangles; %zu degenerate, %zu overlapping%s; "
                "open sides %zu = free-edge samples %zu%s; volume %.6g%s\n",
-               parts_bad ? "not ok" : "ok", argv[a], m->nfaces, nparts, tri, degenerate, duplicate, unpaired, expect,
+               parts_bad ? "not ok" : "ok", argv[a], m->nfaces, nparts, tri, degenerate, duplicate, lens_note, unpaired, expect,
                nonmanifold_parts ? " (parts with non-manifold edges not compared)" : "", volume, worst);
         bad += parts_bad > 0;
     }
