@@ -241,7 +241,7 @@ $(STACK_CHECK): tests/tools/check_stack.c
 	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
 .PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-fuzz-decode-replay \
-	check-corpus-roundtrip check-decode-cross check-corpus-occt deps
+	check-corpus-roundtrip check-decode-cross check-corpus-occt check-step-occt check-step-roundtrip deps
 # `make check` on a fresh machine: install what is missing, then test.
 # The builds run on every core (CHECK_JOBS); the suites and gates still run one at a time, but their
 # own builds (clang, cross, -O0) share the job slots.
@@ -268,11 +268,13 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
 		"gate:stack-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack" \
 		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
-		"gate:iges-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
+		"gate:import-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
 		"gate:tess-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-tess-replay" \
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
 		"gate:corpus-roundtrip:$(MAKE) --no-print-directory -s check-corpus-roundtrip" \
+		"gate:step-vs-occt:$(MAKE) --no-print-directory -s check-step-occt" \
+		"gate:step-roundtrip:$(MAKE) --no-print-directory -s check-step-roundtrip" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
@@ -299,7 +301,7 @@ test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,termi
 # every fuzz target's seeds and regressions replayed under the sanitizers, the shared corpus left
 # to check-fuzz-replay (2.5 minutes of 2-4 MB models under ASan)
 check-fuzz-replay-fast:
-	$(Q)$(MAKE) --no-print-directory -s check-fuzz-replay FUZZ_REPLAY_SHARED=
+	$(Q)$(MAKE) --no-print-directory -s check-fuzz-replay FUZZ_REPLAY_SHARED= FUZZ_REPLAY_SHARED_STEP=
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-decode-replay
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-tess-replay
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-link-replay
@@ -343,12 +345,18 @@ check-clang:
 # the IGES import fuzz target replayed under ASan/UBSan: seeds, regressions and the shared corpus
 SHARED_MODELS ?= ../shared/models
 FUZZ_REPLAY_SHARED ?= $(wildcard $(SHARED_MODELS)/iges)
+FUZZ_REPLAY_SHARED_STEP ?= $(wildcard $(SHARED_MODELS)/step)
 check-fuzz-replay:
 	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
 		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
 		$(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges
 	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_iges \
 		tests/fuzz/corpus_iges $(wildcard tests/fuzz/regressions_iges) $(FUZZ_REPLAY_SHARED)
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
+		$(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_step
+	$(Q)ASAN_OPTIONS=detect_leaks=1 $(BUILD_ROOT)/clang-san/$(shell clang -dumpmachine 2>/dev/null)-host/tests/fuzz/replay_step \
+		tests/fuzz/corpus_step $(wildcard tests/fuzz/regressions_step) $(FUZZ_REPLAY_SHARED_STEP)
 
 # the decode fuzz target (terminal profile, the board's limits) replayed under ASan/UBSan:
 # seeds (valid files of every method), named malformed inputs and regressions
@@ -435,6 +443,20 @@ fuzz-decode:
 	$(BUILD_ROOT)/fuzz/fuzz_decode $(FUZZ_ARGS) -max_len=65536 -timeout=30 \
 		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_decode
 
+# libFuzzer on the STEP import (not part of check): make fuzz-step FUZZ_SECONDS=600
+.PHONY: fuzz-step
+fuzz-step:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz CM_NO_STACK_FLAGS=1 \
+		CFLAGS="-O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all $(FUZZ_COVERAGE_IGNORE)" \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_step.o \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz/fuzz_step \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/tests/fuzz/fuzz_step.o \
+		$(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmhost.a $(BUILD_ROOT)/fuzz/$(FUZZ_TRIPLET)-host/libcmdecoder.a -lm
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz/corpus_step && cp tests/fuzz/corpus_step/* $(BUILD_ROOT)/fuzz/corpus_step/
+	$(BUILD_ROOT)/fuzz/fuzz_step $(FUZZ_ARGS) -max_len=4194304 -timeout=120 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz/ $(BUILD_ROOT)/fuzz/corpus_step $(wildcard $(SHARED_MODELS)/step)
+
 # libFuzzer on the IGES import (not part of check): make fuzz-iges FUZZ_SECONDS=600
 # (max_len 4 MiB: the corpus models, up to 3.9 MB, are seeds whole, not cut at the default length)
 FUZZ_SECONDS ?= 60
@@ -459,6 +481,14 @@ fuzz-iges:
 # the import against Open CASCADE on the shared corpus (skips without it)
 check-corpus-occt: $(CMZ) oracle
 	$(Q)tests/tools/check_corpus_occt.sh $(CMZ) $(ORACLE_BIN) $(SHARED_MODELS)
+
+# the STEP import against Open CASCADE's STEP reader: faces, free edges, diagonal, points (skips without it)
+check-step-occt: $(CMZ) oracle
+	$(Q)tests/tools/check_step_occt.sh $(CMZ) $(ORACLE_BIN) $(SHARED_MODELS)
+
+# STEP -> .cmz -> decode -> mesh on the shared corpus's STEP models, judged as the IGES ones (skips without it)
+check-step-roundtrip: $(CMZ) $(MESH_CHECK) oracle gltf-check-tool
+	$(Q)tests/tools/check_corpus_roundtrip.sh $(CMZ) $(MESH_CHECK) $(ORACLE_BIN) $(GLTF_CHECK_BIN) $(SHARED_MODELS) step
 
 # encode -> decode -> mesh on the shared corpus, judged by mesh_check, OCCT, tinygltf and cmz eval
 # (skips without it)

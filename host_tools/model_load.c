@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "model_load.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -11,6 +12,18 @@
 static double now(void)
 {
     return cm_clock_s();
+}
+
+/* 1 if the file begins like a STEP file (its first 4 KB: blanks, a BOM or comments may come first) */
+static int file_is_step(const char *path)
+{
+    char head[4096];
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return 0; /* the IGES reader reports why it cannot be opened */
+    size_t n = fread(head, 1, sizeof head, fp);
+    fclose(fp);
+    return step_sniff(head, n);
 }
 
 /* remember warning w as one about a face left out of the model */
@@ -24,13 +37,31 @@ static cm_err note_left_out(loaded_model *lm, int w)
     return CM_OK;
 }
 
-/* everything after the IGES file is in lm->iges */
+/* a STEP file read into lm->step: its faces into the B-rep, its warnings and error where IGES's go */
+static cm_err step_import(loaded_model *lm, cm_status *st)
+{
+    cm_err e = step_to_brep(&lm->step, &lm->brep, &lm->step_stats, st);
+    for (int w = 0; w < lm->step.nwarn; w++)
+        iges_warn(&lm->iges, lm->step.warn[w].line, "%s", lm->step.warn[w].msg);
+    if (lm->step.warnings_dropped)
+        iges_warn(&lm->iges, lm->step.nlines, "... and %d more warnings not kept", lm->step.warnings_dropped);
+    if (lm->step.err[0]) {
+        snprintf(lm->iges.err, sizeof lm->iges.err, "%s", lm->step.err);
+        lm->iges.err_line = lm->step.err_line;
+    }
+    return e;
+}
+
+/* everything after the file is read (into lm->iges or lm->step) */
 static cm_err load_rest(loaded_model *lm, int flags, model_progress progress, void *ctx, cm_status *st)
 {
     double t = now();
     cm_err e;
     lm->load_flags = flags;
-    e = iges_to_brep(&lm->iges, &lm->brep, &lm->stats, (flags & MODEL_LOAD_BLANKED) != 0, st);
+    if (lm->is_step)
+        e = step_import(lm, st);
+    else
+        e = iges_to_brep(&lm->iges, &lm->brep, &lm->stats, (flags & MODEL_LOAD_BLANKED) != 0, st);
     if (e == CM_OK && (flags & MODEL_LOAD_FOLD))
         e = brep_fold_instances(&lm->brep, &lm->instances_folded, st);
     lm->seconds_brep = now() - t;
@@ -55,8 +86,9 @@ static cm_err load_rest(loaded_model *lm, int flags, model_progress progress, vo
         if (face_domain_build(m, f, tol, &lm->fds[f], &fst) != CM_OK) {
             if (fst.code == CM_E_NOMEM)
                 return cm_fail(st, CM_E_NOMEM, "out of memory");
-            iges_warn(&lm->iges, 0, "face %d (DE %d): left out: no parameter domain: %s", f, m->faces[f].src_de,
-                      cm_strerror(fst.code));
+            char src[64];
+            iges_warn(&lm->iges, 0, "face %d (%s): left out: no parameter domain: %s", f,
+                      brep_face_source(&m->faces[f], src, sizeof src), cm_strerror(fst.code));
             face_domain_free(&lm->fds[f]);
             if (note_left_out(lm, lm->iges.nwarn - 1) != CM_OK)
                 return cm_fail(st, CM_E_NOMEM, "out of memory");
@@ -87,7 +119,18 @@ cm_err model_load_ex(const char *path, loaded_model *lm, int flags, model_progre
 {
     memset(lm, 0, sizeof *lm);
     double t = now();
-    cm_err e = iges_read(path, &lm->iges, st);
+    cm_err e;
+    lm->is_step = file_is_step(path);
+    if (lm->is_step) {
+        e = step_read(path, &lm->step, st);
+        lm->iges.path = strdup(path);
+        if (e != CM_OK)
+            snprintf(lm->iges.err, sizeof lm->iges.err, "%s", lm->step.err), lm->iges.err_line = lm->step.err_line;
+        if (e == CM_OK && !lm->iges.path)
+            e = cm_fail(st, CM_E_NOMEM, "out of memory");
+    } else {
+        e = iges_read(path, &lm->iges, st);
+    }
     lm->seconds_read = now() - t;
     if (e != CM_OK)
         return e;
@@ -105,7 +148,15 @@ cm_err model_load_data_ex(const char *name, const char *data, size_t len, loaded
 {
     memset(lm, 0, sizeof *lm);
     double t = now();
-    cm_err e = iges_parse(data, len, &lm->iges, st);
+    cm_err e;
+    lm->is_step = step_sniff(data, len);
+    if (lm->is_step) {
+        e = step_parse(data, len, &lm->step, st);
+        if (e != CM_OK)
+            snprintf(lm->iges.err, sizeof lm->iges.err, "%s", lm->step.err), lm->iges.err_line = lm->step.err_line;
+    } else {
+        e = iges_parse(data, len, &lm->iges, st);
+    }
     lm->iges.path = strdup(name);
     lm->seconds_read = now() - t;
     if (e != CM_OK)
@@ -122,7 +173,8 @@ cm_err model_leave_out_face(loaded_model *lm, int bf, const char *why, cm_status
     if (!drop)
         return cm_fail(st, CM_E_NOMEM, "out of memory");
     drop[bf] = 1;
-    iges_warn(&lm->iges, 0, "face of entity %d (DE %d): left out: %s", m->faces[bf].src_type, m->faces[bf].src_de, why);
+    char src[64];
+    iges_warn(&lm->iges, 0, "face of %s: left out: %s", brep_face_source(&m->faces[bf], src, sizeof src), why);
     cm_err e = note_left_out(lm, lm->iges.nwarn - 1) == CM_OK ? CM_OK : cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK)
         e = brep_remove_faces(m, drop, st);
@@ -154,5 +206,6 @@ void model_free(loaded_model *lm)
     free(lm->fds);
     brep_free(&lm->brep);
     iges_free(&lm->iges);
+    step_free(&lm->step);
     memset(lm, 0, sizeof *lm);
 }

@@ -1,7 +1,9 @@
 /*
  * model_load.h - the workstation's import pipeline in one call:
- * IGES file -> B-rep -> face parameter domains (loops oriented) -> curve
- * mesh.  Shared by `cmz info`, `cmz sample` and the encoder.
+ * IGES or STEP file -> B-rep -> face parameter domains (loops oriented) ->
+ * curve mesh.  Shared by `cmz info`, `cmz sample` and the encoder.  The
+ * format is told by content (a STEP file begins with ISO-10303-21;), not
+ * by the file's name.
  */
 #ifndef MODEL_LOAD_H
 #define MODEL_LOAD_H
@@ -11,9 +13,14 @@
 #include "iges/iges_brep.h"
 #include "iges/iges_file.h"
 #include "mesh/cmesh.h"
+#include "step/step_brep.h"
+#include "step/step_file.h"
 
 typedef struct loaded_model {
-    iges_file iges;
+    iges_file iges;      /* an IGES model's file; for either format its path, warnings (iges.warn) and error (iges.err) */
+    int is_step;         /* the file is STEP (ISO 10303-21, detected by content): step and step_stats hold it */
+    step_file step;
+    step_import_stats step_stats;
     brep_model brep;
     brep_import_stats stats;
     face_domain *fds;    /* one per face; a face whose domain failed has fds[f].uv == NULL */
@@ -48,7 +55,7 @@ CM_NODISCARD cm_err model_load(const char *path, loaded_model *lm, model_progres
 CM_NODISCARD cm_err model_load_ex(const char *path, loaded_model *lm, int flags, model_progress progress, void *ctx,
                                   cm_status *st);
 
-/** The same from an IGES file already in memory (`name` is used in messages; the fuzzer uses this). */
+/** The same from a file already in memory, IGES or STEP (`name` is used in messages; the fuzzers use this). */
 CM_NODISCARD cm_err model_load_data(const char *name, const char *data, size_t len, loaded_model *lm,
                                     model_progress progress, void *ctx, cm_status *st);
 

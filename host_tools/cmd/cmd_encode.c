@@ -19,12 +19,13 @@
 #include "encode/encode.h"
 #include "profiles.h"
 
-/* an import warning about the structure around faces (iges_brep.c): a solid, shell or instance
-   left out, or a member pointer of one skipped */
+/* an import warning about the structure around faces (iges_brep.c, step_brep.c): a solid, shell,
+   instance or placement left out, or a member pointer of one skipped */
 static int is_structure_warning(const char *msg)
 {
     return (strncmp(msg, "entity ", 7) == 0 && strstr(msg, ") left out: ")) ||
-           ((strncmp(msg, "shell DE ", 9) == 0 || strncmp(msg, "solid DE ", 9) == 0) && strstr(msg, " skipped"));
+           ((strncmp(msg, "shell DE ", 9) == 0 || strncmp(msg, "solid DE ", 9) == 0) && strstr(msg, " skipped")) ||
+           (msg[0] == '#' && strstr(msg, "left out")); /* STEP (step_brep.c): a shell, placement or mapped item */
 }
 
 /* write a buffer to `path` through a temporary file and a rename: never half a file */
@@ -262,9 +263,10 @@ int cmd_encode(int argc, char **argv)
         if (r.placements > 0)
             snprintf(placed, sizeof placed, "; %d sent, %u as %u placed copies of parts", lm.mesh.nfaces,
                      r.placed_faces, r.placements);
-        printf("%s -> %s: %d faces (%s%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the IGES (%ld bytes)\n",
+        printf("%s -> %s: %d faces (%s%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the %s (%ld bytes)\n",
                path, out, lm.mesh.nfaces + (int)r.placed_faces, methods, left, placed,
-               r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0, isize);
+               r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0,
+               lm.is_step ? "STEP" : "IGES", isize);
         if (r.edges_refit + r.surfs_refit > 0)
             fprintf(stderr, "%s: %s: note: %d edge curves and %d surfaces re-approximated within a quarter of "
                     "their tolerance to fit profile %s\n", cmd_prog, path, r.edges_refit, r.surfs_refit,

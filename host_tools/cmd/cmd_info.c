@@ -1,6 +1,6 @@
 /*
- * cmd_info.c - `cmz info MODEL.igs [--json]`: what the importer sees in a
- * CAD file (exporter, units, entities, faces, loops, the curve mesh's
+ * cmd_info.c - `cmz info MODEL [--json]`: what the importer sees in a
+ * CAD file, IGES or STEP (exporter, units, entities, faces, loops, the curve mesh's
  * edges, solids, bounding box, tolerances, warnings), as text or JSON.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 /* ---- JSON helpers (strings from files may hold any byte: escaped as Latin-1) ---- */
 
@@ -34,10 +35,82 @@ static const char *units_name(int flag)
     return flag >= 1 && flag <= 11 ? n[flag] : "?";
 }
 
-/* per IGES type: read, used */
+/* per IGES type (or STEP entity name): read, used */
 typedef struct type_count {
     int type, read, used, bad;
+    const char *name; /* STEP: the entity name (not NUL-terminated), name_len bytes */
+    int name_len;
 } type_count;
+
+/* the name a STEP instance is listed under: a complex instance by its most telling part */
+static void step_kind_name(const step_file *f, const step_entity *e, const char **name, int *len)
+{
+    static const char *const telling[] = {"B_SPLINE_CURVE_WITH_KNOTS", "B_SPLINE_SURFACE_WITH_KNOTS",
+                                          "REPRESENTATION_RELATIONSHIP", "GEOMETRIC_REPRESENTATION_CONTEXT",
+                                          "LENGTH_UNIT", "PLANE_ANGLE_UNIT", "SOLID_ANGLE_UNIT",
+                                          "OVER_RIDING_STYLED_ITEM", "BREP_WITH_VOIDS"};
+    const step_part *pick = e->nparts ? &f->parts[e->first_part] : NULL;
+    for (size_t t = 0; t < sizeof telling / sizeof telling[0] && e->nparts > 1; t++)
+        for (int i = 0; i < e->nparts; i++) {
+            const step_part *p = &f->parts[e->first_part + i];
+            if ((size_t)p->name_len == strlen(telling[t]) && strncasecmp(f->text + p->name, telling[t], strlen(telling[t])) == 0) {
+                pick = p;
+                t = sizeof telling / sizeof telling[0] - 1;
+                break;
+            }
+        }
+    *name = pick ? f->text + pick->name : "";
+    *len = pick ? pick->name_len : 0;
+}
+
+static int cmp_type_name(const void *a, const void *b)
+{
+    const type_count *x = a, *y = b;
+    int n = x->name_len < y->name_len ? x->name_len : y->name_len;
+    int c = strncasecmp(x->name, y->name, (size_t)n);
+    return c ? c : (x->name_len > y->name_len) - (x->name_len < y->name_len);
+}
+
+/* per STEP entity name: read, used (a file with more names than cap lists the first cap) */
+static int count_step_types(const step_file *f, type_count *tc, int cap)
+{
+    int n = 0;
+    for (int i = 0; i < f->nents; i++) {
+        const char *name;
+        int len, k = 0;
+        step_kind_name(f, &f->ents[i], &name, &len);
+        while (k < n && !(tc[k].name_len == len && strncasecmp(tc[k].name, name, (size_t)len) == 0))
+            k++;
+        if (k == n) {
+            if (n == cap)
+                continue;
+            tc[n] = (type_count){0, 0, 0, 0, name, len};
+            n++;
+        }
+        tc[k].read++;
+        tc[k].used += f->ents[i].used;
+    }
+    qsort(tc, (size_t)n, sizeof *tc, cmp_type_name);
+    return n;
+}
+
+/* a surface kind's name: brep_face.surf_type numbers surfaces as IGES does, for STEP too */
+static const char *surface_name(int type, int step)
+{
+    if (!step)
+        return iges_type_name(type);
+    switch (type) {
+    case 190: return "PLANE";
+    case 192: return "CYLINDRICAL_SURFACE";
+    case 194: return "CONICAL_SURFACE";
+    case 196: return "SPHERICAL_SURFACE";
+    case 198: return "TOROIDAL_SURFACE";
+    case 120: return "SURFACE_OF_REVOLUTION";
+    case 122: return "SURFACE_OF_LINEAR_EXTRUSION";
+    case 128: return "B_SPLINE_SURFACE_WITH_KNOTS";
+    default: return "unknown";
+    }
+}
 
 static int count_types(const iges_file *f, type_count *tc, int cap)
 {
@@ -83,7 +156,7 @@ int cmd_info(int argc, char **argv)
             return EXIT_USAGE;
     }
     if (!path) {
-        fprintf(stderr, "%s info: which model? usage: cmz info MODEL.igs [--json]\n", cmd_prog);
+        fprintf(stderr, "%s info: which model? usage: cmz info MODEL.igs|MODEL.stp [--json]\n", cmd_prog);
         return EXIT_USAGE;
     }
     loaded_model lm;
@@ -93,8 +166,18 @@ int cmd_info(int argc, char **argv)
     const iges_file *f = &lm.iges;
     const brep_model *m = &lm.brep;
     const cmesh *cm = &lm.mesh;
-    type_count tc[128];
-    int ntc = count_types(f, tc, 128);
+    type_count tc[256];
+    int step = lm.is_step;
+    int ntc = step ? count_step_types(&lm.step, tc, 256) : count_types(f, tc, 256);
+    /* what the file says about itself */
+    char units[200];
+    const char *exporter = step ? lm.step.system : f->g.system_id, *preproc = step ? lm.step.schema : f->g.preprocessor;
+    double to_mm = step ? lm.step_stats.unit_mm : f->to_mm;
+    if (step)
+        snprintf(units, sizeof units, "%g mm per unit (of the first shape representation)", to_mm);
+    else
+        snprintf(units, sizeof units, "%s (flag %d%s%s), model scale %g", units_name(f->g.units_flag), f->g.units_flag,
+                 f->g.units_name[0] ? ", " : "", f->g.units_name, f->g.model_scale);
     int nread = 0, nused = 0, nbad = 0;
     for (int k = 0; k < ntc; k++) {
         nread += tc[k].read - tc[k].bad;
@@ -145,27 +228,29 @@ int cmd_info(int argc, char **argv)
         printf("{\n  \"file\": ");
         json_str(stdout, path);
         printf(",\n  \"exporter\": ");
-        json_str(stdout, f->g.system_id);
-        printf(",\n  \"preprocessor\": ");
-        json_str(stdout, f->g.preprocessor);
-        printf(",\n  \"units\": {\"flag\": %d, \"name\": ", f->g.units_flag);
-        json_str(stdout, f->g.units_name);
-        printf(", \"to_mm\": %.17g, \"model_scale\": %.17g, \"resolution_mm\": %.6g},\n", f->to_mm, f->g.model_scale,
-               m->resolution_mm);
+        json_str(stdout, exporter);
+        printf(",\n  \"format\": \"%s\",\n  \"preprocessor\": ", step ? "step" : "iges");
+        json_str(stdout, preproc);
+        printf(",\n  \"units\": {\"flag\": %d, \"name\": ", step ? 0 : f->g.units_flag);
+        json_str(stdout, step ? "" : f->g.units_name);
+        printf(", \"to_mm\": %.17g, \"model_scale\": %.17g, \"resolution_mm\": %.6g},\n", to_mm,
+               step ? 1.0 : f->g.model_scale, m->resolution_mm);
         printf("  \"entities\": {\"read\": %d, \"used\": %d, \"skipped\": %d, \"unreadable\": %d, \"by_type\": [", nread,
                nused, nread - nused, nbad);
         for (int k = 0; k < ntc; k++)
-            printf("%s\n    {\"type\": %d, \"name\": \"%s\", \"read\": %d, \"used\": %d}", k ? "," : "", tc[k].type,
-                   iges_type_name(tc[k].type), tc[k].read - tc[k].bad, tc[k].used);
+            printf("%s\n    {\"type\": %d, \"name\": \"%.*s\", \"read\": %d, \"used\": %d}", k ? "," : "", tc[k].type,
+                   step ? tc[k].name_len : 64, step ? tc[k].name : iges_type_name(tc[k].type), tc[k].read - tc[k].bad,
+                   tc[k].used);
         printf("]},\n  \"faces\": {\"total\": %d, \"trimmed_144\": %d, \"bounded_143\": %d, \"brep_510\": %d, "
                "\"untrimmed\": %d, \"failed\": %d, \"instances\": %d, \"face_entities\": %d, "
                "\"blanked_entities\": %d, \"blanked_faces\": %lld, \"by_surface\": [",
                m->nfaces, lm.stats.faces_144, lm.stats.faces_143, lm.stats.faces_510, lm.stats.faces_untrimmed,
-               m->faces_failed, lm.stats.instances, lm.stats.face_entities, lm.stats.blanked_entities,
+               m->faces_failed, step ? lm.step_stats.placements : lm.stats.instances,
+               step ? lm.step_stats.face_entities : lm.stats.face_entities, lm.stats.blanked_entities,
                lm.stats.blanked_faces);
         for (int k = 0; k < nsc; k++)
             printf("%s{\"type\": %d, \"name\": \"%s\", \"faces\": %d}", k ? ", " : "", sc[k].type,
-                   iges_type_name(sc[k].type), sc[k].read);
+                   surface_name(sc[k].type, step), sc[k].read);
         printf("]},\n  \"loops\": {\"total\": %d, \"holes\": %d, \"reoriented_faces\": %d, \"outer_reordered\": %d, "
                "\"seam_joined\": %d, \"domains_failed\": %d},\n",
                m->nloops, holes, lm.loops_reversed, lm.outer_reordered, lm.seam_joined, lm.domains_failed);
@@ -200,16 +285,18 @@ int cmd_info(int argc, char **argv)
         printf("]\n}\n");
     } else {
         printf("file        %s\n", path);
-        printf("exporter    %s%s%s\n", f->g.system_id[0] ? f->g.system_id : "(not named)",
-               f->g.preprocessor[0] ? " / " : "", f->g.preprocessor);
-        printf("units       %s (flag %d%s%s), model scale %g, resolution %.3g mm\n", units_name(f->g.units_flag),
-               f->g.units_flag, f->g.units_name[0] ? ", " : "", f->g.units_name, f->g.model_scale, m->resolution_mm);
+        printf("format      %s\n", step ? "STEP (ISO 10303-21)" : "IGES");
+        printf("exporter    %s%s%s\n", exporter[0] ? exporter : "(not named)", preproc[0] ? " / " : "", preproc);
+        printf("units       %s, resolution %.3g mm\n", units, m->resolution_mm);
         printf("entities    %d read, %d used, %d skipped%s", nread, nused, nread - nused, nbad ? "" : "\n");
         if (nbad)
             printf(", %d unreadable\n", nbad);
         for (int k = 0; k < ntc; k++)
-            printf("  %4d %-36s %6d read %6d used\n", tc[k].type, iges_type_name(tc[k].type), tc[k].read - tc[k].bad,
-                   tc[k].used);
+            if (step)
+                printf("  %-41.*s %6d read %6d used\n", tc[k].name_len, tc[k].name, tc[k].read, tc[k].used);
+            else
+                printf("  %4d %-36s %6d read %6d used\n", tc[k].type, iges_type_name(tc[k].type),
+                       tc[k].read - tc[k].bad, tc[k].used);
         printf("faces       %d", m->nfaces);
         if (lm.stats.faces_144)
             printf(", %d trimmed (144)", lm.stats.faces_144);
@@ -222,6 +309,12 @@ int cmd_info(int argc, char **argv)
         if (lm.stats.instances)
             printf(", placed by %d subfigure instances (%d distinct face entities)", lm.stats.instances,
                    lm.stats.face_entities);
+        if (step)
+            printf(" from %d solids and %d shells%s", lm.step_stats.solids, lm.step_stats.shells,
+                   lm.step_stats.colored_faces ? ", coloured" : "");
+        if (step && lm.step_stats.placements)
+            printf(", %d placements of parts (%d distinct faces)", lm.step_stats.placements,
+                   lm.step_stats.face_entities);
         if (m->faces_failed)
             printf("; %d could not be read (see warnings)", m->faces_failed);
         if (m->entities_failed)
@@ -231,7 +324,10 @@ int cmd_info(int argc, char **argv)
                    lm.stats.blanked_faces, lm.stats.blanked_entities);
         printf("\n  by surface:");
         for (int k = 0; k < nsc; k++)
-            printf(" %d %s (%d)%s", sc[k].read, iges_type_name(sc[k].type), sc[k].type, k + 1 < nsc ? "," : "");
+            if (step)
+                printf(" %d %s%s", sc[k].read, surface_name(sc[k].type, 1), k + 1 < nsc ? "," : "");
+            else
+                printf(" %d %s (%d)%s", sc[k].read, iges_type_name(sc[k].type), sc[k].type, k + 1 < nsc ? "," : "");
         printf("\nloops       %d: %d outer, %d holes", m->nloops, m->nloops - holes, holes);
         if (lm.loops_reversed)
             printf("; %d faces re-oriented to the surface normal", lm.loops_reversed);

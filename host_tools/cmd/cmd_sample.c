@@ -66,8 +66,9 @@ int cmd_sample(int argc, char **argv)
         int n = fd->uv ? face_domain_sample(fd, per_face, 0x9e3779b9u ^ (uint32_t)fi, uv) : 0;
         if (n == 0) {
             empty++;
-            fprintf(stderr, "%s: warning: face %d (DE %d) got no sample points%s\n", cmd_prog, fi,
-                    lm.brep.faces[fi].src_de, fd->uv ? "" : " (no parameter domain)");
+            char src[64];
+            fprintf(stderr, "%s: warning: face %d (%s) got no sample points%s\n", cmd_prog, fi,
+                    brep_face_source(&lm.brep.faces[fi], src, sizeof src), fd->uv ? "" : " (no parameter domain)");
         }
         for (int k = 0; k < n; k++) {
             cm_vec3 P;

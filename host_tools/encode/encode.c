@@ -350,8 +350,9 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
         char refusal[sizeof r->refusal] = "";
         if (nout > 0 && o->strict) {
             const brep_face *F = &lm->brep.faces[lm->mesh.faces[out[0]].brep_face];
-            snprintf(refusal, sizeof refusal, "face of entity %d (DE %d) cannot be sent: %s (--strict)", F->src_type,
-                     F->src_de, fault[out[0]]);
+            char src[64];
+            snprintf(refusal, sizeof refusal, "face of %s cannot be sent: %s (--strict)",
+                     brep_face_source(F, src, sizeof src), fault[out[0]]);
             e = cm_fail(st, CM_E_DEGENERATE, "a face cannot be sent (--strict)");
         }
         if (e == CM_OK && nout > 0) {

@@ -829,12 +829,20 @@ static int colour_for(const importer *im, int id, uint32_t *rgb)
 
 /* the curves of one bound, in loop order: EDGE_LOOP, POLY_LOOP; a VERTEX_LOOP gives none */
 static cm_err loop_curves(importer *im, const step_entity *face, const step_entity *loop, hcurve_list *out,
-                          int *face_edges)
+                          int *face_edges, hbox *points)
 {
     const step_file *f = im->f;
     const step_val *p;
-    if (step_is(f, loop, "VERTEX_LOOP"))
-        return CM_OK; /* a loop shrunk to a point (a cone's apex): nothing to bound */
+    if ((p = step_params(f, loop, "VERTEX_LOOP"))) {
+        /* a loop shrunk to a point (a cone's apex, a sphere's pole): no boundary, but the surface
+           must reach it (an unbounded cone is built over the face's extent, the apex in it) */
+        const step_entity *v = ref_of(im, loop, step_item(p, 1), "VERTEX_POINT", "its vertex");
+        cm_vec3 P;
+        if (!v || point_at(im, v, step_item(step_params(f, v, "VERTEX_POINT"), 1), &P) != CM_OK)
+            return CM_E_STEP;
+        hbox_add(points, P);
+        return CM_OK;
+    }
     if ((p = step_params(f, loop, "POLY_LOOP"))) {
         const step_val *pts = step_item(p, 1);
         int n = pts && pts->kind == STEP_LIST ? pts->n : 0;
@@ -927,6 +935,7 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
         return cm_fail(im->st, CM_E_NOMEM, "out of memory");
     cm_err err = CM_OK;
     int nloops = 0, face_edges = 0, outer = -1;
+    hbox vertex_loops = hbox_empty(); /* the points of its VERTEX_LOOPs */
     for (int b = 0; b < nb && err == CM_OK; b++) {
         const step_entity *be = ref_of(im, fe, step_item(bounds, b), "FACE_BOUND", "a bound");
         if (!be) { /* FACE_OUTER_BOUND is a FACE_BOUND subtype: its own name */
@@ -947,7 +956,7 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
             err = CM_E_STEP;
             break;
         }
-        err = loop_curves(im, fe, le, &loops[nloops], &face_edges);
+        err = loop_curves(im, fe, le, &loops[nloops], &face_edges, &vertex_loops);
         if (err != CM_OK || loops[nloops].n == 0)
             continue;
         if (!bool_of(im, step_item(bp, 2), 1)) { /* the bound runs against its loop */
@@ -973,6 +982,10 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
     for (int l = 0; l < nloops; l++)
         for (int i = 0; i < loops[l].n; i++)
             hbox_add_curve(&box, &loops[l].c[i]);
+    if (!vertex_loops.empty && nloops > 0) {
+        hbox_add(&box, vertex_loops.lo);
+        hbox_add(&box, vertex_loops.hi);
+    }
     hsurf s = {0};
     int kind = 0;
     if (err == CM_OK && nloops > 0)
@@ -1736,8 +1749,9 @@ static cm_err walk(importer *im, structure *s)
     while (n > 0 && err == CM_OK) {
         visit v = stack[--n];
         if (++im->nvisits > STEP_MAX_VISITS) {
-            err = step_error(f, 0, "the assembly places its parts more than %d times (limit %d)", STEP_MAX_VISITS,
-                             STEP_MAX_VISITS);
+            const step_entity *re = &f->ents[s->ent_of[v.group]];
+            err = step_error(f, re->line, "the assembly places its parts more than %d times (limit %d; #%d is "
+                             "placed again there)", STEP_MAX_VISITS, STEP_MAX_VISITS, re->id);
             break;
         }
         if (v.depth > 0)
@@ -1836,7 +1850,7 @@ cm_err step_to_brep(step_file *f, brep_model *m, step_import_stats *stats, cm_st
             return cm_fail(st, step_error(f, im.first_fail_line, "none of the file's %d faces could be read; the first: %s",
                                           m->faces_failed, im.first_fail),
                            "step import");
-        return cm_fail(st, step_error(f, 0, "no face found: no shape representation holds a solid, shell or face"),
+        return cm_fail(st, step_error(f, f->nlines, "no face found: no shape representation holds a solid, shell or face"),
                        "step import");
     }
     return CM_OK;

@@ -14,6 +14,8 @@
 /* Nesting of parameter lists one instance may use: exporters write 3 (a surface's control net
    inside its record); a deeper file is hostile and is refused instance by instance. */
 #define STEP_MAX_DEPTH 32
+/* Warnings kept (the rest are counted in warnings_dropped) */
+#define STEP_MAX_WARNINGS 10000
 /* Values one file may hold: 2^28 (a 4 GB file of single-character values); past it, refused. */
 #define STEP_MAX_VALS (1 << 28)
 
@@ -23,6 +25,10 @@ __attribute__((format(printf, 3, 0))) static void vwarn(step_file *f, int line, 
 {
     char msg[400];
     vsnprintf(msg, sizeof msg, fmt, ap);
+    if (f->nwarn >= STEP_MAX_WARNINGS) { /* a garbled file would say the same thing a million times */
+        f->warnings_dropped++;
+        return;
+    }
     if (f->nwarn == f->capwarn) {
         int cap = f->capwarn ? 2 * f->capwarn : 16;
         step_warning *w = realloc(f->warn, (size_t)cap * sizeof *w);
@@ -184,6 +190,7 @@ static tok_kind lex(lexer *L)
             v = v * 10 + (s[i++] - '0');
         if (i == L->pos + 1 || v > 2147483647LL || v < 1) {
             L->why = "an instance name (#n) is not a number from 1 to 2147483647";
+            L->pos = i; /* past what was read: every token moves on */
             return L->k = T_BAD;
         }
         L->ref = (int)v;
@@ -468,9 +475,7 @@ int step_sniff(const char *data, size_t len)
 
 cm_err step_parse(const char *data, size_t len, step_file *f, cm_status *st)
 {
-    char *path = f->path;
     memset(f, 0, sizeof *f);
-    f->path = path;
     if (len > (size_t)0x7fffffff - 1)
         return cm_fail(st, step_error(f, 0, "the file is larger than 2 GB"), "step");
     f->text = malloc(len + 1);
@@ -608,39 +613,40 @@ cm_err step_parse(const char *data, size_t len, step_file *f, cm_status *st)
 cm_err step_read(const char *path, step_file *f, cm_status *st)
 {
     memset(f, 0, sizeof *f);
-    f->path = strdup(path);
-    if (!f->path)
-        return cm_fail(st, CM_E_NOMEM, "out of memory");
     FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return step_error(f, 0, "cannot open: %s", strerror(errno)), cm_fail(st, CM_E_IO, "open");
+    cm_err e = CM_OK;
     char *buf = NULL;
     size_t len = 0, cap = 0;
-    for (;;) {
-        if (len + 65536 > cap) {
-            size_t nc = cap ? 2 * cap : 1 << 20;
-            char *q = realloc(buf, nc);
-            if (!q) {
-                free(buf);
-                fclose(fp);
-                return step_error(f, 0, "out of memory reading the file"), cm_fail(st, CM_E_NOMEM, "out of memory");
+    if (!fp) {
+        step_error(f, 0, "cannot open: %s", strerror(errno));
+        e = cm_fail(st, CM_E_IO, "open");
+    } else {
+        for (;;) {
+            if (len + 65536 > cap) {
+                size_t nc = cap ? 2 * cap : 1 << 20;
+                char *q = realloc(buf, nc);
+                if (!q) {
+                    e = cm_fail(st, CM_E_NOMEM, "out of memory");
+                    step_error(f, 0, "out of memory reading the file");
+                    break;
+                }
+                buf = q;
+                cap = nc;
             }
-            buf = q;
-            cap = nc;
+            size_t got = fread(buf + len, 1, cap - len, fp);
+            len += got;
+            if (got == 0)
+                break;
         }
-        size_t got = fread(buf + len, 1, cap - len, fp);
-        len += got;
-        if (got == 0)
-            break;
+        if (e == CM_OK && ferror(fp))
+            e = cm_fail(st, CM_E_IO, "read"), step_error(f, 0, "read error");
+        fclose(fp);
     }
-    int bad = ferror(fp);
-    fclose(fp);
-    if (bad) {
-        free(buf);
-        return step_error(f, 0, "read error"), cm_fail(st, CM_E_IO, "read");
-    }
-    cm_err e = step_parse(buf, len, f, st);
+    if (e == CM_OK)
+        e = step_parse(buf, len, f, st);
     free(buf);
+    free(f->path);
+    f->path = strdup(path); /* NULL when out of memory: messages then name no file */
     return e;
 }
 

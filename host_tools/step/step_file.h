@@ -87,6 +87,7 @@ typedef struct step_file {
     char system[160];   /* FILE_NAME's originating system, "" if none */
     step_warning *warn;
     int nwarn, capwarn;
+    int warnings_dropped; /* past the first 10000 warnings: counted, not kept */
     int bad_instances;  /* instances skipped because they could not be read (warned) */
     char err[512];      /* the error that stopped step_read, "" otherwise */
     int err_line;
@@ -101,7 +102,7 @@ int step_sniff(const char *data, size_t len);
  * CM_E_NOMEM; f is always freeable.  Warnings go to f->warn.
  */
 CM_NODISCARD cm_err step_read(const char *path, step_file *f, cm_status *st);
-/** The same from memory (`data` need not be NUL-terminated; it is copied). */
+/** The same from memory (`data` need not be NUL-terminated; it is copied); f->path is left NULL. */
 CM_NODISCARD cm_err step_parse(const char *data, size_t len, step_file *f, cm_status *st);
 void step_free(step_file *f);
 

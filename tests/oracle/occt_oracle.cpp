@@ -1,23 +1,28 @@
 // occt_oracle - an independent test oracle for curvemesh, built on Open CASCADE (OCCT).
 //
-// curvemesh rebuilds every face of an IGES model from its boundary curves.  To judge
-// that result we need answers that do not come from curvemesh's own IGES reader or
-// geometry kernels: what the model contains, how far a set of points is from the real
-// (trimmed) faces, and how far a decoded triangle mesh is from the model in both
+// curvemesh rebuilds every face of a CAD model from its boundary curves.  To judge
+// that result we need answers that do not come from curvemesh's own IGES/STEP readers
+// or geometry kernels: what the model contains, how far a set of points is from the
+// real (trimmed) faces, and how far a decoded triangle mesh is from the model in both
 // directions.  This tool gives those answers using OCCT only.
 //
-//   occt_oracle info      MODEL.igs [--sew-rel 1e-6]
-//   occt_oracle points    MODEL.igs POINTS.xyz [--tol-rel 1e-6] [--out FILE]
-//   occt_oracle mesh-dev  MODEL.igs MESH.stl   [--defl-rel 1e-4] [--max-points N] [--per-face-out F]
-//   occt_oracle sample    MODEL.igs OUT.xyz    [--per-face 20]
-//   occt_oracle write-stl MODEL.igs OUT.stl    [--defl-rel 1e-4]   (hidden: test meshes)
-//   every command: [--curves file|3d]   (which IGES trim curves define the faces)
+//   occt_oracle info      MODEL [--sew-rel 1e-6]
+//   occt_oracle points    MODEL POINTS.xyz [--tol-rel 1e-6] [--out FILE]
+//   occt_oracle mesh-dev  MODEL MESH.stl   [--defl-rel 1e-4] [--max-points N] [--per-face-out F]
+//   occt_oracle sample    MODEL OUT.xyz    [--per-face 20]
+//   occt_oracle write-stl MODEL OUT.stl    [--defl-rel 1e-4]   (hidden: test meshes)
+//   every command: [--curves file|3d]   (which trim curves define the faces)
+//
+// MODEL is an IGES file or a STEP file (ISO 10303-21, any AP that OCCT's
+// STEPControl_Reader reads), told apart by content, not by name: a STEP file starts
+// with "ISO-10303-21" (after blanks and a UTF-8 BOM), everything else must be
+// fixed-format IGES.  Both come out in millimetres.
 //
 // Output: machine-readable "key value" lines on stdout, human-readable lines start
 // with "# ".  Exit status: 0 success, 1 a check failed (points farther than tol),
 // 2 usage or input error.  Diagnostics go to stderr.  OCCT itself prints to stdout in
-// places (IGES load reports, messenger), so fd 1 is redirected to stderr at start-up
-// and our own results go to a private duplicate of the original stdout.
+// places (IGES/STEP load reports, messenger), so fd 1 is redirected to stderr at
+// start-up and our own results go to a private duplicate of the original stdout.
 //
 // See tests/oracle/README.md for the method and the OCCT pitfalls met.
 
@@ -61,9 +66,12 @@
 #include <Poly_PolygonOnTriangulation.hxx>
 #include <Poly_Triangulation.hxx>
 #include <Precision.hxx>
+#include <STEPControl_Controller.hxx>
+#include <STEPControl_Reader.hxx>
 #include <Standard_Failure.hxx>
 #include <TCollection_HAsciiString.hxx>
 #include <TColStd_Array1OfReal.hxx>
+#include <TColStd_SequenceOfAsciiString.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopLoc_Location.hxx>
@@ -330,8 +338,9 @@ struct Model {
     Box3 box;                          // tight box of all faces
     double diag = 0;
     int optimal_boxes = 0;             // faces whose optimal box was needed for `box`
-    std::string unit_name;
-    int unit_flag = 0;
+    const char* format = "IGES";       // "IGES" or "STEP": which reader made `shape`
+    std::string unit_name;             // the file's length unit(s), as the file names them
+    int unit_flag = 0;                 // IGES only: global-section unit flag
 };
 
 void check_readable_file(const char* path, const char* what) {
@@ -347,16 +356,50 @@ void check_readable_file(const char* path, const char* what) {
 // Cheap sniff so that a wrong file gives a clear message instead of whatever the IGES
 // parser makes of it: fixed-format IGES has the section letter in column 73 and the
 // file starts with the Start (S) or, in some exporters, the Global (G) section.
-// Compressed ('C') and binary ('B') IGES are not supported by OCCT either.
+// Compressed ('C') and binary ('B') IGES are not supported by OCCT either.  Called
+// once sniff_step has said the file is not STEP, so the message says both.
 void sniff_iges(const char* path) {
     std::ifstream in(path, std::ios::binary);
     std::string line;
     if (!std::getline(in, line) || line.empty())
-        throw InputError(strf("'%s' is empty, not an IGES file", path));
+        throw InputError(strf("'%s' is empty or starts with an empty line, not an IGES or STEP file", path));
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.size() < 73 || (line[72] != 'S' && line[72] != 'G'))
-        throw InputError(strf("'%s' is not a fixed-format IGES file (line 1 has no 'S' or 'G' "
-                              "section letter in column 73)", path));
+        throw InputError(strf("'%s' is neither a STEP file (it does not start with 'ISO-10303-21') nor a "
+                              "fixed-format IGES file (line 1 has no 'S' or 'G' section letter in column 73)",
+                              path));
+}
+
+// Which reader a model needs, told by content: file names lie (.stp, .step, .p21,
+// .igs, .iges, or none).  An ISO 10303-21 exchange structure begins with the keyword
+// "ISO-10303-21;" (ISO 10303-21 clause 5.1); some writers put blanks or a UTF-8 BOM
+// before it.  Everything else is taken to be IGES and checked by sniff_iges.
+// Returns true for STEP, with `skip` = bytes of BOM to skip before handing the file
+// to OCCT: OCCT 7.6's STEP lexer does not know the BOM (syntax error "unexpected QUID"
+// on the cube with a BOM, then a crash if the reader is used further), while leading
+// blanks are fine and are kept so that OCCT's line numbers stay those of the file.
+bool sniff_step(const char* path, std::streamoff& skip) {
+    std::ifstream in(path, std::ios::binary);
+    skip = 0;
+    unsigned char bom[3] = {0, 0, 0};
+    in.read(reinterpret_cast<char*>(bom), 3);
+    if (in.gcount() == 3 && bom[0] == 0xEF && bom[1] == 0xBB && bom[2] == 0xBF) skip = 3;
+    in.clear();
+    in.seekg(skip);
+    int c;
+    long blanks = 0;
+    while ((c = in.get()) != EOF && (c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'))
+        blanks++;
+    if (c == EOF) {
+        if (skip > 0 || blanks > 0)
+            throw InputError(strf("'%s' has nothing but blanks, not an IGES or STEP file", path));
+        return false;  // empty: sniff_iges says so
+    }
+    static const char kKey[] = "ISO-10303-21";
+    char buf[sizeof kKey - 1];
+    buf[0] = static_cast<char>(c);
+    in.read(buf + 1, sizeof buf - 1);
+    return in.gcount() == static_cast<std::streamsize>(sizeof buf - 1) && memcmp(buf, kKey, sizeof buf) == 0;
 }
 
 void set_static(const char* name, const char* value) {
@@ -468,30 +511,49 @@ void compute_boxes(Model& m) {
     }
 }
 
-Model load_model(const char* path) {
-    check_readable_file(path, "model");
-    sniff_iges(path);
+// What an XSControl_Reader::ReadFile/ReadStream status means, for error messages
+// (IFSelect_WorkSession::ReadFile: RetError when the file cannot be opened or is not
+// recognised, RetFail when the parser hit errors; the parser's own report goes through
+// the messenger, which prints failures to stderr).
+const char* read_status_text(IFSelect_ReturnStatus st) {
+    switch (st) {
+    case IFSelect_RetVoid: return "nothing was read";
+    case IFSelect_RetError: return "the file could not be opened or recognised";
+    case IFSelect_RetFail: return "the parser failed; OCCT's messages above say where";
+    case IFSelect_RetStop: return "reading was stopped";
+    default: return "unknown status";
+    }
+}
 
-    // The parameters below only exist once the IGES controller is registered;
-    // setting them before that silently fails.
-    IGESControl_Controller::Init();
+// Parameters common to both readers.  They only exist once a controller (IGES or STEP)
+// is registered; setting them before that silently fails.
+void set_xstep_statics(int surfacecurve_mode) {
     // Lengths in millimetres whatever the file's unit (it is the default, but a
-    // default is not a guarantee and the oracle's numbers must be in mm).
+    // default is not a guarantee and the oracle's numbers must be in mm).  Both
+    // readers honour it: "M" really scales IGES and STEP results by 1e-3.
     set_static("xstep.cascade.unit", "MM");
-    // Keep B-splines as they are in the file.  The default (1) makes the reader
-    // split/convert C0 curves and surfaces to C1, which can move geometry within a
-    // tolerance and change the face count; an oracle must see the file's geometry.
-    set_static("read.iges.bspline.continuity", 0);
-    // Tolerances of the file (read.precision.mode 0 = "File") so healing does not
-    // invent coarser ones.
+    // Tolerances of the file (read.precision.mode 0 = "File": IGES global section,
+    // STEP uncertainty_measure_with_unit) so healing does not invent coarser ones.
     set_static("read.precision.mode", 0);
+    // Trim curves: which of an edge's 3D curve and parameter-space curve(s) build the
+    // face; the values differ between IGES and STEP (see the two readers).
+    set_static("read.surfacecurve.mode", surfacecurve_mode);
+}
+
+// IGES: fills m.shape and the unit fields; returns the number of roots transferred.
+int read_iges(const char* path, Model& m) {
+    IGESControl_Controller::Init();
     // Trim curves: an IGES 142 curve-on-surface may carry both a parameter-space
     // curve and a 3D curve, with a preference flag.  By default (mode 0) OCCT follows
     // the flag, as the standard says.  Some exporters' two curves disagree badly
     // (SolidWorks, PREF=1 "2D preferred": up to 0.57 mm on the 20 mm hex nut), which
     // shows as large edge tolerances (info: max_tol); --curves 3d (mode -3) rebuilds
     // every parameter-space curve from the 3D one instead, to cross-check.
-    set_static("read.surfacecurve.mode", g_curves_3d ? -3 : 0);
+    set_xstep_statics(g_curves_3d ? -3 : 0);
+    // Keep B-splines as they are in the file.  The default (1) makes the reader
+    // split/convert C0 curves and surfaces to C1, which can move geometry within a
+    // tolerance and change the face count; an oracle must see the file's geometry.
+    set_static("read.iges.bspline.continuity", 0);
     // blanked (hidden) entities are not part of the model a CAD system shows, and cmz leaves them
     // out by default (iges_brep.c); so does OCCT with this (ovt__asmo's six blanked planes,
     // Shelt_channel_5's 30 blanked subfigure instances: 3358 faces each, both ways compared)
@@ -502,12 +564,13 @@ Model load_model(const char* path) {
     try {
         st = reader.ReadFile(path);
     } catch (const Standard_Failure& e) {
-        throw InputError(strf("OCCT failed to parse '%s': %s", path, occt_what(e).c_str()));
+        throw InputError(strf("OCCT failed to parse '%s' as IGES: %s", path, occt_what(e).c_str()));
     }
     if (st != IFSelect_RetDone)
-        throw InputError(strf("OCCT could not read '%s' as IGES (status %d)", path, static_cast<int>(st)));
+        throw InputError(strf("OCCT could not read '%s' as IGES (status %d: %s)", path, static_cast<int>(st),
+                              read_status_text(st)));
 
-    Model m;
+    m.format = "IGES";
     Handle(IGESData_IGESModel) im = reader.IGESModel();
     if (!im.IsNull()) {
         const IGESData_GlobalSection& gs = im->GlobalSection();
@@ -522,10 +585,90 @@ Model load_model(const char* path) {
     } catch (const Standard_Failure& e) {
         throw InputError(strf("OCCT failed to transfer '%s': %s", path, occt_what(e).c_str()));
     }
-    if (m.shape.IsNull()) throw InputError(strf("'%s': OCCT produced no shape", path));
+    return nroots;
+}
+
+// STEP: fills m.shape and m.unit_name; returns the number of roots transferred.
+// `skip` is the UTF-8 BOM to step over (see sniff_step).
+int read_step(const char* path, std::streamoff skip, Model& m) {
+    STEPControl_Controller::Init();
+    // Trim curves: a STEP edge always has its 3D curve (edge_curve); a surface_curve
+    // may add pcurves on the faces' surfaces.  Mode 0 (default) uses those pcurves
+    // where the file gives them and computes the others from the 3D curve.  For
+    // --curves 3d the STEP value is +3: StepToTopoDS_TranslateEdgeLoop then ignores
+    // the file's pcurves and rebuilds every one from the 3D curve.  (-3, the IGES
+    // value, only reaches composite-curve boundaries in STEP and would leave edge
+    // pcurves as they are.)  Edges with a bare 3D curve, and all edges on planes, get
+    // computed pcurves in both modes, so --curves changes nothing for them.
+    set_xstep_statics(g_curves_3d ? 3 : 0);
+    // Nothing here corresponds to read.iges.bspline.continuity: the STEP translator
+    // (StepToGeom) keeps B-splines as written, whatever their continuity.  Nor to
+    // read.iges.onlyvisible: STEP has no blanked flag (invisibility is presentation
+    // data, which STEPControl_Reader does not read).  The read.step.* parameters keep
+    // their defaults: products are the roots (read.step.product.mode 1) and every
+    // representation (shape.repr 1) of every assembly level (assembly.level 1) is
+    // transferred with its placement (root.transformation 1), so an assembly gives
+    // every placed part, as IGES 408 subfigure instances do.
+
+    // Read through a stream so that a BOM can be skipped (OCCT's lexer chokes on it).
+    std::ifstream in(path, std::ios::binary);
+    if (!in || !in.seekg(skip))
+        throw InputError(strf("cannot open model '%s': %s", path, strerror(errno)));
+    STEPControl_Reader reader;
+    IFSelect_ReturnStatus st = IFSelect_RetError;
+    try {
+        st = reader.ReadStream(path, in);
+    } catch (const Standard_Failure& e) {
+        throw InputError(strf("OCCT failed to parse '%s' as STEP: %s", path, occt_what(e).c_str()));
+    }
+    // Stop here on any failure: after a failed read the reader's model may be null,
+    // and OCCT 7.6 dereferences it without checking (FileUnits crashed in a test).
+    if (st != IFSelect_RetDone || reader.StepModel().IsNull())
+        throw InputError(strf("OCCT could not read '%s' as STEP (status %d: %s)", path, static_cast<int>(st),
+                              read_status_text(st)));
+
+    m.format = "STEP";
+    // Length units of the file's representation contexts, for the "# file unit" line.
+    // A file may hold several (one per part of an assembly); all are listed.
+    try {
+        TColStd_SequenceOfAsciiString len, ang, solid;
+        reader.FileUnits(len, ang, solid);
+        for (int i = 1; i <= len.Length(); i++) {
+            if (!m.unit_name.empty()) m.unit_name += ",";
+            m.unit_name += len(i).ToCString();
+        }
+    } catch (const Standard_Failure& e) {
+        warn("'%s': could not list the STEP length units (%s)", path, occt_what(e).c_str());
+    }
+    int nroots = reader.NbRootsForTransfer();
+    if (nroots <= 0)
+        throw InputError(strf("'%s': OCCT found no transferable STEP entities (no product definition "
+                              "or shape representation to translate)", path));
+    int ntransferred = 0;
+    try {
+        ntransferred = reader.TransferRoots();
+        m.shape = reader.OneShape();
+    } catch (const Standard_Failure& e) {
+        throw InputError(strf("OCCT failed to transfer '%s': %s", path, occt_what(e).c_str()));
+    }
+    if (ntransferred < nroots)
+        warn("'%s': OCCT transferred %d of %d STEP roots (use -v for its messages)", path, ntransferred, nroots);
+    return ntransferred;
+}
+
+Model load_model(const char* path) {
+    check_readable_file(path, "model");
+    std::streamoff skip = 0;
+    const bool step = sniff_step(path, skip);
+    if (!step) sniff_iges(path);
+
+    Model m;
+    const int nroots = step ? read_step(path, skip, m) : read_iges(path, m);
+    if (m.shape.IsNull())
+        throw InputError(strf("'%s': OCCT produced no shape (%d %s roots transferred)", path, nroots, m.format));
     TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
     if (m.faces.Extent() == 0)
-        throw InputError(strf("'%s': the model has no faces (%d IGES roots transferred)", path, nroots));
+        throw InputError(strf("'%s': the model has no faces (%d %s roots transferred)", path, nroots, m.format));
 
     compute_boxes(m);
     m.diag = std::sqrt(sq(m.box.hi[0] - m.box.lo[0]) + sq(m.box.hi[1] - m.box.lo[1]) + sq(m.box.hi[2] - m.box.lo[2]));
@@ -535,9 +678,13 @@ Model load_model(const char* path) {
 }
 
 void print_unit_note(const Model& m) {
-    note("file unit: %s (IGES unit flag %d); all lengths below are millimetres; trim curves: %s",
-         m.unit_name.empty() ? "?" : m.unit_name.c_str(), m.unit_flag,
-         g_curves_3d ? "3d (forced)" : "as the file prefers");
+    const char* unit = m.unit_name.empty() ? "?" : m.unit_name.c_str();
+    if (strcmp(m.format, "STEP") == 0)
+        note("STEP file; file unit: %s; all lengths below are millimetres; trim curves: %s", unit,
+             g_curves_3d ? "3d (forced)" : "pcurves of the file where given");
+    else
+        note("file unit: %s (IGES unit flag %d); all lengths below are millimetres; trim curves: %s", unit,
+             m.unit_flag, g_curves_3d ? "3d (forced)" : "as the file prefers");
 }
 
 // ---------------------------------------------------------------------------------
@@ -1417,7 +1564,7 @@ Args parse_args(int argc, char** argv, int first, const std::vector<std::string>
 // ---------------------------------------------------------------------------------
 
 int cmd_info(const Args& a) {
-    if (a.pos.size() != 1) throw UsageError("info needs exactly one argument: MODEL.igs");
+    if (a.pos.size() != 1) throw UsageError("info needs exactly one argument: MODEL");
     double sew_rel = 1e-6;
     if (a.opt.count("--sew-rel")) sew_rel = parse_positive(a.opt.at("--sew-rel"), "--sew-rel");
     Stopwatch sw;
@@ -1549,7 +1696,7 @@ std::vector<InPoint> read_points(const char* path) {
 }
 
 int cmd_points(const Args& a) {
-    if (a.pos.size() != 2) throw UsageError("points needs MODEL.igs POINTS.xyz");
+    if (a.pos.size() != 2) throw UsageError("points needs MODEL POINTS.xyz");
     double tol_rel = 1e-6;
     if (a.opt.count("--tol-rel")) tol_rel = parse_positive(a.opt.at("--tol-rel"), "--tol-rel");
     std::vector<InPoint> pts = read_points(a.pos[1].c_str());  // cheap: fail early on bad input
@@ -1919,7 +2066,7 @@ std::vector<size_t> strided(size_t total, size_t n) {
 }
 
 int cmd_mesh_dev(const Args& a) {
-    if (a.pos.size() != 2) throw UsageError("mesh-dev needs MODEL.igs MESH.stl");
+    if (a.pos.size() != 2) throw UsageError("mesh-dev needs MODEL MESH.stl");
     double defl_rel = 1e-4;
     if (a.opt.count("--defl-rel")) defl_rel = parse_positive(a.opt.at("--defl-rel"), "--defl-rel");
     long long max_points = 0;  // 0: no cap
@@ -2092,7 +2239,7 @@ int cmd_mesh_dev(const Args& a) {
 // ---------------------------------------------------------------------------------
 
 int cmd_sample(const Args& a) {
-    if (a.pos.size() != 2) throw UsageError("sample needs MODEL.igs OUT.xyz");
+    if (a.pos.size() != 2) throw UsageError("sample needs MODEL OUT.xyz");
     long long per_face = 20;
     if (a.opt.count("--per-face")) {
         const std::string& s = a.opt.at("--per-face");
@@ -2169,7 +2316,7 @@ int cmd_sample(const Args& a) {
 // ---------------------------------------------------------------------------------
 
 int cmd_write_stl(const Args& a) {
-    if (a.pos.size() != 2) throw UsageError("write-stl needs MODEL.igs OUT.stl");
+    if (a.pos.size() != 2) throw UsageError("write-stl needs MODEL OUT.stl");
     double defl_rel = 1e-4;
     if (a.opt.count("--defl-rel")) defl_rel = parse_positive(a.opt.at("--defl-rel"), "--defl-rel");
     Model m = load_model(a.pos[0].c_str());
@@ -2236,12 +2383,12 @@ int cmd_write_stl(const Args& a) {
 
 const char* kUsage =
     "usage: occt_oracle [-v] COMMAND ARGS\n"
-    "  info     MODEL.igs [--sew-rel R]            faces, shells, solids, bbox, diag, free_edges\n"
+    "  info     MODEL [--sew-rel R]                faces, shells, solids, bbox, diag, free_edges\n"
     "                                               (faces sewn at R*diag, default 1e-6)\n"
-    "  points   MODEL.igs POINTS.xyz [--tol-rel R]  distance of 'x y z face_id' points to the faces\n"
+    "  points   MODEL POINTS.xyz [--tol-rel R]      distance of 'x y z face_id' points to the faces\n"
     "                    [--out FILE]               (default R 1e-6; exit 1 if any point > R*diag;\n"
     "                                               FILE gets every point's distance and nearest face)\n"
-    "  mesh-dev MODEL.igs MESH.stl [--defl-rel R]   two-sided deviation mesh <-> model\n"
+    "  mesh-dev MODEL MESH.stl [--defl-rel R]       two-sided deviation mesh <-> model\n"
     "                    [--max-points N]           (model tessellated at R*diag, default 1e-4;\n"
     "                                               N: measure at most N evenly strided points\n"
     "                                               each way, default all)\n"
@@ -2249,8 +2396,9 @@ const char* kUsage =
     "                                               mesh point nearest it, worst sample of it\n"
     "                    [--mesh-faces F.tsv [--mesh-faces-out O.tsv]]  per face of the mesh\n"
     "                                               (cmz decode --face-map): its box, its worst point\n"
-    "  sample   MODEL.igs OUT.xyz [--per-face N]    N points (default 20) inside every face\n"
-    "Every command also takes --curves file|3d: trim curves as the IGES file prefers\n"
+    "  sample   MODEL OUT.xyz [--per-face N]        N points (default 20) inside every face\n"
+    "MODEL is an IGES or a STEP (ISO 10303-21) file, recognised by its content.\n"
+    "Every command also takes --curves file|3d: trim curves as the file gives them\n"
     "(default) or rebuilt from the 3D curves.\n"
     "Output: 'key value' lines on stdout, '# ' lines for people; lengths in mm.\n"
     "Exit: 0 ok, 1 check failed, 2 usage or input error.  -v shows OCCT's own messages.\n";

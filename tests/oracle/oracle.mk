@@ -23,11 +23,14 @@ ORACLE_OCCT_LIBDIR ?=
 ORACLE_CXXFLAGS ?= -O2 -g
 # -isystem: warnings are for our code, not for OCCT's headers
 ORACLE_FLAGS := -std=c++17 -Wall -Wextra -Wshadow -Werror -isystem $(ORACLE_OCCT_INC)
-# Link order: users before providers.  TKIGES/TKXSBase read IGES, TKShHealing heals
-# it on the way in, TKMesh tessellates, TKTopAlgo has sewing, face classification and
+# Link order: users before providers.  TKIGES reads IGES; TKSTEP (with TKSTEP209,
+# TKSTEPAttr and TKSTEPBase, the AP209/attribute/base entity schemas it needs) reads
+# STEP; TKXSBase is the data-exchange core both sit on; TKShHealing heals the result
+# on the way in, TKMesh tessellates, TKTopAlgo has sewing, face classification and
 # BRepExtrema, TKGeomAlgo curve projection, the rest is the geometry/topology core.
-ORACLE_LIBS := -lTKIGES -lTKXSBase -lTKMesh -lTKShHealing -lTKTopAlgo -lTKGeomAlgo -lTKBRep \
-               -lTKGeomBase -lTKG3d -lTKG2d -lTKMath -lTKernel
+ORACLE_LIBS := -lTKIGES -lTKSTEP -lTKSTEP209 -lTKSTEPAttr -lTKSTEPBase -lTKXSBase -lTKMesh \
+               -lTKShHealing -lTKTopAlgo -lTKGeomAlgo -lTKBRep -lTKGeomBase -lTKG3d -lTKG2d \
+               -lTKMath -lTKernel
 ORACLE_LDFLAGS := $(if $(ORACLE_OCCT_LIBDIR),-L$(ORACLE_OCCT_LIBDIR))
 
 ORACLE_BIN := $(BUILD_ROOT)/tools/occt_oracle

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# check_corpus_roundtrip.sh CMZ MESH_CHECK ORACLE GLTF_CHECK [MODELS_DIR]
+# check_corpus_roundtrip.sh CMZ MESH_CHECK ORACLE GLTF_CHECK [MODELS_DIR [SUBDIR]]
 #
-# The whole product on every model of the shared corpus: IGES -> cmz encode
+# SUBDIR is iges (default) or step: the models of MODELS_DIR/SUBDIR.
+# The whole product on every model of the shared corpus: IGES (or STEP) -> cmz encode
 # -> .cmz -> decode as the terminal does -> triangles, then judged by tools
 # that share no code with the decoder's output path:
 #   1. mesh_check: welded by position, no degenerate or overlapping
@@ -31,7 +32,7 @@
 # float output and the oracle's projections.  One TAP line per model.
 set -u
 ORACLE_OPTS=${ORACLE_OPTS:-}
-cmz=$1 mesh_check=$2 oracle=$3 gltf=$4 dir=${5:-../shared/models}/iges
+cmz=$1 mesh_check=$2 oracle=$3 gltf=$4 dir=${5:-../shared/models}/${6:-iges}
 if [ ! -d "$dir" ]; then
     echo "# SKIP: $dir not found (the shared corpus is not beside this checkout)"
     echo "ok 1 - corpus round trip skipped"

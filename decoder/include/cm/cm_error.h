@@ -39,7 +39,8 @@
     X(E_IGES, 16, "malformed IGES file")                                        \
     X(E_IO, 17, "I/O error")                                                    \
     X(E_PROTOCOL, 22, "link protocol error")                                    \
-    X(E_NOMEM, 23, "out of memory")
+    X(E_NOMEM, 23, "out of memory")                                           \
+    X(E_STEP, 24, "malformed STEP file")
 
 #define CM_ERR_ENUM_(id, num, text) CM_##id = num,
 typedef enum cm_err { CM_ERRORS(CM_ERR_ENUM_) CM_ERR_COUNT } cm_err;
