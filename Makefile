@@ -551,7 +551,7 @@ demo:
 # size, speed and memory on the bundled models and the shared corpus (not part of check), then the
 # same models against xz -9e, Open CASCADE's mesh + Draco and Open CASCADE's read + mesh (one run);
 # BENCH_CALLGRIND=1 adds the decoders' instruction counts (valgrind)
-BENCH_MODELS ?= $(wildcard tests/data/*.igs) $(wildcard $(SHARED_MODELS)/iges/*)
+BENCH_MODELS ?= $(wildcard tests/data/*.igs) $(wildcard $(SHARED_MODELS)/iges/*) $(wildcard $(SHARED_MODELS)/step/*)
 bench:
 	$(Q)DEPS_ARCHS= tests/tools/deps.sh $(DEMO_PKGS) time bc valgrind draco \
 		libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev

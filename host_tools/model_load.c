@@ -14,8 +14,7 @@ static double now(void)
     return cm_clock_s();
 }
 
-/* 1 if the file begins like a STEP file (its first 4 KB: blanks, a BOM or comments may come first) */
-static int file_is_step(const char *path)
+int model_file_is_step(const char *path)
 {
     char head[4096];
     FILE *fp = fopen(path, "rb");
@@ -120,7 +119,7 @@ cm_err model_load_ex(const char *path, loaded_model *lm, int flags, model_progre
     memset(lm, 0, sizeof *lm);
     double t = now();
     cm_err e;
-    lm->is_step = file_is_step(path);
+    lm->is_step = model_file_is_step(path);
     if (lm->is_step) {
         e = step_read(path, &lm->step, st);
         lm->iges.path = strdup(path);

@@ -37,6 +37,9 @@ typedef struct loaded_model {
     double seconds_read, seconds_brep, seconds_domains, seconds_mesh;
 } loaded_model;
 
+/** 1 if the file at path begins like a STEP file (its first 4 KB: blanks, a BOM or comments may come first). */
+int model_file_is_step(const char *path);
+
 /** Progress callback: stage name, done, total (may be NULL). */
 typedef void (*model_progress)(const char *stage, int done, int total, void *ctx);
 

@@ -54,13 +54,13 @@ static void on_int(int sig)
 static void send_usage(FILE *f)
 {
     fprintf(f,
-            "usage: cmz send MODEL.cmz|MODEL.igs (--serial DEV[:BAUD] | --usb VID:PID[:SERIAL] |\n"
+            "usage: cmz send MODEL.cmz|MODEL.igs|MODEL.stp (--serial DEV[:BAUD] | --usb VID:PID[:SERIAL] |\n"
             "                --gadget FFSDIR | --stdio) [--stay] [--no-wait] [--chunk N]\n"
             "                [--timeout S] [--tol REL] [-q]\n"
             "\n"
             "Send a model to a cmz-terminal.  The terminal announces its format versions and\n"
             "limits first: a .cmz it could not load is refused here, with the limit; an IGES\n"
-            "model is encoded for exactly those limits (and for format 1 when the terminal is\n"
+            "or STEP model is encoded for exactly those limits (and for format 1 when the terminal is\n"
             "older).  Transfers survive noise, cable pulls and terminal restarts: they resume\n"
             "where the terminal's copy stops.  Shows a progress bar (bytes, rate, ETA) on a TTY.\n"
             "\n"
@@ -245,7 +245,7 @@ static const char *limit_hint(unsigned id)
 static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_link_hello *h, const cm_limit_info *tab)
 {
     if (n < 64 || b[0] != 0x89 || b[1] != 'C' || b[2] != 'M' || b[3] != 'Z') {
-        fprintf(stderr, "cmz send: %s: not a .cmz file (give a .cmz, or an IGES model to encode)\n", path);
+        fprintf(stderr, "cmz send: %s: not a .cmz file (give a .cmz, or an IGES or STEP model to encode)\n", path);
         return -1;
     }
     if (b[4] > h->fmt_major_max || b[4] < h->fmt_major_min || (b[4] == h->fmt_major_max && b[5] > h->fmt_minor_max)) {
@@ -269,13 +269,15 @@ static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_li
     return 0;
 }
 
-static int is_iges(const char *path)
+static int is_model(const char *path)
 {
     const char *dot = strrchr(path, '.');
-    return dot && (strcasecmp(dot, ".igs") == 0 || strcasecmp(dot, ".iges") == 0);
+    return (dot && (strcasecmp(dot, ".igs") == 0 || strcasecmp(dot, ".iges") == 0 || strcasecmp(dot, ".stp") == 0 ||
+                    strcasecmp(dot, ".step") == 0)) ||
+           model_file_is_step(path); /* a CAD model (IGES or STEP) to encode, not a .cmz */
 }
 
-/* encode an IGES model for the terminal; 0 with the bytes in data, size (malloc'd) */
+/* encode a CAD model (IGES or STEP) for the terminal; 0 with the bytes in data, size (malloc'd) */
 static int encode_for(const char *path, const cm_link_hello *h, const cm_limit_info *tab, double tol, int quiet,
                       uint8_t **data, uint32_t *size)
 {
@@ -446,7 +448,7 @@ int cmz_cmd_send(int argc, char **argv)
 
     uint8_t *data = NULL;
     uint32_t size = 0;
-    if (!is_iges(path) && read_file(path, &data, &size) != 0)
+    if (!is_model(path) && read_file(path, &data, &size) != 0)
         return S_INPUT;
     cm_transport *t = NULL;
     if (open_transport(&c, &t) != 0) {
@@ -479,7 +481,7 @@ int cmz_cmd_send(int argc, char **argv)
     static cm_limit_info tab[CM_LIMIT_COUNT];
     hello_table(&h, tab);
     int rc;
-    if (is_iges(path)) {
+    if (is_model(path)) {
         rc = encode_for(path, &h, tab, tol, c.quiet, &data, &size) == 0 ? S_OK : S_INPUT;
     } else {
         rc = check_cmz(path, data, size, &h, tab) == 0 ? S_OK : S_INPUT;
@@ -488,7 +490,7 @@ int cmz_cmd_send(int argc, char **argv)
     base = base ? base + 1 : path;
     char name[CM_LINK_MAX_NAME + 1];
     snprintf(name, sizeof name, "%s", base);
-    if (is_iges(path)) {
+    if (is_model(path)) {
         char *dot = strrchr(name, '.');
         if (dot && (size_t)(dot - name) + 4 <= CM_LINK_MAX_NAME)
             strcpy(dot, ".cmz");
