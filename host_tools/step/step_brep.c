@@ -41,6 +41,12 @@
 /* curves in one loop and in one face (the host profile's CM_MAX_LOOP_EDGES, CM_MAX_FACE_EDGES) */
 #define STEP_MAX_LOOP_EDGES 4096
 #define STEP_MAX_FACE_EDGES 16384
+/* boundary curves built for the whole model (the host profile's CM_MAX_MODEL_USES, as
+   IGES_MAX_MODEL_PIECES): a shell listing one 16384-edge face 262144 times is refused, not built */
+#define STEP_MAX_MODEL_PIECES 4194304
+/* control points built for the whole model, curves and surfaces (1.5 GB of points): a file that
+   lists one face with a 10^7-point surface a thousand times is refused by name, not built */
+#define STEP_MAX_MODEL_CTRL (1LL << 26)
 /* largest coordinate magnitude accepted, in millimetres (as IGES_MAX_COORD_MM) */
 #define STEP_MAX_COORD_MM 1e12
 
@@ -74,13 +80,13 @@ typedef struct importer {
     colour_of *colours;
     int ncolours;
     unsigned char *done; /* per entity index: 1 face imported once, 2 solid reached */
-    int nvisits;
     int *placed_head;   /* per entity index: its latest entry in placed_at, -1 none */
     struct placed_item {
         haffine xf;
         int next;       /* the entity's previous entry, -1 none */
     } *placed_at;       /* every placement a solid or shell model was imported with */
     int nplaced, capplaced;
+    long long ctrl_built; /* control points of the curves and surfaces built so far (STEP_MAX_MODEL_CTRL) */
     int face_ordinal;
     int first_fail_line;
     char first_fail[480];
@@ -226,6 +232,10 @@ static cm_err axis2_at(importer *im, const step_entity *host, const step_val *v,
     if (err != CM_OK)
         return err;
     fr->Z = Z;
+    /* no reference direction: ISO 10303-42's first_proj_axis, the x axis projected, or the y axis
+       when the placement's axis is the x axis */
+    if (!(r && r->kind == STEP_REF) && fabs(fabs(Z.x) - 1.0) <= 1e-12)
+        ref = cm_v3(0, 1, 0);
     hbox_frame(Z, &ref, &fr->X, &fr->Y);
     return CM_OK;
 }
@@ -359,27 +369,62 @@ static double conic_angle(const frame *fr, double a, double b, cm_vec3 P)
 static cm_err conic_arc(importer *im, const frame *fr, double a, double b, double t0, double t1, int sense,
                         int closed, hcurve *out)
 {
+    if (!isfinite(t0) || !isfinite(t1) || fabs(t0) > 1e6 || fabs(t1) > 1e6)
+        return why(im, NULL, "an arc's angles (%g, %g rad) are not finite numbers of turns", t0, t1);
+    /* angles reduced to one turn first: a file's 1e20 would never move by 2 pi steps */
+    t0 = remainder(t0, 2 * M_PI);
+    t1 = remainder(t1, 2 * M_PI);
     double lo, hi;
     if (closed) {
         lo = t0;
         hi = t0 + 2 * M_PI;
-    } else if (sense) {
-        lo = t0;
-        hi = t1;
-        while (hi <= lo + 1e-12)
-            hi += 2 * M_PI;
     } else {
-        lo = t1;
-        hi = t0;
-        while (hi <= lo + 1e-12)
+        lo = sense ? t0 : t1;
+        hi = sense ? t1 : t0;
+        if (hi <= lo + 1e-12)
+            hi += 2 * M_PI; /* once: both within a turn of zero */
+        if (hi <= lo + 1e-12)
             hi += 2 * M_PI;
     }
-    while (hi - lo > 2 * M_PI)
-        hi -= 2 * M_PI;
+    if (hi - lo > 2 * M_PI)
+        hi = lo + 2 * M_PI;
     cm_err err = hcurve_ellipse_arc(fr->o, fr->X, fr->Y, a, b, lo, hi, out, im->st);
     if (err == CM_OK && !sense)
         hcurve_reverse(out);
     return err;
+}
+
+/*
+ * Two clamped pieces of one closed curve, a ending where b starts (its seam), as one curve: b's knots
+ * moved on to follow a's, the seam point once, a's degree and rationality (b's weights scaled to
+ * meet a's at the seam: the same curve).
+ */
+static cm_err join_at_seam(const hcurve *a, const hcurve *b, hcurve *out, cm_status *st)
+{
+    if (a->p != b->p || (a->w == NULL) != (b->w == NULL))
+        return cm_fail(st, CM_E_ARG, "join_at_seam");
+    int p = a->p, n = a->n + b->n - 1;
+    cm_err err = hcurve_alloc(out, p, n, a->w != NULL, st);
+    if (err != CM_OK)
+        return err;
+    double shift = a->knots[a->n + p] - b->knots[0];
+    int k = 0;
+    for (int i = 0; i < a->n + p; i++) /* a's knots but the last one */
+        out->knots[k++] = a->knots[i];
+    for (int i = p + 1; i < b->n + p + 1; i++) /* b's after its first p + 1 (the seam, p-fold now) */
+        out->knots[k++] = b->knots[i] + shift;
+    double scale = a->w ? a->w[a->n - 1] / b->w[0] : 1.0;
+    for (int i = 0; i < a->n; i++) {
+        out->ctrl[i] = a->ctrl[i];
+        if (a->w)
+            out->w[i] = a->w[i];
+    }
+    for (int i = 1; i < b->n; i++) {
+        out->ctrl[a->n - 1 + i] = b->ctrl[i];
+        if (a->w)
+            out->w[a->n - 1 + i] = b->w[i] * scale;
+    }
+    return CM_OK;
 }
 
 /*
@@ -411,7 +456,8 @@ static cm_err cut_between(importer *im, const step_entity *e, hcurve *whole, cm_
         s = d[0];
     if (cm_curve_eval(&v, t1, 0, d, NULL) == CM_OK)
         en = d[0];
-    if (cm_dist(s, en) <= 1e-9 * (1 + cm_norm(s))) { /* a closed curve: the seam belongs to either end */
+    int closed_curve = cm_dist(s, en) <= 1e-9 * (1 + cm_norm(s));
+    if (closed_curve) { /* a closed curve: the seam belongs to either end */
         if (sense) {
             if (ta >= t1 - eps)
                 ta = t0;
@@ -425,9 +471,24 @@ static cm_err cut_between(importer *im, const step_entity *e, hcurve *whole, cm_
         }
     }
     double lo = sense ? ta : tb, hi = sense ? tb : ta;
+    if (!(hi > lo + eps) && closed_curve && lo < t1 - eps && hi > t0 + eps) {
+        /* the edge runs over the closed curve's seam: from lo to the end, then from the start to hi */
+        hcurve a = {0}, b = {0};
+        err = hcurve_subrange(whole, lo, t1, &a, im->st);
+        if (err == CM_OK)
+            err = hcurve_subrange(whole, t0, hi, &b, im->st);
+        if (err == CM_OK)
+            err = join_at_seam(&a, &b, out, im->st);
+        hcurve_free(&a);
+        hcurve_free(&b);
+        hcurve_free(whole);
+        if (err == CM_OK && !sense)
+            hcurve_reverse(out);
+        return err;
+    }
     if (!(hi > lo + eps)) {
         hcurve_free(whole);
-        return why(im, e, "the edge's vertices come in the wrong order on it (or wrap over its seam)");
+        return why(im, e, "the edge's vertices come in the wrong order on it");
     }
     if (lo <= t0 + eps && hi >= t1 - eps) {
         *out = *whole;
@@ -458,6 +519,17 @@ static cm_err polyline_of(importer *im, const step_entity *e, hcurve *out)
         err = hcurve_polyline(p, n, out, im->st);
     free(p);
     return err;
+}
+
+/* a curve given by its points (a B-spline or a polyline) whole; `what` names its use in the error */
+static cm_err curve_of_points(importer *im, const step_entity *g, const char *what, hcurve *out)
+{
+    if (step_is(im->f, g, "B_SPLINE_CURVE_WITH_KNOTS"))
+        return bspline_curve(im, g, out);
+    if (step_is(im->f, g, "POLYLINE"))
+        return polyline_of(im, g, out);
+    char t[64];
+    return why(im, g, "a %s %s is not supported", tname(im, g, t, sizeof t), what);
 }
 
 /* follow SURFACE_CURVE / SEAM_CURVE to the 3D curve and TRIMMED_CURVE to its basis (sense flips) */
@@ -509,35 +581,36 @@ static cm_err edge_curve(importer *im, const step_entity *edge, const step_entit
         return conic_arc(im, &fr, a, b, conic_angle(&fr, a, b, A), conic_angle(&fr, a, b, B), sense, closed, out);
     }
     hcurve whole = {0};
-    cm_err err;
-    if (step_is(f, g, "B_SPLINE_CURVE_WITH_KNOTS"))
-        err = bspline_curve(im, g, &whole);
-    else if (step_is(f, g, "POLYLINE"))
-        err = polyline_of(im, g, &whole);
-    else {
-        char t[64];
-        return why(im, g, "a %s edge curve is not supported", tname(im, g, t, sizeof t));
-    }
+    cm_err err = curve_of_points(im, g, "edge curve", &whole);
     if (err != CM_OK)
         return err;
     return cut_between(im, g, &whole, A, B, sense, closed, out);
 }
 
-/* a trimming value of a TRIMMED_CURVE: PARAMETER_VALUE(t) preferred, else a point */
-static int trim_value(importer *im, const step_val *sel, double *t, cm_vec3 *P, int *is_point)
+/* a trimming value of a TRIMMED_CURVE: a PARAMETER_VALUE(t) or a point, the one its master
+   representation names first (.CARTESIAN.: the point; exporters' parameters are the less reliable) */
+static int trim_value(importer *im, const step_val *sel, int cartesian_first, double *t, cm_vec3 *P, int *is_point)
 {
-    for (int i = 0; sel && i < sel->n; i++) {
-        const step_val *v = step_item(sel, i);
-        if (step_val_is(im->f, v, "PARAMETER_VALUE") && step_num(v, t) == 0) {
-            *is_point = 0;
-            return 0;
+    char saved[sizeof im->why];
+    memcpy(saved, im->why, sizeof saved); /* a select item that is no point is no error */
+    for (int pass = 0; pass < 2; pass++) {
+        int want_point = pass == 0 ? cartesian_first : !cartesian_first;
+        for (int i = 0; sel && i < sel->n; i++) {
+            const step_val *v = step_item(sel, i);
+            if (!want_point && step_val_is(im->f, v, "PARAMETER_VALUE") && step_num(v, t) == 0) {
+                *is_point = 0;
+                memcpy(im->why, saved, sizeof saved);
+                return 0;
+            }
+            if (want_point && v && v->kind == STEP_REF && step_is(im->f, step_ref(im->f, v), "CARTESIAN_POINT") &&
+                point_at(im, NULL, v, P) == CM_OK) {
+                *is_point = 1;
+                memcpy(im->why, saved, sizeof saved);
+                return 0;
+            }
         }
     }
-    for (int i = 0; sel && i < sel->n; i++)
-        if (point_at(im, NULL, step_item(sel, i), P) == CM_OK) {
-            *is_point = 1;
-            return 0;
-        }
+    memcpy(im->why, saved, sizeof saved);
     return -1;
 }
 
@@ -558,7 +631,9 @@ static cm_err bounded_curve(importer *im, const step_entity *host, const step_va
     cm_vec3 PA = cm_v3(0, 0, 0), PB = PA;
     double ta = 0, tb = 0;
     int pa = 0, pb = 0;
-    if (tr && (trim_value(im, step_item(tr, 2), &ta, &PA, &pa) || trim_value(im, step_item(tr, 3), &tb, &PB, &pb)))
+    int cartesian = tr && step_val_is(f, step_item(tr, 5), "CARTESIAN");
+    if (tr && (trim_value(im, step_item(tr, 2), cartesian, &ta, &PA, &pa) ||
+               trim_value(im, step_item(tr, 3), cartesian, &tb, &PB, &pb)))
         return why(im, host, "its trimmed curve has no usable trims");
     if (step_is(f, g, "LINE")) {
         if (!tr)
@@ -587,15 +662,7 @@ static cm_err bounded_curve(importer *im, const step_entity *host, const step_va
         return conic_arc(im, &fr, a, b, t0, t1, sense, 0, out);
     }
     hcurve whole = {0};
-    cm_err err;
-    if (step_is(f, g, "B_SPLINE_CURVE_WITH_KNOTS"))
-        err = bspline_curve(im, g, &whole);
-    else if (step_is(f, g, "POLYLINE"))
-        err = polyline_of(im, g, &whole);
-    else {
-        char t[64];
-        return why(im, g, "a %s curve is not supported here", tname(im, g, t, sizeof t));
-    }
+    cm_err err = curve_of_points(im, g, "curve", &whole);
     if (err != CM_OK || !tr) {
         if (err == CM_OK)
             *out = whole;
@@ -848,6 +915,8 @@ static cm_err loop_curves(importer *im, const step_entity *face, const step_enti
         int n = pts && pts->kind == STEP_LIST ? pts->n : 0;
         if (n < 3 || n > STEP_MAX_LOOP_EDGES)
             return why(im, loop, "%d corners (3 to %d expected)", n, STEP_MAX_LOOP_EDGES);
+        if ((*face_edges += n) > STEP_MAX_FACE_EDGES)
+            return why(im, face, "its loops have more than %d edges", STEP_MAX_FACE_EDGES);
         cm_vec3 first, prev, P;
         cm_err err = point_at(im, loop, step_item(pts, 0), &first);
         prev = first;
@@ -867,7 +936,6 @@ static cm_err loop_curves(importer *im, const step_entity *face, const step_enti
             }
             prev = P;
         }
-        *face_edges += n;
         return err;
     }
     if (!(p = step_params(f, loop, "EDGE_LOOP"))) {
@@ -903,6 +971,7 @@ static cm_err loop_curves(importer *im, const step_entity *face, const step_enti
         int closed = va == vb || cm_dist(A, B) <= 1e-12 * (1 + cm_norm(A));
         hcurve c = {0};
         err = edge_curve(im, ec, g, A, B, bool_of(im, step_item(ep, 4), 1), closed, &c);
+        im->ctrl_built += c.n;
         if (err == CM_OK && !bool_of(im, step_item(op, 4), 1))
             hcurve_reverse(&c);
         if (err == CM_OK)
@@ -996,6 +1065,7 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
         if (err == CM_OK && kind != SURF_SPHERE && kind != SURF_TORUS && kind != SURF_BSPLINE && kind != SURF_REVOLUTION)
             err = why(im, fe, "an unbounded surface without any edge");
     }
+    im->ctrl_built += (long long)s.nu * s.nv;
     if (err == CM_OK && !im->why[0]) {
         double worst = 0;
         for (long i = 0; i < (long)s.nu * s.nv; i++)
@@ -1017,7 +1087,10 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
         face.src_de = fe->id;
         face.src_type = BREP_SRC_STEP_FACE;
         face.surf_type = kind;
-        face.flip = (!bool_of(im, step_item(p, 3), 1)) != (flip != 0);
+        /* the face's normal is its surface's unless same_sense says otherwise; a SURFACE_OF_REVOLUTION
+           is built with the curve along u and the angle along v (hsurf_revolve), ISO 10303-42 the
+           other way round: its Su x Sv points against the standard's normal */
+        face.flip = ((!bool_of(im, step_item(p, 3), 1)) != (flip != 0)) != (kind == SURF_REVOLUTION);
         face.shell = im->shell;
         face.instance = im->instance;
         face.first_loop = m->nloops;
@@ -1063,6 +1136,42 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
     return err;
 }
 
+static int same_map(const haffine *a, const haffine *b)
+{
+    double scale = 1 + cm_norm(a->t) + cm_norm(b->t);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (fabs(a->R[i][j] - b->R[i][j]) > 1e-9)
+                return 0;
+    return cm_dist(a->t, b->t) <= 1e-9 * scale;
+}
+
+/*
+ * 1 if item k was already imported with the placement im->xf, else remembers it: exporters reach
+ * one solid through several representations (a part's shape and a copy for validation properties,
+ * a mapped item and the representation it maps) and it is one solid all the same.
+ */
+static int placed_before(importer *im, int k, cm_err *err)
+{
+    for (int i = im->placed_head[k]; i >= 0; i = im->placed_at[i].next)
+        if (same_map(&im->placed_at[i].xf, &im->xf))
+            return 1;
+    if (im->nplaced == im->capplaced) {
+        int cap = im->capplaced ? 2 * im->capplaced : 64;
+        struct placed_item *q = realloc(im->placed_at, (size_t)cap * sizeof *q);
+        if (!q) {
+            *err = cm_fail(im->st, CM_E_NOMEM, "out of memory");
+            return 1;
+        }
+        im->placed_at = q;
+        im->capplaced = cap;
+    }
+    im->placed_at[im->nplaced].xf = im->xf;
+    im->placed_at[im->nplaced].next = im->placed_head[k];
+    im->placed_head[k] = im->nplaced++;
+    return 0;
+}
+
 /* one face: built, or skipped with a warning naming it (the rest of the model goes on) */
 static cm_err import_face(importer *im, const step_entity *fe, int flip)
 {
@@ -1070,6 +1179,21 @@ static cm_err import_face(importer *im, const step_entity *fe, int flip)
     if (m->nfaces >= STEP_MAX_PLACED_FACES)
         return step_error(im->f, fe->line, "the model places more than %d faces (limit %d)", STEP_MAX_PLACED_FACES,
                           STEP_MAX_PLACED_FACES);
+    if (im->ctrl_built >= STEP_MAX_MODEL_CTRL)
+        return step_error(im->f, fe->line, "the model's curves and surfaces have more than %lld control points "
+                          "(limit %lld)", STEP_MAX_MODEL_CTRL, STEP_MAX_MODEL_CTRL);
+    if (m->nsegs >= STEP_MAX_MODEL_PIECES)
+        return step_error(im->f, fe->line, "the model's faces have more than %lld boundary curves (limit %lld)",
+                          (long long)STEP_MAX_MODEL_PIECES, (long long)STEP_MAX_MODEL_PIECES);
+    cm_err dup = CM_OK;
+    if (placed_before(im, ent_index(im->f, fe), &dup)) {
+        /* a shell listing one face twice (or two shells sharing it) at one placement: one face, not
+           two on top of each other (nor a file that multiplies one big face by listing it) */
+        if (dup != CM_OK)
+            return dup;
+        step_warn(im->f, fe->line, "face #%d is listed again at the same place; imported once", fe->id);
+        return CM_OK;
+    }
     int ns = m->nsurfs, nf = m->nfaces, nl = m->nloops, nsg = m->nsegs;
     hbox box = m->box;
     im->why[0] = 0;
@@ -1148,42 +1272,6 @@ static cm_err import_shell(importer *im, const step_entity *host, const step_val
     }
     im->shell_id = saved;
     return err;
-}
-
-static int same_map(const haffine *a, const haffine *b)
-{
-    double scale = 1 + cm_norm(a->t) + cm_norm(b->t);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            if (fabs(a->R[i][j] - b->R[i][j]) > 1e-9)
-                return 0;
-    return cm_dist(a->t, b->t) <= 1e-9 * scale;
-}
-
-/*
- * 1 if item k was already imported with the placement im->xf, else remembers it: exporters reach
- * one solid through several representations (a part's shape and a copy for validation properties,
- * a mapped item and the representation it maps) and it is one solid all the same.
- */
-static int placed_before(importer *im, int k, cm_err *err)
-{
-    for (int i = im->placed_head[k]; i >= 0; i = im->placed_at[i].next)
-        if (same_map(&im->placed_at[i].xf, &im->xf))
-            return 1;
-    if (im->nplaced == im->capplaced) {
-        int cap = im->capplaced ? 2 * im->capplaced : 64;
-        struct placed_item *q = realloc(im->placed_at, (size_t)cap * sizeof *q);
-        if (!q) {
-            *err = cm_fail(im->st, CM_E_NOMEM, "out of memory");
-            return 1;
-        }
-        im->placed_at = q;
-        im->capplaced = cap;
-    }
-    im->placed_at[im->nplaced].xf = im->xf;
-    im->placed_at[im->nplaced].next = im->placed_head[k];
-    im->placed_head[k] = im->nplaced++;
-    return 0;
 }
 
 /* a representation item that holds faces: a solid or a shell-based surface model (else nothing) */
@@ -1673,14 +1761,61 @@ typedef struct visit {
     haffine xf;
 } visit;
 
-/* import the faces of every representation in group g, placed by v */
-static cm_err import_group(importer *im, structure *s, const visit *v)
+/* the groups' members and the placements out of each group, by group (counting sorts: every
+   visit touches its own members and links only) */
+typedef struct group_index {
+    int *member_start, *members; /* members[member_start[g] .. member_start[g + 1]) are group g's nodes */
+    int *link_start, *links;     /* links[link_start[g] .. link_start[g + 1]) place children into group g */
+} group_index;
+
+static void group_index_free(group_index *gi)
+{
+    free(gi->member_start);
+    free(gi->members);
+    free(gi->link_start);
+    free(gi->links);
+}
+
+static cm_err group_index_build(importer *im, structure *s, group_index *gi)
+{
+    int n = s->nnodes, nl = s->nlinks;
+    gi->member_start = calloc((size_t)n + 2, sizeof *gi->member_start);
+    gi->members = malloc(((size_t)n + 1) * sizeof *gi->members);
+    gi->link_start = calloc((size_t)n + 2, sizeof *gi->link_start);
+    gi->links = malloc(((size_t)nl + 1) * sizeof *gi->links);
+    if (!gi->member_start || !gi->members || !gi->link_start || !gi->links)
+        return cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    for (int k = 0; k < n; k++)
+        gi->member_start[find_group(s, k) + 1]++;
+    for (int l = 0; l < nl; l++)
+        gi->link_start[find_group(s, s->links[l].parent) + 1]++;
+    for (int g = 0; g < n; g++) {
+        gi->member_start[g + 1] += gi->member_start[g];
+        gi->link_start[g + 1] += gi->link_start[g];
+    }
+    int *fill = calloc((size_t)n + 1, sizeof *fill);
+    if (!fill)
+        return cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    for (int k = 0; k < n; k++) {
+        int g = find_group(s, k);
+        gi->members[gi->member_start[g] + fill[g]++] = k;
+    }
+    memset(fill, 0, ((size_t)n + 1) * sizeof *fill);
+    for (int l = 0; l < nl; l++) {
+        int g = find_group(s, s->links[l].parent);
+        gi->links[gi->link_start[g] + fill[g]++] = l;
+    }
+    free(fill);
+    return CM_OK;
+}
+
+/* import the faces of every representation in group v->group, placed by v */
+static cm_err import_group(importer *im, structure *s, const group_index *gi, const visit *v)
 {
     step_file *f = im->f;
     cm_err err = CM_OK;
-    for (int k = 0; k < s->nnodes && err == CM_OK; k++) {
-        if (find_group(s, k) != v->group)
-            continue;
+    for (int q = gi->member_start[v->group]; q < gi->member_start[v->group + 1] && err == CM_OK; q++) {
+        int k = gi->members[q];
         const step_entity *re = &f->ents[s->ent_of[k]];
         const step_val *items = step_item(rep_params(f, re, NULL), 1);
         im->mm = s->units[k].mm;
@@ -1706,19 +1841,31 @@ static cm_err import_group(importer *im, structure *s, const visit *v)
     return err;
 }
 
+static cm_err push_visit(importer *im, visit **stack, int *n, int *cap, const visit *v)
+{
+    if (*n == *cap) {
+        visit *q = realloc(*stack, (size_t)(*cap * 2) * sizeof *q);
+        if (!q)
+            return cm_fail(im->st, CM_E_NOMEM, "out of memory");
+        *stack = q;
+        *cap *= 2;
+    }
+    (*stack)[(*n)++] = *v;
+    return CM_OK;
+}
+
 static cm_err walk(importer *im, structure *s)
 {
     step_file *f = im->f;
     /* group indices: a group is named by its root node; groups placed by nothing are the roots */
     unsigned char *placed = calloc((size_t)s->nnodes + 1, 1);
-    int cap = 64, n = 0, next_instance = 0;
+    unsigned char *product = calloc((size_t)s->nnodes + 1, 1);
+    int cap = 64, n = 0, next_instance = 0, pushed = 0;
     visit *stack = malloc((size_t)cap * sizeof *stack);
-    if (!placed || !stack) {
-        free(placed);
-        free(stack);
-        return cm_fail(im->st, CM_E_NOMEM, "out of memory");
-    }
-    for (int l = 0; l < s->nlinks; l++)
+    group_index gi;
+    memset(&gi, 0, sizeof gi);
+    cm_err err = placed && product && stack ? group_index_build(im, s, &gi) : cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    for (int l = 0; err == CM_OK && l < s->nlinks; l++)
         placed[find_group(s, s->links[l].child)] = 1;
     /*
      * The roots: groups nothing places that shape a product (a SHAPE_DEFINITION_REPRESENTATION of
@@ -1726,47 +1873,39 @@ static cm_err walk(importer *im, structure *s)
      * "solid data", validation properties) repeats a part's solid where the part is not placed and
      * is no root.  A file that names no product at all (loose geometry) has every group as a root.
      */
-    unsigned char *product = calloc((size_t)s->nnodes + 1, 1);
     int any_product = 0;
-    for (int k = 0; product && k < s->nnodes; k++)
+    for (int k = 0; err == CM_OK && k < s->nnodes; k++)
         if (s->pd_of[k]) {
             product[find_group(s, k)] = 1;
             any_product = 1;
         }
-    cm_err err = product ? CM_OK : cm_fail(im->st, CM_E_NOMEM, "out of memory");
     for (int k = s->nnodes - 1; k >= 0 && err == CM_OK; k--)
         if (find_group(s, k) == k && !placed[k] && (!any_product || product[k])) {
-            if (n == cap) {
-                visit *q = realloc(stack, (size_t)(cap *= 2) * sizeof *q);
-                if (!q) {
-                    err = cm_fail(im->st, CM_E_NOMEM, "out of memory");
-                    break;
-                }
-                stack = q;
-            }
-            stack[n++] = (visit){k, 0, 0, haffine_identity()};
+            visit root = {k, 0, 0, haffine_identity()};
+            err = push_visit(im, &stack, &n, &cap, &root);
         }
+    /* every visit pushed counts against the budget (a representation mapping itself 800 times
+       would otherwise be walked 800^16 ways, each looked at before it is refused) */
     while (n > 0 && err == CM_OK) {
         visit v = stack[--n];
-        if (++im->nvisits > STEP_MAX_VISITS) {
-            const step_entity *re = &f->ents[s->ent_of[v.group]];
-            err = step_error(f, re->line, "the assembly places its parts more than %d times (limit %d; #%d is "
-                             "placed again there)", STEP_MAX_VISITS, STEP_MAX_VISITS, re->id);
-            break;
-        }
         if (v.depth > 0)
             im->stats->placements++;
-        err = import_group(im, s, &v);
-        for (int l = s->nlinks - 1; l >= 0 && err == CM_OK; l--) {
-            const placement_link *L = &s->links[l];
-            if (find_group(s, L->parent) != v.group)
-                continue;
-            if (v.depth + 1 > STEP_MAX_ASSEMBLY_DEPTH) {
-                step_warn(f, f->ents[s->ent_of[L->child]].line,
-                          "#%d: placed deeper than %d assembly levels (a cycle?); left out there",
-                          f->ents[s->ent_of[L->child]].id, STEP_MAX_ASSEMBLY_DEPTH);
-                im->m->entities_failed++;
-                continue;
+        err = import_group(im, s, &gi, &v);
+        int first = gi.link_start[v.group], last = gi.link_start[v.group + 1];
+        if (err == CM_OK && last > first && v.depth + 1 > STEP_MAX_ASSEMBLY_DEPTH) {
+            const step_entity *re = &f->ents[s->ent_of[v.group]];
+            step_warn(f, re->line, "#%d: places parts deeper than %d assembly levels (a cycle?); those left out",
+                      re->id, STEP_MAX_ASSEMBLY_DEPTH);
+            im->m->entities_failed++;
+            continue;
+        }
+        for (int q = last - 1; q >= first && err == CM_OK; q--) {
+            const placement_link *L = &s->links[gi.links[q]];
+            if (++pushed > STEP_MAX_VISITS) {
+                const step_entity *re = &f->ents[s->ent_of[v.group]];
+                err = step_error(f, re->line, "the assembly places its parts more than %d times (limit %d; #%d "
+                                 "places them again)", STEP_MAX_VISITS, STEP_MAX_VISITS, re->id);
+                break;
             }
             visit c = {find_group(s, L->child), v.depth + 1, v.instance, haffine_compose(&v.xf, &L->xf)};
             if (v.depth == 0) { /* an outermost placement: an instance the fold may send once */
@@ -1774,17 +1913,11 @@ static cm_err walk(importer *im, structure *s)
                 c.instance = in.id;
                 err = brep_add_instance(im->m, &in, im->st);
             }
-            if (n == cap) {
-                visit *q = realloc(stack, (size_t)(cap *= 2) * sizeof *q);
-                if (!q) {
-                    err = cm_fail(im->st, CM_E_NOMEM, "out of memory");
-                    break;
-                }
-                stack = q;
-            }
-            stack[n++] = c;
+            if (err == CM_OK)
+                err = push_visit(im, &stack, &n, &cap, &c);
         }
     }
+    group_index_free(&gi);
     free(placed);
     free(product);
     free(stack);

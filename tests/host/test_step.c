@@ -28,7 +28,7 @@ typedef struct sw {
     int next;
 } sw;
 
-static void sw_raw(sw *w, const char *fmt, ...)
+__attribute__((format(printf, 2, 3))) static void sw_raw(sw *w, const char *fmt, ...)
 {
     char buf[4096];
     va_list ap;
@@ -46,7 +46,7 @@ static void sw_raw(sw *w, const char *fmt, ...)
 }
 
 /* add "#id=<entity>;" and return id */
-static int sw_ent(sw *w, const char *fmt, ...)
+__attribute__((format(printf, 2, 3))) static int sw_ent(sw *w, const char *fmt, ...)
 {
     char buf[3500];
     va_list ap;
@@ -564,6 +564,52 @@ static void test_mutations(void **state)
     free(text);
 }
 
+/* ---- what a review found (tests/fuzz/regressions_step: the files the fuzz replay also runs) ---- */
+
+static cm_err load_file(const char *name, loaded_model *lm)
+{
+    char path[256];
+    snprintf(path, sizeof path, "tests/fuzz/regressions_step/%s", name);
+    cm_status st;
+    cm_status_init(&st);
+    return model_load_ex(path, lm, MODEL_LOAD_FOLD, NULL, NULL, &st);
+}
+
+static void test_review_regressions(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    /* a cylinder made as a SURFACE_OF_REVOLUTION: its normals agree with the caps' (ISO's angle is u) */
+    assert_ok(load_file("revolution_cylinder.stp", &lm));
+    assert_int_equal(lm.brep.nfaces, 3);
+    assert_int_equal(lm.mesh.inconsistent, 0);
+    assert_int_equal(free_edges(&lm), 0);
+    model_free(&lm);
+    /* an ellipse (10, 2) on an x-axis placement without a reference direction: ISO's first_proj_axis
+       puts its major axis along y */
+    assert_ok(load_file("ellipse_x_axis_no_ref.stp", &lm));
+    assert_true(lm.brep.box.hi.y - lm.brep.box.lo.y > 19.9 && lm.brep.box.hi.z - lm.brep.box.lo.z < 4.1);
+    model_free(&lm);
+    /* an edge whose vertices lie on both sides of its closed curve's seam */
+    assert_ok(load_file("edge_over_polyline_seam.stp", &lm));
+    assert_int_equal(lm.brep.nfaces, 1);
+    assert_int_equal(lm.brep.faces_failed, 0);
+    model_free(&lm);
+    /* an arc trimmed at 1e20 rad: that face left out at once, the rest kept */
+    assert_ok(load_file("trim_angle_1e20.stp", &lm));
+    assert_int_equal(lm.brep.faces_failed, 1);
+    assert_true(warned(&lm, "skipped:", "not finite numbers of turns"));
+    model_free(&lm);
+    /* a representation mapping itself 200 times: refused by the placement budget, by name */
+    assert_int_equal(load_file("mapped_item_self_200.stp", &lm), CM_E_STEP);
+    assert_non_null(strstr(lm.iges.err, "places its parts more than 65536 times"));
+    model_free(&lm);
+    /* a shell whose list is mostly other things: those left out, the faces kept, quickly */
+    assert_ok(load_file("shell_face_listed_100000.stp", &lm));
+    assert_int_equal(lm.brep.nfaces, 6);
+    model_free(&lm);
+}
+
 /* ---- the same model as IGES and as STEP ---- */
 
 static void same_as_iges(const char *stp, const char *igs)
@@ -654,6 +700,7 @@ int main(void)
         cmocka_unit_test(test_bad_face_left_out),
         cmocka_unit_test(test_no_face_refused),
         cmocka_unit_test(test_mutations),
+        cmocka_unit_test(test_review_regressions),
         cmocka_unit_test(test_same_as_iges_cube),
         cmocka_unit_test(test_same_as_iges_assembly),
     };
