@@ -18,6 +18,8 @@ printf 'model\tiges_bytes\tgzip9\txz9\tcmz_bytes\tx_iges\tx_gzip\tx_xz\tfaces\tp
 now() { date +%s.%N; }
 for m in "$@"; do
     name=$(basename "${m%.*}")
+    # a model in both forms (o3dv__as1_pe_203.igs and .stp) gets two names: their outputs must not meet
+    case "${m##*.}" in stp|STP|step|STEP) name=${name}.stp ;; esac
     c=$out/$name.cmz g=$out/$name.glb
     t0=$(now)
     if ! enc=$("$cmz" encode -q "$m" -o "$c" --report "$out/$name.faces.tsv" 2>&1); then

@@ -60,6 +60,8 @@ instr() {
 }
 for m in "$@"; do
     name=$(basename "${m%.*}")
+    # a model in both forms (o3dv__as1_pe_203.igs and .stp) gets two names: their outputs must not meet
+    case "${m##*.}" in stp|STP|step|STEP) name=${name}.stp ;; esac
     c=$out/$name.cmz
     [ -s "$c" ] || { echo "# $name: no $c (bench.sh did not encode it): skipped" >&2; continue; }
     # Open CASCADE: read + mesh (+ a binary STL, small next to the meshing), timed once
