@@ -1950,7 +1950,21 @@ cm_err step_to_brep(step_file *f, brep_model *m, step_import_stats *stats, cm_st
         err = build_structure(&im, &s);
     if (err == CM_OK)
         err = walk(&im, &s);
-    /* solids no product's shape reaches (a loose file): where they stand, in the first context's units */
+    /* solids no product's shape reaches (a loose file): where they stand, in the units of the
+       representation that holds them (else the first one's) */
+    int *holder = err == CM_OK ? malloc(((size_t)f->nents + 1) * sizeof *holder) : NULL;
+    if (err == CM_OK && !holder)
+        err = cm_fail(st, CM_E_NOMEM, "out of memory");
+    for (int i = 0; holder && i < f->nents; i++)
+        holder[i] = -1;
+    for (int k = 0; holder && k < s.nnodes; k++) {
+        const step_val *items = step_item(rep_params(f, &f->ents[s.ent_of[k]], NULL), 1);
+        for (int i = 0; i < items->n; i++) {
+            const step_entity *it = step_ref(f, step_item(items, i));
+            if (it && holder[ent_index(f, it)] < 0)
+                holder[ent_index(f, it)] = k;
+        }
+    }
     for (int i = 0; i < f->nents && err == CM_OK; i++) {
         const step_entity *e = &f->ents[i];
         if (im.done[i] & 2)
@@ -1962,10 +1976,12 @@ cm_err step_to_brep(step_file *f, brep_model *m, step_import_stats *stats, cm_st
                   e->id);
         im.xf = haffine_identity();
         im.instance = 0;
-        im.mm = s.nnodes ? s.units[0].mm : 1.0;
-        im.rad = s.nnodes ? s.units[0].rad : 1.0;
+        int k = holder[i] >= 0 ? holder[i] : 0;
+        im.mm = s.nnodes ? s.units[k].mm : 1.0;
+        im.rad = s.nnodes ? s.units[k].rad : 1.0;
         err = import_item(&im, e);
     }
+    free(holder);
     structure_free(&s);
     free(im.colours);
     free(im.done);

@@ -338,6 +338,28 @@ static void test_box_units(void **state)
     }
 }
 
+/* a solid that no product's shape places is imported where it stands, in its own representation's units */
+static void test_loose_solid_units(void **state)
+{
+    (void)state;
+    sw w;
+    sw_begin(&w);
+    int mm = context(&w, "mm"), inch = context(&w, "inch");
+    int a = box_solid(&w, 10, 10, 10, NULL);
+    product(&w, sw_ent(&w, "ADVANCED_BREP_SHAPE_REPRESENTATION('',(#%d),#%d)", a, mm));
+    int b = box_solid(&w, 2, 2, 2, NULL);
+    sw_ent(&w, "ADVANCED_BREP_SHAPE_REPRESENTATION('loose',(#%d),#%d)", b, inch);
+    sw_end(&w);
+    loaded_model lm;
+    if (load_text(w.text, w.len, &lm, 0) != CM_OK)
+        fail_msg("%s", lm.iges.err);
+    assert_int_equal(lm.brep.nfaces, 12);
+    assert_true(warned(&lm, "no product's shape places", NULL));
+    assert_vec_near(lm.brep.box.hi, cm_v3(50.8, 50.8, 50.8), 1e-9); /* 2 inch, not 2 mm */
+    model_free(&lm);
+    free(w.text);
+}
+
 /* a cylinder r, h: two planar caps bounded by closed circle edges, the side by both circles and a
    seam line used twice (as exporters write it) */
 static char *cylinder_file(double r, double h, size_t *len)
@@ -695,6 +717,7 @@ int main(void)
         cmocka_unit_test(test_parse_layer),
         cmocka_unit_test(test_parse_errors),
         cmocka_unit_test(test_box_units),
+        cmocka_unit_test(test_loose_solid_units),
         cmocka_unit_test(test_cylinder_seam),
         cmocka_unit_test(test_assembly),
         cmocka_unit_test(test_bad_face_left_out),
