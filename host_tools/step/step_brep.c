@@ -1121,7 +1121,7 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
             face.nloops++;
         }
     }
-    for (int l = 0; l <= nb && l < nb + 1; l++)
+    for (int l = 0; l <= nb; l++) /* all nb + 1 lists (calloc'd) */
         hcurve_list_free(&loops[l]);
     free(loops);
     if (err == CM_OK && face.nloops == 0)
