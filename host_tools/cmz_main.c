@@ -15,8 +15,6 @@
 #include "cmd/cmd.h"
 #include "send/send_cmd.h"
 
-#define CMZ_VERSION "0.1.0"
-
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -88,6 +86,24 @@ static void usage(FILE *f)
             "      A face that cannot be sent (it cannot be imported, or its surface does not\n"
             "      tessellate even kept) is left out with a warning naming its entity, and the\n"
             "      summary counts it; --strict makes that an error (exit status 1).\n"
+            "  encode FOLDER|--list FILE -o OUTFOLDER [-j N] [--force] [--timeout S] [--shard K/N]\n"
+            "         [--summary FILE.tsv] [encode options]\n"
+            "      Encode a vault: every IGES and STEP model under FOLDER (*.igs, *.iges, *.stp,\n"
+            "      *.step, *.p21; hidden folders left out), or every path in FILE (one a line,\n"
+            "      '#' comments; a listed folder is walked; '-' reads the list from stdin), each\n"
+            "      with the same options, N at a time in processes of their own.  The outputs\n"
+            "      mirror the tree under OUTFOLDER (a/part.igs -> OUTFOLDER/a/part.cmz; two\n"
+            "      models of one stem keep their extensions: part.igs.cmz, part.stp.cmz), each\n"
+            "      model's warnings in OUT.cmz.log.  A model that fails, crashes or runs past\n"
+            "      --timeout S seconds is named and the rest still encode.  A summary\n"
+            "      (OUTFOLDER/cmz-vault.tsv, or --summary) has a row per model: sizes, share of\n"
+            "      faces deleted, worst deviation, warnings, seconds, encoder and options, error.\n"
+            "      A model whose output is newer, of the size recorded there, and built by this\n"
+            "      same cmz binary with the same options is skipped (--force: encode all).\n"
+            "      --shard K/N encodes only the models whose place in the sorted list is K\n"
+            "      modulo N, for task K of N of a batch engine (summary cmz-vault.K-of-N.tsv).\n"
+            "      A progress bar on a TTY.  Exit status 1 if any model failed, 130 when\n"
+            "      interrupted (the summary is written, the models not reached keep their rows).\n"
             "  eval MODEL.igs|MODEL.stp MODEL.cmz [--tol REL] [--tol-abs MM] [--report FACES.tsv]\n"
             "      Rebuild every face of MODEL.cmz with the terminal's code and measure it\n"
             "      against the model (a grid on each face and its boundary, normals across\n"

@@ -16,6 +16,9 @@
 /* the exit statuses of README's table; `cmz send` adds its own (send_cmd.c) */
 enum { EXIT_OK = 0, EXIT_INPUT = 1, EXIT_USAGE = 2, EXIT_IO = 3, EXIT_NOMEM = 4 };
 
+/** The workstation tool's version (`cmz --version`; with a CRC of the binary, a vault's encoder id). */
+#define CMZ_VERSION "0.1.0"
+
 /** The program's name, first on every message. */
 extern const char cmd_prog[];
 
@@ -31,6 +34,30 @@ int cmd_sample(int argc, char **argv);
 int cmd_encode(int argc, char **argv);
 int cmd_decode(int argc, char **argv);
 int cmd_eval(int argc, char **argv);
+
+/** What one model's encode measured, for a vault's summary (cmd_vault.c). */
+typedef struct cmd_encode_summary {
+    long in_bytes, cmz_bytes;
+    int faces_sent, faces_placed; /* faces sent, and those placed again as copies of parts (format 4.3) */
+    int kept;                     /* sent faces whose surface is kept */
+    int left_out, parts_left_out; /* faces left out; solids, shells or instances left out */
+    int is_step;
+    double max_err_mm, max_ratio; /* the worst face's rebuilt surface against its source: mm, and / its box */
+} cmd_encode_summary;
+
+/** When set, a successful `cmz encode` of one model fills it in. */
+extern cmd_encode_summary *cmd_encode_summary_out;
+
+/** A vault's options (`cmz encode FOLDER|--list FILE -o OUTFOLDER ...`). */
+typedef struct cmd_vault_opts {
+    const char *folder, *list, *out, *summary;
+    int jobs, force;
+    double timeout_s;       /* per model; 0: none */
+    int shard_k, shard_n;   /* this task's share of the models: those whose index is k modulo n (n 0: all) */
+} cmd_vault_opts;
+
+/** Encode every model of a folder tree or a list, `pass` the encoding options given (cmd_vault.c). */
+int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass);
 
 /** Progress callback of the import and the encoder: a counter on stderr, only on a TTY and unless -q. */
 void cmd_progress(const char *stage, int done, int total, void *ctx);

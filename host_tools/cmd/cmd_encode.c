@@ -2,6 +2,8 @@
  * cmd_encode.c - `cmz encode MODEL.igs -o MODEL.cmz`: import the model,
  * encode it (encode/encode.h), write the file atomically, and report every
  * face left out, the summary line and, with --report, a row per face.
+ * A folder or a list of models goes to cmd_vault.c, which runs this once
+ * per model.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
@@ -11,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cm/cm_format.h"
@@ -71,14 +74,96 @@ static int parse_format(const char *v, encode_opts *o)
     return 0;
 }
 
+cmd_encode_summary *cmd_encode_summary_out;
+
+/* a vault option (cmd_vault.c): taken into vo, 1 (2 with its value), 0 if `a` is not one, -1 on a bad value */
+static int vault_arg(const char *a, const char *v, cmd_vault_opts *vo)
+{
+    if (strcmp(a, "--list") == 0 && v) {
+        vo->list = v;
+        return 2;
+    }
+    if (strcmp(a, "--summary") == 0 && v) {
+        vo->summary = v;
+        return 2;
+    }
+    if (strcmp(a, "--force") == 0) {
+        vo->force = 1;
+        return 1;
+    }
+    if (strcmp(a, "-j") == 0 && v) {
+        double j;
+        if (cmd_parse_real(a, v, 1, 256, &j) || j != (int)j)
+            return -1;
+        vo->jobs = (int)j;
+        return 2;
+    }
+    if (strcmp(a, "--timeout") == 0 && v) {
+        if (cmd_parse_real(a, v, 0, 1e6, &vo->timeout_s))
+            return -1;
+        return 2;
+    }
+    if (strcmp(a, "--shard") == 0 && v) {
+        int k = -1, n = 0, used = 0;
+        if (sscanf(v, "%d/%d%n", &k, &n, &used) != 2 || v[used] || n < 1 || k < 0 || k >= n) {
+            fprintf(stderr, "%s: --shard wants K/N with 0 <= K < N (this task's index and the task count), not '%s'\n",
+                    cmd_prog, v);
+            return -1;
+        }
+        vo->shard_k = k;
+        vo->shard_n = n;
+        return 2;
+    }
+    return 0;
+}
+
+/* the encoding options that take a value (the parser below); a vault passes them on as given */
+static int takes_value(const char *a)
+{
+    static const char *const names[] = {"--profile", "--tol", "--tol-abs", "--format", "--quant", "--tess"};
+    for (size_t k = 0; k < sizeof names / sizeof names[0]; k++)
+        if (strcmp(a, names[k]) == 0)
+            return 1;
+    return 0;
+}
+
+static int is_directory(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
 int cmd_encode(int argc, char **argv)
 {
     const char *path = NULL, *out = NULL, *report = NULL, *profile = NULL;
     encode_opts o;
     encode_opts_default(&o);
     o.progress = cmd_progress;
+    /* the options each model of a vault is encoded with, as given (cmd_vault.c) */
+    const char **pass = calloc((size_t)argc + 1, sizeof *pass);
+    int npass = 0, vault_opt = 0;
+    cmd_vault_opts vo = {.jobs = 1};
+    if (!pass) {
+        fprintf(stderr, "%s: out of memory\n", cmd_prog);
+        return EXIT_NOMEM;
+    }
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int taken = vault_arg(a, v, &vo);
+        if (taken < 0) {
+            free(pass);
+            return EXIT_USAGE;
+        }
+        if (taken > 0) {
+            vault_opt = 1;
+            i += taken - 1;
+            continue;
+        }
+        if (a[0] == '-' && a[1] && strcmp(a, "-o") != 0 && strcmp(a, "-q") != 0 && strcmp(a, "--report") != 0) {
+            pass[npass++] = a; /* an encoding option, with its value if it takes one */
+            if (takes_value(a) && v)
+                pass[npass++] = v;
+        }
         if (strcmp(a, "-o") == 0 && v) {
             out = v;
             i++;
@@ -133,8 +218,45 @@ int cmd_encode(int argc, char **argv)
                 return EXIT_USAGE;
             i++;
         } else if (cmd_common_arg("encode", a, &path)) {
+            free(pass);
             return EXIT_USAGE;
         }
+    }
+    if (vo.list || (path && is_directory(path))) {
+        if (report) {
+            fprintf(stderr, "%s encode: --report is a model's face table: give it one model, not a folder or a list\n",
+                    cmd_prog);
+            free(pass);
+            return EXIT_USAGE;
+        }
+        if (vo.list && path) {
+            fprintf(stderr, "%s encode: a folder or --list, not both (got %s and --list %s)\n", cmd_prog, path, vo.list);
+            free(pass);
+            return EXIT_USAGE;
+        }
+        if (!out) {
+            fprintf(stderr, "%s encode: usage: cmz encode FOLDER|--list FILE -o OUTFOLDER [-j N] [options] (see cmz --help)\n",
+                    cmd_prog);
+            free(pass);
+            return EXIT_USAGE;
+        }
+        struct stat sb;
+        if (stat(out, &sb) == 0 && !S_ISDIR(sb.st_mode)) {
+            fprintf(stderr, "%s encode: -o %s: a folder for the outputs, and this is a file\n", cmd_prog, out);
+            free(pass);
+            return EXIT_USAGE;
+        }
+        vo.folder = path;
+        vo.out = out;
+        int rc = cmd_vault(&vo, pass, npass);
+        free(pass);
+        return rc;
+    }
+    free(pass);
+    if (vault_opt) {
+        fprintf(stderr, "%s encode: -j, --list, --summary, --force, --timeout and --shard are for a folder or a list "
+                        "of models (see cmz --help)\n", cmd_prog);
+        return EXIT_USAGE;
     }
     if (!path || !out) {
         fprintf(stderr, "%s encode: usage: cmz encode MODEL.igs -o MODEL.cmz [options] (see cmz --help)\n", cmd_prog);
@@ -271,6 +393,26 @@ int cmd_encode(int argc, char **argv)
             fprintf(stderr, "%s: %s: note: %d edge curves and %d surfaces re-approximated within a quarter of "
                     "their tolerance to fit profile %s\n", cmd_prog, path, r.edges_refit, r.surfs_refit,
                     o.target_name ? o.target_name : "?");
+        if (cmd_encode_summary_out) {
+            cmd_encode_summary *sm = cmd_encode_summary_out;
+            memset(sm, 0, sizeof *sm);
+            sm->in_bytes = isize;
+            sm->cmz_bytes = (long)r.len;
+            sm->faces_sent = lm.mesh.nfaces;
+            sm->faces_placed = (int)r.placed_faces;
+            sm->left_out = lm.nleft_out;
+            sm->parts_left_out = lm.brep.entities_failed;
+            sm->is_step = lm.is_step;
+            for (int i = 0; i < lm.mesh.nfaces; i++) {
+                const face_report *fr = &r.faces[i];
+                if (cm_method_of((unsigned)fr->method)->kept_surface)
+                    sm->kept++;
+                if (fr->rebuild_max > sm->max_err_mm)
+                    sm->max_err_mm = fr->rebuild_max;
+                if (fr->ratio > sm->max_ratio)
+                    sm->max_ratio = fr->ratio;
+            }
+        }
         if (r.tess_used > r.tess_asked)
             fprintf(stderr, "%s: %s: note: recommended chordal tolerance %.3g mm, not %.3g mm (%.0fx coarser), so that "
                     "profile %s can tessellate the model (a viewer may ask for finer: --tess)\n", cmd_prog, path,
