@@ -267,6 +267,8 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:readme-tables:$(MAKE) --no-print-directory -s check-readme" \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
 		"gate:stack-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack" \
+		"gate:stack-programs:$(MAKE) --no-print-directory -s check-stack-programs" \
+		"gate:stack-programs-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack-programs" \
 		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
 		"gate:import-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
@@ -295,6 +297,7 @@ test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,termi
 	$(Q)tests/tools/run_suites.sh \
 		$(UNIT_SUITES) \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
+		"gate:stack-programs:$(MAKE) --no-print-directory -s check-stack-programs" \
 		"gate:fuzz-replays:$(MAKE) --no-print-directory -s check-fuzz-replay-fast" \
 		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip" \
 		"gate:vault:$(MAKE) --no-print-directory -s check-vault" \

@@ -215,6 +215,16 @@
 #  define CM_STACK_BUDGET 65536
 #endif
 
+/* Deepest call path of a whole terminal program (cmz-decode, cmz-terminal:
+ * main, the link, the store, the writers, then the decoder), summed frames;
+ * every function of it also within CM_STACK_FN_MAX.  Unit: bytes.  32 KiB:
+ * a board's daemon thread may get as little as 64 KiB of stack, and the
+ * libraries below (libc, libusb, libgpiod), whose frames the gate cannot
+ * see, keep the other half.  Checked by `make check-stack-programs`. */
+#ifndef CM_STACK_PROGRAM_BUDGET
+#  define CM_STACK_PROGRAM_BUDGET 32768
+#endif
+
 /* ---- memory of one decode ---- */
 
 /* Static storage of one decode, sizeof(cm_decode_state) (cm_decode_state.h):

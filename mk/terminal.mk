@@ -136,3 +136,24 @@ check-link: $(LINK_RECOVERY_BIN)
 .PHONY: check-link-recovery
 check-link-recovery: $(LINK_RECOVERY_BIN)
 	$(Q)$(LINK_RECOVERY_BIN) tests/fuzz/corpus_decode/as1_pe_203_chunk0.cmzf
+
+# ---- the stack gate over whole terminal programs (issue 15.3) ----
+# cmz-decode's and cmz-terminal's own code (main, link, transports, GPIO, store, writers) is compiled
+# again here with the call graph on, and checked with the decoder's: no frame over CM_STACK_FN_MAX,
+# no recursion, every indirect call resolved by tests/tools/stack_indirect.txt, the deepest path
+# within CM_STACK_PROGRAM_BUDGET (libc, libusb and libgpiod frames are not seen: the budget leaves
+# them the rest of a small thread's stack).  gcc only (clang writes no call graph).
+STACK_PROGRAM_SRC := platform/cmz_decode_main.c platform/cm_decode_file.c platform/cm_report.c \
+	platform/cmz_terminal_main.c platform/cm_term_store.c $(LINK_TERM_SRC) $(GPIO_SRC)
+STACK_PROGRAM_CI := $(patsubst %.c,$(B)/stackgate/%.ci,$(STACK_PROGRAM_SRC))
+$(B)/stackgate/%.ci: %.c
+	@mkdir -p $(@D)
+	$(call say,CC-STACK,$@)
+	$(Q)$(CC) $(CM_INC_ALL) -DCM_PROFILE='"profiles/$(PROFILE).h"' $(LINK_USB_CFLAGS) $(GPIO_CFLAGS) $(CM_STD) \
+		$(CM_WARN) $(call stack_flags,$(PROFILE)) $(CFLAGS) -c $< -o $(@:.ci=.o)
+
+.PHONY: check-stack-programs
+check-stack-programs: $(B)/libcmdecoder.a $(BUILD_ROOT)/tools/check_stack $(STACK_PROGRAM_CI)
+	$(Q)$(STACK_CHECK) --fn-max $(call limit_of,$(PROFILE),CM_STACK_FN_MAX) \
+		--budget $(call limit_of,$(PROFILE),CM_STACK_PROGRAM_BUDGET) --indirect tests/tools/stack_indirect.txt \
+		$$(find $(B)/decoder -name '*.ci' | sort) $(STACK_PROGRAM_CI)

@@ -44,16 +44,23 @@ static cm_err io_fail(cm_status *st, const char *where)
     return e;
 }
 
+/* The file's bytes on their way to the decoder, and the serialiser's on their way to a file: static,
+ * not on the stack, so that a terminal program's deepest call path stays within
+ * CM_STACK_PROGRAM_BUDGET (make check-stack-programs).  A program reads or writes one file at a
+ * time (the terminal, cmz decode and cmz eval are single-threaded). */
+static uint8_t read_chunk[16384];
+static uint8_t write_chunk[65536];
+
 cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
 {
     cm_dec_init(dec);
     int fd = open(in_path, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         return io_fail(st, "open");
-    uint8_t chunk[16384];
+    uint8_t *chunk = read_chunk;
     cm_err e = CM_OK;
     for (;;) {
-        ssize_t n = read(fd, chunk, sizeof chunk);
+        ssize_t n = read(fd, chunk, sizeof read_chunk);
         if (n < 0) {
             if (errno == EINTR)
                 continue;
@@ -150,13 +157,13 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
 /* the serialiser's bytes into fd; step(ctx, "written") after the first chunk */
 static cm_err write_all(cm_out *w, int fd, uint64_t *total, cm_write_step *step, void *ctx, cm_status *st)
 {
-    uint8_t chunk[65536];
+    uint8_t *chunk = write_chunk;
     cm_err e = CM_OK;
     *total = 0;
     for (;;) {
         size_t n = 0;
         int done = 0;
-        if ((e = cm_out_next(w, chunk, sizeof chunk, &n, &done, st)) != CM_OK)
+        if ((e = cm_out_next(w, chunk, sizeof write_chunk, &n, &done, st)) != CM_OK)
             return e;
         for (size_t off = 0; off < n;) {
             ssize_t k = write(fd, chunk + off, n - off);

@@ -69,31 +69,44 @@ static uint64_t read_current(int dirfd)
 }
 
 /*
- * Call fn for every entry of directory fd but . and .. until a whole pass removes nothing: entries
- * unlinked while a directory is read may make the reader skip others, so one pass is not enough.
- * fn returns true when it removed the entry.
+ * A directory read entry by entry (getdents64, no heap).  Entries unlinked while a directory is
+ * read may make the reader skip others, so a caller that removes entries reads it again until a
+ * whole pass removes nothing (at most DIR_PASSES).  No callback: the walks nest (the store's walk
+ * removes a generation, whose own walk removes its files), and a call through a pointer would hide
+ * that bound from the stack gate (make check-stack-programs).
  */
-static void each_entry(int fd, bool (*fn)(void *ctx, const char *name, unsigned char type), void *ctx)
+enum { DIR_PASSES = 64 };
+
+typedef struct dir_reader {
+    int fd;
+    ssize_t n, at; /* bytes in buf, and the next entry's offset */
+    _Alignas(struct dirent64) char buf[4096];
+} dir_reader;
+
+/* start a pass over fd's entries; false if the directory cannot be read again */
+static bool dir_rewind(dir_reader *r, int fd)
 {
-    _Alignas(struct dirent64) char buf[4096]; /* not static: remove_gen reads a directory inside a pass over DIR */
-    for (int pass = 0; pass < 64; pass++) {
-        bool removed = false;
-        if (lseek(fd, 0, SEEK_SET) != 0)
-            return;
-        for (;;) {
-            ssize_t n = getdents64(fd, buf, sizeof buf);
-            if (n <= 0)
-                break;
-            for (ssize_t at = 0; at < n;) {
-                const struct dirent64 *d = (const struct dirent64 *)(const void *)(buf + at);
-                at += d->d_reclen;
-                if (strcmp(d->d_name, ".") == 0 || strcmp(d->d_name, "..") == 0)
-                    continue;
-                removed |= fn(ctx, d->d_name, d->d_type);
-            }
+    r->fd = fd;
+    r->n = r->at = 0;
+    return lseek(fd, 0, SEEK_SET) == 0;
+}
+
+/* the pass's next entry but . and .. (its type in *type), or NULL at its end */
+static const char *dir_next(dir_reader *r, unsigned char *type)
+{
+    for (;;) {
+        if (r->at >= r->n) {
+            r->n = getdents64(r->fd, r->buf, sizeof r->buf);
+            r->at = 0;
+            if (r->n <= 0)
+                return NULL;
         }
-        if (!removed)
-            return;
+        const struct dirent64 *d = (const struct dirent64 *)(const void *)(r->buf + r->at);
+        r->at += d->d_reclen;
+        if (strcmp(d->d_name, ".") != 0 && strcmp(d->d_name, "..") != 0) {
+            *type = d->d_type;
+            return d->d_name;
+        }
     }
 }
 
@@ -103,9 +116,8 @@ typedef struct gen_removal {
     unsigned removed;
 } gen_removal;
 
-static bool unlink_in_gen(void *ctx, const char *name, unsigned char type)
+static bool unlink_in_gen(gen_removal *g, const char *name, unsigned char type)
 {
-    gen_removal *g = ctx;
     (void)type;
     if (unlinkat(g->fd, name, 0) != 0)
         return false;
@@ -119,7 +131,15 @@ static void remove_gen(int dirfd, const char *name, bool kill_steps)
 {
     gen_removal g = {openat(dirfd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC), kill_steps, 0};
     if (g.fd >= 0) {
-        each_entry(g.fd, unlink_in_gen, &g);
+        dir_reader r;
+        for (int pass = 0; pass < DIR_PASSES && dir_rewind(&r, g.fd); pass++) {
+            bool removed = false;
+            unsigned char type;
+            for (const char *entry; (entry = dir_next(&r, &type));)
+                removed |= unlink_in_gen(&g, entry, type);
+            if (!removed)
+                break;
+        }
         close(g.fd);
     }
     unlinkat(dirfd, name, AT_REMOVEDIR);
@@ -147,9 +167,8 @@ static bool is_temp_link(const char *name)
            (strncmp(name, ".model.", 7) == 0 && n > 4 && strcmp(name + n - 4, ".new") == 0);
 }
 
-static bool clean_entry(void *ctx, const char *name, unsigned char type)
+static bool clean_entry(cm_term_store *s, const char *name, unsigned char type)
 {
-    cm_term_store *s = ctx;
     if (strncmp(name, GEN_PREFIX, strlen(GEN_PREFIX)) == 0) {
         if (gen_number(name) == s->gen && s->gen != 0)
             return false;
@@ -283,7 +302,15 @@ int cm_term_store_open(cm_term_store *s, const char *dir, bool stl)
         return -1;
     }
     s->gen = read_current(s->dirfd);
-    each_entry(s->dirfd, clean_entry, s);
+    dir_reader r;
+    for (int pass = 0; pass < DIR_PASSES && dir_rewind(&r, s->dirfd); pass++) {
+        bool removed = false;
+        unsigned char type;
+        for (const char *entry; (entry = dir_next(&r, &type));)
+            removed |= clean_entry(s, entry, type);
+        if (!removed)
+            break;
+    }
     if (migrate(s) != 0 || ensure_links(s) != 0) {
         close(s->dirfd);
         s->dirfd = -1;

@@ -7,7 +7,12 @@
  *     bounded by a sum of frames),
  *   - a frame is unboundedly dynamic (VLA/alloca slipped through) or larger than
  *     --fn-max,
- *   - a call is indirect (its callee, hence its stack, is unknown),
+ *   - a call is indirect (its callee, hence its stack, is unknown) and
+ *     --indirect FILE does not name where it goes: each line of FILE is
+ *     `caller: callee callee ...` (function names; a static one matches in
+ *     any file, so the bound stays conservative).  A caller that makes no
+ *     indirect call, or a callee in no call graph, fails too, so the table
+ *     stays true as the code changes,
  *   - the deepest call path, summed, exceeds --budget.
  * Calls out of the graph (libm, mem*) count as 0 bytes: check-noheap
  * restricts them to a short allowlist of leaf functions.
@@ -23,6 +28,7 @@ typedef struct node {
     char *title;
     long bytes;   /* -1: not defined in any .ci (external) */
     int dynamic;
+    int resolved; /* its indirect calls go where --indirect says */
     int nout;
     int *out;     /* callee node ids */
     int capout;
@@ -131,33 +137,116 @@ static const char *short_name(const char *title)
     return c ? c + 1 : title;
 }
 
+/* a function's name without its file and without gcc's clone suffixes (.constprop.0, .part.1, .isra.0) */
+static void base_name(const char *title, char *buf, size_t cap)
+{
+    snprintf(buf, cap, "%s", short_name(title));
+    char *dot = strchr(buf, '.');
+    if (dot)
+        *dot = '\0';
+}
+
+/* --indirect FILE: every indirect call of a listed caller becomes calls to its listed callees */
+static void resolve_indirect(const char *path, int indirect)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        perror(path);
+        exit(2);
+    }
+    char *line = NULL;
+    size_t cap = 0;
+    int lineno = 0;
+    while (getline(&line, &cap, f) > 0) {
+        lineno++;
+        char *colon = strchr(line, ':');
+        if (line[0] == '#' || !colon)
+            continue;
+        *colon = '\0';
+        char caller[256], nm[256];
+        if (sscanf(line, "%255s", caller) != 1)
+            continue;
+        char *callee[64];
+        int ncallee = 0;
+        char *save = NULL;
+        for (char *c = strtok_r(colon + 1, " \t\r\n", &save); c && ncallee < 64; c = strtok_r(NULL, " \t\r\n", &save))
+            callee[ncallee++] = c;
+        int callers = 0;
+        for (int m = 0; m < nnodes; m++) {
+            base_name(nodes[m].title, nm, sizeof nm);
+            int calls_through = 0;
+            for (int k = 0; k < nodes[m].nout; k++)
+                calls_through |= nodes[m].out[k] == indirect;
+            if (strcmp(nm, caller) != 0 || !calls_through)
+                continue;
+            callers++;
+            nodes[m].resolved = 1;
+            for (int e = 0; e < ncallee; e++) {
+                int found = 0;
+                for (int c = 0; c < nnodes; c++) {
+                    base_name(nodes[c].title, nm, sizeof nm);
+                    if (strcmp(nm, callee[e]) == 0 && nodes[c].bytes >= 0) {
+                        add_edge(m, c);
+                        found = 1;
+                    }
+                }
+                if (!found && callers == 1) {
+                    printf("check-stack: %s line %d: %s's callee %s is in no call graph read\n", path, lineno, caller,
+                           callee[e]);
+                    failures++;
+                }
+            }
+        }
+        if (!callers) {
+            printf("check-stack: %s line %d: %s makes no indirect call in the graphs read (a stale line)\n", path,
+                   lineno, caller);
+            failures++;
+        }
+    }
+    free(line);
+    fclose(f);
+}
+
 int main(int argc, char **argv)
 {
     long fn_max = 0, budget = 0;
+    const char *indirect_table = NULL;
     int i = 1;
     for (; i < argc; i++) {
         if (strcmp(argv[i], "--fn-max") == 0 && i + 1 < argc)
             fn_max = strtol(argv[++i], NULL, 10);
         else if (strcmp(argv[i], "--budget") == 0 && i + 1 < argc)
             budget = strtol(argv[++i], NULL, 10);
+        else if (strcmp(argv[i], "--indirect") == 0 && i + 1 < argc)
+            indirect_table = argv[++i];
         else
             break;
     }
     if (fn_max <= 0 || budget <= 0 || i >= argc) {
-        fprintf(stderr, "usage: check_stack --fn-max BYTES --budget BYTES FILE.ci...\n");
+        fprintf(stderr, "usage: check_stack --fn-max BYTES --budget BYTES [--indirect FILE] FILE.ci...\n");
         return 2;
     }
     for (; i < argc; i++)
         read_ci(argv[i]);
+    int indirect = -1;
+    for (int n = 0; n < nnodes; n++)
+        if (strstr(nodes[n].title, "__indirect_call"))
+            indirect = n;
+    if (indirect_table && indirect >= 0)
+        resolve_indirect(indirect_table, indirect);
+    else if (indirect_table) {
+        printf("check-stack: %s: no indirect call in the graphs read (the table is stale)\n", indirect_table);
+        failures++;
+    }
 
     long maxframe = 0;
     int maxframe_id = -1;
     for (int n = 0; n < nnodes; n++) {
         node *x = &nodes[n];
-        if (strstr(x->title, "__indirect_call")) {
+        if (n == indirect) {
             for (int m = 0; m < nnodes; m++)
                 for (int k = 0; k < nodes[m].nout; k++)
-                    if (nodes[m].out[k] == n) {
+                    if (nodes[m].out[k] == n && !nodes[m].resolved) {
                         printf("check-stack: %s makes an indirect call (callee stack unknown)\n",
                                short_name(nodes[m].title));
                         failures++;
