@@ -240,6 +240,11 @@ int cmd_encode(int argc, char **argv)
             free(pass);
             return EXIT_USAGE;
         }
+        if (profile && !cm_profile_limits(profile)) { /* before any worker: every model would fail alike */
+            fprintf(stderr, "%s encode: unknown profile '%s' (terminal, host or tiny)\n", cmd_prog, profile);
+            free(pass);
+            return EXIT_USAGE;
+        }
         struct stat sb;
         if (stat(out, &sb) == 0 && !S_ISDIR(sb.st_mode)) {
             fprintf(stderr, "%s encode: -o %s: a folder for the outputs, and this is a file\n", cmd_prog, out);

@@ -106,8 +106,7 @@ check '[ -s "$W/lo$V/a/b/leave_out.cmz" ] && grep -q "listed again" <<<"$out"' "
 
 # an interrupt: the summary is written, models not reached keep what the last run knew
 "$CMZ" encode "$W/slow" -o "$W/int" -q > /dev/null 2>&1 # slow.igs and quick.igs both encoded
-touch "$W/slow/quick.igs" "$W/slow/slow.igs"
-"$CMZ" encode "$W/slow" -o "$W/int" -q > "$W/int.txt" 2>&1 &
+"$CMZ" encode "$W/slow" -o "$W/int" -q --force > "$W/int.txt" 2>&1 &
 pid=$!
 sleep 1
 kill -INT $pid
@@ -119,9 +118,40 @@ check '[ "$(col "$W/int/cmz-vault.tsv" "$W/slow/slow.igs" status)" = not-run ] &
     "the interrupted model is not run and leaves nothing" "$(cat "$W/int/cmz-vault.tsv")"
 check '[ "$(col "$W/int/cmz-vault.tsv" "$W/slow/slow.igs" cmz_bytes)" = "$(stat -c %s "$W/int/slow.cmz")" ]' \
     "its row keeps what the last run built" "$(cat "$W/int/cmz-vault.tsv")"
-touch -d @1 "$W/slow/slow.igs" # as if the interrupted run had found it unchanged
 out=$("$CMZ" encode "$W/slow" -o "$W/int" -q 2>&1)
-check 'grep -q "0 encoded, 2 up to date" <<<"$out"' "the next run skips it when its output is still newer" "$out"
+check 'grep -q "0 encoded, 2 up to date" <<<"$out"' "the next run skips it: the model has not changed since its output" "$out"
+
+# names: three models whose outputs would clash, a tab in a name, a leading dash, links
+Q=$W/quick
+mkdir -p "$Q/sub"
+for f in part.igs part.iges part.igs.iges "tab	name.igs" -dash.igs; do cp "$V/a/b/leave_out.igs" "$Q/$f"; done
+mkdir -p "$W/elsewhere"
+cp "$V/a/b/leave_out.igs" "$W/elsewhere/model.igs"
+ln -s "$W/elsewhere/model.igs" "$Q/sub/linked.igs"
+ln -s "$Q/nothing.igs" "$Q/sub/dangling.igs"
+ln -s "$Q" "$W/quick_link"
+out=$("$CMZ" encode "$W/quick_link" -o "$W/qo" -q 2>&1)
+rc=$?
+check '[ -s "$W/qo/part.igs.cmz" ] && [ -s "$W/qo/part.iges.cmz" ] && [ -s "$W/qo/part.igs~2.cmz" ]' \
+    "models whose outputs would clash get one each" "$(ls "$W/qo") $out"
+check '[ -s "$W/qo/tab	name.cmz" ] && [ -s "$W/qo/-dash.cmz" ] && [ -s "$W/qo/sub/linked.cmz" ]' \
+    "a tab and a leading dash in a name, a link to a model; the folder given as a link" "$(ls -R "$W/qo") $out"
+check '[ $rc -eq 1 ] && grep -q "failed: $W/quick_link/sub/dangling.igs: a symbolic link to nothing" <<<"$out"' \
+    "a link to nothing is named" "exit $rc: $out"
+check '[ "$(awk -F"\t" "NR > 1" "$W/qo/cmz-vault.tsv" | wc -l)" -eq 7 ] && grep -qF "tab\\tname.igs" "$W/qo/cmz-vault.tsv"' \
+    "the summary has a row per model, a tab in a name escaped" "$(cat "$W/qo/cmz-vault.tsv")"
+out=$("$CMZ" encode "$W/quick_link" -o "$W/qo" -q 2>&1)
+check 'grep -q "7 models: 0 encoded, 6 up to date, 1 failed" <<<"$out"' "every name is found up to date again" "$out"
+# a model replaced by another one carrying an older time (a restore, rsync -a) is encoded again
+cp "$SMALL" "$Q/part.iges"
+touch -d @1000000000 "$Q/part.iges"
+out=$("$CMZ" encode "$W/quick_link" -o "$W/qo" -q 2>&1)
+check 'grep -q "1 encoded, 5 up to date, 1 failed" <<<"$out"' "a model replaced by an older-dated one is encoded again" "$out"
+# a model that no longer encodes loses its old output (it would not be this model)
+printf 'junk\n' > "$Q/part.iges"
+out=$("$CMZ" encode "$W/quick_link" -o "$W/qo" -q 2>&1)
+check '[ ! -e "$W/qo/part.iges.cmz" ] && grep -q "failed: $W/quick_link/part.iges" <<<"$out"' \
+    "a model that fails now leaves no earlier output" "$(ls "$W/qo") $out"
 
 # usage
 "$CMZ" encode "$SMALL" -o "$W/x.cmz" -j 2 > /dev/null 2>&1
