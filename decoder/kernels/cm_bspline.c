@@ -166,6 +166,28 @@ cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots
         ders[0][j] = ndu[j][p];
 
     int n = nd < p ? nd : p; /* derivatives above the degree vanish */
+    if (n == 1) {
+        /* first derivatives only (surface and curve evaluation with normals, Newton steps: nearly
+           every call): the general loop below with k = 1, where j1 > j2 leaves no inner loop and
+           a[s1][0] = 1.  The same operations in the same order, so the same bits, without the
+           bookkeeping; 1/x and -1/x round alike, so each reciprocal serves two neighbours. */
+        double inv_prev = 0.0;
+        for (int r = 0; r <= p; r++) {
+            double d = 0.0;
+            if (r >= 1)
+                d = inv_prev * ndu[r - 1][p - 1];
+            if (r <= p - 1) {
+                double inv = 1.0 / ndu[p][r];
+                d += -inv * ndu[r][p - 1];
+                inv_prev = inv;
+            }
+            ders[1][r] = d * (double)p;
+        }
+        for (int k = 2; k <= nd; k++)
+            for (int j = 0; j <= p; j++)
+                ders[k][j] = 0.0;
+        return CM_OK;
+    }
     for (int r = 0; r <= p; r++) {
         int s1 = 0, s2 = 1;
         a[0][0] = 1.0;
@@ -280,12 +302,56 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
         return e;
 
     for (int k = 0; k <= CM_MAX_DERS; k++)
-        for (int l = 0; l <= CM_MAX_DERS; l++) {
+        for (int l = 0; l <= CM_MAX_DERS; l++)
             S[k][l] = cm_v3(0, 0, 0);
-            Aw[k][l].x = Aw[k][l].y = Aw[k][l].z = Aw[k][l].w = 0.0;
+    /* (Aw needs no clearing: the quotient below reads only entries k + l <= nd, all written) */
+    if (nd == 1) {
+        /* the point and first derivatives (normals, Newton steps: nearly every call).  The loop
+           below contracts u twice, for k = 0 and 1, loading the net twice; here each control
+           point is loaded once for both.  Every sum still adds its terms in the same order, so
+           the bits are the general loop's. */
+        cm_hpt temp1[CM_MAX_ORDER];
+        for (int sidx = 0; sidx <= q; sidx++) {
+            cm_hpt t0 = {0, 0, 0, 0}, t1 = {0, 0, 0, 0};
+            for (int r = 0; r <= p; r++) {
+                long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
+                double wi = s->w ? s->w[idx] : 1.0;
+                cm_vec3 c = s->ctrl[idx];
+                double b0 = Nu[0][r] * wi, b1 = Nu[1][r] * wi;
+                t0.x += b0 * c.x;
+                t0.y += b0 * c.y;
+                t0.z += b0 * c.z;
+                t0.w += b0;
+                t1.x += b1 * c.x;
+                t1.y += b1 * c.y;
+                t1.z += b1 * c.z;
+                t1.w += b1;
+            }
+            temp[sidx] = t0;
+            temp1[sidx] = t1;
         }
+        cm_hpt a00 = {0, 0, 0, 0}, a01 = {0, 0, 0, 0}, a10 = {0, 0, 0, 0};
+        for (int sidx = 0; sidx <= q; sidx++) {
+            double b0 = Nv[0][sidx], b1 = Nv[1][sidx];
+            a00.x += b0 * temp[sidx].x;
+            a00.y += b0 * temp[sidx].y;
+            a00.z += b0 * temp[sidx].z;
+            a00.w += b0 * temp[sidx].w;
+            a01.x += b1 * temp[sidx].x;
+            a01.y += b1 * temp[sidx].y;
+            a01.z += b1 * temp[sidx].z;
+            a01.w += b1 * temp[sidx].w;
+            a10.x += b0 * temp1[sidx].x;
+            a10.y += b0 * temp1[sidx].y;
+            a10.z += b0 * temp1[sidx].z;
+            a10.w += b0 * temp1[sidx].w;
+        }
+        Aw[0][0] = a00;
+        Aw[0][1] = a01;
+        Aw[1][0] = a10;
+    }
     /* A3.6: contract u first into temp[s], then v; fixed summation order */
-    for (int k = 0; k <= nd; k++) {
+    for (int k = 0; k <= nd && nd != 1; k++) {
         for (int sidx = 0; sidx <= q; sidx++) {
             cm_hpt t = {0, 0, 0, 0};
             for (int r = 0; r <= p; r++) {

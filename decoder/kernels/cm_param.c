@@ -140,6 +140,29 @@ cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, do
     return grid_search(ps, P, n, NULL, u, v, dist, st);
 }
 
+cm_err cm_psurf_grid_points(const cm_psurf *ps, int n, cm_vec3 *g, cm_status *st)
+{
+    if (n < 2 || n > 64)
+        return cm_fail(st, CM_E_ARG, __func__);
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            cm_vec3 d[3];
+            cm_err e = cm_psurf_eval(ps, grid_at(ps->u0, ps->u1, i, n), grid_at(ps->v0, ps->v1, j, n), d, st);
+            if (e != CM_OK)
+                return e;
+            g[i * n + j] = d[0];
+        }
+    return CM_OK;
+}
+
+cm_err cm_psurf_project_grid_pts(const cm_psurf *ps, cm_vec3 P, int n, const cm_vec3 *g, double *u, double *v,
+                                 double *dist, cm_status *st)
+{
+    if (n < 2 || n > 64 || !g)
+        return cm_fail(st, CM_E_ARG, __func__);
+    return grid_search(ps, P, n, g, u, v, dist, st);
+}
+
 /*
  * cm_psurf_project_grid with the grid's surface points kept in ws for the rest of the loop: the same
  * evaluations in the same order, so the same answer (and the same error, at the same grid point,
@@ -153,14 +176,9 @@ static cm_err project_grid_cached(const cm_psurf *ps, cm_vec3 P, int n, cm_param
         return cm_psurf_project_grid(ps, P, n, u, v, dist, st);
     cm_vec3 *g = ws->grid + (which ? CM_PARAM_GRID_COARSE * CM_PARAM_GRID_COARSE : 0);
     if (!ws->grid_have[which]) {
-        for (int i = 0; i < n; i++)
-            for (int j = 0; j < n; j++) {
-                cm_vec3 d[3];
-                cm_err e = cm_psurf_eval(ps, grid_at(ps->u0, ps->u1, i, n), grid_at(ps->v0, ps->v1, j, n), d, st);
-                if (e != CM_OK)
-                    return e;
-                g[i * n + j] = d[0];
-            }
+        cm_err e = cm_psurf_grid_points(ps, n, g, st);
+        if (e != CM_OK)
+            return e;
         ws->grid_have[which] = 1;
     }
     return grid_search(ps, P, n, g, u, v, dist, st);

@@ -34,7 +34,22 @@ void face_domain_free(face_domain *fd)
     free(fd->uv);
     free(fd->xyz);
     free(fd->loops);
+    if (fd->grid)
+        free(fd->grid->pts);
+    free(fd->grid);
     memset(fd, 0, sizeof *fd);
+}
+
+cm_err face_domain_project_global(const face_domain *fd, cm_vec3 S, double *u, double *v, double *d)
+{
+    fd_grid *G = fd->grid;
+    if (G && G->state == 0) {
+        G->pts = malloc((size_t)FD_GRID_N * FD_GRID_N * sizeof *G->pts);
+        G->state = G->pts && cm_psurf_grid_points(&fd->ps, FD_GRID_N, G->pts, NULL) == CM_OK ? 1 : -1;
+    }
+    if (G && G->state == 1)
+        return cm_psurf_project_grid_pts(&fd->ps, S, FD_GRID_N, G->pts, u, v, d, NULL);
+    return cm_psurf_project_grid(&fd->ps, S, FD_GRID_N, u, v, d, NULL);
 }
 
 static double signed_area(const cm_vec2 *p, int n)
@@ -128,8 +143,9 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
     if (cm_psurf_init(&fd->ps, &view, tol, st) != CM_OK)
         return cm_fail(st, CM_E_DEGENERATE, "face_domain: surface");
     fd->loops = calloc((size_t)f->nloops + 1, sizeof *fd->loops);
+    fd->grid = calloc(1, sizeof *fd->grid);
     int *wu = calloc((size_t)f->nloops, sizeof(int)), *wv = calloc((size_t)f->nloops, sizeof(int));
-    if (!fd->loops || !wu || !wv) {
+    if (!fd->loops || !fd->grid || !wu || !wv) {
         free(wu);
         free(wv);
         return cm_fail(st, CM_E_NOMEM, "out of memory");

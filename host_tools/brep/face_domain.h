@@ -25,6 +25,15 @@ typedef struct fd_loop {
     int winds;      /* net turns around a closed direction (0 for an ordinary loop) */
 } fd_loop;
 
+/* the face's surface on verify.c's global-search grid, made on first need and kept: the encoder
+   projects thousands of points onto one face, and each search evaluated the whole grid again */
+typedef struct fd_grid {
+    int state;    /* 0 not made yet, 1 made, -1 an evaluation failed (search as before) */
+    cm_vec3 *pts; /* FD_GRID_N x FD_GRID_N points (cm_psurf_grid_points) */
+} fd_grid;
+
+#define FD_GRID_N 33
+
 typedef struct face_domain {
     int face;
     cm_psurf ps;      /* the face's surface, with its domain and closedness */
@@ -38,6 +47,7 @@ typedef struct face_domain {
     int reversed;     /* loops were reversed to match the face normal */
     int reordered;    /* the outer loop was not the file's first loop */
     int joined_seam;  /* winding loops were joined along the seam */
+    fd_grid *grid;    /* (its pointee changes under a const face_domain: a cache of what ps gives) */
 } face_domain;
 
 /**
@@ -49,6 +59,12 @@ typedef struct face_domain {
 CM_NODISCARD cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, cm_status *st);
 
 void face_domain_free(face_domain *fd);
+
+/**
+ * A global projection of S onto the face's surface: cm_psurf_project_grid at FD_GRID_N, over the
+ * grid kept in fd->grid (made on first need), so the same answer without evaluating the grid again.
+ */
+CM_NODISCARD cm_err face_domain_project_global(const face_domain *fd, cm_vec3 S, double *u, double *v, double *d);
 
 /** 1 if (u,v) is inside the outer polygon and outside every hole. */
 int face_domain_inside(const face_domain *fd, cm_vec2 uv);

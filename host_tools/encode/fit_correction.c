@@ -100,7 +100,7 @@ int fit_sides_within(const loaded_model *lm, int bface, const cm_greg_surface *g
                 double su = start.x, sv = start.y;
                 if (best < HUGE_VAL && cm_psurf_project_from(&fd->ps, S, &su, &sv, &d, NULL) != CM_OK)
                     d = HUGE_VAL;
-                if (!(d < tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d)
+                if (!(d < tol) && face_domain_project_global(fd, S, &ug, &vg, &dg) == CM_OK && dg < d)
                     d = dg;
                 if (!(d < tol))
                     return 0;
@@ -178,7 +178,7 @@ int fit_correction(const loaded_model *lm, int bface, const cm_greg_surface *gs0
             /* a foot stuck in a local minimum: search again (as verify.c's back measure does), in the
                first round only (later ones start from that foot, and the surface moved little) */
             double ug, vg, dg;
-            if (round == 0 && !(d < 0.5 * tol) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK &&
+            if (round == 0 && !(d < 0.5 * tol) && face_domain_project_global(fd, S, &ug, &vg, &dg) == CM_OK &&
                 dg < d) {
                 su = ug;
                 sv = vg;

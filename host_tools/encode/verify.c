@@ -418,7 +418,7 @@ static double point_to_source(const brep_model *m, const face_domain *fd, const 
         return HUGE_VAL;
     double dg, ug, vg;
     /* a foot stuck in a local minimum only overstates the distance: search again */
-    if (!(d < again) && cm_psurf_project_grid(&fd->ps, S, 33, &ug, &vg, &dg, NULL) == CM_OK && dg < d) {
+    if (!(d < again) && face_domain_project_global(fd, S, &ug, &vg, &dg) == CM_OK && dg < d) {
         d = dg;
         u = ug;
         v = vg;

@@ -369,10 +369,84 @@ static void test_uniform_knots_greville(void **state)
     assert_err(cm_knots_uniform(3, 3, U, NULL), CM_E_RANGE);
 }
 
+/* the first-derivative fast path (nd = 1) gives the general algorithm's bits (nd = 2 runs it),
+   for every degree, on uneven knots with repeats, at spans' ends and inside: the decoder's
+   tessellation and the encoder's checks must not move a bit */
+static void test_first_derivative_path_same_bits(void **state)
+{
+    (void)state;
+    uint32_t seed = 12345u;
+    for (int p = 1; p <= CM_MAX_DEGREE; p++) {
+        double U[2 * CM_MAX_ORDER + 8];
+        int nctrl = p + 5, nk = nctrl + p + 1;
+        for (int i = 0; i < nk; i++) {
+            if (i <= p)
+                U[i] = -1.5;
+            else if (i >= nctrl)
+                U[i] = 7.25;
+            else {
+                seed = seed * 1103515245u + 12345u;
+                U[i] = U[i - 1] + ((seed >> 16) % 4 == 0 ? 0.0 : 0.1 + (double)((seed >> 8) % 1000) / 300.0);
+                if (U[i] > 7.0)
+                    U[i] = 7.0;
+            }
+        }
+        for (int t = 0; t <= 200; t++) {
+            double u = -1.5 + 8.75 * t / 200.0;
+            int span = cm_bspl_find_span(nctrl, p, U, u);
+            double d1[CM_MAX_DERS + 1][CM_MAX_ORDER], d2[CM_MAX_DERS + 1][CM_MAX_ORDER];
+            assert_ok(cm_bspl_ders_basis(span, u, p, 1, U, d1, NULL));
+            assert_ok(cm_bspl_ders_basis(span, u, p, 2, U, d2, NULL));
+            assert_memory_equal(d1[0], d2[0], (size_t)(p + 1) * sizeof(double));
+            assert_memory_equal(d1[1], d2[1], (size_t)(p + 1) * sizeof(double));
+        }
+    }
+}
+
+/* the surface's first-derivative path (nd = 1) gives the general loop's bits (nd = 2 runs it), on
+   rational and polynomial nets of several degrees, across spans and at the ends */
+static void test_surface_first_derivative_path_same_bits(void **state)
+{
+    (void)state;
+    enum { NU = 7, NV = 6 };
+    static const int degs[][2] = {{3, 3}, {1, 2}, {2, 5}, {5, 1}, {3, 2}};
+    uint32_t seed = 777u;
+    cm_vec3 ctrl[NU * NV];
+    double w[NU * NV];
+    for (int i = 0; i < NU * NV; i++) {
+        seed = seed * 1103515245u + 12345u;
+        ctrl[i] = cm_v3((double)(seed % 1000) / 7.0, (double)((seed >> 10) % 1000) / 3.0, (double)((seed >> 20) % 1000) / 11.0);
+        w[i] = 0.5 + (double)((seed >> 5) % 100) / 50.0;
+    }
+    for (size_t d = 0; d < sizeof degs / sizeof degs[0]; d++)
+        for (int rational = 0; rational <= 1; rational++) {
+            int p = degs[d][0], q = degs[d][1];
+            if (p > CM_MAX_DEGREE || q > CM_MAX_DEGREE)
+                continue; /* the tiny profile's degree limit */
+            double U[NU + CM_MAX_ORDER], V[NV + CM_MAX_ORDER];
+            for (int i = 0; i < NU + p + 1; i++)
+                U[i] = i <= p ? 0.0 : i >= NU ? 1.0 : (double)(i - p) / (NU - p) + 0.01 * (i & 1);
+            for (int i = 0; i < NV + q + 1; i++)
+                V[i] = i <= q ? -2.0 : i >= NV ? 3.0 : -2.0 + 5.0 * (i - q) / (NV - q);
+            cm_surf s = {.p = p, .q = q, .nu = NU, .nv = NV, .U = U, .V = V, .ctrl = ctrl, .w = rational ? w : NULL};
+            for (int t = 0; t <= 40; t++) {
+                double u = t / 40.0, v = -2.0 + 5.0 * ((t * 7) % 41) / 40.0;
+                cm_vec3 S1[CM_MAX_DERS + 1][CM_MAX_DERS + 1], S2[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+                assert_ok(cm_surf_eval(&s, u, v, 1, S1, NULL));
+                assert_ok(cm_surf_eval(&s, u, v, 2, S2, NULL));
+                assert_memory_equal(&S1[0][0], &S2[0][0], sizeof(cm_vec3));
+                assert_memory_equal(&S1[1][0], &S2[1][0], sizeof(cm_vec3));
+                assert_memory_equal(&S1[0][1], &S2[0][1], sizeof(cm_vec3));
+            }
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ex23_basis_exact),
+        cmocka_unit_test(test_first_derivative_path_same_bits),
+        cmocka_unit_test(test_surface_first_derivative_path_same_bits),
         cmocka_unit_test(test_ex24_derivatives_exact),
         cmocka_unit_test(test_find_span_edges),
         cmocka_unit_test(test_partition_of_unity),

@@ -52,6 +52,14 @@ CM_NODISCARD cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double 
 CM_NODISCARD cm_err cm_psurf_project_grid(const cm_psurf *ps, cm_vec3 P, int n, double *u, double *v, double *dist,
                                           cm_status *st);
 
+/** The n x n grid of cm_psurf_project_grid (2 <= n <= 64): g[i * n + j] = S(u_i, v_j). */
+CM_NODISCARD cm_err cm_psurf_grid_points(const cm_psurf *ps, int n, cm_vec3 *g, cm_status *st);
+
+/** cm_psurf_project_grid over a grid cm_psurf_grid_points made: the same answer, without evaluating
+ *  the grid again (a caller projecting many points onto one surface keeps it). */
+CM_NODISCARD cm_err cm_psurf_project_grid_pts(const cm_psurf *ps, cm_vec3 P, int n, const cm_vec3 *g, double *u,
+                                              double *v, double *dist, cm_status *st);
+
 /** Workspace of cm_loop_uv. */
 /* cm_loop_uv's global searches use two grids, COARSE^2 and FINE^2 points; with
    CM_PARAM_GRID_CACHE the surface's points on them are evaluated once per loop instead of once per
