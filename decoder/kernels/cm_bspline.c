@@ -166,24 +166,37 @@ cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots
         ders[0][j] = ndu[j][p];
 
     int n = nd < p ? nd : p; /* derivatives above the degree vanish */
-    if (n == 1) {
-        /* first derivatives only (surface and curve evaluation with normals, Newton steps: nearly
-           every call): the general loop below with k = 1, where j1 > j2 leaves no inner loop and
-           a[s1][0] = 1.  The same operations in the same order, so the same bits, without the
-           bookkeeping; 1/x and -1/x round alike, so each reciprocal serves two neighbours. */
+    if (n == 1 || n == 2) {
+        /* first, or first and second, derivatives (normals and Newton steps; curvature of the
+           exact patches' sides): nearly every call.  The general loop below with k <= 2 unrolled:
+           its inner j loop runs at most once, a[s1][0] = 1, and a[][] holds the last two rows.
+           The same operations in the same order, so the same bits (unit tests compare with the
+           textbook loop); 1/x and -1/x round alike, so a reciprocal serves both neighbours. */
         double inv_prev = 0.0;
+        double fac1 = (double)p, fac2 = fac1 * (double)(p - 1);
         for (int r = 0; r <= p; r++) {
-            double d = 0.0;
+            double a10 = inv_prev, a11 = 0.0, d = 0.0;
             if (r >= 1)
-                d = inv_prev * ndu[r - 1][p - 1];
+                d = a10 * ndu[r - 1][p - 1];
             if (r <= p - 1) {
                 double inv = 1.0 / ndu[p][r];
-                d += -inv * ndu[r][p - 1];
+                a11 = -inv;
+                d += a11 * ndu[r][p - 1];
                 inv_prev = inv;
             }
-            ders[1][r] = d * (double)p;
+            ders[1][r] = d * fac1;
+            if (n == 2) {
+                double d2 = 0.0;
+                if (r >= 2)
+                    d2 = (a10 / ndu[p - 1][r - 2]) * ndu[r - 2][p - 2];
+                if (r >= 1 && r <= p - 1)
+                    d2 += ((a11 - a10) / ndu[p - 1][r - 1]) * ndu[r - 1][p - 2];
+                if (r <= p - 2)
+                    d2 += (-a11 / ndu[p - 1][r]) * ndu[r][p - 2];
+                ders[2][r] = d2 * fac2;
+            }
         }
-        for (int k = 2; k <= nd; k++)
+        for (int k = n + 1; k <= nd; k++)
             for (int j = 0; j <= p; j++)
                 ders[k][j] = 0.0;
         return CM_OK;
