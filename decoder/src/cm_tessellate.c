@@ -597,7 +597,7 @@ static int pass_again(const pass_table *last, pass_table *now, cm_tess_ws *ws, u
  * triangulated again; a few rounds bring every such point within tol.
  */
 static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *ntris_io, int nloops,
-                            double min_dist, double tol, double su, double sv, cm_status *st)
+                            double min_dist, double tol, double su, double sv, int *nsurface, cm_status *st)
 {
     int npts = *npts_io, ntris = *ntris_io, nxyz = 0, nbnd = ws->loop_start[nloops];
     cm_err e = CM_OK;
@@ -636,6 +636,8 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
                     pass_add(&now, skey);
             }
         }
+        /* the points just added carry their surface point (refine_worst): not evaluated again */
+        nxyz = npts;
         if (npts == before)
             break;
         last = now;
@@ -645,6 +647,7 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
     }
     *npts_io = npts;
     *ntris_io = ntris;
+    *nsurface = nxyz; /* points [0, nxyz) off the boundary have their surface point in ws->xyz */
     return CM_OK;
 }
 
@@ -656,8 +659,8 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
  * neighbours meet directly and the mesh stays closed.  Triangles are counter-clockwise in (u,v),
  * around Su x Sv; `turn` reverses them.
  */
-static cm_err emit_region(const chart *c, cm_tess_ws *ws, int npts, int ntris, cm_vec2 centre, int turn,
-                          cm_mesh *mesh, int *emitted, cm_status *st)
+static cm_err emit_region(const chart *c, cm_tess_ws *ws, int npts, int nsurface, int ntris, cm_vec2 centre,
+                          int turn, cm_mesh *mesh, int *emitted, cm_status *st)
 {
     cm_err e;
     for (int i = 0; i < npts; i++)
@@ -665,8 +668,11 @@ static cm_err emit_region(const chart *c, cm_tess_ws *ws, int npts, int ntris, c
     for (int t = 0; t < ntris; t++)
         for (int k = 0; k < 3; k++)
             ws->vmap[ws->tris[t][k]] = 0;
+    /* a boundary point takes its curve's point; an interior one the refinement evaluated keeps it
+       (point_xyz would evaluate the same (u,v) again: the same bits) */
     for (int i = 0; i < npts; i++)
-        if (ws->vmap[i] != UINT32_MAX && (e = point_xyz(c, ws, i, 0, st)) != CM_OK)
+        if (ws->vmap[i] != UINT32_MAX && (i >= nsurface || ws->src[i] >= 0) &&
+            (e = point_xyz(c, ws, i, 0, st)) != CM_OK)
             return e;
     int kept_tris = 0;
     for (int t = 0; t < ntris; t++) {
@@ -845,9 +851,10 @@ static cm_err tess_patch(const cm_greg_surface *gs, int patch, cm_tess_ws *ws, i
     int ntris = 0, emitted = 0;
     if ((e = triangulate(ws, npts, 1, min_dist, tol, &ntris, st)) != CM_OK)
         return e;
-    if ((e = refine_region(&c, ws, &npts, &ntris, 1, min_dist, tol, su, sv, st)) != CM_OK)
+    int nsurface = 0;
+    if ((e = refine_region(&c, ws, &npts, &ntris, 1, min_dist, tol, su, sv, &nsurface, st)) != CM_OK)
         return e;
-    if ((e = emit_region(&c, ws, npts, ntris, cm_v2(0.5, 0.5), 0, mesh, &emitted, st)) != CM_OK)
+    if ((e = emit_region(&c, ws, npts, nsurface, ntris, cm_v2(0.5, 0.5), 0, mesh, &emitted, st)) != CM_OK)
         return e;
     info->points = npts > info->points ? npts : info->points;
     info->triangles += emitted;
@@ -1095,13 +1102,14 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
     int ntris = 0;
     if ((e = triangulate(ws, npts, nloops, min_dist, tol, &ntris, st)) != CM_OK)
         return e;
-    if ((e = refine_region(&c, ws, &npts, &ntris, nloops, min_dist, tol, su, sv, st)) != CM_OK)
+    int nsurface = 0;
+    if ((e = refine_region(&c, ws, &npts, &ntris, nloops, min_dist, tol, su, sv, &nsurface, st)) != CM_OK)
         return e;
     info->points = npts;
     /* a flipped kept face turns its triangles */
     int emitted = 0;
-    if ((e = emit_region(&c, ws, npts, ntris, cm_v2(0.5 * (umin + umax), 0.5 * (vmin + vmax)), rb.sign < 0, mesh,
-                         &emitted, st)) != CM_OK)
+    if ((e = emit_region(&c, ws, npts, nsurface, ntris, cm_v2(0.5 * (umin + umax), 0.5 * (vmin + vmax)), rb.sign < 0,
+                         mesh, &emitted, st)) != CM_OK)
         return e;
     info->triangles = emitted;
     end_face(mesh, mf);
