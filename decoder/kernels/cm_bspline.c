@@ -137,6 +137,8 @@ cm_err cm_bspl_basis(int span, double u, int p, const double *knots, double *N, 
     return CM_OK;
 }
 
+_Static_assert(CM_MAX_DERS <= 2, "cm_bspl_ders_basis unrolls A2.3's derivative loop for k <= 2: extend it first");
+
 cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots,
                           double ders[CM_MAX_DERS + 1][CM_MAX_ORDER], cm_status *st)
 {
@@ -146,7 +148,6 @@ cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots
     if (nd < 0 || nd > CM_MAX_DERS)
         return cm_fail(st, CM_E_ARG, __func__);
     double ndu[CM_MAX_ORDER][CM_MAX_ORDER];
-    double a[2][CM_MAX_ORDER];
     double left[CM_MAX_ORDER], right[CM_MAX_ORDER];
 
     ndu[0][0] = 1.0;
@@ -166,72 +167,35 @@ cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots
         ders[0][j] = ndu[j][p];
 
     int n = nd < p ? nd : p; /* derivatives above the degree vanish */
-    if (n == 1 || n == 2) {
-        /* first, or first and second, derivatives (normals and Newton steps; curvature of the
-           exact patches' sides): nearly every call.  The general loop below with k <= 2 unrolled:
-           its inner j loop runs at most once, a[s1][0] = 1, and a[][] holds the last two rows.
-           The same operations in the same order, so the same bits (unit tests compare with the
-           textbook loop); 1/x and -1/x round alike, so a reciprocal serves both neighbours. */
-        double inv_prev = 0.0;
-        double fac1 = (double)p, fac2 = fac1 * (double)(p - 1);
-        for (int r = 0; r <= p; r++) {
-            double a10 = inv_prev, a11 = 0.0, d = 0.0;
-            if (r >= 1)
-                d = a10 * ndu[r - 1][p - 1];
-            if (r <= p - 1) {
-                double inv = 1.0 / ndu[p][r];
-                a11 = -inv;
-                d += a11 * ndu[r][p - 1];
-                inv_prev = inv;
-            }
-            ders[1][r] = d * fac1;
-            if (n == 2) {
-                double d2 = 0.0;
-                if (r >= 2)
-                    d2 = (a10 / ndu[p - 1][r - 2]) * ndu[r - 2][p - 2];
-                if (r >= 1 && r <= p - 1)
-                    d2 += ((a11 - a10) / ndu[p - 1][r - 1]) * ndu[r - 1][p - 2];
-                if (r <= p - 2)
-                    d2 += (-a11 / ndu[p - 1][r]) * ndu[r][p - 2];
-                ders[2][r] = d2 * fac2;
-            }
+    /* A2.3's derivative loop for k <= 2 (CM_MAX_DERS) unrolled: its inner j loop runs at most once,
+       a[s1][0] = 1, and a[][] holds the last two rows.  The same operations in the same order, so
+       the same bits (the unit tests keep the textbook loop and compare, every degree and order);
+       1/x and -1/x round alike, so one reciprocal serves two neighbours.  (The first derivatives
+       of nearly every call, normals and Newton steps, and the second of the exact patches' sides,
+       spent most of their time in the loop's bookkeeping.) */
+    double inv_prev = 0.0;
+    double fac1 = (double)p, fac2 = fac1 * (double)(p - 1);
+    for (int r = 0; r <= p && n >= 1; r++) {
+        double a10 = inv_prev, a11 = 0.0, d = 0.0;
+        if (r >= 1)
+            d = a10 * ndu[r - 1][p - 1];
+        if (r <= p - 1) {
+            double inv = 1.0 / ndu[p][r];
+            a11 = -inv;
+            d += a11 * ndu[r][p - 1];
+            inv_prev = inv;
         }
-        for (int k = n + 1; k <= nd; k++)
-            for (int j = 0; j <= p; j++)
-                ders[k][j] = 0.0;
-        return CM_OK;
-    }
-    for (int r = 0; r <= p; r++) {
-        int s1 = 0, s2 = 1;
-        a[0][0] = 1.0;
-        for (int k = 1; k <= n; k++) {
-            double d = 0.0;
-            int rk = r - k, pk = p - k;
-            if (r >= k) {
-                a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
-                d = a[s2][0] * ndu[rk][pk];
-            }
-            int j1 = rk >= -1 ? 1 : -rk;
-            int j2 = (r - 1 <= pk) ? k - 1 : p - r;
-            for (int j = j1; j <= j2; j++) {
-                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
-                d += a[s2][j] * ndu[rk + j][pk];
-            }
-            if (r <= pk) {
-                a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
-                d += a[s2][k] * ndu[r][pk];
-            }
-            ders[k][r] = d;
-            int t = s1;
-            s1 = s2;
-            s2 = t;
+        ders[1][r] = d * fac1;
+        if (n == 2) {
+            double d2 = 0.0;
+            if (r >= 2)
+                d2 = (a10 / ndu[p - 1][r - 2]) * ndu[r - 2][p - 2];
+            if (r >= 1 && r <= p - 1)
+                d2 += ((a11 - a10) / ndu[p - 1][r - 1]) * ndu[r - 1][p - 2];
+            if (r <= p - 2)
+                d2 += (-a11 / ndu[p - 1][r]) * ndu[r][p - 2];
+            ders[2][r] = d2 * fac2;
         }
-    }
-    double fac = (double)p;
-    for (int k = 1; k <= n; k++) {
-        for (int j = 0; j <= p; j++)
-            ders[k][j] *= fac;
-        fac *= (double)(p - k);
     }
     for (int k = n + 1; k <= nd; k++)
         for (int j = 0; j <= p; j++)
@@ -287,6 +251,24 @@ cm_err cm_curve_eval(const cm_curve *c, double u, int nd, cm_vec3 *d, cm_status 
     return CM_OK;
 }
 
+/* t += b (P, 1): a homogeneous sum's next term, in A3.6's order */
+static void hpt_add_point(cm_hpt *t, double b, cm_vec3 P)
+{
+    t->x += b * P.x;
+    t->y += b * P.y;
+    t->z += b * P.z;
+    t->w += b;
+}
+
+/* a += b h, component by component */
+static void hpt_add_scaled(cm_hpt *a, double b, cm_hpt h)
+{
+    a->x += b * h.x;
+    a->y += b * h.y;
+    a->z += b * h.z;
+    a->w += b * h.w;
+}
+
 cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1],
                     cm_status *st)
 {
@@ -329,35 +311,17 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
             for (int r = 0; r <= p; r++) {
                 long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
                 double wi = s->w ? s->w[idx] : 1.0;
-                cm_vec3 c = s->ctrl[idx];
-                double b0 = Nu[0][r] * wi, b1 = Nu[1][r] * wi;
-                t0.x += b0 * c.x;
-                t0.y += b0 * c.y;
-                t0.z += b0 * c.z;
-                t0.w += b0;
-                t1.x += b1 * c.x;
-                t1.y += b1 * c.y;
-                t1.z += b1 * c.z;
-                t1.w += b1;
+                hpt_add_point(&t0, Nu[0][r] * wi, s->ctrl[idx]);
+                hpt_add_point(&t1, Nu[1][r] * wi, s->ctrl[idx]);
             }
             temp[sidx] = t0;
             temp1[sidx] = t1;
         }
         cm_hpt a00 = {0, 0, 0, 0}, a01 = {0, 0, 0, 0}, a10 = {0, 0, 0, 0};
         for (int sidx = 0; sidx <= q; sidx++) {
-            double b0 = Nv[0][sidx], b1 = Nv[1][sidx];
-            a00.x += b0 * temp[sidx].x;
-            a00.y += b0 * temp[sidx].y;
-            a00.z += b0 * temp[sidx].z;
-            a00.w += b0 * temp[sidx].w;
-            a01.x += b1 * temp[sidx].x;
-            a01.y += b1 * temp[sidx].y;
-            a01.z += b1 * temp[sidx].z;
-            a01.w += b1 * temp[sidx].w;
-            a10.x += b0 * temp1[sidx].x;
-            a10.y += b0 * temp1[sidx].y;
-            a10.z += b0 * temp1[sidx].z;
-            a10.w += b0 * temp1[sidx].w;
+            hpt_add_scaled(&a00, Nv[0][sidx], temp[sidx]);
+            hpt_add_scaled(&a01, Nv[1][sidx], temp[sidx]);
+            hpt_add_scaled(&a10, Nv[0][sidx], temp1[sidx]);
         }
         Aw[0][0] = a00;
         Aw[0][1] = a01;
@@ -370,23 +334,14 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
             for (int r = 0; r <= p; r++) {
                 long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
                 double wi = s->w ? s->w[idx] : 1.0;
-                double b = Nu[k][r] * wi;
-                t.x += b * s->ctrl[idx].x;
-                t.y += b * s->ctrl[idx].y;
-                t.z += b * s->ctrl[idx].z;
-                t.w += b;
+                hpt_add_point(&t, Nu[k][r] * wi, s->ctrl[idx]);
             }
             temp[sidx] = t;
         }
         for (int l = 0; l <= nd - k; l++) {
             cm_hpt a = {0, 0, 0, 0};
-            for (int sidx = 0; sidx <= q; sidx++) {
-                double b = Nv[l][sidx];
-                a.x += b * temp[sidx].x;
-                a.y += b * temp[sidx].y;
-                a.z += b * temp[sidx].z;
-                a.w += b * temp[sidx].w;
-            }
+            for (int sidx = 0; sidx <= q; sidx++)
+                hpt_add_scaled(&a, Nv[l][sidx], temp[sidx]);
             Aw[k][l] = a;
         }
     }

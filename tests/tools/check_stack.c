@@ -95,13 +95,19 @@ static int field(const char *line, const char *key, char *buf, size_t cap)
     return 1;
 }
 
-static void read_ci(const char *path)
+static FILE *open_or_exit(const char *path)
 {
     FILE *f = fopen(path, "r");
     if (!f) {
         perror(path);
         exit(2);
     }
+    return f;
+}
+
+static void read_ci(const char *path)
+{
+    FILE *f = open_or_exit(path);
     char *line = NULL;
     size_t cap = 0;
     char a[4096], b[4096];
@@ -149,11 +155,7 @@ static void base_name(const char *title, char *buf, size_t cap)
 /* --indirect FILE: every indirect call of a listed caller becomes calls to its listed callees */
 static void resolve_indirect(const char *path, int indirect)
 {
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        perror(path);
-        exit(2);
-    }
+    FILE *f = open_or_exit(path);
     char *line = NULL;
     size_t cap = 0;
     int lineno = 0;
