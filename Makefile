@@ -269,6 +269,8 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:stack-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack" \
 		"gate:stack-programs:$(MAKE) --no-print-directory -s check-stack-programs" \
 		"gate:stack-programs-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-stack-programs" \
+		"gate:ram:$(MAKE) --no-print-directory -s check-ram" \
+		"gate:ram-aarch64:$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- check-ram" \
 		"gate:clang-sanitizers:$(MAKE) --no-print-directory -s check-clang" \
 		"gate:import-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
@@ -298,6 +300,7 @@ test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,termi
 		$(UNIT_SUITES) \
 		"gate:stack:$(MAKE) --no-print-directory -s check-stack" \
 		"gate:stack-programs:$(MAKE) --no-print-directory -s check-stack-programs" \
+		"gate:ram:$(MAKE) --no-print-directory -s check-ram" \
 		"gate:fuzz-replays:$(MAKE) --no-print-directory -s check-fuzz-replay-fast" \
 		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip" \
 		"gate:vault:$(MAKE) --no-print-directory -s check-vault" \

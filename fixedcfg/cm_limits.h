@@ -239,6 +239,16 @@
 #  define CM_DECODE_STATE_BUDGET 50331648
 #endif
 
+/* Static storage of a terminal program besides its decode state (cmz-decode,
+ * cmz-terminal: the link's frames and file, the transports, the writer's and
+ * reader's chunks, the store).  Unit: bytes.  A budget like the one above:
+ * `make check-ram` fails when a program's data + bss exceeds
+ * CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET (x86-64 and aarch64), so
+ * the board's RAM grows only on purpose.  Terminal: 1 MiB for about 290 KiB. */
+#ifndef CM_PROGRAM_STATIC_BUDGET
+#  define CM_PROGRAM_STATIC_BUDGET 1048576
+#endif
+
 /* ---- derived sizes: never set directly ---- */
 #define CM_MAX_ORDER (CM_MAX_DEGREE + 1)                      /* order = degree + 1 */
 #define CM_MAX_DERS 2                                         /* derivatives evaluated: S, S', S'' */

@@ -157,3 +157,10 @@ check-stack-programs: $(B)/libcmdecoder.a $(BUILD_ROOT)/tools/check_stack $(STAC
 	$(Q)$(STACK_CHECK) --fn-max $(call limit_of,$(PROFILE),CM_STACK_FN_MAX) \
 		--budget $(call limit_of,$(PROFILE),CM_STACK_PROGRAM_BUDGET) --indirect tests/tools/stack_indirect.txt \
 		$$(find $(B)/decoder -name '*.ci' | sort) $(STACK_PROGRAM_CI)
+
+# ---- the terminal programs' static RAM (issue 15.3) ----
+# data + bss of cmz-decode and cmz-terminal within CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET
+.PHONY: check-ram
+check-ram: $(B)/cmz-decode $(B)/cmz-terminal
+	$(Q)tests/tools/check_ram.sh $(CROSS_COMPILE)size $(CROSS_COMPILE)nm $(call limit_of,$(PROFILE),CM_DECODE_STATE_BUDGET) \
+		$(call limit_of,$(PROFILE),CM_PROGRAM_STATIC_BUDGET) $(B)/cmz-decode $(B)/cmz-terminal

@@ -46,6 +46,10 @@ void cm_report_limits(FILE *f)
 #endif
     fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", "decode budget", budget, "", "bytes",
             "CM_DECODE_STATE_BUDGET, checked at compile time", (double)budget / 1048576.0);
+    unsigned long long program = (unsigned long long)CM_PROGRAM_STATIC_BUDGET;
+    fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", "program budget", program, "", "bytes",
+            "CM_PROGRAM_STATIC_BUDGET: a terminal program's other static storage (make check-ram)",
+            (double)program / 1048576.0);
 }
 
 void cm_report_limits_markdown(FILE *f)

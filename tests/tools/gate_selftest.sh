@@ -28,6 +28,11 @@ printf 'fixture_small: fixture_deep\n' > "$tmp/indirect.txt"
 out=$("$stack" --fn-max 8192 --budget 65536 --indirect "$tmp/indirect.txt" "$tmp/bad_indirect.ci")
 if [ $? -eq 0 ]; then echo "stack gate accepted a stale indirect table"; fail=1; fi
 grep -q 'fixture_small makes no indirect call' <<<"$out" || { echo "stack gate did not name the stale line: $out"; fail=1; }
+# static RAM over its budget: named with its size
+$cc -std=c11 -O2 "$here/fixtures/bad_ram.c" -o "$tmp/bad_ram" || exit 1
+out=$("$here/check_ram.sh" size "$nm" 0 100000 "$tmp/bad_ram")
+if [ $? -eq 0 ]; then echo "ram gate accepted 300 kB over a 100 kB budget"; fail=1; fi
+grep -q "not ok 1 - $tmp/bad_ram: data + bss 3[0-9]\{5\} bytes" <<<"$out" || { echo "ram gate did not name the program's size: $out"; fail=1; }
 $cc -std=c11 -O2 -c "$here/fixtures/bad_heap.c" -o "$tmp/bad_heap.o" || exit 1
 rm -f "$tmp/bad_heap.a" && ar rcs "$tmp/bad_heap.a" "$tmp/bad_heap.o"
 out=$("$here/check_noheap.sh" "$nm" "$tmp/bad_heap.a" "$here/noheap_allow.txt")
@@ -42,5 +47,5 @@ out=$("$here/run_suites.sh" "gate:outer:$here/sum_suites.sh --parallel \"$here/s
 if [ $? -eq 0 ]; then echo "runner passed a failing nested test"; fail=1; fi
 sed -n '/^failures:/,$p' <<<"$out" | grep -q 'gate outer: 2 - the deeply nested test' ||
     { echo "runner did not name the nested failing test: $out"; fail=1; }
-[ $fail -eq 0 ] && echo "gate self-test: recursion, 20 kB frame, an unresolved or stale indirect call, malloc and stdio are all rejected; a nested failure is named"
+[ $fail -eq 0 ] && echo "gate self-test: recursion, 20 kB frame, an unresolved or stale indirect call, static RAM over its budget, malloc and stdio are all rejected; a nested failure is named"
 exit $fail

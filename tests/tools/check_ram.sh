@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# check_ram.sh SIZE NM DECODE_BUDGET PROGRAM_BUDGET PROGRAM... - the static RAM of the terminal's
+# programs (issue 15.3): each program's data + bss within CM_DECODE_STATE_BUDGET (its one decode
+# state) + CM_PROGRAM_STATIC_BUDGET (everything else: link, transports, store, I/O chunks).  Prints
+# each program's total, what is not the decode state, and its five largest static objects; exits 1
+# when one is over, naming it.  TAP.
+set -u
+size=$1 nm=$2 decode=$3 program=$4
+shift 4
+budget=$((decode + program))
+n=0 bad=0
+for bin in "$@"; do
+    n=$((n + 1))
+    read -r data bss < <("$size" -B "$bin" | awk 'NR == 2 { print $2, $3 }')
+    if [ -z "${data:-}" ] || [ -z "${bss:-}" ]; then
+        echo "not ok $n - $bin: $size gave no data and bss"
+        bad=$((bad + 1))
+        continue
+    fi
+    total=$((data + bss))
+    state=$("$nm" -S -t d "$bin" | awk '$4 == "state" && ($3 == "b" || $3 == "B") { print $2 + 0 }' | head -1)
+    own=$((total - ${state:-0}))
+    largest=$("$nm" -S -t d --size-sort "$bin" | awk '$3 ~ /^[bBdD]$/ { printf "%s %d; ", $4, $2 + 0 }' |
+        tr ';' '\n' | sed '/^ *$/d' | tail -n 5 | tac | tr '\n' ';')
+    msg="$bin: data + bss $total bytes (decode state ${state:-0}, the program's own $own), budget $budget"
+    if [ "$total" -le "$budget" ] && [ "$own" -le "$program" ]; then
+        echo "ok $n - $msg; largest:$largest"
+    else
+        echo "not ok $n - $msg: over CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET ($decode + $program); largest:$largest"
+        bad=$((bad + 1))
+    fi
+done
+echo "$((n - bad)) passed, $bad failed"
+[ $bad -eq 0 ]
