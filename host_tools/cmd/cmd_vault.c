@@ -54,6 +54,7 @@ typedef struct vault_job {
     int status; /* JOB_FAILED before any run: a folder or link that cannot be read (message says why) */
     int exit_code;
     int have_stat;
+    int is_link;    /* found as a symbolic link (a model reached also by its own path is encoded there) */
     long long in_size, in_mtime_ns; /* the model as it was just before it was encoded */
     dev_t dev;
     ino_t ino;
@@ -157,8 +158,9 @@ static int walk_one(const char *path, const struct stat *sb, int type, struct FT
     struct stat target;
     if (type == FTW_DNR) {
         snprintf(why, sizeof why, "a folder that cannot be read: its models are not encoded");
-    } else if (type == FTW_NS && is_model_name(base)) {
-        snprintf(why, sizeof why, "cannot look at it: %s", strerror(errno));
+    } else if (type == FTW_NS) {
+        /* a model, or a folder that may hold some: said, not skipped in silence */
+        snprintf(why, sizeof why, "cannot look at it (%s): its models, if any, are not encoded", strerror(errno));
     } else if (type == FTW_SL || type == FTW_SLN) {
         /* a link to a model is read (links to folders are not followed: no loops) */
         if (!is_model_name(base))
@@ -173,6 +175,8 @@ static int walk_one(const char *path, const struct stat *sb, int type, struct FT
     char *in = join3(walk_given, walk_given[0] && walk_given[strlen(walk_given) - 1] == '/' ? "" : "/", rel);
     char *r = walk_prefix && walk_prefix[0] ? join3(walk_prefix, "/", rel) : strdup(rel);
     int bad = !in || !r || (why[0] ? push_failed(&walk_found, in, r, why) : push_job(&walk_found, in, r));
+    if (!bad && (type == FTW_SL || type == FTW_SLN))
+        walk_found.v[walk_found.n - 1].is_link = 1;
     free(in);
     free(r);
     return bad;
@@ -212,6 +216,7 @@ static int walk_folder(const char *folder, const char *prefix, job_list *l)
         vault_job *j = &l->v[l->n - 1];
         j->status = f->status;
         j->exit_code = f->exit_code;
+        j->is_link = f->is_link;
         j->message = f->message;
         f->message = NULL;
     }
@@ -309,6 +314,8 @@ static int by_identity(const void *a, const void *b)
         c = x->dev != y->dev ? (x->dev > y->dev ? 1 : -1) : x->ino != y->ino ? (x->ino > y->ino ? 1 : -1) : 0;
     if (!c && !x->have_stat)
         c = strcmp(x->in, y->in);
+    if (!c) /* of one file, its own path before a link to it */
+        c = x->is_link - y->is_link;
     return c ? c : (*(const size_t *)a > *(const size_t *)b) - (*(const size_t *)a < *(const size_t *)b);
 }
 
@@ -422,6 +429,35 @@ static int name_outputs(job_list *l, const char *out)
     free(ix);
     free(clash);
     return rc;
+}
+
+/* the output folder as one spelling ("out", "out/" and "./out" are one folder, so that the summary's
+   rows, found by output path, are found again): repeated '/' and '.' components dropped */
+static char *folder_spelling(const char *path)
+{
+    size_t n = strlen(path);
+    char *r = malloc(n + 2), *w = r;
+    if (!r)
+        return NULL;
+    if (path[0] == '/')
+        *w++ = '/';
+    for (const char *p = path; *p;) {
+        while (*p == '/')
+            p++;
+        const char *e = strchr(p, '/');
+        size_t len = e ? (size_t)(e - p) : strlen(p);
+        if (len > 0 && !(len == 1 && p[0] == '.')) {
+            if (w > r && w[-1] != '/')
+                *w++ = '/';
+            memcpy(w, p, len);
+            w += len;
+        }
+        p += len;
+    }
+    if (w == r)
+        *w++ = '.';
+    *w = '\0';
+    return r;
 }
 
 /* mkdir -p of the folder that holds `path` */
@@ -624,12 +660,11 @@ static int up_to_date(const vault_job *j, const prev_row *p, const char *encoder
 
 /* ---- running the models ---- */
 
-static volatile sig_atomic_t interrupted;
+static volatile sig_atomic_t interrupted; /* the signal that stopped the vault, or 0 */
 
 static void on_interrupt(int sig)
 {
-    (void)sig;
-    interrupted = 1;
+    interrupted = sig;
 }
 
 static double now_s(void)
@@ -648,16 +683,18 @@ typedef struct slot {
 
 /* in the child: encode one model, its messages into `err`, its summary into `res`; never returns */
 static void run_child(const vault_job *j, const char **pass, int npass, const cmd_vault_opts *vo, slot *slots,
-                      int nslots, const slot *mine, pid_t parent)
+                      int nslots, const slot *mine, pid_t parent, const sigset_t *mask)
 {
-    /* stopped with the vault, however the vault ends (a worker left behind would write an output the
-       summary says was not made) */
-    prctl(PR_SET_PDEATHSIG, SIGTERM);
-    if (getppid() != parent)
-        _exit(128 + SIGTERM);
+    /* (INT, TERM and HUP arrive blocked.)  Stopped with the vault, however the vault ends: a worker
+       left behind would write an output the summary says was not made */
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
     signal(SIGHUP, SIG_DFL);
+    signal(SIGCHLD, SIG_DFL);
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent)
+        _exit(128 + SIGTERM);
+    sigprocmask(SIG_SETMASK, mask, NULL);
     int dn = open("/dev/null", O_WRONLY);
     if (dn >= 0) {
         dup2(dn, 1);
@@ -802,8 +839,9 @@ static void finish(vault_job *j, slot *s, int wstatus, const cmd_vault_opts *vo)
             }
         }
     }
-    if (j->status == JOB_FAILED)
-        remove(j->out); /* the last good encode of a model that no longer encodes would not be this model */
+    if (j->status == JOB_FAILED && WIFEXITED(wstatus) && WEXITSTATUS(wstatus) == EXIT_INPUT)
+        remove(j->out); /* the model no longer reads: its last good encode would not be this model (a
+                           timeout, a crash, memory or I/O says nothing of the model: its output stays) */
     j->warnings = text ? count_lines_with(text, ": warning: ") : 0;
     if (log && j->status != JOB_NOT_RUN) {
         if (text && text[0] && make_parents(log) == 0) {
@@ -955,9 +993,16 @@ static int launch(job_list *l, size_t next, slot *slots, int nslots, const char 
     s->t0 = now_s();
     fflush(NULL); /* a child must not write the parent's buffered output again */
     pid_t parent = getpid();
+    sigset_t stop, was;
+    sigemptyset(&stop);
+    sigaddset(&stop, SIGINT);
+    sigaddset(&stop, SIGTERM);
+    sigaddset(&stop, SIGHUP);
+    sigprocmask(SIG_BLOCK, &stop, &was); /* a ^C between fork and the child's own handlers is not lost */
     pid_t pid = fork();
     if (pid == 0)
-        run_child(&l->v[next], pass, npass, vo, slots, nslots, s, parent);
+        run_child(&l->v[next], pass, npass, vo, slots, nslots, s, parent, &was);
+    sigprocmask(SIG_SETMASK, &was, NULL);
     if (pid < 0) {
         int e = errno;
         fclose(s->err);
@@ -976,7 +1021,10 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
     for (size_t i = 0; rc == EXIT_OK && i < all.n; i++)
         stat_input(&all.v[i]);
     /* the outputs are named over all the models, so that a shard names them as the whole run would */
-    if (rc == EXIT_OK && name_outputs(&all, vo->out) != 0)
+    char *out = folder_spelling(vo->out);
+    if (!out)
+        rc = EXIT_NOMEM;
+    if (rc == EXIT_OK && name_outputs(&all, out) != 0)
         rc = EXIT_NOMEM;
     /* this task's share (--shard K/N: a batch engine's task K of N), by a hash of the model's place in
        the tree: a model stays in its shard when others are added or removed */
@@ -1009,7 +1057,7 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
     char summary_default[64] = "cmz-vault.tsv";
     if (vo->shard_n)
         snprintf(summary_default, sizeof summary_default, "cmz-vault.%d-of-%d.tsv", vo->shard_k, vo->shard_n);
-    char *summary = vo->summary ? strdup(vo->summary) : join3(vo->out, "/", summary_default);
+    char *summary = !out ? NULL : vo->summary ? strdup(vo->summary) : join3(out, "/", summary_default);
     size_t olen = 1;
     for (int i = 0; i < npass; i++)
         olen += strlen(pass[i]) + 1;
@@ -1018,6 +1066,7 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
         rc = EXIT_NOMEM;
     if (rc != EXIT_OK) {
         free(summary);
+        free(out);
         free(options);
         free_jobs(&l);
         return rc;
@@ -1053,6 +1102,11 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
     sigaction(SIGINT, &sa, &old_int);
     sigaction(SIGTERM, &sa, &old_term);
     sigaction(SIGHUP, &sa, &old_hup);
+    struct sigaction child_default, old_chld;
+    memset(&child_default, 0, sizeof child_default);
+    child_default.sa_handler = SIG_DFL; /* an inherited SIG_IGN would let the kernel reap the workers */
+    sigemptyset(&child_default.sa_mask);
+    sigaction(SIGCHLD, &child_default, &old_chld);
 
     int jobs = vo->jobs < 1 ? 1 : vo->jobs;
     slot *slots = calloc((size_t)jobs, sizeof *slots);
@@ -1092,6 +1146,23 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
             break;
         int wstatus;
         pid_t pid = waitpid(-1, &wstatus, 0);
+        if (pid < 0 && errno == ECHILD) {
+            /* no worker left to wait for (SIGCHLD was ignored: the kernel reaped them): say so */
+            for (int k = 0; k < jobs; k++)
+                if (slots[k].pid) {
+                    vault_job *j = &l.v[slots[k].job];
+                    j->status = JOB_FAILED;
+                    j->message = join3(j->in, ": ", "its worker's end was not seen (SIGCHLD ignored?)");
+                    fclose(slots[k].err);
+                    fclose(slots[k].res);
+                    slots[k].pid = 0;
+                    count[JOB_FAILED]++;
+                    running--;
+                    done++;
+                }
+            stopped = 1;
+            continue;
+        }
         if (pid < 0)
             continue; /* EINTR: the loop looks at the flag */
         for (int k = 0; k < jobs; k++)
@@ -1110,6 +1181,7 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
     sigaction(SIGINT, &old_int, NULL);
     sigaction(SIGTERM, &old_term, NULL);
     sigaction(SIGHUP, &old_hup, NULL);
+    sigaction(SIGCHLD, &old_chld, NULL);
     for (size_t i = 0; i < l.n; i++)
         if (l.v[i].status == JOB_PENDING) {
             l.v[i].status = JOB_NOT_RUN;
@@ -1136,7 +1208,7 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
                  start_error[0] ? "no worker could be started" : "interrupted");
     printf("%s -> %s: %zu models: %zu encoded, %zu up to date, %zu failed%s; %lld bytes -> %lld (%.1fx); %.0f s; "
            "summary %s\n",
-           from, vo->out, l.n, count[JOB_ENCODED], count[JOB_UP_TO_DATE], count[JOB_FAILED], not_run, in_total,
+           from, out, l.n, count[JOB_ENCODED], count[JOB_UP_TO_DATE], count[JOB_FAILED], not_run, in_total,
            out_total, out_total ? (double)in_total / (double)out_total : 0.0, now_s() - t0, summary);
     fflush(stdout);
     for (size_t i = 0; i < l.n; i++)
@@ -1150,7 +1222,7 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
             rc = EXIT_IO;
     }
     if (interrupted)
-        rc = 128 + SIGINT;
+        rc = 128 + interrupted;
     else if (rc == EXIT_OK && start_error[0])
         rc = EXIT_NOMEM;
     else if (rc == EXIT_OK && count[JOB_FAILED] > 0)
@@ -1158,6 +1230,7 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
     free_previous(prev, nprev);
     free(slots);
     free(summary);
+    free(out);
     free(options);
     free_jobs(&l);
     return rc;

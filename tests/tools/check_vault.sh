@@ -89,6 +89,22 @@ check '[ $rc -eq 1 ] && grep -q "failed: $W/slow/slow.igs: took longer than --ti
 check '[ -s "$W/slow_out/quick.cmz" ] && [ -z "$(ls "$W/slow_out" | grep -v -e "^quick.cmz" -e "^slow.cmz.log$" -e "^cmz-vault.tsv$")" ]' \
     "the rest encodes and the stopped model leaves no output nor temporary file" "$(ls "$W/slow_out")"
 
+# a timeout says nothing of the model: an earlier output of it stays
+"$CMZ" encode "$W/slow" -o "$W/slow_out" -q > /dev/null 2>&1
+cp "$W/slow_out/slow.cmz" "$W/slow_good.cmz" 2>/dev/null
+out=$("$CMZ" encode "$W/slow" -o "$W/slow_out" --force --timeout 1 -q 2>&1)
+check 'cmp -s "$W/slow_good.cmz" "$W/slow_out/slow.cmz" && [ "$(col "$W/slow_out/cmz-vault.tsv" "$W/slow/slow.igs" status)" = failed ]' \
+    "a model stopped by --timeout keeps its earlier output (its row says failed)" "$out"
+
+# workers are waited for even when SIGCHLD comes ignored (an inherited SIG_IGN let the kernel reap them)
+out=$( (trap '' CHLD; exec timeout 120 "$CMZ" encode "$V/a/b" -o "$W/chld" -q) 2>&1)
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "1 models: 1 encoded" <<<"$out"' "a vault started with SIGCHLD ignored ends" "exit $rc: $out"
+
+# one output folder however -o is spelled
+out=$("$CMZ" encode "$V/a/b" -o "$W/chld/" -q 2>&1; "$CMZ" encode "$V/a/b" -o "$W/./chld" -q 2>&1)
+check '[ "$(grep -c "0 encoded, 1 up to date" <<<"$out")" -eq 2 ]' "-o OUT/ and -o ./OUT are OUT" "$out"
+
 # shards: each model in exactly one, named as in the whole run
 for k in 0 1 2; do "$CMZ" encode "$V" -o "$W/sh" --shard $k/3 -q > /dev/null 2>&1; done
 rows=$(cat "$W"/sh/cmz-vault.*-of-3.tsv | grep -v '^input' | cut -f1 | sort)
@@ -114,6 +130,13 @@ wait $pid
 rc=$?
 out=$(cat "$W/int.txt")
 check '[ $rc -eq 130 ] && grep -q "not run (interrupted)" <<<"$out"' "an interrupt stops the run, exit 130" "exit $rc: $out"
+"$CMZ" encode "$W/slow" -o "$W/int_term" -q --force > /dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -TERM $pid
+wait $pid
+rc=$?
+check '[ $rc -eq 143 ] && [ -s "$W/int_term/cmz-vault.tsv" ]' "SIGTERM stops it too, exit 143, the summary written" "exit $rc"
 check '[ "$(col "$W/int/cmz-vault.tsv" "$W/slow/slow.igs" status)" = not-run ] && [ -z "$(ls "$W/int" | grep tmp)" ]' \
     "the interrupted model is not run and leaves nothing" "$(cat "$W/int/cmz-vault.tsv")"
 check '[ "$(col "$W/int/cmz-vault.tsv" "$W/slow/slow.igs" cmz_bytes)" = "$(stat -c %s "$W/int/slow.cmz")" ]' \
