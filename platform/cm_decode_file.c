@@ -51,6 +51,11 @@ static cm_err io_fail(cm_status *st, const char *where)
 static uint8_t read_chunk[16384];
 static uint8_t write_chunk[65536];
 
+size_t cm_decode_file_static_bytes(void)
+{
+    return sizeof read_chunk + sizeof write_chunk;
+}
+
 cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
 {
     cm_dec_init(dec);

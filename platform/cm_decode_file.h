@@ -74,6 +74,9 @@ typedef void cm_write_step(void *ctx, const char *step);
  * next generation, made visible as a whole).  On failure the file is removed.  step (may be NULL)
  * is called with ctx after each stage.
  */
+/** The static storage of this file's reader and writer (their I/O chunks), for `--limits`. */
+size_t cm_decode_file_static_bytes(void);
+
 CM_NODISCARD cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int dirfd, const char *name,
                                      uint64_t *bytes, cm_write_step *step, void *ctx, cm_status *st);
 

@@ -52,6 +52,19 @@ void cm_report_limits(FILE *f)
             (double)program / 1048576.0);
 }
 
+void cm_report_program_ram(FILE *f, const cm_ram_part *part, size_t n)
+{
+    unsigned long long sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f KiB)\n", part[i].name, part[i].bytes, "", "bytes", part[i].doc,
+                (double)part[i].bytes / 1024.0);
+        sum += part[i].bytes;
+    }
+    fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f KiB of %.1f KiB)\n", "program's own", sum, "", "bytes",
+            "its static storage beside the decode state, the parts above", (double)sum / 1024.0,
+            (double)CM_PROGRAM_STATIC_BUDGET / 1024.0);
+}
+
 void cm_report_limits_markdown(FILE *f)
 {
     fprintf(f, "| limit | %s | hard max | unit | meaning |\n|---|---:|---:|---|---|\n", cm_profile_name);

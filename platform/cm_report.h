@@ -20,6 +20,16 @@ char *cm_report_method_counts(char *buf, size_t cap, const uint32_t *count, int 
 /** The limits table of this build (profile name, then one row per limit). */
 void cm_report_limits(FILE *f);
 
+/** A program's own static storage, beside its decode state: one row of `--limits` each. */
+typedef struct cm_ram_part {
+    const char *name, *doc;
+    unsigned long long bytes;
+} cm_ram_part;
+
+/** The program's own static storage, part by part, and their sum against CM_PROGRAM_STATIC_BUDGET
+ *  (make check-ram measures the whole program). */
+void cm_report_program_ram(FILE *f, const cm_ram_part *part, size_t n);
+
 /** The limits table as a Markdown table (for README). */
 void cm_report_limits_markdown(FILE *f);
 

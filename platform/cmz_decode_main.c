@@ -59,6 +59,9 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(argv[i], "--limits") == 0) {
             cm_report_limits(stdout);
+            const cm_ram_part own[] = {
+                {"  I/O chunks", "the reader's and the writer's chunks", cm_decode_file_static_bytes()}};
+            cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
             return 0;
         } else if (strcmp(argv[i], "--version") == 0) {
             printf("cmz-decode 0.1.0 (format 1, profile %s)\n", cm_profile_name);

@@ -363,6 +363,16 @@ int main(int argc, char **argv)
         }
         if (strcmp(argv[i], "--limits") == 0) {
             cm_report_limits(stdout);
+            const cm_ram_part own[] = {
+                {"  link", "the link's frames, paths and state", sizeof term},
+                {"  store", "the displayed model's store", sizeof store},
+                {"  transports", "the serial line and stdio links", sizeof serial + sizeof stdio_link},
+#ifdef CM_HAVE_LIBUSB
+                {"  usb", "the USB transport", sizeof usb},
+#endif
+                {"  gpio", "the GPIO lines", sizeof gpio},
+                {"  I/O chunks", "the reader's and the writer's chunks", cm_decode_file_static_bytes()}};
+            cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
             return 0;
         }
         if (strcmp(argv[i], "--version") == 0) {

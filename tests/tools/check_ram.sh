@@ -29,6 +29,19 @@ for bin in "$@"; do
         echo "not ok $n - $msg: over CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET ($decode + $program); largest:$largest"
         bad=$((bad + 1))
     fi
+    # --limits names the program's own storage part by part: what it leaves unnamed stays small (a new
+    # buffer of 32 KiB or more must have its row); a foreign binary (a cross build) is not run
+    if named=$("$bin" --limits 2>/dev/null | awk '/^program.s own/ { print $3 }') && [ -n "$named" ]; then
+        n=$((n + 1))
+        if [ "$named" -le "$own" ] && [ $((own - named)) -lt 32768 ]; then
+            echo "ok $n - $bin --limits names $named of its own $own bytes"
+        else
+            echo "not ok $n - $bin --limits names $named of its own $own bytes: a static buffer of 32 KiB or more has no row"
+            bad=$((bad + 1))
+        fi
+    else
+        echo "# $bin --limits not run here (a cross build): its rows are checked natively"
+    fi
 done
 echo "$((n - bad)) passed, $bad failed"
 [ $bad -eq 0 ]
