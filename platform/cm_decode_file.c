@@ -62,10 +62,9 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
     int fd = open(in_path, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         return io_fail(st, "open");
-    uint8_t *chunk = read_chunk;
     cm_err e = CM_OK;
     for (;;) {
-        ssize_t n = read(fd, chunk, sizeof read_chunk);
+        ssize_t n = read(fd, read_chunk, sizeof read_chunk);
         if (n < 0) {
             if (errno == EINTR)
                 continue;
@@ -74,7 +73,7 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
         }
         if (n == 0)
             break;
-        if ((e = cm_dec_feed(dec, chunk, (size_t)n, st)) != CM_OK)
+        if ((e = cm_dec_feed(dec, read_chunk, (size_t)n, st)) != CM_OK)
             break;
     }
     close(fd);
@@ -162,16 +161,15 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
 /* the serialiser's bytes into fd; step(ctx, "written") after the first chunk */
 static cm_err write_all(cm_out *w, int fd, uint64_t *total, cm_write_step *step, void *ctx, cm_status *st)
 {
-    uint8_t *chunk = write_chunk;
     cm_err e = CM_OK;
     *total = 0;
     for (;;) {
         size_t n = 0;
         int done = 0;
-        if ((e = cm_out_next(w, chunk, sizeof write_chunk, &n, &done, st)) != CM_OK)
+        if ((e = cm_out_next(w, write_chunk, sizeof write_chunk, &n, &done, st)) != CM_OK)
             return e;
         for (size_t off = 0; off < n;) {
-            ssize_t k = write(fd, chunk + off, n - off);
+            ssize_t k = write(fd, write_chunk + off, n - off);
             if (k < 0 && errno == EINTR)
                 continue;
             if (k <= 0)

@@ -74,9 +74,6 @@ typedef void cm_write_step(void *ctx, const char *step);
  * next generation, made visible as a whole).  On failure the file is removed.  step (may be NULL)
  * is called with ctx after each stage.
  */
-/** The static storage of this file's reader and writer (their I/O chunks), for `--limits`. */
-size_t cm_decode_file_static_bytes(void);
-
 CM_NODISCARD cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int dirfd, const char *name,
                                      uint64_t *bytes, cm_write_step *step, void *ctx, cm_status *st);
 
@@ -110,5 +107,8 @@ static inline uint64_t cm_out_bytes_bound(cm_out_format fmt, uint64_t cmz_bytes)
     uint64_t seen = (fmt == CM_OUT_STL ? 2u : 1u) * CM_OUT_BYTES_PER_CMZ_BYTE * cmz_bytes;
     return seen < cap ? seen : cap;
 }
+
+/** The static storage of this file's reader and writer (their I/O chunks), for `--limits`. */
+size_t cm_decode_file_static_bytes(void);
 
 #endif /* CM_DECODE_FILE_H */

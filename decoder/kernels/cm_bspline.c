@@ -327,7 +327,7 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
         Aw[0][1] = a01;
         Aw[1][0] = a10;
     }
-    /* A3.6: contract u first into temp[s], then v; fixed summation order */
+    /* A3.6: contract u first into temp[s], then v; fixed summation order (nd = 1 done above) */
     for (int k = 0; k <= nd && nd != 1; k++) {
         for (int sidx = 0; sidx <= q; sidx++) {
             cm_hpt t = {0, 0, 0, 0};

@@ -37,11 +37,10 @@ int cmd_eval(int argc, char **argv);
 
 /** What one model's encode measured, for a vault's summary (cmd_vault.c). */
 typedef struct cmd_encode_summary {
-    long in_bytes, cmz_bytes;
+    long cmz_bytes;
     int faces_sent, faces_placed; /* faces sent, and those placed again as copies of parts (format 4.3) */
     int kept;                     /* sent faces whose surface is kept */
-    int left_out, parts_left_out; /* faces left out; solids, shells or instances left out */
-    int is_step;
+    int left_out;                 /* faces left out */
     double max_err_mm, max_ratio; /* the worst face's rebuilt surface against its source: mm, and / its box */
 } cmd_encode_summary;
 

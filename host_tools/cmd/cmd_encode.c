@@ -117,20 +117,36 @@ static int vault_arg(const char *a, const char *v, cmd_vault_opts *vo)
     return 0;
 }
 
-/* the encoding options that take a value (the parser below); a vault passes them on as given */
-static int takes_value(const char *a)
-{
-    static const char *const names[] = {"--profile", "--tol", "--tol-abs", "--format", "--quant", "--tess"};
-    for (size_t k = 0; k < sizeof names / sizeof names[0]; k++)
-        if (strcmp(a, names[k]) == 0)
-            return 1;
-    return 0;
-}
-
 static int is_directory(const char *path)
 {
     struct stat sb;
     return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+/* a folder or a list of models (cmd_vault.c), `pass` the encoding options as given: what only one
+   model can take is refused here, before any worker starts */
+static int encode_vault(cmd_vault_opts *vo, const char *path, const char *out, const char *report,
+                        const char *profile, const char **pass, int npass)
+{
+    struct stat sb;
+    if (report)
+        fprintf(stderr, "%s encode: --report is a model's face table: give it one model, not a folder or a list\n",
+                cmd_prog);
+    else if (vo->list && path)
+        fprintf(stderr, "%s encode: a folder or --list, not both (got %s and --list %s)\n", cmd_prog, path, vo->list);
+    else if (!out)
+        fprintf(stderr, "%s encode: usage: cmz encode FOLDER|--list FILE -o OUTFOLDER [-j N] [options] (see cmz --help)\n",
+                cmd_prog);
+    else if (profile && !cm_profile_limits(profile)) /* every model would fail alike */
+        fprintf(stderr, "%s encode: unknown profile '%s' (terminal, host or tiny)\n", cmd_prog, profile);
+    else if (stat(out, &sb) == 0 && !S_ISDIR(sb.st_mode))
+        fprintf(stderr, "%s encode: -o %s: a folder for the outputs, and this is a file\n", cmd_prog, out);
+    else {
+        vo->folder = path;
+        vo->out = out;
+        return cmd_vault(vo, pass, npass);
+    }
+    return EXIT_USAGE;
 }
 
 int cmd_encode(int argc, char **argv)
@@ -149,21 +165,17 @@ int cmd_encode(int argc, char **argv)
     }
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int taken = vault_arg(a, v, &vo);
+        int taken = vault_arg(a, v, &vo), first = i;
         if (taken < 0) {
-            free(pass);
-            return EXIT_USAGE;
+            goto usage;
         }
         if (taken > 0) {
             vault_opt = 1;
             i += taken - 1;
             continue;
         }
-        if (a[0] == '-' && a[1] && strcmp(a, "-o") != 0 && strcmp(a, "-q") != 0 && strcmp(a, "--report") != 0) {
-            pass[npass++] = a; /* an encoding option, with its value if it takes one */
-            if (takes_value(a) && v)
-                pass[npass++] = v;
-        }
+        /* an encoding option, with the value the parser below takes for it (argv[first..i]) */
+        int encoding = a[0] == '-' && a[1] && strcmp(a, "-o") != 0 && strcmp(a, "-q") != 0 && strcmp(a, "--report") != 0;
         if (strcmp(a, "-o") == 0 && v) {
             out = v;
             i++;
@@ -176,12 +188,12 @@ int cmd_encode(int argc, char **argv)
             i++;
         } else if (strcmp(a, "--tol") == 0 && v) {
             if (cmd_parse_real(a, v, 1e-9, 0.5, &o.rel_tol))
-                return EXIT_USAGE;
+                goto usage;
             o.rel_set = 1;
             i++;
         } else if (strcmp(a, "--tol-abs") == 0 && v) {
             if (cmd_parse_real(a, v, 1e-9, 1e9, &o.abs_tol))
-                return EXIT_USAGE;
+                goto usage;
             i++;
         } else if (strcmp(a, "--no-gregory") == 0) {
             o.gregory = 0; /* planes only (cmz --help): no fitted surface either */
@@ -205,55 +217,26 @@ int cmd_encode(int argc, char **argv)
             o.budget_steps = 0;
         } else if (strcmp(a, "--format") == 0 && v) {
             if (parse_format(v, &o))
-                return EXIT_USAGE;
+                goto usage;
             i++;
         } else if (strcmp(a, "--strict") == 0) {
             o.strict = 1;
         } else if (strcmp(a, "--quant") == 0 && v) {
             if (cmd_parse_real(a, v, 1e-12, 1e-2, &o.quant_rel))
-                return EXIT_USAGE;
+                goto usage;
             i++;
         } else if (strcmp(a, "--tess") == 0 && v) {
             if (cmd_parse_real(a, v, 1e-7, 0.1, &o.tess_rel))
-                return EXIT_USAGE;
+                goto usage;
             i++;
         } else if (cmd_common_arg("encode", a, &path)) {
-            free(pass);
-            return EXIT_USAGE;
+            goto usage;
         }
+        for (int k = first; encoding && k <= i; k++)
+            pass[npass++] = argv[k];
     }
     if (vo.list || (path && is_directory(path))) {
-        if (report) {
-            fprintf(stderr, "%s encode: --report is a model's face table: give it one model, not a folder or a list\n",
-                    cmd_prog);
-            free(pass);
-            return EXIT_USAGE;
-        }
-        if (vo.list && path) {
-            fprintf(stderr, "%s encode: a folder or --list, not both (got %s and --list %s)\n", cmd_prog, path, vo.list);
-            free(pass);
-            return EXIT_USAGE;
-        }
-        if (!out) {
-            fprintf(stderr, "%s encode: usage: cmz encode FOLDER|--list FILE -o OUTFOLDER [-j N] [options] (see cmz --help)\n",
-                    cmd_prog);
-            free(pass);
-            return EXIT_USAGE;
-        }
-        if (profile && !cm_profile_limits(profile)) { /* before any worker: every model would fail alike */
-            fprintf(stderr, "%s encode: unknown profile '%s' (terminal, host or tiny)\n", cmd_prog, profile);
-            free(pass);
-            return EXIT_USAGE;
-        }
-        struct stat sb;
-        if (stat(out, &sb) == 0 && !S_ISDIR(sb.st_mode)) {
-            fprintf(stderr, "%s encode: -o %s: a folder for the outputs, and this is a file\n", cmd_prog, out);
-            free(pass);
-            return EXIT_USAGE;
-        }
-        vo.folder = path;
-        vo.out = out;
-        int rc = cmd_vault(&vo, pass, npass);
+        int rc = encode_vault(&vo, path, out, report, profile, pass, npass);
         free(pass);
         return rc;
     }
@@ -401,13 +384,10 @@ int cmd_encode(int argc, char **argv)
         if (cmd_encode_summary_out) {
             cmd_encode_summary *sm = cmd_encode_summary_out;
             memset(sm, 0, sizeof *sm);
-            sm->in_bytes = isize;
             sm->cmz_bytes = (long)r.len;
             sm->faces_sent = lm.mesh.nfaces;
             sm->faces_placed = (int)r.placed_faces;
             sm->left_out = lm.nleft_out;
-            sm->parts_left_out = lm.brep.entities_failed;
-            sm->is_step = lm.is_step;
             for (int i = 0; i < lm.mesh.nfaces; i++) {
                 const face_report *fr = &r.faces[i];
                 if (cm_method_of((unsigned)fr->method)->kept_surface)
@@ -426,4 +406,7 @@ int cmd_encode(int argc, char **argv)
     encode_result_free(&r);
     model_free(&lm);
     return rc;
+usage: /* a bad argument, already said */
+    free(pass);
+    return EXIT_USAGE;
 }

@@ -78,7 +78,8 @@ static char *join3(const char *a, const char *b, const char *c)
     return s;
 }
 
-static int push_job(job_list *l, const char *in, const char *rel)
+/* room for one more job */
+static int reserve_one(job_list *l)
 {
     if (l->n == l->cap) {
         size_t cap = l->cap ? 2 * l->cap : 64;
@@ -88,6 +89,23 @@ static int push_job(job_list *l, const char *in, const char *rel)
         l->v = v;
         l->cap = cap;
     }
+    return 0;
+}
+
+/* append *j to l, which now owns its strings (j is left empty) */
+static int move_job(job_list *l, vault_job *j)
+{
+    if (reserve_one(l))
+        return -1;
+    l->v[l->n++] = *j;
+    memset(j, 0, sizeof *j);
+    return 0;
+}
+
+static int push_job(job_list *l, const char *in, const char *rel)
+{
+    if (reserve_one(l))
+        return -1;
     vault_job *j = &l->v[l->n];
     memset(j, 0, sizeof *j);
     j->in = strdup(in);
@@ -112,14 +130,18 @@ static int push_failed(job_list *l, const char *in, const char *rel, const char 
     return (j->message = join3(in, ": ", why)) ? 0 : -1;
 }
 
+static void free_job(vault_job *j)
+{
+    free(j->in);
+    free(j->rel);
+    free(j->out);
+    free(j->message);
+}
+
 static void free_jobs(job_list *l)
 {
-    for (size_t i = 0; i < l->n; i++) {
-        free(l->v[i].in);
-        free(l->v[i].rel);
-        free(l->v[i].out);
-        free(l->v[i].message);
-    }
+    for (size_t i = 0; i < l->n; i++)
+        free_job(&l->v[i]);
     free(l->v);
     memset(l, 0, sizeof *l);
 }
@@ -207,19 +229,9 @@ static int walk_folder(const char *folder, const char *prefix, job_list *l)
         rc = errno ? EXIT_IO : EXIT_NOMEM;
     }
     qsort(walk_found.v, walk_found.n, sizeof *walk_found.v, by_in);
-    for (size_t i = 0; rc == EXIT_OK && i < walk_found.n; i++) {
-        vault_job *f = &walk_found.v[i];
-        if (push_job(l, f->in, f->rel)) {
+    for (size_t i = 0; rc == EXIT_OK && i < walk_found.n; i++)
+        if (move_job(l, &walk_found.v[i]))
             rc = EXIT_NOMEM;
-            break;
-        }
-        vault_job *j = &l->v[l->n - 1];
-        j->status = f->status;
-        j->exit_code = f->exit_code;
-        j->is_link = f->is_link;
-        j->message = f->message;
-        f->message = NULL;
-    }
     free_jobs(&walk_found);
     free(real);
     return rc;
@@ -348,7 +360,7 @@ static int drop_duplicates(job_list *l)
     size_t w = 0;
     for (size_t i = 0; i < l->n; i++)
         if (l->v[i].status == JOB_DUPLICATE) {
-            free(l->v[i].in), free(l->v[i].rel), free(l->v[i].out), free(l->v[i].message);
+            free_job(&l->v[i]);
         } else {
             l->v[w++] = l->v[i];
         }
@@ -1034,18 +1046,8 @@ int cmd_vault(const cmd_vault_opts *vo, const char **pass, int npass)
         if (vo->shard_n && cm_crc32_update(0, (const uint8_t *)rel, strlen(rel)) % (uint32_t)vo->shard_n !=
                                (uint32_t)vo->shard_k)
             continue;
-        if (push_job(&l, all.v[i].in, rel)) {
+        if (move_job(&l, &all.v[i]))
             rc = EXIT_NOMEM;
-            break;
-        }
-        vault_job *j = &l.v[l.n - 1], *a = &all.v[i];
-        vault_job keep = *j;
-        *j = *a;
-        j->in = keep.in;
-        j->rel = keep.rel;
-        j->out = a->out;
-        j->message = a->message;
-        a->out = a->message = NULL;
     }
     free_jobs(&all);
     const char *from = vo->list ? (strcmp(vo->list, "-") == 0 ? "the list on stdin" : vo->list) : vo->folder;
