@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "cm/cm_arc.h"
 #include "cm/cm_arith.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_gregface.h"
@@ -609,6 +610,72 @@ static cm_err read_vref(reader *r, cm_ac_prob *newp, cm_ac_int *mb, uint32_t *ne
     return CM_OK;
 }
 
+/* the file is format 4.minor or newer */
+static int at_least_4(const reader *r, unsigned minor)
+{
+    return r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= minor);
+}
+
+/*
+ * Format 4.4: an arc edge.  Its middle point q comes as its offset from the chord's midpoint
+ * (cm_pred_arc_mid) in steps of its own; the curve is cm_arc_nurbs's rational quadratic through the
+ * edge's vertices and q, appended to the pools like any other curve.
+ */
+static cm_err read_arc(reader *r, cm_edge_ctx *ctx, cm_edge *E)
+{
+    cm_model *m = &r->d->model;
+    int64_t step, qk[3];
+    cm_err e = read_step(r, &ctx->arc_step, &step, "arc step");
+    if (e != CM_OK)
+        return e;
+    const int64_t *first = r->d->vq[E->v0], *last = r->d->vq[E->v1];
+    for (int k = 0; k < 3; k++)
+        if ((e = read_coord(r, &ctx->arc_coord[k], cm_pred_arc_mid(first[k], last[k]), step, &qk[k],
+                            "arc middle point")) != CM_OK)
+            return e;
+    cm_vec3 P[CM_ARC_MAX_CTRL];
+    double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
+    int n;
+    cm_status cst;
+    cm_status_init(&cst);
+    if (cm_arc_nurbs(m->verts[E->v0], grid_point(m, qk), m->verts[E->v1], P, W, K, &n, &cst) != CM_OK)
+        return rfail(r, cst.code, cst.where ? cst.where : "arc edge");
+    if (2 > CM_MAX_DEGREE)
+        return rlimit(r, CM_LIMIT_MAX_DEGREE, 2, CM_MAX_DEGREE, "edge degree");
+    if ((uint32_t)n > CM_MAX_EDGE_CTRL)
+        return rlimit(r, CM_LIMIT_MAX_EDGE_CTRL, (uint64_t)n, CM_MAX_EDGE_CTRL, "edge control points");
+    if ((uint32_t)n > CM_MAX_MODEL_CTRL - m->nctrl)
+        return rlimit(r, CM_LIMIT_MAX_MODEL_CTRL, (uint64_t)m->nctrl + (uint32_t)n, CM_MAX_MODEL_CTRL, "control points");
+    if ((uint32_t)n + 3 > CM_MAX_MODEL_KNOTS - m->nknots)
+        return rlimit(r, CM_LIMIT_MAX_MODEL_KNOTS, (uint64_t)m->nknots + (uint32_t)n + 3, CM_MAX_MODEL_KNOTS, "knots");
+    E->p = 2;
+    E->nctrl = (uint16_t)n;
+    E->rational = 1;
+    E->ctrl0 = m->nctrl;
+    E->knot0 = m->nknots;
+    for (int j = 0; j < n; j++) {
+        m->ctrl[m->nctrl + (uint32_t)j] = P[j];
+        m->w[m->nctrl + (uint32_t)j] = W[j];
+    }
+    for (int j = 0; j < n + 3; j++)
+        m->knots[m->nknots + (uint32_t)j] = K[j];
+    m->nctrl += (uint32_t)n;
+    m->nknots += (uint32_t)n + 3;
+    return CM_OK;
+}
+
+/* edge i's curve as the kernels will take it: degree, count, knots, finite points, weights > 0 */
+static cm_err check_edge_curve(reader *r, uint32_t i)
+{
+    cm_curve c;
+    cm_model_edge_curve(&r->d->model, i, &c);
+    cm_status cst;
+    cm_status_init(&cst);
+    if (cm_curve_check(&c, &cst) != CM_OK)
+        return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, "edge curve");
+    return CM_OK;
+}
+
 static cm_err sec_edge(reader *r)
 {
     cm_decoder *d = r->d;
@@ -619,6 +686,7 @@ static cm_err sec_edge(reader *r)
     if (e != CM_OK)
         return e;
     uint32_t vnext = 0;
+    int arcs = at_least_4(r, CM_FMT_ARC_MINOR);
     for (uint32_t i = 0; i < m->nedges; i++) {
         cm_edge *E = &m->edges[i];
         if ((e = read_vref(r, &ctx.is_new, &ctx.back, &vnext, &E->v0)) != CM_OK ||
@@ -627,6 +695,11 @@ static cm_err sec_edge(reader *r)
         E->g1 = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.g1);
         E->kind = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.kind);
         int p = 1, n = 2, rational = 0;
+        if (E->kind == CM_EDGE_CURVE && arcs && cm_ac_dec_bit(&r->ac, &ctx.arc)) {
+            if ((e = read_arc(r, &ctx, E)) != CM_OK || (e = check_edge_curve(r, i)) != CM_OK)
+                return e;
+            continue;
+        }
         if (E->kind == CM_EDGE_CURVE) {
             uint64_t pv = cm_ac_dec_uint(&r->ac, &ctx.degree) + 1;
             if (pv > CM_MAX_DEGREE)
@@ -699,12 +772,8 @@ static cm_err sec_edge(reader *r)
             W[j] = (double)wq / (double)WEIGHT_ONE;
         }
         m->nctrl += (uint32_t)n;
-        cm_curve c;
-        cm_model_edge_curve(m, i, &c);
-        cm_status cst;
-        cm_status_init(&cst);
-        if (cm_curve_check(&c, &cst) != CM_OK)
-            return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, "edge curve");
+        if ((e = check_edge_curve(r, i)) != CM_OK)
+            return e;
     }
     if (vnext != m->nverts)
         return rfail(r, CM_E_FORMAT, "unused vertices");
@@ -850,11 +919,6 @@ static cm_err read_placements(reader *r, cm_face_ctx *ctx)
     return CM_OK;
 }
 
-/* the file is format 4.minor or newer */
-static int at_least_4(const reader *r, unsigned minor)
-{
-    return r->d->version_major > 4 || (r->d->version_major == 4 && r->d->version_minor >= minor);
-}
 
 static cm_err sec_face(reader *r)
 {

@@ -35,6 +35,9 @@ void cm_edge_ctx_init(cm_edge_ctx *c)
     cm_ac_prob_init(&c->knot_zero);
     cm_ac_int_init(&c->knot_delta);
     cm_ac_int_init(&c->step);
+    cm_ac_prob_init(&c->arc);
+    cm_ac_int_init(&c->arc_step);
+    ints(c->arc_coord, 3);
 }
 
 void cm_surf_ctx_init(cm_surf_ctx *c)

@@ -373,9 +373,12 @@ int cmd_encode(int argc, char **argv)
         if (r.placements > 0)
             snprintf(placed, sizeof placed, "; %d sent, %u as %u placed copies of parts", lm.mesh.nfaces,
                      r.placed_faces, r.placements);
-        printf("%s -> %s: %d faces (%s%s%s), %d edges (%d lines), %zu bytes, %.1fx smaller than the %s (%ld bytes)\n",
+        char arcs[32] = "";
+        if (r.edges_arcs > 0)
+            snprintf(arcs, sizeof arcs, ", %d arcs", r.edges_arcs);
+        printf("%s -> %s: %d faces (%s%s%s), %d edges (%d lines%s), %zu bytes, %.1fx smaller than the %s (%ld bytes)\n",
                path, out, lm.mesh.nfaces + (int)r.placed_faces, methods, left, placed,
-               r.edges_line + r.edges_curve, r.edges_line, r.len, r.len ? (double)isize / (double)r.len : 0.0,
+               r.edges_line + r.edges_curve, r.edges_line, arcs, r.len, r.len ? (double)isize / (double)r.len : 0.0,
                lm.is_step ? "STEP" : "IGES", isize);
         if (r.edges_refit + r.surfs_refit > 0)
             fprintf(stderr, "%s: %s: note: %d edge curves and %d surfaces re-approximated within a quarter of "

@@ -214,7 +214,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
             t.fit[f] = NULL;
         }
         tx_free_edges(&t);
-        t.edges_refit = t.edges_reapproximated = 0;
+        t.edges_refit = t.edges_reapproximated = t.edges_arcs = 0;
         if ((e = tx_build_edges(lm, &t, st)) == CM_OK && t.nfaults == 0)
             e = enc_choose_and_write(lm, &t, o, r, st);
     }
@@ -236,6 +236,7 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     r->tess_asked = r->tess_used = enc_file_tess(&t, o->tess_rel * diag); /* as the file can say it */
     r->edges_refit = t.edges_refit;
     r->edges_reapproximated = t.edges_reapproximated;
+    r->edges_arcs = t.edges_arcs;
     r->surfs_refit = t.surfs_refit;
     r->surfs_reapproximated = t.surfs_reapproximated;
     for (int k = 0; e == CM_OK && t.nfaults == 0 && o->target && k < 4 && tess_over(o->target, r->need); k++) {

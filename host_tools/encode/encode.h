@@ -119,6 +119,7 @@ typedef struct encode_result {
     double q;          /* grid step (mm) */
     int edges_refit, surfs_refit; /* edges and kept surfaces re-approximated to fit the target profile */
     int edges_reapproximated;     /* curves sent as fewer cubic points within their budget (budget steps) */
+    int edges_arcs;               /* curves sent as arcs through their middle points (format 4.4) */
     int surfs_reapproximated;     /* kept surfaces likewise */
     int nets_whole;               /* kept nets sent whole: re-approximated, they folded their triangles */
     double tess_asked, tess_used; /* recommended chordal tolerance (mm): asked (--tess), written (coarser

@@ -49,7 +49,10 @@ typedef struct tx_edge {
     int64_t (*cq)[3]; /* n control points on the grid (ends = vertices) */
     int64_t *wq;      /* n weights */
     int linear, step; /* format 3: the predictor and the step 2^step of the interior points
-                         (tx_coarsen.c; 0, 0 in format 2) */
+                         (tx_coarsen.c; 0, 0 in format 2); of an arc, its middle point's */
+    int arc;          /* format 4.4: sent as the arc through its vertices and qa (tx_arc.c); p, n and
+                         rational are then the decoded curve's, cq, wq and kq NULL */
+    int64_t qa[3];    /* ... the arc's middle point on the grid */
 } tx_edge;
 
 typedef struct tx_surf {
@@ -69,6 +72,7 @@ typedef struct tx {
                             enc_keep_fine_edges); NULL: none */
     int no_vstep;       /* 1: the vertices stay on the grid (a face is kept) */
     int edges_reapproximated; /* curves sent as fewer cubic points within their budget (tx_coarsen.c) */
+    int edges_arcs;     /* curves sent as arcs (format 4.4, tx_arc.c) */
     int nverts, nedges, nfaces, nsurfs;
     int64_t (*vq)[3];   /* vertices in transmission order */
     tx_edge *edges;     /* in transmission order */
@@ -200,6 +204,11 @@ cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st);
 /* the decoded file's copies are lm's (faces, linear part exactly, translation within half a grid
    step): CM_E_FORMAT naming the copy when not (an encoder bug) */
 cm_err enc_placements_decoded(const tx *t, const loaded_model *lm, const cm_model *dm, cm_status *st);
+/* format 4.4 on: curves may be sent as arcs (tx_arc.c) */
+static inline int enc_arcs(const encode_opts *o)
+{
+    return enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_ARC_MINOR;
+}
 /* format 4.2 on: NFILL and G1FIT nets may carry an interior correction (cm_fit_net_add) */
 static inline int enc_net_fit(const encode_opts *o)
 {
@@ -227,7 +236,12 @@ static inline int64_t tx_edge_pred(const tx_edge *X, int linear, int j, int k)
 /* the estimate of what one sint costs once the models have learnt (write_sections.c) */
 double enc_sint_bits(int64_t v);
 /* ... and of what curve X costs in EDGE, as sec_edge writes it (write_sections.c) */
-double enc_edge_bits(const tx_edge *X, int predicted);
+double enc_edge_bits(const tx *t, const tx_edge *X, int predicted);
+/* an arc edge's middle point, coordinate k, less its prediction (the chord's midpoint), in steps */
+static inline int64_t tx_arc_residual(const tx *t, const tx_edge *X, int k)
+{
+    return (X->qa[k] - cm_pred_arc_mid(t->vq[X->v0][k], t->vq[X->v1][k])) / ((int64_t)1 << X->step);
+}
 
 /*
  * Format 3's precision from the tolerance budget (tx_coarsen.c): the interior control points of
@@ -241,6 +255,17 @@ void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm);
    to half as many more where it is rational or on uneven knots) that stays within a sixteenth of the
    tolerance of a face its size, matched at equal steps of length; 1 if it was replaced. */
 int tx_reapproximate_curve(const tx *t, hcurve *c);
+/* of the faces' tolerance, for the points of a curve or net (tx_coarsen.c) and an arc (tx_arc.c) */
+#define ENC_CURVE_SHARE (1.0 / 16.0)
+/* Format 4.4 (tx_arc.c): 1 and A an arc edge (its vertices and G1 flag as set) when curve c, from A's
+   vertex v0 to v1, is the arc through them and its middle point within a sixteenth of the tolerance
+   of a face its size, as the terminal will build it (cm_arc_nurbs), its middle point on the largest
+   step the budget allows (`fine`: on the grid, within two grid steps); else 0 and A as it was. */
+int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A);
+/* the step exponent for points whose shortest leg is h_min mm, within tol_mm's share (tx_coarsen.c) */
+int tx_choose_step(const tx *t, double tol_mm, double h_min);
+/* v / 2^s rounded to the nearest integer, halves away from zero */
+int64_t tx_div_step(int64_t v, int s);
 /* the tolerance (mm) of a face the size of curve c (the box of its control points holds it): no
    face it bounds is held to less */
 double curve_face_tol(const tx *t, const hcurve *c);

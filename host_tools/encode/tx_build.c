@@ -350,7 +350,7 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
             tx_edge A = {.v0 = X->v0, .v1 = X->v1, .g1 = X->g1};
             const char *abad = NULL;
             if ((err = tx_edge_fill(t, &A, &alt, 0, &abad, st)) == CM_OK && !abad &&
-                enc_edge_bits(&A, t->o->predicted) < enc_edge_bits(X, t->o->predicted)) {
+                enc_edge_bits(t, &A, t->o->predicted) < enc_edge_bits(t, X, t->o->predicted)) {
                 tx_edge_free(X);
                 *X = A;
                 t->edges_reapproximated++;
@@ -359,6 +359,16 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
             }
         }
         hcurve_free(&alt);
+        /* format 4.4: the arc it is, where that holds within the same share (on the grid: within two
+           grid steps) and costs fewer bits (tx_arc.c) */
+        if (!bad && err == CM_OK && t->o && X->kind == CM_EDGE_CURVE) {
+            tx_edge A = {.v0 = X->v0, .v1 = X->v1, .g1 = X->g1};
+            if (tx_arc_edge(t, &c, fine, &A) && enc_edge_bits(t, &A, t->o->predicted) < enc_edge_bits(t, X, t->o->predicted)) {
+                tx_edge_free(X);
+                *X = A;
+                t->edges_arcs++;
+            }
+        }
         if (bad)
             why[order[i]] = bad;
         hcurve_free(&c);

@@ -30,12 +30,12 @@
 #include <stdlib.h>
 
 
-#define BUDGET_SHARE (1.0 / 16.0) /* of the faces' tolerance, for the points of a curve or net */
+#define BUDGET_SHARE ENC_CURVE_SHARE
 #define KEPT_SURFACE_SHARE 0.25  /* of its face's tolerance, for a kept surface re-approximated */
 #define TURN_SHARE 4.4e-3         /* of the shortest leg: tan(0.5 deg) / 2, half a degree of turning */
 
-/* the step exponent for points whose shortest leg is h_min mm (0: coincident points) */
-static int choose_step(const tx *t, double tol_mm, double h_min)
+/* the step exponent (encode_internal.h); 0 for coincident points (h_min 0) */
+int tx_choose_step(const tx *t, double tol_mm, double h_min)
 {
     if (!t->o->predicted || !t->o->budget_steps || !(tol_mm > 0) || !(h_min > 0))
         return 0;
@@ -47,8 +47,8 @@ static int choose_step(const tx *t, double tol_mm, double h_min)
     return s;
 }
 
-/* v / 2^s rounded to the nearest integer (halves away from zero) */
-static int64_t div_step(int64_t v, int s)
+/* halves away from zero */
+int64_t tx_div_step(int64_t v, int s)
 {
     int64_t d = (int64_t)1 << s, h = d / 2;
     return v >= 0 ? (v + h) / d : -((-v + h) / d);
@@ -73,19 +73,19 @@ void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm)
     double h_min = HUGE_VAL;
     for (int j = 1; j < n; j++)
         h_min = fmin(h_min, leg_mm(t, X->cq[j], X->cq[j - 1]));
-    int s = fine ? 0 : choose_step(t, tol_mm, h_min);
+    int s = fine ? 0 : tx_choose_step(t, tol_mm, h_min);
     /* the predictor whose residuals, at this step, cost fewer bits (estimated open loop) */
     double bits[2] = {0, 0};
     for (int linear = 0; linear < 2; linear++)
         for (int j = 1; j < n - 1; j++)
             for (int k = 0; k < 3; k++)
-                bits[linear] += enc_sint_bits(div_step(X->cq[j][k] - tx_edge_pred(X, linear, j, k), s));
+                bits[linear] += enc_sint_bits(tx_div_step(X->cq[j][k] - tx_edge_pred(X, linear, j, k), s));
     X->linear = bits[1] < bits[0];
     X->step = s;
     for (int j = 1; j < n - 1; j++)
         for (int k = 0; k < 3; k++) {
             int64_t pred = tx_edge_pred(X, X->linear, j, k);
-            X->cq[j][k] = pred + div_step(X->cq[j][k] - pred, s) * ((int64_t)1 << s);
+            X->cq[j][k] = pred + tx_div_step(X->cq[j][k] - pred, s) * ((int64_t)1 << s);
         }
 }
 
@@ -322,11 +322,11 @@ void tx_coarsen_vertices(tx *t, const cmesh *cm)
         if (a0 >= 0 && a1 >= 0 && a0 != a1)
             h_min = fmin(h_min, leg_mm(t, t->vq[a0], t->vq[a1]));
     }
-    int s = choose_step(t, tol, h_min);
+    int s = tx_choose_step(t, tol, h_min);
     t->vstep = s;
     for (int v = 0; v < t->nverts; v++)
         for (int k = 0; k < 3; k++)
-            t->vq[v][k] = div_step(t->vq[v][k], s) * ((int64_t)1 << s);
+            t->vq[v][k] = tx_div_step(t->vq[v][k], s) * ((int64_t)1 << s);
 }
 
 /*

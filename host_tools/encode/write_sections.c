@@ -107,6 +107,15 @@ static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
         cm_ac_enc_bit(e, &ctx.kind, (unsigned)X->kind);
         if (X->kind == CM_EDGE_LINE)
             continue;
+        if (enc_arcs(t->o)) {
+            cm_ac_enc_bit(e, &ctx.arc, (unsigned)X->arc);
+            if (X->arc) {
+                cm_ac_enc_uint(e, &ctx.arc_step, (uint64_t)X->step);
+                for (int k = 0; k < 3; k++)
+                    cm_ac_enc_sint(e, &ctx.arc_coord[k], tx_arc_residual(t, X, k));
+                continue;
+            }
+        }
         cm_ac_enc_uint(e, &ctx.degree, (uint64_t)(X->p - 1));
         cm_ac_enc_uint(e, &ctx.ncoef, (uint64_t)(X->n - X->p - 1));
         cm_ac_enc_bit(e, &ctx.rational, (unsigned)X->rational);
@@ -186,11 +195,17 @@ static double est_knot_bits(int predicted, int uniform, const int64_t *kq, int i
     return b;
 }
 
-double enc_edge_bits(const tx_edge *X, int predicted)
+double enc_edge_bits(const tx *t, const tx_edge *X, int predicted)
 {
     double b = 2.0; /* kind, g1 */
     if (X->kind == CM_EDGE_LINE)
         return b;
+    if (X->arc) {
+        b += 1.0 + est_uint_bits((uint64_t)X->step);
+        for (int k = 0; k < 3; k++)
+            b += est_sint_bits(tx_arc_residual(t, X, k));
+        return b;
+    }
     b += est_uint_bits((uint64_t)(X->p - 1)) + est_uint_bits((uint64_t)(X->n - X->p - 1)) + 1.0;
     b += est_knot_bits(predicted, X->uniform, X->kq, X->n - X->p - 1);
     int linear = predicted ? X->linear : 0, step = predicted ? X->step : 0;

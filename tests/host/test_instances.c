@@ -114,7 +114,7 @@ static void test_copies_placed(void **state)
     encode_result r, rw;
     encode(&lm, 1, &r);
     encode(&whole, 1, &rw);
-    assert_int_equal(r.bytes[CM_HDR_MINOR], CM_FMT_PLACE_MINOR);
+    assert_true(r.bytes[CM_HDR_MINOR] >= CM_FMT_PLACE_MINOR);
     assert_int_equal(r.placements, 3);
     assert_int_equal(r.placed_faces, 21);
     assert_int_equal(r.need[CM_LIMIT_MAX_PLACEMENTS], 3);

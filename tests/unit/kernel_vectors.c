@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "cm/cm_arc.h"
 #include "cm/cm_bezier.h"
 #include "cm/cm_bspline.h"
 #include "cm/cm_cubic_convert.h"
@@ -201,6 +202,28 @@ int main(void)
         cm_patch po = cm_patch_of_surf(&oct);
         ok(cm_patch_project(&po, cm_scale(X, 0.7), &u, &v, &dist, NULL), "sproj");
         printf("sproj %d: %a %a %a\n", k, u, v, dist);
+    }
+
+    /* format 4.4: arcs of one, two and four pieces from their ends and middle points, and points on
+       them */
+    for (int k = 0; k < 6; k++) {
+        cm_vec3 a0 = rvec(&seed, 50.0), a2 = cm_add(a0, rvec(&seed, 10.0)), mid = cm_scale(cm_add(a0, a2), 0.5);
+        cm_vec3 off = cm_scale(cm_cross(cm_sub(a2, a0), rvec(&seed, 1.0)), 0.1 * (k + 1) * (k + 1));
+        cm_vec3 P[CM_ARC_MAX_CTRL];
+        double W[CM_ARC_MAX_CTRL], AK[CM_ARC_MAX_KNOTS];
+        int n = 0;
+        ok(cm_arc_nurbs(a0, cm_add(mid, off), a2, P, W, AK, &n, NULL), "arc");
+        for (int i = 0; i < n; i++) {
+            pv("arc ctrl", k * 10 + i, P[i]);
+            pd("arc weight", k * 10 + i, W[i]);
+        }
+        cm_curve ac = {2, n, AK, P, W};
+        for (int i = 0; i <= 4; i++) {
+            cm_vec3 d[2];
+            ok(cm_curve_eval(&ac, i / 4.0 + (i < 4 ? 0.01 : 0.0), 1, d, NULL), "arc eval");
+            pv("arc point", k * 10 + i, d[0]);
+            pv("arc tangent", k * 10 + i, d[1]);
+        }
     }
 
     /* K11: face frame of a skewed hexagon */

@@ -30,6 +30,13 @@ static inline int64_t cm_pred_ctrl(int linear, int j, int n, int64_t first, int6
     return 2 * prev - prev2;
 }
 
+/* format 4.4: an arc's middle point, coordinate by coordinate, from its ends: the chord's midpoint
+   (the integer quotient rounded towards zero, as C's /), which leaves the arc's sagitta to send */
+static inline int64_t cm_pred_arc_mid(int64_t first, int64_t last)
+{
+    return first + (last - first) / 2;
+}
+
 /* weight j (j >= 1; weight 0 is one, w_one): the weight two places before it, or for j = 1 the first */
 static inline int64_t cm_pred_weight(int j, int64_t prev, int64_t prev2)
 {

@@ -26,6 +26,8 @@ typedef struct cm_edge_ctx {
     cm_ac_prob linear, knot_zero; /* format 3: the curve's predictor, a repeated knot */
     cm_ac_int knot_delta;         /* format 3: a knot gap less the last gap that was not zero */
     cm_ac_int step;               /* format 3: the exponent of the curve's own step */
+    cm_ac_prob arc;               /* format 4.4: a curve sent as an arc (its middle point) */
+    cm_ac_int arc_step, arc_coord[3]; /* ... the point's step and its offset from the chord's midpoint */
 } cm_edge_ctx;
 
 /* SURF: count; per kept surface its degrees, sizes, knots, net and weights */

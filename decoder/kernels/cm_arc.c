@@ -1,0 +1,76 @@
+/* cm_arc.c - a circular arc from its ends and its middle point (see cm_arc.h). */
+#include "cm/cm_arc.h"
+
+#include <math.h>
+
+#include "cm/cm_bspline.h"
+
+typedef cm_hpt hp; /* (w x, w y, w z, w) */
+
+static hp hp_mid(hp a, hp b)
+{
+    hp r = {(a.x + b.x) * 0.5, (a.y + b.y) * 0.5, (a.z + b.z) * 0.5, (a.w + b.w) * 0.5};
+    return r;
+}
+
+static cm_vec3 hp_point(hp a)
+{
+    return cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
+}
+
+/* 1 - w below this (1 + w = 2 c^2 / (c^2 + h^2)): the arc is within about 0.1 degree of a full
+   circle, whose pieces' weights and points no longer hold their digits */
+#define ARC_MIN_OPEN 1e-6
+
+cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_CTRL], double w[CM_ARC_MAX_CTRL],
+                    double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st)
+{
+    *n = 0;
+    if (!isfinite(p0.x + p0.y + p0.z + q.x + q.y + q.z + p2.x + p2.y + p2.z))
+        return cm_fail(st, CM_E_NONFINITE, "arc");
+    cm_vec3 m = cm_v3((p0.x + p2.x) * 0.5, (p0.y + p2.y) * 0.5, (p0.z + p2.z) * 0.5);
+    cm_vec3 s = cm_sub(q, m);
+    double c2 = cm_norm2(cm_sub(p2, p0)) * 0.25, h2 = cm_norm2(s), den = c2 + h2;
+    if (!(c2 > 0))
+        return cm_fail(st, CM_E_DEGENERATE, "arc with coincident ends");
+    double open = 2.0 * c2 / den; /* 1 + w, without the cancellation */
+    if (!(open >= ARC_MIN_OPEN) || !isfinite(den))
+        return cm_fail(st, CM_E_DEGENERATE, "arc of a full circle");
+    double wm = (c2 - h2) / den;
+    /* the piece [A, B, C] in homogeneous form, cut until each turns by at most 90 degrees: the
+       whole when w >= cos 45 deg, two halves when w >= 0 (at most a half circle), else four */
+    hp piece[4][3];
+    piece[0][0] = (hp){p0.x, p0.y, p0.z, 1.0};
+    piece[0][1] = (hp){wm * m.x + open * s.x, wm * m.y + open * s.y, wm * m.z + open * s.z, wm};
+    piece[0][2] = (hp){p2.x, p2.y, p2.z, 1.0};
+    int k = wm > 0 && 2.0 * wm * wm >= 1.0 ? 1 : (wm >= 0 ? 2 : 4);
+    for (int have = 1; have < k; have *= 2)
+        for (int i = have - 1; i >= 0; i--) { /* from the last, so that piece i's halves land at 2i, 2i+1 */
+            hp a = piece[i][0], b = piece[i][1], c = piece[i][2];
+            hp ab = hp_mid(a, b), bc = hp_mid(b, c), abc = hp_mid(ab, bc);
+            piece[2 * i][0] = a;
+            piece[2 * i][1] = ab;
+            piece[2 * i][2] = abc;
+            piece[2 * i + 1][0] = abc;
+            piece[2 * i + 1][1] = bc;
+            piece[2 * i + 1][2] = c;
+        }
+    ctrl[0] = p0;
+    w[0] = 1.0;
+    for (int i = 0; i < k; i++) {
+        hp a = piece[i][0], b = piece[i][1], c = piece[i][2];
+        /* the same piece with weight 1 at both ends (a change of its parameter, not of its shape) */
+        ctrl[2 * i + 1] = hp_point(b);
+        w[2 * i + 1] = b.w / sqrt(a.w * c.w);
+        ctrl[2 * i + 2] = i == k - 1 ? p2 : hp_point(c);
+        w[2 * i + 2] = 1.0;
+    }
+    *n = 2 * k + 1;
+    for (int i = 0; i < 3; i++) {
+        knots[i] = 0.0;
+        knots[*n + i] = 1.0;
+    }
+    for (int i = 1; i < k; i++)
+        knots[2 * i + 1] = knots[2 * i + 2] = (double)i / (double)k;
+    return CM_OK;
+}

@@ -1,0 +1,36 @@
+/*
+ * cm_arc.h - a circular arc from its ends and its middle point, as the rational quadratic NURBS the
+ * rest of the decoder evaluates (format 4.4's arc edges, docs/FORMAT.md, EDGE).
+ *
+ * CAD models are full of circles: holes, fillets' ends, bosses.  Sent as NURBS, an arc costs its
+ * degree, count, knots, its middle control points and their weights; but an arc whose ends are
+ * known (the edge's vertices) is fixed by one point more, its middle.  Given that point q, the
+ * conic through p0, q and p2 with q at t = 1/2 and the weight w = (c^2 - h^2) / (c^2 + h^2) in the
+ * middle (c half the chord, h the distance of q from the chord's midpoint: w is the cosine of half
+ * the arc's angle) is that circle when q lies as far from p0 as from p2, and with q on the
+ * coordinate grid within a step of it otherwise.  In homogeneous form its middle point is
+ * (w m + (1 + w)(q - m), w), finite for every arc short of a full circle (w < 0 beyond a half
+ * circle), so it is cut in halves by de Casteljau's rule until every piece turns by at most 90
+ * degrees (1, 2 or 4 pieces, as The NURBS Book's A7.1), each piece then written with weight 1 at
+ * its ends.  Only + - * / and one square root per piece: the same bits on every machine.
+ */
+#ifndef CM_ARC_H
+#define CM_ARC_H
+
+#include "cm/cm_error.h"
+#include "cm/cm_vec.h"
+
+#define CM_ARC_MAX_CTRL 9   /* four pieces */
+#define CM_ARC_MAX_KNOTS 12 /* CM_ARC_MAX_CTRL + 3 */
+
+/**
+ * The arc from p0 through q to p2 as a clamped rational quadratic on [0,1]: *n (3, 5 or 9) control
+ * points in ctrl (ctrl[0] is p0 and ctrl[*n - 1] is p2, bit for bit), their weights in w (1 at
+ * the ends of every piece), *n + 3 knots (the pieces equally long in parameter).
+ * @return CM_OK; CM_E_DEGENERATE when p0 == p2 or the arc is within about 0.1 degree of a full
+ *         circle; CM_E_NONFINITE when a point is not finite.
+ */
+CM_NODISCARD cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_CTRL],
+                                 double w[CM_ARC_MAX_CTRL], double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st);
+
+#endif /* CM_ARC_H */

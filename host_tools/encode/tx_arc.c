@@ -1,0 +1,166 @@
+/*
+ * tx_arc.c - curves sent as the arcs they are (issue 14.4; format 4.4, docs/FORMAT.md, EDGE).
+ *
+ * A fifth of the corpus's bytes were circles: holes, the ends of fillets, bosses, each a rational
+ * quadratic of 3 to 9 control points with its weights and double knots (asitus__Shelt_channel_5:
+ * 8.7 of its 13.2 KB).  Its ends are the edge's vertices, which the terminal has; one point more, the
+ * arc's middle, fixes it, and that point is sent as its offset from the chord's midpoint (the
+ * arc's sagitta: one or two coordinates on an axis-aligned part).  The terminal builds the NURBS
+ * (cm_arc_nurbs); the encoder builds the same one from the same grid numbers and sends the arc
+ * only where it lies within the curves' share of the tolerance of the source curve, both ways,
+ * and costs fewer bits.  Whatever the curve's source form: a polynomial approximation of a
+ * circle becomes its arc as well.
+ *
+ * The middle point is the source curve's point as far from one end as from the other (found by
+ * bisection: that distance difference runs monotonically along an arc), put on the largest step
+ * the budget allows: the curves' share of the tolerance, and 4.4e-3 of the leg from an end to it,
+ * so that the end tangents turn by at most half a degree (tx_coarsen.c's rule for a control
+ * polygon's legs); on the grid itself when that step fails the check.
+ *
+ * An edge that stays on the grid (it bounds a kept face, whose surface meets it only as closely as
+ * the source file made them: tx_coarsen.c, enc_keep_fine_edges) is sent as an arc only where the
+ * arc through its middle point on the grid lies within FINE_STEPS grid steps of it: what its
+ * control points on the grid would move it by, about.
+ */
+#include "encode_internal.h"
+
+#include <math.h>
+
+#include "cm/cm_arc.h"
+
+#define SHOULDER_ITERATIONS 60 /* bisection halvings of the parameter interval */
+#define CHECK_SAMPLES 64       /* points of each curve tested against the other */
+#define POLY_SEGMENTS 256      /* chords of the curve they are tested against */
+#define PROJECT_ITERATIONS 40  /* golden-section steps onto the curve about its nearest chord */
+#define FINE_STEPS 2.0         /* grid steps: how far an edge that stays on the grid may move as an arc */
+
+static cm_vec3 grid_mm(const tx *t, const int64_t k[3])
+{
+    /* as the terminal's grid_point (cm_decode.c) */
+    return cm_v3(t->origin[0] + t->q * (double)k[0], t->origin[1] + t->q * (double)k[1],
+                 t->origin[2] + t->q * (double)k[2]);
+}
+
+static int eval_at(const cm_curve *c, double u, cm_vec3 *p)
+{
+    cm_status st;
+    cm_status_init(&st);
+    double a = c->knots[c->p], b = c->knots[c->n_ctrl];
+    return cm_curve_eval(c, a + (b - a) * u, 0, p, &st) == CM_OK;
+}
+
+/* the parameter (on [0,1] of the domain) of c's point as far from p0 as from p2 */
+static int shoulder(const cm_curve *c, cm_vec3 p0, cm_vec3 p2, double *u)
+{
+    double lo = 0, hi = 1;
+    for (int i = 0; i < SHOULDER_ITERATIONS; i++) {
+        double mid = 0.5 * (lo + hi);
+        cm_vec3 x;
+        if (!eval_at(c, mid, &x))
+            return 0;
+        if (cm_norm2(cm_sub(x, p0)) < cm_norm2(cm_sub(x, p2)))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    *u = 0.5 * (lo + hi);
+    return 1;
+}
+
+/* the largest distance from CHECK_SAMPLES + 1 points of a to curve b: the nearest of POLY_SEGMENTS
+   chords of b, then b's nearest point about it by golden-section search (HUGE_VAL when either does
+   not evaluate) */
+static double one_way(const cm_curve *a, const cm_curve *b)
+{
+    cm_vec3 poly[POLY_SEGMENTS + 1];
+    for (int i = 0; i <= POLY_SEGMENTS; i++)
+        if (!eval_at(b, (double)i / POLY_SEGMENTS, &poly[i]))
+            return HUGE_VAL;
+    double worst = 0;
+    for (int k = 0; k <= CHECK_SAMPLES; k++) {
+        cm_vec3 x;
+        if (!eval_at(a, (double)k / CHECK_SAMPLES, &x))
+            return HUGE_VAL;
+        double best = HUGE_VAL;
+        int near = 0;
+        for (int i = 0; i < POLY_SEGMENTS; i++) {
+            cm_vec3 s = cm_sub(poly[i + 1], poly[i]);
+            double L = cm_norm2(s), f = L > 0 ? cm_dot(cm_sub(x, poly[i]), s) / L : 0.0;
+            f = f < 0 ? 0 : (f > 1 ? 1 : f);
+            double d = cm_dist(x, cm_add(poly[i], cm_scale(s, f)));
+            if (d < best) {
+                best = d;
+                near = i;
+            }
+        }
+        /* the chords cut corners by up to their sagitta: the curve itself about the nearest one */
+        double lo = (double)(near > 0 ? near - 1 : 0) / POLY_SEGMENTS,
+               hi = (double)(near + 2 < POLY_SEGMENTS ? near + 2 : POLY_SEGMENTS) / POLY_SEGMENTS;
+        for (int it = 0; it < PROJECT_ITERATIONS; it++) {
+            double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
+            cm_vec3 y1, y2;
+            if (!eval_at(b, m1, &y1) || !eval_at(b, m2, &y2))
+                return HUGE_VAL;
+            double d1 = cm_dist(x, y1), d2 = cm_dist(x, y2);
+            best = fmin(best, fmin(d1, d2));
+            if (d1 < d2)
+                hi = m2;
+            else
+                lo = m1;
+        }
+        worst = fmax(worst, best);
+    }
+    return worst;
+}
+
+int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A)
+{
+    if (!t->o || !enc_arcs(t->o) || !t->o->budget_steps || A->v0 == A->v1 || c->n < 3)
+        return 0;
+    const int64_t *k0 = t->vq[A->v0], *k2 = t->vq[A->v1];
+    cm_vec3 p0 = grid_mm(t, k0), p2 = grid_mm(t, k2);
+    cm_curve src = hcurve_view(c);
+    double u, tol = fine ? FINE_STEPS * t->q : ENC_CURVE_SHARE * curve_face_tol(t, c);
+    cm_vec3 q;
+    if (!shoulder(&src, p0, p2, &u) || !eval_at(&src, u, &q))
+        return 0;
+    int64_t on_grid[3], pred[3];
+    for (int k = 0; k < 3; k++) {
+        double g = ((k == 0 ? q.x : k == 1 ? q.y : q.z) - t->origin[k]) / t->q;
+        if (!(fabs(g) < 0x1p40))
+            return 0;
+        on_grid[k] = llround(g);
+        pred[k] = cm_pred_arc_mid(k0[k], k2[k]);
+    }
+    int s = fine ? 0 : tx_choose_step(t, curve_face_tol(t, c), fmin(cm_dist(q, p0), cm_dist(q, p2)));
+    for (;; s = 0) {
+        int64_t qk[3];
+        for (int k = 0; k < 3; k++)
+            qk[k] = pred[k] + tx_div_step(on_grid[k] - pred[k], s) * ((int64_t)1 << s);
+        cm_vec3 P[CM_ARC_MAX_CTRL];
+        double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
+        int n;
+        cm_status st;
+        cm_status_init(&st);
+        /* a target board takes the curve the arc builds, or the arc is not sent (fit_board.c) */
+        const cm_limit_info *L = t->o->target;
+        if (cm_arc_nurbs(p0, grid_mm(t, qk), p2, P, W, K, &n, &st) == CM_OK &&
+            (!L || (n <= (int)L[CM_LIMIT_MAX_EDGE_CTRL].value && 2 <= (int)L[CM_LIMIT_MAX_DEGREE].value))) {
+            cm_curve arc = {2, n, K, P, W};
+            if (one_way(&src, &arc) <= tol && one_way(&arc, &src) <= tol) {
+                A->kind = CM_EDGE_CURVE;
+                A->arc = 1;
+                A->p = 2;
+                A->n = n;
+                A->rational = 1;
+                A->step = s;
+                A->linear = 0;
+                for (int k = 0; k < 3; k++)
+                    A->qa[k] = qk[k];
+                return 1;
+            }
+        }
+        if (s == 0)
+            return 0;
+    }
+}

@@ -1,0 +1,329 @@
+/*
+ * test_arcs.c - format 4.4's arc edges through the whole product: the encoder sends a half
+ * cylinder's half circles as arcs (their middle points), the terminal's decoder builds them on the
+ * circle within the curves' share of the tolerance, the file is smaller than 4.3's, and a 4.3 reader
+ * cannot take the same bytes.  Then arc records as a broken or hostile writer could send them, each
+ * in a file whose every length and CRC is right: refused by name, never a crash.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "../unit/test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "cm/cm_arith.h"
+#include "cm/cm_crc32.h"
+#include "cm/cm_decode.h"
+#include "cm/cm_predict.h"
+#include "cm/cm_sections.h"
+#include "encode/encode.h"
+#include "igs_writer.h"
+#include "model_load.h"
+
+#define CYL_R 10.0 /* the half cylinder: radius, axis z */
+#define CYL_H 20.0 /* and height */
+
+static cm_decoder dec;
+
+static void load_half_cylinder(loaded_model *lm)
+{
+    igw w;
+    igw_init(&w);
+    igw_half_cylinder_120(&w, CYL_R, CYL_H);
+    cm_status st;
+    assert_ok(igw_load(&w, "half_cylinder", lm, &st));
+}
+
+static void encode_minor(loaded_model *lm, int minor, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    if (minor >= 0)
+        encode_opts_for_format(&o, 4, minor);
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+static cm_err decode(const uint8_t *b, size_t len, cm_status *st)
+{
+    cm_status_init(st);
+    cm_dec_init(&dec);
+    cm_err e = cm_dec_feed(&dec, b, len, st);
+    return e == CM_OK ? cm_dec_finish(&dec, st) : e;
+}
+
+/* the rational quadratic edges of the decoded model: how many, and how far their points (at 64
+   steps) lie from the half cylinder's circles */
+static int curved_edges(const cm_model *m, double *worst)
+{
+    int n = 0;
+    *worst = 0;
+    for (uint32_t i = 0; i < m->nedges; i++) {
+        if (m->edges[i].kind != CM_EDGE_CURVE)
+            continue;
+        assert_int_equal(m->edges[i].p, 2);
+        assert_int_equal(m->edges[i].rational, 1);
+        n++;
+        cm_curve c;
+        cm_model_edge_curve(m, i, &c);
+        for (int k = 0; k <= 64; k++) {
+            cm_vec3 x;
+            assert_ok(cm_curve_eval(&c, k / 64.0, 0, &x, NULL));
+            *worst = fmax(*worst, fabs(sqrt(x.x * x.x + x.y * x.y) - CYL_R));
+        }
+    }
+    return n;
+}
+
+/*
+ * Its two half circles go as arcs (two pieces each, A7.1's), on the circle within a sixteenth of
+ * the tolerance (1e-3 of the model's diagonal at most), the file smaller than format 4.3's, which
+ * sends them as rational NURBS; the 4.4 bytes read as 4.3 do not decode to the same edges.
+ */
+static void test_half_circles_as_arcs(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    load_half_cylinder(&lm);
+    encode_result r, r43;
+    encode_minor(&lm, -1, &r);
+    assert_int_equal(r.bytes[CM_HDR_MINOR], CM_FMT_ARC_MINOR);
+    assert_int_equal(r.edges_arcs, 2);
+    cm_status st;
+    assert_ok(decode(r.bytes, r.len, &st));
+    double worst, diag = sqrt(4 * CYL_R * CYL_R + CYL_R * CYL_R + CYL_H * CYL_H);
+    assert_int_equal(curved_edges(&dec.model, &worst), 2);
+    for (uint32_t i = 0; i < dec.model.nedges; i++)
+        if (dec.model.edges[i].kind == CM_EDGE_CURVE)
+            assert_int_equal(dec.model.edges[i].nctrl, 5);
+    if (!(worst <= 1e-3 * diag / 16))
+        fail_msg("an arc %.3g mm off its circle", worst);
+    encode_minor(&lm, (int)CM_FMT_PLACE_MINOR, &r43);
+    assert_int_equal(r43.edges_arcs, 0);
+    if (!(r.len < r43.len))
+        fail_msg("4.4: %zu bytes, 4.3: %zu", r.len, r43.len);
+    assert_ok(decode(r43.bytes, r43.len, &st));
+    assert_int_equal(curved_edges(&dec.model, &worst), 2);
+    /* the 4.4 file as a 4.3 writer would have labelled it: its arc bits are read as degrees */
+    uint8_t *b = malloc(r.len);
+    assert_non_null(b);
+    memcpy(b, r.bytes, r.len);
+    b[CM_HDR_MINOR] = (uint8_t)CM_FMT_PLACE_MINOR;
+    uint32_t at = CM_FMT_COMPACT_AT_H;
+    uint64_t H = 0;
+    assert_true(cm_fmt_get_varint(b, (uint32_t)r.len, &at, &H));
+    cm_put_u32(b + H - 4, cm_crc32(b, (size_t)H - 4));
+    cm_put_u32(b + r.len - 4, cm_crc32(b, r.len - 4));
+    cm_err e = decode(b, r.len, &st);
+    if (e == CM_OK) {
+        assert_int_equal(curved_edges(&dec.model, &worst), 2);
+        assert_true(worst > 1e-3 * diag);
+    }
+    free(b);
+    encode_result_free(&r);
+    encode_result_free(&r43);
+    model_free(&lm);
+}
+
+/* ---- arc records as a writer could send them ---- */
+
+/* one arc record's fields: where its vertices are referenced from, its step and its residual */
+typedef struct arc_edit {
+    int v1_is_v0;      /* the first arc's v1 referenced as its v0 */
+    uint64_t step;     /* every arc's step exponent */
+    int64_t add;       /* added to the first arc's residual, coordinate y */
+    int cut;           /* the stream ends after the first arc's arc bit */
+} arc_edit;
+
+static void put_vref(cm_ac_enc *e, cm_edge_ctx *c, uint32_t *next, uint32_t v)
+{
+    cm_ac_enc_bit(e, &c->is_new, v == *next);
+    if (v == *next)
+        (*next)++;
+    else
+        cm_ac_enc_uint(e, &c->back, (uint64_t)(*next - 1 - v));
+}
+
+/* the EDGE section of the model decoded last into dec (lines and arcs only) coded again, each arc's middle
+   point on the grid at its step, with the edit; returns its length */
+static size_t edge_section(uint8_t *buf, size_t cap, const arc_edit *ed)
+{
+    const cm_model *m = &dec.model;
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, buf, cap);
+    cm_edge_ctx c;
+    cm_edge_ctx_init(&c);
+    cm_ac_enc_uint(&e, &c.count, m->nedges);
+    uint32_t next = 0;
+    int first = 1;
+    for (uint32_t i = 0; i < m->nedges; i++) {
+        const cm_edge *E = &m->edges[i];
+        int arc = E->kind == CM_EDGE_CURVE, edit = arc && first;
+        put_vref(&e, &c, &next, (uint32_t)E->v0);
+        put_vref(&e, &c, &next, (uint32_t)(edit && ed->v1_is_v0 ? E->v0 : E->v1));
+        cm_ac_enc_bit(&e, &c.g1, E->g1);
+        cm_ac_enc_bit(&e, &c.kind, E->kind);
+        if (!arc)
+            continue;
+        cm_ac_enc_bit(&e, &c.arc, 1);
+        if (edit && ed->cut)
+            break;
+        cm_ac_enc_uint(&e, &c.arc_step, ed->step);
+        cm_curve cv;
+        cm_model_edge_curve(m, i, &cv);
+        cm_vec3 q;
+        assert_ok(cm_curve_eval(&cv, 0.5, 0, &q, NULL));
+        double qq[3] = {q.x, q.y, q.z};
+        for (int k = 0; k < 3; k++) {
+            int64_t grid = llround((qq[k] - m->origin[k]) / m->q);
+            int64_t res = (grid - cm_pred_arc_mid(dec.vq[E->v0][k], dec.vq[E->v1][k])) >> ed->step;
+            cm_ac_enc_sint(&e, &c.arc_coord[k], res + (edit && k == 1 ? ed->add : 0));
+        }
+        first = 0;
+    }
+    size_t n = cm_ac_enc_finish_trimmed(&e);
+    assert_false(e.overflow);
+    return n;
+}
+
+static size_t put_varint(uint8_t *b, uint64_t v)
+{
+    return cm_fmt_put_varint(b, v);
+}
+
+/* file r with its EDGE section replaced by edge[0..elen): the header's section length, the file's
+   length among the needs and both CRCs made right (a writer's file in all but the EDGE records) */
+static uint8_t *with_edges(const encode_result *r, const uint8_t *edge, size_t elen, size_t *out_len)
+{
+    const uint8_t *b = r->bytes;
+    uint32_t at = CM_FMT_COMPACT_AT_H, end = (uint32_t)r->section_bytes[0];
+    uint64_t H, flags, N, need[64], S, len[8];
+    assert_true(cm_fmt_get_varint(b, end, &at, &H) && cm_fmt_get_varint(b, end, &at, &flags) &&
+                cm_fmt_get_varint(b, end, &at, &N) && N <= 64);
+    for (uint64_t i = 0; i < N; i++)
+        assert_true(cm_fmt_get_varint(b, end, &at, &need[i]));
+    assert_true(cm_fmt_get_varint(b, end, &at, &S) && S == CM_SEC_COUNT);
+    for (uint64_t s = 0; s < S; s++)
+        assert_true(cm_fmt_get_varint(b, end, &at, &len[s]));
+    uint32_t rest = at, rest_len = (uint32_t)H - 4 - rest; /* grid, origin, tolerances */
+    len[CM_SEC_EDGE - 1] = elen;
+    size_t body = 0;
+    for (uint64_t s = 0; s < S; s++)
+        body += len[s];
+    uint8_t *out = malloc(CM_FMT_MAX_HEADER + body + 4);
+    assert_non_null(out);
+    size_t total = r->len;
+    for (int pass = 0; pass < 8; pass++) { /* the file's length is a need: until it holds still */
+        need[CM_LIMIT_MAX_FILE_BYTES] = total;
+        uint8_t tail[CM_FMT_MAX_HEADER];
+        size_t t = 0;
+        t += put_varint(tail + t, flags);
+        t += put_varint(tail + t, N);
+        for (uint64_t i = 0; i < N; i++)
+            t += put_varint(tail + t, need[i]);
+        t += put_varint(tail + t, S);
+        for (uint64_t s = 0; s < S; s++)
+            t += put_varint(tail + t, len[s]);
+        memcpy(tail + t, b + rest, rest_len);
+        t += rest_len;
+        uint64_t h = CM_FMT_COMPACT_AT_H + t + 4 + 1;
+        uint8_t hv[CM_FMT_VARINT_MAX];
+        while (CM_FMT_COMPACT_AT_H + put_varint(hv, h) + t + 4 != h)
+            h = CM_FMT_COMPACT_AT_H + put_varint(hv, h) + t + 4;
+        size_t hl = put_varint(hv, h);
+        memcpy(out, b, CM_FMT_COMPACT_AT_H);
+        memcpy(out + CM_FMT_COMPACT_AT_H, hv, hl);
+        memcpy(out + CM_FMT_COMPACT_AT_H + hl, tail, t);
+        cm_put_u32(out + h - 4, cm_crc32(out, (size_t)h - 4));
+        size_t o = h, src = r->section_bytes[0];
+        for (uint64_t s = 0; s < S; s++) {
+            if (s == CM_SEC_EDGE - 1)
+                memcpy(out + o, edge, elen);
+            else
+                memcpy(out + o, b + src, len[s]);
+            o += len[s];
+            src += r->section_bytes[s + 1];
+        }
+        cm_put_u32(out + o, cm_crc32(out, o));
+        int still = o + 4 == total;
+        total = o + 4;
+        if (still)
+            break;
+    }
+    *out_len = total;
+    return out;
+}
+
+static void assert_refused(const encode_result *r, const arc_edit *ed, cm_err code, const char *cause)
+{
+    static uint8_t sec[1 << 16];
+    cm_status st;
+    assert_ok(decode(r->bytes, r->len, &st)); /* the model the section is coded from */
+    size_t n = edge_section(sec, sizeof sec, ed), len;
+    uint8_t *b = with_edges(r, sec, n, &len);
+    cm_err e = decode(b, len, &st);
+    if (e != code)
+        fail_msg("%s: %s (%s), expected %s", cause, cm_err_name(e), st.where ? st.where : "-", cm_err_name(code));
+    assert_non_null(st.where);
+    if (!strstr(st.where, cause))
+        fail_msg("refused as \"%s\", expected \"%s\"", st.where, cause);
+    free(b);
+}
+
+/*
+ * The half cylinder's EDGE section coded again here: as the encoder meant it (every arc's middle
+ * point on the grid itself), it decodes to the same curves bit for bit; then each field out of what
+ * the decoder takes: coincident ends, a middle point that makes a full circle of a short chord or
+ * lies beyond the grid, a step beyond 24, a stream that ends inside the record.
+ */
+static void test_arc_records_refused(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    load_half_cylinder(&lm);
+    encode_result r;
+    encode_minor(&lm, -1, &r);
+    cm_status st;
+    assert_ok(decode(r.bytes, r.len, &st));
+    static cm_vec3 ctrl[CM_MAX_MODEL_CTRL];
+    static double w[CM_MAX_MODEL_CTRL];
+    uint32_t nctrl = dec.model.nctrl;
+    memcpy(ctrl, dec.model.ctrl, nctrl * sizeof *ctrl);
+    memcpy(w, dec.model.w, nctrl * sizeof *w);
+
+    static uint8_t sec[1 << 16];
+    arc_edit same = {0};
+    size_t n = edge_section(sec, sizeof sec, &same), len;
+    uint8_t *b = with_edges(&r, sec, n, &len);
+    assert_ok(decode(b, len, &st));
+    assert_int_equal(dec.model.nctrl, nctrl);
+    assert_memory_equal(dec.model.ctrl, ctrl, nctrl * sizeof *ctrl);
+    assert_memory_equal(dec.model.w, w, nctrl * sizeof *w);
+    free(b);
+
+    arc_edit coincident = {.v1_is_v0 = 1};
+    assert_refused(&r, &coincident, CM_E_DEGENERATE, "arc with coincident ends");
+    arc_edit full = {.add = (int64_t)1 << 30}; /* the coder carries up to 2^33 - 1 */
+    assert_refused(&r, &full, CM_E_DEGENERATE, "arc of a full circle");
+    arc_edit far = {.step = CM_FMT_MAX_STEP, .add = (int64_t)1 << 30};
+    assert_refused(&r, &far, CM_E_RANGE, "arc middle point");
+    arc_edit step = {.step = CM_FMT_MAX_STEP + 1};
+    assert_refused(&r, &step, CM_E_RANGE, "arc step");
+    arc_edit cut = {.cut = 1};
+    /* a trimmed stream reads as zeros for a few fields past its end (cm_arith.h): truncated where
+       the reader runs out, a field or a few later */
+    assert_refused(&r, &cut, CM_E_TRUNCATED, "");
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_half_circles_as_arcs),
+        cmocka_unit_test(test_arc_records_refused),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
