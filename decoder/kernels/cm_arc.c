@@ -13,13 +13,16 @@ static hp hp_mid(hp a, hp b)
     return r;
 }
 
-static cm_vec3 hp_point(hp a)
+/* the point a stands for, about m (the pieces are built about the chord's midpoint, so that a part
+   far from the origin keeps its digits where the weights are small) */
+static cm_vec3 hp_point(hp a, cm_vec3 m)
 {
-    return cm_v3(a.x / a.w, a.y / a.w, a.z / a.w);
+    return cm_v3(m.x + a.x / a.w, m.y + a.y / a.w, m.z + a.z / a.w);
 }
 
-/* 1 - w below this (1 + w = 2 c^2 / (c^2 + h^2)): the arc is within about 0.1 degree of a full
-   circle, whose pieces' weights and points no longer hold their digits */
+/* 1 + w below this (1 + w = 2 c^2 / (c^2 + h^2) = 1 + cos of half the arc's angle): the arc is
+   within about 0.16 degree of a full circle, whose pieces' weights and points no longer hold their
+   digits */
 #define ARC_MIN_OPEN 1e-6
 
 cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_CTRL], double w[CM_ARC_MAX_CTRL],
@@ -29,7 +32,7 @@ cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_C
     if (!isfinite(p0.x + p0.y + p0.z + q.x + q.y + q.z + p2.x + p2.y + p2.z))
         return cm_fail(st, CM_E_NONFINITE, "arc");
     cm_vec3 m = cm_v3((p0.x + p2.x) * 0.5, (p0.y + p2.y) * 0.5, (p0.z + p2.z) * 0.5);
-    cm_vec3 s = cm_sub(q, m);
+    cm_vec3 a0 = cm_sub(p0, m), s = cm_sub(q, m), a2 = cm_sub(p2, m);
     double c2 = cm_norm2(cm_sub(p2, p0)) * 0.25, h2 = cm_norm2(s), den = c2 + h2;
     if (!(c2 > 0))
         return cm_fail(st, CM_E_DEGENERATE, "arc with coincident ends");
@@ -37,12 +40,13 @@ cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_C
     if (!(open >= ARC_MIN_OPEN) || !isfinite(den))
         return cm_fail(st, CM_E_DEGENERATE, "arc of a full circle");
     double wm = (c2 - h2) / den;
-    /* the piece [A, B, C] in homogeneous form, cut until each turns by at most 90 degrees: the
-       whole when w >= cos 45 deg, two halves when w >= 0 (at most a half circle), else four */
+    /* the piece [A, B, C] in homogeneous form about m (its middle point (1 + w) s, weight w), cut
+       until each turns by at most 90 degrees: the whole when w >= cos 45 deg, two halves when
+       w >= 0 (at most a half circle), else four */
     hp piece[4][3];
-    piece[0][0] = (hp){p0.x, p0.y, p0.z, 1.0};
-    piece[0][1] = (hp){wm * m.x + open * s.x, wm * m.y + open * s.y, wm * m.z + open * s.z, wm};
-    piece[0][2] = (hp){p2.x, p2.y, p2.z, 1.0};
+    piece[0][0] = (hp){a0.x, a0.y, a0.z, 1.0};
+    piece[0][1] = (hp){open * s.x, open * s.y, open * s.z, wm};
+    piece[0][2] = (hp){a2.x, a2.y, a2.z, 1.0};
     int k = wm > 0 && 2.0 * wm * wm >= 1.0 ? 1 : (wm >= 0 ? 2 : 4);
     for (int have = 1; have < k; have *= 2)
         for (int i = have - 1; i >= 0; i--) { /* from the last, so that piece i's halves land at 2i, 2i+1 */
@@ -60,9 +64,9 @@ cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_C
     for (int i = 0; i < k; i++) {
         hp a = piece[i][0], b = piece[i][1], c = piece[i][2];
         /* the same piece with weight 1 at both ends (a change of its parameter, not of its shape) */
-        ctrl[2 * i + 1] = hp_point(b);
+        ctrl[2 * i + 1] = hp_point(b, m);
         w[2 * i + 1] = b.w / sqrt(a.w * c.w);
-        ctrl[2 * i + 2] = i == k - 1 ? p2 : hp_point(c);
+        ctrl[2 * i + 2] = i == k - 1 ? p2 : hp_point(c, m);
         w[2 * i + 2] = 1.0;
     }
     *n = 2 * k + 1;

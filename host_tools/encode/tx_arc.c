@@ -12,7 +12,8 @@
  * circle becomes its arc as well.
  *
  * The middle point is the source curve's point as far from one end as from the other (found by
- * bisection: that distance difference runs monotonically along an arc), put on the largest step
+ * bisection: along an arc the two distances' difference changes sign once, where the arc crosses
+ * the plane that bisects its chord), put on the largest step
  * the budget allows: the curves' share of the tolerance, and 4.4e-3 of the leg from an end to it,
  * so that the end tangents turn by at most half a degree (tx_coarsen.c's rule for a control
  * polygon's legs); on the grid itself when that step fails the check.
@@ -25,12 +26,15 @@
 #include "encode_internal.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 #include "cm/cm_arc.h"
 
 #define SHOULDER_ITERATIONS 60 /* bisection halvings of the parameter interval */
-#define CHECK_SAMPLES 64       /* points of each curve tested against the other */
-#define POLY_SEGMENTS 256      /* chords of the curve they are tested against */
+#define CHECK_SAMPLES 64       /* points of each curve tested against the other, at least */
+#define SAMPLES_PER_SPAN 8     /* ... and in each knot span of a spline */
+#define POLY_SEGMENTS 256      /* chords of the curve they are tested against, at least */
+#define POLY_PER_SPAN 32       /* ... and in each knot span */
 #define PROJECT_ITERATIONS 40  /* golden-section steps onto the curve about its nearest chord */
 #define FINE_STEPS 2.0         /* grid steps: how far an edge that stays on the grid may move as an arc */
 
@@ -67,40 +71,77 @@ static int shoulder(const cm_curve *c, cm_vec3 p0, cm_vec3 p2, double *u)
     return 1;
 }
 
-/* the largest distance from CHECK_SAMPLES + 1 points of a to curve b: the nearest of POLY_SEGMENTS
-   chords of b, then b's nearest point about it by golden-section search (HUGE_VAL when either does
-   not evaluate) */
+/* the knot spans of c that are not empty */
+static int spans(const cm_curve *c)
+{
+    int k = 0;
+    for (int i = c->p; i < c->n_ctrl; i++)
+        k += c->knots[i + 1] > c->knots[i];
+    return k;
+}
+
+/* the parameter (on [0,1] of the domain) of sample k of m, spread evenly over each non-empty knot
+   span of c in turn (so that a short span, where a spline may hold a narrow feature, is looked at as
+   closely as a long one) */
+static double span_sample(const cm_curve *c, int k, int m)
+{
+    int ns = spans(c), seen = 0;
+    double x = (double)k * ns / m, a = c->knots[c->p], b = c->knots[c->n_ctrl];
+    int span = (int)x < ns ? (int)x : ns - 1;
+    for (int i = c->p; i < c->n_ctrl; i++)
+        if (c->knots[i + 1] > c->knots[i] && seen++ == span) {
+            double f = x - span;
+            return (c->knots[i] + (c->knots[i + 1] - c->knots[i]) * (f > 1 ? 1 : f) - a) / (b - a);
+        }
+    return 1.0;
+}
+
+/* the largest distance from the samples of a (SAMPLES_PER_SPAN in each of its knot spans, at least
+   CHECK_SAMPLES) to curve b, found about b's nearest chord (of POLY_PER_SPAN a span, at least
+   POLY_SEGMENTS) by golden-section search; HUGE_VAL when either does not evaluate */
 static double one_way(const cm_curve *a, const cm_curve *b)
 {
-    cm_vec3 poly[POLY_SEGMENTS + 1];
-    for (int i = 0; i <= POLY_SEGMENTS; i++)
-        if (!eval_at(b, (double)i / POLY_SEGMENTS, &poly[i]))
-            return HUGE_VAL;
-    double worst = 0;
-    for (int k = 0; k <= CHECK_SAMPLES; k++) {
+    int na = spans(a) * SAMPLES_PER_SPAN, nb = spans(b) * POLY_PER_SPAN;
+    na = na < CHECK_SAMPLES ? CHECK_SAMPLES : na;
+    nb = nb < POLY_SEGMENTS ? POLY_SEGMENTS : nb;
+    cm_vec3 *poly = malloc((size_t)(nb + 1) * sizeof *poly);
+    double *up = malloc((size_t)(nb + 1) * sizeof *up), worst = 0;
+    if (!poly || !up)
+        worst = HUGE_VAL;
+    for (int i = 0; i <= nb && worst == 0; i++) {
+        up[i] = i == nb ? 1.0 : span_sample(b, i, nb);
+        if (!eval_at(b, up[i], &poly[i]))
+            worst = HUGE_VAL;
+    }
+    for (int k = 0; k <= na && worst < HUGE_VAL; k++) {
         cm_vec3 x;
-        if (!eval_at(a, (double)k / CHECK_SAMPLES, &x))
-            return HUGE_VAL;
-        double best = HUGE_VAL;
+        if (!eval_at(a, k == na ? 1.0 : span_sample(a, k, na), &x)) {
+            worst = HUGE_VAL;
+            break;
+        }
+        double nearest = HUGE_VAL;
         int near = 0;
-        for (int i = 0; i < POLY_SEGMENTS; i++) {
+        for (int i = 0; i < nb; i++) {
             cm_vec3 s = cm_sub(poly[i + 1], poly[i]);
             double L = cm_norm2(s), f = L > 0 ? cm_dot(cm_sub(x, poly[i]), s) / L : 0.0;
             f = f < 0 ? 0 : (f > 1 ? 1 : f);
             double d = cm_dist(x, cm_add(poly[i], cm_scale(s, f)));
-            if (d < best) {
-                best = d;
+            if (d < nearest) {
+                nearest = d;
                 near = i;
             }
         }
-        /* the chords cut corners by up to their sagitta: the curve itself about the nearest one */
-        double lo = (double)(near > 0 ? near - 1 : 0) / POLY_SEGMENTS,
-               hi = (double)(near + 2 < POLY_SEGMENTS ? near + 2 : POLY_SEGMENTS) / POLY_SEGMENTS;
+        /* the chords only say where: the distance is to the curve itself, about the nearest chord
+           (chords cut corners, so a chord's distance may be less than the curve's) */
+        double lo = up[near > 0 ? near - 1 : 0], hi = up[near + 2 < nb ? near + 2 : nb];
+        double best = fmin(cm_dist(x, poly[near]), cm_dist(x, poly[near + 1]));
         for (int it = 0; it < PROJECT_ITERATIONS; it++) {
             double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
             cm_vec3 y1, y2;
-            if (!eval_at(b, m1, &y1) || !eval_at(b, m2, &y2))
-                return HUGE_VAL;
+            if (!eval_at(b, m1, &y1) || !eval_at(b, m2, &y2)) {
+                best = HUGE_VAL;
+                break;
+            }
             double d1 = cm_dist(x, y1), d2 = cm_dist(x, y2);
             best = fmin(best, fmin(d1, d2));
             if (d1 < d2)
@@ -110,6 +151,8 @@ static double one_way(const cm_curve *a, const cm_curve *b)
         }
         worst = fmax(worst, best);
     }
+    free(poly);
+    free(up);
     return worst;
 }
 
@@ -135,8 +178,11 @@ int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A)
     int s = fine ? 0 : tx_choose_step(t, curve_face_tol(t, c), fmin(cm_dist(q, p0), cm_dist(q, p2)));
     for (;; s = 0) {
         int64_t qk[3];
-        for (int k = 0; k < 3; k++)
+        int inside = 1; /* rounded to its step, the point may not pass what the terminal takes */
+        for (int k = 0; k < 3; k++) {
             qk[k] = pred[k] + tx_div_step(on_grid[k] - pred[k], s) * ((int64_t)1 << s);
+            inside &= qk[k] <= CM_FMT_COORD_MAX && qk[k] >= -CM_FMT_COORD_MAX;
+        }
         cm_vec3 P[CM_ARC_MAX_CTRL];
         double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
         int n;
@@ -144,7 +190,7 @@ int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A)
         cm_status_init(&st);
         /* a target board takes the curve the arc builds, or the arc is not sent (fit_board.c) */
         const cm_limit_info *L = t->o->target;
-        if (cm_arc_nurbs(p0, grid_mm(t, qk), p2, P, W, K, &n, &st) == CM_OK &&
+        if (inside && cm_arc_nurbs(p0, grid_mm(t, qk), p2, P, W, K, &n, &st) == CM_OK &&
             (!L || (n <= (int)L[CM_LIMIT_MAX_EDGE_CTRL].value && 2 <= (int)L[CM_LIMIT_MAX_DEGREE].value))) {
             cm_curve arc = {2, n, K, P, W};
             if (one_way(&src, &arc) <= tol && one_way(&arc, &src) <= tol) {

@@ -200,8 +200,10 @@ double enc_edge_bits(const tx *t, const tx_edge *X, int predicted)
     double b = 2.0; /* kind, g1 */
     if (X->kind == CM_EDGE_LINE)
         return b;
+    if (enc_arcs(t->o))
+        b += 1.0; /* the arc bit */
     if (X->arc) {
-        b += 1.0 + est_uint_bits((uint64_t)X->step);
+        b += est_uint_bits((uint64_t)X->step);
         for (int k = 0; k < 3; k++)
             b += est_sint_bits(tx_arc_residual(t, X, k));
         return b;

@@ -2,7 +2,8 @@
  * test_arcs.c - format 4.4's arc edges through the whole product: the encoder sends a half
  * cylinder's half circles as arcs (their middle points), the terminal's decoder builds them on the
  * circle within the curves' share of the tolerance, the file is smaller than 4.3's, and a 4.3 reader
- * cannot take the same bytes.  Then arc records as a broken or hostile writer could send them, each
+ * cannot take the same bytes.  The encoder's choice (tx_arc_edge) on curves that are arcs and on
+ * curves that nearly are, which it must turn back.  Then arc records as a broken or hostile writer could send them, each
  * in a file whose every length and CRC is right: refused by name, never a crash.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -17,6 +18,8 @@
 #include "cm/cm_predict.h"
 #include "cm/cm_sections.h"
 #include "encode/encode.h"
+#include "encode/encode_internal.h"
+#include "cm/cm_limits_info.h"
 #include "igs_writer.h"
 #include "model_load.h"
 
@@ -125,6 +128,127 @@ static void test_half_circles_as_arcs(void **state)
     encode_result_free(&r);
     encode_result_free(&r43);
     model_free(&lm);
+}
+
+/* ---- what the encoder sends as an arc ---- */
+
+#define ARC_R 10.0 /* the test curves' radius (mm) */
+
+/* the rational quadratic of k pieces of 90 degrees on the circle of radius ARC_R about the origin
+   in the plane z = 0, from angle 0 (A7.1's form) */
+static void circle_nurbs(hcurve *c, int k)
+{
+    assert_ok(hcurve_alloc(c, 2, 2 * k + 1, 1, NULL));
+    const double h = 0.70710678118654752440;
+    for (int i = 0; i <= 2 * k; i++) {
+        double a = i * M_PI / 4;
+        c->ctrl[i] = i % 2 ? cm_v3(ARC_R * cos(a) / h, ARC_R * sin(a) / h, 0) : cm_v3(ARC_R * cos(a), ARC_R * sin(a), 0);
+        c->w[i] = i % 2 ? h : 1.0;
+    }
+    for (int i = 0; i < 3; i++) {
+        c->knots[i] = 0;
+        c->knots[2 * k + 1 + i] = 1;
+    }
+    for (int i = 1; i < k; i++)
+        c->knots[2 * i + 1] = c->knots[2 * i + 2] = (double)i / k;
+}
+
+/* a uniform cubic B-spline of n points on the quarter circle (a polynomial near it: within 3e-5 mm
+   for n = 400), point `bump` moved outwards by `by` mm */
+static void quarter_spline(hcurve *c, int n, int bump, double by)
+{
+    assert_ok(hcurve_alloc(c, 3, n, 0, NULL));
+    for (int i = 0; i < n; i++) {
+        double a = (M_PI / 2) * i / (n - 1), r = ARC_R + (i == bump ? by : 0.0);
+        c->ctrl[i] = cm_v3(r * cos(a), r * sin(a), 0);
+    }
+    for (int i = 0; i < 4; i++) {
+        c->knots[i] = 0;
+        c->knots[n + i] = 1;
+    }
+    for (int j = 1; j < n - 3; j++)
+        c->knots[3 + j] = (double)j / (n - 3);
+}
+
+/* tx_arc_edge on curve c alone (its ends the vertices, on a grid of 2^-16 mm about the origin),
+   for a target board of `board_ctrl` control points an edge (0: none); the arc's points in *n */
+static int arc_for(hcurve *c, unsigned board_ctrl, int *n)
+{
+    static cm_limit_info board[CM_LIMIT_COUNT];
+    memcpy(board, cm_limit_table, sizeof board);
+    board[CM_LIMIT_MAX_EDGE_CTRL].value = board_ctrl;
+    encode_opts o;
+    encode_opts_default(&o);
+    o.target = board_ctrl ? board : NULL;
+    tx t;
+    memset(&t, 0, sizeof t);
+    t.o = &o;
+    t.q_exp = -16;
+    t.q = ldexp(1.0, t.q_exp);
+    int64_t vq[2][3];
+    cm_vec3 ends[2] = {c->ctrl[0], c->ctrl[c->n - 1]};
+    for (int v = 0; v < 2; v++) {
+        vq[v][0] = llround(ends[v].x / t.q);
+        vq[v][1] = llround(ends[v].y / t.q);
+        vq[v][2] = llround(ends[v].z / t.q);
+    }
+    t.vq = vq;
+    t.nverts = 2;
+    tx_edge A;
+    memset(&A, 0, sizeof A);
+    A.v0 = 0;
+    A.v1 = 1;
+    int ok = tx_arc_edge(&t, c, 0, &A);
+    *n = A.n;
+    if (ok) {
+        assert_int_equal(A.arc, 1);
+        assert_int_equal(A.kind, CM_EDGE_CURVE);
+        assert_true(A.step > 0); /* on a step of the budget's, not the grid */
+    }
+    hcurve_free(c);
+    return ok;
+}
+
+/*
+ * Arcs of one, two and three quarters, rational or a dense polynomial near the circle, go as arcs
+ * (of 3 and 9 points); a board of 8 points an edge (the tiny profile) takes the quarter but not the
+ * three quarters.  Curves that nearly are arcs are turned back: a quarter ellipse (a tenth flatter),
+ * an S, and a dense spline of 4000 points with one moved 0.05 mm out: a spike 0.033 mm high (four
+ * times the curves' share of the tolerance) over 0.016 mm of its length, between two of the
+ * samples a check at 65 even parameters takes, narrower than twice the share (so that no point of
+ * the arc is farther from the spline than that): such a check, tried, let it through.
+ */
+static void test_arc_choice(void **state)
+{
+    (void)state;
+    hcurve c = {0};
+    int n;
+    circle_nurbs(&c, 1);
+    assert_true(arc_for(&c, 0, &n));
+    assert_int_equal(n, 3);
+    circle_nurbs(&c, 3);
+    assert_true(arc_for(&c, 0, &n));
+    assert_int_equal(n, 9);
+    circle_nurbs(&c, 3);
+    assert_false(arc_for(&c, 8, &n));
+    circle_nurbs(&c, 1);
+    assert_true(arc_for(&c, 8, &n));
+    quarter_spline(&c, 400, -1, 0);
+    assert_true(arc_for(&c, 0, &n));
+    quarter_spline(&c, 4000, 640, 0.05); /* support [637/3997, 641/3997], between 10/64 and 11/64 */
+    assert_false(arc_for(&c, 0, &n));
+    circle_nurbs(&c, 1);
+    for (int i = 0; i < 3; i++)
+        c.ctrl[i].y *= 0.9;
+    assert_false(arc_for(&c, 0, &n));
+    assert_ok(hcurve_alloc(&c, 3, 4, 0, NULL));
+    const cm_vec3 S[4] = {{0, 0, 0}, {3, 3, 0}, {7, -3, 0}, {10, 0, 0}};
+    for (int i = 0; i < 4; i++) {
+        c.ctrl[i] = S[i];
+        c.knots[i] = 0;
+        c.knots[4 + i] = 1;
+    }
+    assert_false(arc_for(&c, 0, &n));
 }
 
 /* ---- arc records as a writer could send them ---- */
@@ -323,6 +447,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_half_circles_as_arcs),
+        cmocka_unit_test(test_arc_choice),
         cmocka_unit_test(test_arc_records_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

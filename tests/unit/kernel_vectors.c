@@ -226,6 +226,23 @@ int main(void)
         }
     }
 
+    /* ... and at its bounds: a half circle exactly (middle weight 0), a quarter circle (2w^2 = 1, as
+       rounding makes it), an arc just short of the full-circle refusal (1 + w = 1.4e-6), far from
+       the origin */
+    const cm_vec3 bounds[3][3] = {{{995, 20, 7}, {1000, 25, 7}, {1005, 20, 7}},
+                                  {{1001, 20, 7}, {1000 + h, 20 + h, 7}, {1000, 21, 7}},
+                                  {{1000, 20, 7}, {1000.0005, 20.6, 7}, {1000.001, 20, 7}}};
+    for (int k = 0; k < 3; k++) {
+        cm_vec3 P[CM_ARC_MAX_CTRL];
+        double W[CM_ARC_MAX_CTRL], AK[CM_ARC_MAX_KNOTS];
+        int n = 0;
+        ok(cm_arc_nurbs(bounds[k][0], bounds[k][1], bounds[k][2], P, W, AK, &n, NULL), "arc bound");
+        for (int i = 0; i < n; i++) {
+            pv("arc bound ctrl", k * 10 + i, P[i]);
+            pd("arc bound weight", k * 10 + i, W[i]);
+        }
+    }
+
     /* K11: face frame of a skewed hexagon */
     cm_vec3 hex[6];
     for (int i = 0; i < 6; i++)
