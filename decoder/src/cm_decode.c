@@ -619,7 +619,8 @@ static int at_least_4(const reader *r, unsigned minor)
 /*
  * Format 4.4: an arc edge.  Its middle point q comes as its offset from the chord's midpoint
  * (cm_pred_arc_mid) in steps of its own; the curve is cm_arc_nurbs's rational quadratic through the
- * edge's vertices and q, appended to the pools like any other curve.
+ * edge's vertices and q, appended to the pools like any other curve.  A closed edge (v0 == v1) is a
+ * full circle: the point across from its vertex and the one halfway to it (cm_circle_nurbs).
  */
 static cm_err read_arc(reader *r, cm_edge_ctx *ctx, cm_edge *E)
 {
@@ -629,16 +630,26 @@ static cm_err read_arc(reader *r, cm_edge_ctx *ctx, cm_edge *E)
     if (e != CM_OK)
         return e;
     const int64_t *first = r->d->vq[E->v0], *last = r->d->vq[E->v1];
+    int closed = E->v0 == E->v1;
+    /* an arc: its middle point, from the chord's midpoint; a closed edge's circle: the point across
+       from its vertex, from the vertex, then the one halfway to it, from their midpoint */
     for (int k = 0; k < 3; k++)
-        if ((e = read_coord(r, &ctx->arc_coord[k], cm_pred_arc_mid(first[k], last[k]), step, &qk[k],
-                            "arc middle point")) != CM_OK)
+        if ((e = read_coord(r, &ctx->arc_coord[k], closed ? first[k] : cm_pred_arc_mid(first[k], last[k]), step,
+                            &qk[k], closed ? "circle's far point" : "arc middle point")) != CM_OK)
+            return e;
+    int64_t rk[3];
+    for (int k = 0; closed && k < 3; k++)
+        if ((e = read_coord(r, &ctx->arc_coord[k], cm_pred_arc_mid(first[k], qk[k]), step, &rk[k],
+                            "circle's middle point")) != CM_OK)
             return e;
     cm_vec3 P[CM_ARC_MAX_CTRL];
     double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
     int n;
     cm_status cst;
     cm_status_init(&cst);
-    if (cm_arc_nurbs(m->verts[E->v0], grid_point(m, qk), m->verts[E->v1], P, W, K, &n, &cst) != CM_OK)
+    cm_err b = closed ? cm_circle_nurbs(m->verts[E->v0], grid_point(m, rk), grid_point(m, qk), P, W, K, &n, &cst)
+                      : cm_arc_nurbs(m->verts[E->v0], grid_point(m, qk), m->verts[E->v1], P, W, K, &n, &cst);
+    if (b != CM_OK)
         return rfail(r, cst.code, cst.where ? cst.where : "arc edge");
     if (2 > CM_MAX_DEGREE)
         return rlimit(r, CM_LIMIT_MAX_DEGREE, 2, CM_MAX_DEGREE, "edge degree");

@@ -23,6 +23,8 @@
  * them by the holes' projections (left to the fitting methods).  Fills the corner angles' cosines
  * for the layout-2 order.  Returns 0 (and why, in rep->why) when not applicable.
  */
+#define NO_SIDE_AREA 1e-6 /* of the square of the loop's size: a loop's Newell vector below this is noise */
+
 static int gregory_applicable(enc_work *w, int f, double tol, int exact, double *corner_cos, face_report *rep)
 {
     const cm_model *m = &w->dec.model;
@@ -65,6 +67,16 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
         rep->why = "no face normal";
         return 0;
     }
+    /* a loop with no mean direction (a full cylinder's band: its two circles run opposite ways, their
+       Newell vectors cancel) has no side to be reflex against: its normal is rounding noise, which
+       made the same band reflex or not as its circles' parameters fell (occt__OCC8842_cylinder_Ideas
+       with its circles as format 4.4 arcs); the rebuild's error and G1 checks judge it instead */
+    cm_vec3 area = cm_v3(0, 0, 0);
+    const cm_vec3 *smp = w->rbws.samples;
+    int ns = n * CM_FMT_SEG_PER_EDGE;
+    for (int i = 0; i < ns; i++)
+        area = cm_add(area, cm_cross(cm_sub(smp[i], smp[0]), cm_sub(smp[(i + 1) % ns], smp[0])));
+    int no_side = exact && !(cm_norm(area) >= NO_SIDE_AREA * bbox * bbox);
     for (int k = 0; k < n; k++) {
         const cm_cubic *in = &cub[(k + n - 1) % n], *out = &cub[k];
         cm_vec3 ta = exact ? t_in[(k + n - 1) % n] : cm_sub(in->c[3], in->c[2]);
@@ -77,7 +89,8 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
         corner_cos[k] = cm_dot(a, b);
         /* GREGORY-EXACT: a corner square to n_F (a half cylinder's) is not reflex; only one clearly
            turned against it (its patch would face inwards there; corner normals are not turned) */
-        if (cm_norm(x) >= CM_SIN_FLAT && (exact ? cm_dot(cm_unit(x), nF) < -0.5 : cm_dot(x, nF) <= 0)) {
+        if (!no_side && cm_norm(x) >= CM_SIN_FLAT &&
+            (exact ? cm_dot(cm_unit(x), nF) < -0.5 : cm_dot(x, nF) <= 0)) {
             rep->why = "reflex corner";
             return 0;
         }

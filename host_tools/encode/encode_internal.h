@@ -52,7 +52,9 @@ typedef struct tx_edge {
                          (tx_coarsen.c; 0, 0 in format 2); of an arc, its middle point's */
     int arc;          /* format 4.4: sent as the arc through its vertices and qa (tx_arc.c); p, n and
                          rational are then the decoded curve's, cq, wq and kq NULL */
-    int64_t qa[3];    /* ... the arc's middle point on the grid */
+    int64_t qa[3];    /* ... the arc's middle point on the grid; of a closed edge's circle, the point
+                         across from its vertex */
+    int64_t ra[3];    /* ... and then the circle's point halfway to it */
 } tx_edge;
 
 typedef struct tx_surf {
@@ -237,10 +239,19 @@ static inline int64_t tx_edge_pred(const tx_edge *X, int linear, int j, int k)
 double enc_sint_bits(int64_t v);
 /* ... and of what curve X costs in EDGE, as sec_edge writes it (write_sections.c) */
 double enc_edge_bits(const tx *t, const tx_edge *X, int predicted);
-/* an arc edge's middle point, coordinate k, less its prediction (the chord's midpoint), in steps */
+/* the numbers an arc edge sends: its middle point less the chord's midpoint (3); a closed edge's
+   circle its far point less its vertex, then its middle point less their midpoint (6) */
+static inline int tx_arc_fields(const tx_edge *X)
+{
+    return X->v0 == X->v1 ? 6 : 3;
+}
+/* ... field k of them, in steps */
 static inline int64_t tx_arc_residual(const tx *t, const tx_edge *X, int k)
 {
-    return (X->qa[k] - cm_pred_arc_mid(t->vq[X->v0][k], t->vq[X->v1][k])) / ((int64_t)1 << X->step);
+    const int64_t *a = t->vq[X->v0], *b = t->vq[X->v1];
+    int64_t v = X->v0 != X->v1 ? X->qa[k] - cm_pred_arc_mid(a[k], b[k])
+                               : (k < 3 ? X->qa[k] - a[k] : X->ra[k - 3] - cm_pred_arc_mid(a[k - 3], X->qa[k - 3]));
+    return v / ((int64_t)1 << X->step);
 }
 
 /*

@@ -111,8 +111,8 @@ static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
             cm_ac_enc_bit(e, &ctx.arc, (unsigned)X->arc);
             if (X->arc) {
                 cm_ac_enc_uint(e, &ctx.arc_step, (uint64_t)X->step);
-                for (int k = 0; k < 3; k++)
-                    cm_ac_enc_sint(e, &ctx.arc_coord[k], tx_arc_residual(t, X, k));
+                for (int k = 0; k < tx_arc_fields(X); k++)
+                    cm_ac_enc_sint(e, &ctx.arc_coord[k % 3], tx_arc_residual(t, X, k));
                 continue;
             }
         }
@@ -204,7 +204,7 @@ double enc_edge_bits(const tx *t, const tx_edge *X, int predicted)
         b += 1.0; /* the arc bit */
     if (X->arc) {
         b += est_uint_bits((uint64_t)X->step);
-        for (int k = 0; k < 3; k++)
+        for (int k = 0; k < tx_arc_fields(X); k++)
             b += est_sint_bits(tx_arc_residual(t, X, k));
         return b;
     }

@@ -243,6 +243,20 @@ int main(void)
         }
     }
 
+    /* ... and full circles from their vertex, halfway point and far point */
+    for (int k = 0; k < 3; k++) {
+        cm_vec3 c0 = rvec(&seed, 100.0), u = rvec(&seed, 5.0), v = cm_cross(u, rvec(&seed, 1.0));
+        v = cm_scale(cm_unit(v), cm_norm(u));
+        cm_vec3 P[CM_ARC_MAX_CTRL];
+        double W[CM_ARC_MAX_CTRL], AK[CM_ARC_MAX_KNOTS];
+        int n = 0;
+        ok(cm_circle_nurbs(cm_add(c0, u), cm_add(c0, v), cm_sub(c0, u), P, W, AK, &n, NULL), "circle");
+        for (int i = 0; i < n; i++) {
+            pv("circle ctrl", k * 10 + i, P[i]);
+            pd("circle weight", k * 10 + i, W[i]);
+        }
+    }
+
     /* K11: face frame of a skewed hexagon */
     cm_vec3 hex[6];
     for (int i = 0; i < 6; i++)

@@ -143,12 +143,68 @@ static void test_arc_refusals(void **state)
     assert_near(W[1], 1.0, 0);
 }
 
+/* Full circles (closed edges) from their vertex, the point halfway round and the point across:
+   on the circle, through those points at t = 1/4 and 1/2, closed bit for bit, forward; a far point
+   on the vertex is refused. */
+static void test_full_circle(void **state)
+{
+    (void)state;
+    circle k = tilted(3.0);
+    for (int start = 0; start < 360; start += 50) {
+        cm_vec3 p0 = at(&k, start), r = at(&k, start + 90), q = at(&k, start + 180);
+        cm_vec3 P[CM_ARC_MAX_CTRL];
+        double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
+        int n = -1;
+        assert_ok(cm_circle_nurbs(p0, r, q, P, W, K, &n, NULL));
+        assert_int_equal(n, 9);
+        assert_memory_equal(&P[0], &p0, sizeof p0);
+        assert_memory_equal(&P[8], &p0, sizeof p0);
+        assert_near(K[3], 0.25, 0);
+        assert_near(K[6], 0.5, 0);
+        cm_curve c = {2, n, K, P, W};
+        if (n <= CM_MAX_EDGE_CTRL)
+            assert_ok(cm_curve_check(&c, NULL));
+        double prev = -1;
+        for (int i = 0; i <= 400; i++) {
+            cm_vec3 x;
+            assert_ok(cm_curve_eval(&c, i / 400.0, 0, &x, NULL));
+            assert_near(cm_dist(x, k.c), k.r, 1e-10);
+            double a = angle(&k, x) - start;
+            a = a < -1e-6 ? a + 360.0 : a;
+            if (i == 400)
+                a = 360.0; /* back at the start */
+            assert_true(a >= prev - 1e-9);
+            prev = a;
+        }
+        cm_vec3 x;
+        assert_ok(cm_curve_eval(&c, 0.25, 0, &x, NULL));
+        assert_vec_near(x, r, 1e-10);
+        assert_ok(cm_curve_eval(&c, 0.5, 0, &x, NULL));
+        assert_vec_near(x, q, 1e-10);
+    }
+    cm_vec3 P[CM_ARC_MAX_CTRL];
+    double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
+    int n;
+    cm_status st;
+    cm_status_init(&st);
+    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(1, 0, 0), P, W, K, &n, &st), CM_E_DEGENERATE);
+    assert_string_equal(st.where, "circle whose far point is its vertex");
+    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(NAN, 0, 0), P, W, K, &n, NULL),
+                     CM_E_NONFINITE);
+    /* the halfway point far beyond a short diameter: each half nearly a full circle */
+    cm_status_init(&st);
+    assert_int_equal(cm_circle_nurbs(cm_v3(0, 0, 0), cm_v3(0, 1e4, 0), cm_v3(1e-1, 0, 0), P, W, K, &n, &st),
+                     CM_E_DEGENERATE);
+    assert_string_equal(st.where, "arc of a full circle");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_arc_is_the_circle),
         cmocka_unit_test(test_arc_off_by_a_step),
         cmocka_unit_test(test_arc_refusals),
+        cmocka_unit_test(test_full_circle),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -34,4 +34,14 @@
 CM_NODISCARD cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl[CM_ARC_MAX_CTRL],
                                  double w[CM_ARC_MAX_CTRL], double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st);
 
+/**
+ * A full circle (a closed edge, from p0 back to p0): through p0, r and q in that order, q the point
+ * across from p0 and r the one halfway to it; the halves p0-r-q and q-r'-p0 (r' = p0 + q - r, r
+ * reflected through the centre) are each the arc above in two pieces: 9 control points (ctrl[0] and
+ * ctrl[8] are p0, bit for bit), knots 0 0 0 1/4 1/4 1/2 1/2 3/4 3/4 1 1 1.
+ * @return CM_OK; CM_E_DEGENERATE when q == p0 or r makes a half a full circle; CM_E_NONFINITE.
+ */
+CM_NODISCARD cm_err cm_circle_nurbs(cm_vec3 p0, cm_vec3 r, cm_vec3 q, cm_vec3 ctrl[CM_ARC_MAX_CTRL],
+                                    double w[CM_ARC_MAX_CTRL], double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st);
+
 #endif /* CM_ARC_H */
