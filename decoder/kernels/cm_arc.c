@@ -109,9 +109,10 @@ cm_err cm_circle_nurbs(cm_vec3 p0, cm_vec3 r, cm_vec3 q, cm_vec3 ctrl[CM_ARC_MAX
                        double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st)
 {
     *n = 0;
-    if (!isfinite(p0.x + p0.y + p0.z + q.x + q.y + q.z) || !(cm_norm2(cm_sub(q, p0)) > 0))
-        return cm_fail(st, isfinite(p0.x + p0.y + p0.z + q.x + q.y + q.z) ? CM_E_DEGENERATE : CM_E_NONFINITE,
-                       "circle whose far point is its vertex");
+    if (!isfinite(p0.x + p0.y + p0.z + q.x + q.y + q.z))
+        return cm_fail(st, CM_E_NONFINITE, "circle");
+    if (!(cm_norm2(cm_sub(q, p0)) > 0))
+        return cm_fail(st, CM_E_DEGENERATE, "circle whose far point is its vertex");
     /* the second half's middle point: r reflected through the centre (p0 + q) / 2 */
     cm_vec3 r2 = cm_sub(cm_add(p0, q), r);
     int k;

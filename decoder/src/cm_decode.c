@@ -791,6 +791,89 @@ static cm_err sec_edge(reader *r)
     return CM_OK;
 }
 
+/* kept surface s as the kernels will take it: degrees, counts, knots, finite points, weights > 0 */
+static cm_err check_kept_surface(reader *r, uint32_t s)
+{
+    cm_surf sv;
+    cm_model_surface(&r->d->model, s, &sv);
+    cm_status cst;
+    cm_status_init(&cst);
+    if (cm_surf_check(&sv, &cst) != CM_OK)
+        return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, "surface");
+    return CM_OK;
+}
+
+/*
+ * Format 4.4: a kept surface ruled between two arcs, or two full circles (a cylinder's or a cone's
+ * patch, a band): per row its first point, then its arc's end and middle point (a circle's far
+ * point and the point halfway to it), each predicted by cm_pred_ruled, in steps of their own; each
+ * row built as an arc edge is (cm_arc_nurbs, cm_circle_nurbs), the two of as many pieces; the net,
+ * u along the arcs and v from the first row to the second (degree 1), or the other way round
+ * (`along_v`), appended to the pools.
+ */
+static cm_err read_ruled(reader *r, cm_surf_ctx *ctx, cm_ksurf *S)
+{
+    cm_model *m = &r->d->model;
+    int closed = (int)cm_ac_dec_bit(&r->ac, &ctx->closed), along_v = (int)cm_ac_dec_bit(&r->ac, &ctx->along_v);
+    int64_t step, pt[2][3][3];
+    cm_err e = read_step(r, &ctx->ruled_step, &step, "ruled surface step");
+    for (int row = 0; row < 2 && e == CM_OK; row++)
+        for (int j = 0; j < 3 && e == CM_OK; j++)
+            for (int k = 0; k < 3 && e == CM_OK; k++)
+                e = read_coord(r, &ctx->ruled_coord[k], cm_pred_ruled((const int64_t(*)[3][3])pt, row, j, k), step,
+                               &pt[row][j][k], "ruled surface point");
+    if (e != CM_OK)
+        return e;
+    cm_vec3 P[2][CM_ARC_MAX_CTRL];
+    double W[2][CM_ARC_MAX_CTRL], K[2][CM_ARC_MAX_KNOTS];
+    int n[2];
+    for (int row = 0; row < 2; row++) {
+        cm_vec3 a = grid_point(m, pt[row][0]), b = grid_point(m, pt[row][1]), c = grid_point(m, pt[row][2]);
+        cm_status cst;
+        cm_status_init(&cst);
+        /* an arc from a through c to b; a circle from a through c to b and round */
+        cm_err b2 = closed ? cm_circle_nurbs(a, c, b, P[row], W[row], K[row], &n[row], &cst)
+                           : cm_arc_nurbs(a, c, b, P[row], W[row], K[row], &n[row], &cst);
+        if (b2 != CM_OK)
+            return rfail(r, cst.code, cst.where ? cst.where : "ruled surface");
+    }
+    if (n[0] != n[1])
+        return rfail(r, CM_E_FORMAT, "ruled surface's arcs of different pieces");
+    uint32_t nu = (uint32_t)n[0];
+    if (2 > CM_MAX_DEGREE)
+        return rlimit(r, CM_LIMIT_MAX_DEGREE, 2, CM_MAX_DEGREE, "surface degree");
+    if (nu > CM_MAX_SURF_CTRL_DIR)
+        return rlimit(r, CM_LIMIT_MAX_SURF_CTRL_DIR, nu, CM_MAX_SURF_CTRL_DIR, "surface control points");
+    if (2 * nu > CM_MAX_SURF_CTRL)
+        return rlimit(r, CM_LIMIT_MAX_SURF_CTRL, 2 * nu, CM_MAX_SURF_CTRL, "surface control points");
+    if (2 * nu > CM_MAX_MODEL_CTRL - m->nctrl)
+        return rlimit(r, CM_LIMIT_MAX_MODEL_CTRL, m->nctrl + 2 * nu, CM_MAX_MODEL_CTRL, "control points");
+    if (nu + 3 + 4 > CM_MAX_MODEL_KNOTS - m->nknots)
+        return rlimit(r, CM_LIMIT_MAX_MODEL_KNOTS, m->nknots + nu + 7, CM_MAX_MODEL_KNOTS, "knots");
+    /* the arcs along u (rows of the net), or along v (its columns: the surface as the source had it) */
+    S->p = along_v ? 1 : 2;
+    S->q = along_v ? 2 : 1;
+    S->nu = (uint16_t)(along_v ? 2 : nu);
+    S->nv = (uint16_t)(along_v ? nu : 2);
+    S->rational = 1;
+    uint32_t arc_knots = m->nknots, line_knots = m->nknots + nu + 3;
+    for (uint32_t i = 0; i < nu + 3; i++)
+        m->knots[m->nknots++] = K[0][i];
+    for (int i = 0; i < 4; i++)
+        m->knots[m->nknots++] = i < 2 ? 0.0 : 1.0;
+    S->uknot0 = along_v ? line_knots : arc_knots;
+    S->vknot0 = along_v ? arc_knots : line_knots;
+    S->ctrl0 = m->nctrl;
+    for (uint32_t i = 0; i < nu; i++)
+        for (int row = 0; row < 2; row++) {
+            uint32_t at = S->ctrl0 + (along_v ? (uint32_t)row * nu + i : i * 2u + (uint32_t)row);
+            m->ctrl[at] = P[row][i];
+            m->w[at] = W[row][i];
+        }
+    m->nctrl += 2 * nu;
+    return CM_OK;
+}
+
 static cm_err sec_surf(reader *r)
 {
     cm_decoder *d = r->d;
@@ -800,8 +883,14 @@ static cm_err sec_surf(reader *r)
     cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nsurfs, "surface count");
     if (e != CM_OK)
         return e;
+    int ruled = at_least_4(r, CM_FMT_ARC_MINOR);
     for (uint32_t s = 0; s < m->nsurfs; s++) {
         cm_ksurf *S = &m->surfs[s];
+        if (ruled && cm_ac_dec_bit(&r->ac, &ctx.ruled)) {
+            if ((e = read_ruled(r, &ctx, S)) != CM_OK || (e = check_kept_surface(r, s)) != CM_OK)
+                return e;
+            continue;
+        }
         int deg[2], cnt[2];
         for (int dir = 0; dir < 2; dir++) {
             uint64_t pv = cm_ac_dec_uint(&r->ac, &ctx.degree) + 1;
@@ -862,12 +951,8 @@ static cm_err sec_surf(reader *r)
                 m->w[S->ctrl0 + (uint32_t)idx] = (double)wq / (double)WEIGHT_ONE;
             }
         m->nctrl += (uint32_t)total;
-        cm_surf sv;
-        cm_model_surface(m, s, &sv);
-        cm_status cst;
-        cm_status_init(&cst);
-        if (cm_surf_check(&sv, &cst) != CM_OK)
-            return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, "surface");
+        if ((e = check_kept_surface(r, s)) != CM_OK)
+            return e;
     }
     return CM_OK;
 }

@@ -54,6 +54,11 @@ void cm_surf_ctx_init(cm_surf_ctx *c)
     cm_ac_prob_init(&c->knot_zero);
     cm_ac_int_init(&c->knot_delta);
     cm_ac_int_init(&c->step);
+    cm_ac_prob_init(&c->ruled);
+    cm_ac_prob_init(&c->closed);
+    cm_ac_prob_init(&c->along_v);
+    cm_ac_int_init(&c->ruled_step);
+    ints(c->ruled_coord, 3);
 }
 
 void cm_face_ctx_init(cm_face_ctx *c)

@@ -15,6 +15,8 @@
 /* the K7 acceptance of spec 6 */
 #define K7_ACCEPT 0.25
 
+#define NO_SIDE_AREA 1e-6 /* of the square of the loop's size: a loop's Newell vector below this is noise */
+
 /*
  * Spec §6 applicability of GREGORY for face f: an outer loop of 3..CM_MAX_SIDES edges, each
  * cubic-convertible within a quarter of the tolerance (K7; not asked by GREGORY-EXACT, whose
@@ -23,8 +25,6 @@
  * them by the holes' projections (left to the fitting methods).  Fills the corner angles' cosines
  * for the layout-2 order.  Returns 0 (and why, in rep->why) when not applicable.
  */
-#define NO_SIDE_AREA 1e-6 /* of the square of the loop's size: a loop's Newell vector below this is noise */
-
 static int gregory_applicable(enc_work *w, int f, double tol, int exact, double *corner_cos, face_report *rep)
 {
     const cm_model *m = &w->dec.model;

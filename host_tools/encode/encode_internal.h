@@ -64,6 +64,10 @@ typedef struct tx_surf {
     int64_t *wq;
     int quadratic;      /* format 3: the net's predictor (tx_net_predictor); its step is always 0 */
     int reapproximated; /* the net is the budget's re-approximation, not the source's (tx_coarsen.c) */
+    int ruled;          /* format 4.4: sent ruled between two arcs (tx_arc.c, tx_ruled_surface) ... */
+    int ruled_closed;   /* ... full circles */
+    int ruled_along_v;  /* ... the arcs along v (the net's columns) */
+    int64_t rp[2][3][3]; /* ... each row's first point, end (a circle's far point) and middle point */
 } tx_surf;
 
 typedef struct tx {
@@ -273,6 +277,10 @@ int tx_reapproximate_curve(const tx *t, hcurve *c);
    of a face its size, as the terminal will build it (cm_arc_nurbs), its middle point on the largest
    step the budget allows (`fine`: on the grid, within two grid steps); else 0 and A as it was. */
 int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A);
+/* ... and a kept surface s (on [0,1] both ways) linear in v whose two rows are arcs (or full circles)
+   of as many pieces within two grid steps, corresponding as s's, or linear in u whose two columns
+   are: 1 and S->ruled set with the rows' points, else 0 and S as it was */
+int tx_ruled_surface(const tx *t, const hsurf *s, tx_surf *S);
 /* the step exponent for points whose shortest leg is h_min mm, within tol_mm's share (tx_coarsen.c) */
 int tx_choose_step(const tx *t, double tol_mm, double h_min);
 /* v / 2^s rounded to the nearest integer, halves away from zero */

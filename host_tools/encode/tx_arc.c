@@ -32,6 +32,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "cm/cm_arc.h"
 
@@ -161,7 +162,7 @@ static double one_way(const cm_curve *a, const cm_curve *b)
     return worst;
 }
 
-/* the parameter (on [0,1]) of c's point farthest from p: the best of 256 samples, then refined
+/* the parameter (on [0,1]) of c's point farthest from p: the best of 257 samples, then refined
    about it by golden-section search */
 static int farthest(const cm_curve *c, cm_vec3 p, double *u)
 {
@@ -214,80 +215,218 @@ static int on_step(const int64_t g[3], const int64_t pred[3], int s, int64_t out
     return inside;
 }
 
+/* the points that fix the arc of src from p0 to p2 (closed: round to p0), in mm: an arc's middle
+   point q; a circle's far point q and the point r halfway to it (r = p0 for an arc) */
+static int arc_points(const cm_curve *src, cm_vec3 p0, cm_vec3 p2, int closed, cm_vec3 *q, cm_vec3 *r)
+{
+    double uq;
+    *r = p0;
+    if (!closed)
+        return shoulder(src, p0, p2, &uq) && eval_at(src, uq, q);
+    if (!farthest(src, p0, &uq) || !eval_at(src, uq, q))
+        return 0;
+    /* the point as far from the vertex as from q, on the way to q */
+    double lo = 0, hi = uq;
+    for (int i = 0; i < SHOULDER_ITERATIONS; i++) {
+        double mid = 0.5 * (lo + hi);
+        cm_vec3 x;
+        if (!eval_at(src, mid, &x))
+            return 0;
+        if (cm_norm2(cm_sub(x, p0)) < cm_norm2(cm_sub(x, *q)))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return eval_at(src, 0.5 * (lo + hi), r);
+}
+
+#define KINK_COS 0.99996192306417131 /* cos 0.5 deg */
+
+/* the cosine of the turn at control point b between legs a-b and b-c (the curve's tangents there) */
+static double joint_cos(cm_vec3 a, cm_vec3 b, cm_vec3 c)
+{
+    cm_vec3 u = cm_sub(b, a), v = cm_sub(c, b);
+    double d = cm_norm(u) * cm_norm(v);
+    return d > 0 ? cm_dot(u, v) / d : -1.0;
+}
+
+/* an arc as the terminal builds it */
+typedef struct built_arc {
+    cm_vec3 P[CM_ARC_MAX_CTRL];
+    double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
+    int n;
+} built_arc;
+
+/* the arc of src through the grid points k0, k2 (closed: k0 round to k0) and the points q, r (mm)
+   on step s about their predictions (the chord's midpoint; a circle's vertex, then the midpoint of
+   it and the far point): 1 when the terminal builds it (in *b; qk, rk its points) with at most
+   max_ctrl points, within tol of src both ways */
+static int fit_arc(const tx *t, const cm_curve *src, const int64_t k0[3], const int64_t k2[3], int closed, cm_vec3 q,
+                   cm_vec3 r, int s, double tol, int max_ctrl, int64_t qk[3], int64_t rk[3], built_arc *b)
+{
+    int64_t qg[3], rg[3], qpred[3], rpred[3];
+    if (!to_grid(t, q, qg) || !to_grid(t, r, rg))
+        return 0;
+    for (int k = 0; k < 3; k++)
+        qpred[k] = closed ? k0[k] : cm_pred_arc_mid(k0[k], k2[k]);
+    int inside = on_step(qg, qpred, s, qk);
+    for (int k = 0; k < 3; k++) {
+        rpred[k] = cm_pred_arc_mid(k0[k], qk[k]);
+        rk[k] = 0;
+    }
+    inside &= !closed || on_step(rg, rpred, s, rk);
+    cm_status st;
+    cm_status_init(&st);
+    cm_vec3 p0 = grid_mm(t, k0), p2 = grid_mm(t, k2);
+    if (!inside || (closed ? cm_circle_nurbs(p0, grid_mm(t, rk), grid_mm(t, qk), b->P, b->W, b->K, &b->n, &st)
+                           : cm_arc_nurbs(p0, grid_mm(t, qk), p2, b->P, b->W, b->K, &b->n, &st)) != CM_OK ||
+        b->n > max_ctrl)
+        return 0;
+    /* a circle's halves are two conics: with the middle point a step off the circle they meet at an
+       angle (about twice the step over the radius), held to the half degree a control polygon's
+       legs are (tx_coarsen.c) */
+    if (closed && !(joint_cos(b->P[3], b->P[4], b->P[5]) >= KINK_COS && joint_cos(b->P[7], b->P[0], b->P[1]) >= KINK_COS))
+        return 0;
+    cm_curve arc = {2, b->n, b->K, b->P, b->W};
+    return one_way(src, &arc) <= tol && one_way(&arc, src) <= tol;
+}
+
 int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A)
 {
     if (!t->o || !enc_arcs(t->o) || !t->o->budget_steps || c->n < 3)
         return 0;
     int closed = A->v0 == A->v1;
     const int64_t *k0 = t->vq[A->v0], *k2 = t->vq[A->v1];
-    cm_vec3 p0 = grid_mm(t, k0), p2 = grid_mm(t, k2);
     cm_curve src = hcurve_view(c);
     double tol = fine ? FINE_STEPS * t->q : ENC_CURVE_SHARE * curve_face_tol(t, c);
-    /* an arc: its middle point; a circle: the point across from its vertex, then the middle of the
-       half up to it */
-    double uq;
-    cm_vec3 q, r = p0;
-    if (closed) {
-        if (!farthest(&src, p0, &uq) || !eval_at(&src, uq, &q))
-            return 0;
-        /* the point as far from the vertex as from q, on the way to q */
-        double lo = 0, hi = uq;
-        for (int i = 0; i < SHOULDER_ITERATIONS; i++) {
-            double mid = 0.5 * (lo + hi);
-            cm_vec3 x;
-            if (!eval_at(&src, mid, &x))
-                return 0;
-            if (cm_norm2(cm_sub(x, p0)) < cm_norm2(cm_sub(x, q)))
-                lo = mid;
-            else
-                hi = mid;
-        }
-        if (!eval_at(&src, 0.5 * (lo + hi), &r))
-            return 0;
-    } else if (!shoulder(&src, p0, p2, &uq) || !eval_at(&src, uq, &q)) {
+    cm_vec3 p0 = grid_mm(t, k0), p2 = grid_mm(t, k2), q, r;
+    if (!arc_points(&src, p0, p2, closed, &q, &r))
         return 0;
-    }
-    int64_t qg[3], rg[3], qpred[3];
-    if (!to_grid(t, q, qg) || !to_grid(t, r, rg))
-        return 0;
-    for (int k = 0; k < 3; k++)
-        qpred[k] = closed ? k0[k] : cm_pred_arc_mid(k0[k], k2[k]);
+    /* a target board takes the curve the arc builds, or the arc is not sent (fit_board.c) */
+    const cm_limit_info *L = t->o->target;
+    int max_ctrl = !L ? CM_ARC_MAX_CTRL : (2 <= (int)L[CM_LIMIT_MAX_DEGREE].value ? (int)L[CM_LIMIT_MAX_EDGE_CTRL].value : 0);
     double leg = closed ? fmin(cm_dist(r, p0), cm_dist(r, q)) : fmin(cm_dist(q, p0), cm_dist(q, p2));
-    int s = fine ? 0 : tx_choose_step(t, curve_face_tol(t, c), leg);
-    for (;; s = 0) {
-        int64_t qk[3], rk[3] = {0, 0, 0}, rpred[3];
-        int inside = on_step(qg, qpred, s, qk);
-        for (int k = 0; k < 3; k++)
-            rpred[k] = cm_pred_arc_mid(k0[k], qk[k]);
-        inside &= !closed || on_step(rg, rpred, s, rk);
-        cm_vec3 P[CM_ARC_MAX_CTRL];
-        double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
-        int n;
-        cm_status st;
-        cm_status_init(&st);
-        /* a target board takes the curve the arc builds, or the arc is not sent (fit_board.c) */
-        const cm_limit_info *L = t->o->target;
-        if (inside &&
-            (closed ? cm_circle_nurbs(p0, grid_mm(t, rk), grid_mm(t, qk), P, W, K, &n, &st)
-                    : cm_arc_nurbs(p0, grid_mm(t, qk), p2, P, W, K, &n, &st)) == CM_OK &&
-            (!L || (n <= (int)L[CM_LIMIT_MAX_EDGE_CTRL].value && 2 <= (int)L[CM_LIMIT_MAX_DEGREE].value))) {
-            cm_curve arc = {2, n, K, P, W};
-            if (one_way(&src, &arc) <= tol && one_way(&arc, &src) <= tol) {
-                A->kind = CM_EDGE_CURVE;
-                A->arc = 1;
-                A->p = 2;
-                A->n = n;
-                A->rational = 1;
-                A->step = s;
-                A->linear = 0;
-                for (int k = 0; k < 3; k++) {
-                    A->qa[k] = qk[k];
-                    A->ra[k] = closed ? rk[k] : 0;
-                }
-                return 1;
-            }
+    for (int s = fine ? 0 : tx_choose_step(t, curve_face_tol(t, c), leg);; s = 0) {
+        int64_t qk[3], rk[3];
+        built_arc b;
+        if (fit_arc(t, &src, k0, k2, closed, q, r, s, tol, max_ctrl, qk, rk, &b)) {
+            A->kind = CM_EDGE_CURVE;
+            A->arc = 1;
+            A->p = 2;
+            A->n = b.n;
+            A->rational = 1;
+            A->step = s;
+            A->linear = 0;
+            memcpy(A->qa, qk, sizeof A->qa);
+            memcpy(A->ra, rk, sizeof A->ra);
+            return 1;
         }
         if (s == 0)
             return 0;
     }
+}
+
+/*
+ * Kept surfaces in their own terms (issue 14.4; format 4.4, docs/FORMAT.md, SURF, "Ruled"): half of
+ * the corpus's kept faces are cylinders and cones (IGES 192, 194, 120 of a line; STEP's cylindrical
+ * and conical surfaces), each sent as a rational net of 9 x 2 points and their weights (gmsh__Block's
+ * 45: 85 bytes each).  A surface linear in v whose two rows are arcs (or full circles), or linear in
+ * u whose two columns are (o3dv__as1_pe_203's twelve half cylinders of revolution), is sent as
+ * those two arcs, their points on the grid: the terminal builds each as an arc edge and rules the
+ * surface between them.  Taken where both rows are arcs within two grid steps (kept nets stay on
+ * the grid: tx_coarsen.c), of as many pieces, corresponding as the source's do (the second row's
+ * point at each parameter within four grid steps of the source's at the parameter of the first
+ * row's nearest point), and where it codes in fewer bits.
+ */
+#define RULED_CHECKS 32 /* parameters along the first row where the rows' correspondence is checked */
+
+/* the parameter (on [0,1]) of c's point nearest to x */
+static int nearest(const cm_curve *c, cm_vec3 x, double *u)
+{
+    double best = HUGE_VAL, at = 0;
+    for (int i = 0; i <= POLY_SEGMENTS; i++) {
+        cm_vec3 y;
+        if (!eval_at(c, (double)i / POLY_SEGMENTS, &y))
+            return 0;
+        if (cm_dist(x, y) < best) {
+            best = cm_dist(x, y);
+            at = (double)i / POLY_SEGMENTS;
+        }
+    }
+    double lo = fmax(0.0, at - 1.0 / POLY_SEGMENTS), hi = fmin(1.0, at + 1.0 / POLY_SEGMENTS);
+    for (int it = 0; it < PROJECT_ITERATIONS; it++) {
+        double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
+        cm_vec3 y1, y2;
+        if (!eval_at(c, m1, &y1) || !eval_at(c, m2, &y2))
+            return 0;
+        if (cm_dist(x, y1) < cm_dist(x, y2))
+            hi = m2;
+        else
+            lo = m1;
+    }
+    *u = 0.5 * (lo + hi);
+    return 1;
+}
+
+int tx_ruled_surface(const tx *t, const hsurf *s, tx_surf *S)
+{
+    /* the arcs along u (the net's rows are 2 points: linear in v) or along v */
+    int along_v = s->p == 1 && s->nu == 2 && s->nv >= 3;
+    if (!t->o || !enc_arcs(t->o) || !t->o->budget_steps || !(along_v || (s->q == 1 && s->nv == 2 && s->nu >= 3)))
+        return 0;
+    int na = along_v ? s->nv : s->nu; /* points along the arcs */
+    cm_vec3 *rc = malloc((size_t)na * 2 * sizeof *rc);
+    double *rw = malloc((size_t)na * 2 * sizeof *rw);
+    int ok = rc && rw;
+    cm_curve row[2];
+    built_arc b[2];
+    int64_t pt[2][3][3];
+    int closed[2] = {0, 0};
+    double tol = FINE_STEPS * t->q;
+    const cm_limit_info *L = t->o->target;
+    int max_ctrl = CM_ARC_MAX_CTRL;
+    if (L)
+        max_ctrl = 2 > (int)L[CM_LIMIT_MAX_DEGREE].value ? 0
+                   : (int)fmin((double)L[CM_LIMIT_MAX_SURF_CTRL_DIR].value, (double)L[CM_LIMIT_MAX_SURF_CTRL].value / 2);
+    for (int j = 0; j < 2 && ok; j++) {
+        for (int i = 0; i < na; i++) {
+            int at = along_v ? j * s->nv + i : i * 2 + j;
+            rc[j * na + i] = s->ctrl[at];
+            rw[j * na + i] = s->w ? s->w[at] : 1.0;
+        }
+        row[j] = along_v ? (cm_curve){s->q, na, s->V, rc + j * na, s->w ? rw + j * na : NULL}
+                         : (cm_curve){s->p, na, s->U, rc + j * na, s->w ? rw + j * na : NULL};
+        cm_vec3 e0, e1, q, r;
+        int64_t qk[3], rk[3];
+        ok = eval_at(&row[j], 0.0, &e0) && eval_at(&row[j], 1.0, &e1) && to_grid(t, e0, pt[j][0]) &&
+             to_grid(t, e1, pt[j][1]);
+        closed[j] = ok && memcmp(pt[j][0], pt[j][1], sizeof pt[j][0]) == 0;
+        cm_vec3 p0 = grid_mm(t, pt[j][0]), p2 = grid_mm(t, pt[j][1]);
+        ok = ok && arc_points(&row[j], p0, p2, closed[j], &q, &r) &&
+             fit_arc(t, &row[j], pt[j][0], pt[j][1], closed[j], q, r, 0, tol, max_ctrl, qk, rk, &b[j]);
+        if (ok && closed[j]) { /* a circle sends its far point, then the point halfway to it */
+            memcpy(pt[j][1], qk, sizeof qk);
+            memcpy(pt[j][2], rk, sizeof rk);
+        } else if (ok) {
+            memcpy(pt[j][2], qk, sizeof qk);
+        }
+    }
+    ok = ok && closed[0] == closed[1] && b[0].n == b[1].n;
+    /* the rows correspond as the source's do: the surface is the source's, not a twisted one */
+    for (int k = 0; k <= RULED_CHECKS && ok; k++) {
+        cm_curve a0 = {2, b[0].n, b[0].K, b[0].P, b[0].W}, a1 = {2, b[1].n, b[1].K, b[1].P, b[1].W};
+        cm_vec3 x0, x1, y1;
+        double u;
+        ok = eval_at(&a0, (double)k / RULED_CHECKS, &x0) && eval_at(&a1, (double)k / RULED_CHECKS, &x1) &&
+             nearest(&row[0], x0, &u) && eval_at(&row[1], u, &y1) && cm_dist(x1, y1) <= 2.0 * tol;
+    }
+    free(rc);
+    free(rw);
+    if (!ok)
+        return 0;
+    S->ruled = 1;
+    S->ruled_closed = closed[0];
+    S->ruled_along_v = along_v;
+    memcpy(S->rp, pt, sizeof S->rp);
+    return 1;
 }

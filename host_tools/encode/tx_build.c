@@ -458,6 +458,15 @@ cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, const cmesh *cm, i
     } else if ((e = fill_surf(t, &s, S, st)) == CM_OK) {
         tx_net_predictor(t, S); /* format 3: the net's predictor */
     }
+    /* format 4.4: ruled between two arcs, where it is one and that codes in fewer bits (tx_arc.c); a
+       face whose triangles it folds takes its net whole, as a re-approximated net (needs.c) */
+    if (e == CM_OK && !(t->net_whole && t->net_whole[cm->faces[f].brep_face])) {
+        tx_surf R = *S;
+        if (tx_ruled_surface(t, &s, &R) && enc_kept_surface_bits(&R, 1) < enc_kept_surface_bits(S, t->o->predicted)) {
+            *S = R; /* the same arrays, the net's fields no longer sent */
+            S->reapproximated = 1;
+        }
+    }
     hsurf_free(&alt);
     hsurf_free(&s);
     return e;

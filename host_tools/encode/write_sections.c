@@ -225,6 +225,14 @@ double enc_edge_bits(const tx *t, const tx_edge *X, int predicted)
 
 double enc_kept_surface_bits(const tx_surf *S, int predicted)
 {
+    if (S->ruled) {
+        double b = 4.0 + est_uint_bits(0); /* ruled, closed, along v, step */
+        for (int row = 0; row < 2; row++)
+            for (int j = 0; j < 3; j++)
+                for (int k = 0; k < 3; k++)
+                    b += est_sint_bits(S->rp[row][j][k] - cm_pred_ruled((const int64_t(*)[3][3])S->rp, row, j, k));
+        return b;
+    }
     double b = 4 * est_uint_bits(3) + 1.0 + (predicted ? 1.0 + est_uint_bits(0) : 0.0);
     int quadratic = predicted ? S->quadratic : 0;
     b += est_knot_bits(predicted, S->uniform_u, S->ku, S->nu - S->p - 1) +
@@ -291,6 +299,20 @@ size_t enc_net_bytes(const tx *t, const tx_surf *S)
 /* a kept net: degrees, counts, knots, its predictor and its points */
 static void put_net(const tx *t, cm_ac_enc *e, cm_surf_ctx *cx, const tx_surf *S)
 {
+    if (enc_arcs(t->o)) { /* format 4.4: ruled between two arcs (tx_ruled_surface) */
+        cm_ac_enc_bit(e, &cx->ruled, (unsigned)S->ruled);
+        if (S->ruled) {
+            cm_ac_enc_bit(e, &cx->closed, (unsigned)S->ruled_closed);
+            cm_ac_enc_bit(e, &cx->along_v, (unsigned)S->ruled_along_v);
+            cm_ac_enc_uint(e, &cx->ruled_step, 0); /* on the grid, as every kept net */
+            for (int row = 0; row < 2; row++)
+                for (int j = 0; j < 3; j++)
+                    for (int k = 0; k < 3; k++)
+                        cm_ac_enc_sint(e, &cx->ruled_coord[k],
+                                       S->rp[row][j][k] - cm_pred_ruled((const int64_t(*)[3][3])S->rp, row, j, k));
+            return;
+        }
+    }
     cm_ac_enc_uint(e, &cx->degree, (uint64_t)(S->p - 1));
     cm_ac_enc_uint(e, &cx->ncoef, (uint64_t)(S->nu - S->p - 1));
     cm_ac_enc_uint(e, &cx->degree, (uint64_t)(S->q - 1));

@@ -374,9 +374,10 @@ static size_t put_varint(uint8_t *b, uint64_t v)
     return cm_fmt_put_varint(b, v);
 }
 
-/* file r with its EDGE section replaced by edge[0..elen): the header's section length, the file's
-   length among the needs and both CRCs made right (a writer's file in all but the EDGE records) */
-static uint8_t *with_edges(const encode_result *r, const uint8_t *edge, size_t elen, size_t *out_len)
+/* file r with its section `tag` (CM_SEC_EDGE, CM_SEC_SURF) replaced by sec[0..slen): the header's
+   section length, the file's length among the needs and both CRCs made right (a writer's file in
+   all but that section's records) */
+static uint8_t *with_section(const encode_result *r, int tag, const uint8_t *edge, size_t elen, size_t *out_len)
 {
     const uint8_t *b = r->bytes;
     uint32_t at = CM_FMT_COMPACT_AT_H, end = (uint32_t)r->section_bytes[0];
@@ -389,7 +390,7 @@ static uint8_t *with_edges(const encode_result *r, const uint8_t *edge, size_t e
     for (uint64_t s = 0; s < S; s++)
         assert_true(cm_fmt_get_varint(b, end, &at, &len[s]));
     uint32_t rest = at, rest_len = (uint32_t)H - 4 - rest; /* grid, origin, tolerances */
-    len[CM_SEC_EDGE - 1] = elen;
+    len[tag - 1] = elen;
     size_t body = 0;
     for (uint64_t s = 0; s < S; s++)
         body += len[s];
@@ -420,7 +421,7 @@ static uint8_t *with_edges(const encode_result *r, const uint8_t *edge, size_t e
         cm_put_u32(out + h - 4, cm_crc32(out, (size_t)h - 4));
         size_t o = h, src = r->section_bytes[0];
         for (uint64_t s = 0; s < S; s++) {
-            if (s == CM_SEC_EDGE - 1)
+            if (s == (uint64_t)tag - 1)
                 memcpy(out + o, edge, elen);
             else
                 memcpy(out + o, b + src, len[s]);
@@ -443,7 +444,7 @@ static void assert_refused(const encode_result *r, const arc_edit *ed, cm_err co
     cm_status st;
     assert_ok(decode(r->bytes, r->len, &st)); /* the model the section is coded from */
     size_t n = edge_section(sec, sizeof sec, ed), len;
-    uint8_t *b = with_edges(r, sec, n, &len);
+    uint8_t *b = with_section(r, CM_SEC_EDGE, sec, n, &len);
     cm_err e = decode(b, len, &st);
     if (e != code)
         fail_msg("%s: %s (%s), expected %s", cause, cm_err_name(e), st.where ? st.where : "-", cm_err_name(code));
@@ -453,12 +454,6 @@ static void assert_refused(const encode_result *r, const arc_edit *ed, cm_err co
     free(b);
 }
 
-/*
- * The half cylinder's EDGE section coded again here: as the encoder meant it (every arc's middle
- * point on the grid itself), it decodes to the same curves bit for bit; then each field out of what
- * the decoder takes: coincident ends, a middle point that makes a full circle of a short chord or
- * lies beyond the grid, a step beyond 24, a stream that ends inside the record.
- */
 /* model lm encoded, its EDGE section coded again here as the encoder meant it (every point on the
    grid itself): decoded, the same curves bit for bit */
 static void recoded_the_same(loaded_model *lm, encode_result *r)
@@ -475,7 +470,7 @@ static void recoded_the_same(loaded_model *lm, encode_result *r)
     static uint8_t sec[1 << 16];
     arc_edit same = {0};
     size_t n = edge_section(sec, sizeof sec, &same), len;
-    uint8_t *b = with_edges(r, sec, n, &len);
+    uint8_t *b = with_section(r, CM_SEC_EDGE, sec, n, &len);
     assert_ok(decode(b, len, &st));
     assert_int_equal(dec.model.nctrl, nctrl);
     assert_memory_equal(dec.model.ctrl, ctrl, nctrl * sizeof *ctrl);
@@ -525,12 +520,161 @@ static void test_arc_records_refused(void **state)
     model_free(&lm);
 }
 
+/* ---- kept surfaces ruled between two arcs ---- */
+
+static void encode_kept(loaded_model *lm, int minor, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    if (minor >= 0)
+        encode_opts_for_format(&o, 4, minor);
+    o.gregory = o.g1fit = o.nfill = 0; /* planes only: the curved faces are kept */
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+/* the farthest (mm) any of 17 x 17 points of kept surface s lies off the cylinder of radius CYL_R
+   about the z axis */
+static double off_cylinder(const cm_model *m, uint32_t s)
+{
+    cm_surf sv;
+    cm_model_surface(m, s, &sv);
+    double worst = 0;
+    for (int i = 0; i <= 16; i++)
+        for (int j = 0; j <= 16; j++) {
+            cm_vec3 d[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+            assert_ok(cm_surf_eval(&sv, i / 16.0, j / 16.0, 0, d, NULL));
+            worst = fmax(worst, fabs(hypot(d[0][0].x, d[0][0].y) - CYL_R));
+        }
+    return worst;
+}
+
+/*
+ * Kept cylinders go ruled between their arcs: the half cylinder of revolution (its arcs along v)
+ * and the full one (full circles along v): the terminal's surface is the source's net in form (the
+ * same directions, degree 2 along the arcs, 1 across), on the cylinder within two grid steps, the
+ * file smaller than 4.3's net.
+ */
+static void test_kept_cylinders_ruled(void **state)
+{
+    (void)state;
+    for (int full = 0; full < 2; full++) {
+        igw w;
+        igw_init(&w);
+        int axis = igw_add(&w, 110, 0, "0,0,0,0,0,1");
+        int gen = igw_add(&w, 110, 0, "%.17g,0,0,%.17g,0,%.17g", CYL_R, CYL_R, CYL_H);
+        igw_add(&w, 120, 0, "%d,%d,0,%.17g", axis, gen, full ? 2 * M_PI : M_PI);
+        loaded_model lm;
+        cm_status st;
+        assert_ok(igw_load(&w, "cylinder", &lm, &st));
+        encode_result r, r43;
+        encode_kept(&lm, -1, &r);
+        encode_kept(&lm, (int)CM_FMT_PLACE_MINOR, &r43);
+        assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+        if (!(r.len + 20 < r43.len))
+            fail_msg("%s cylinder kept ruled: %zu bytes, as a net (4.3): %zu", full ? "full" : "half", r.len, r43.len);
+        assert_ok(decode(r.bytes, r.len, &st));
+        const cm_ksurf *S = &dec.model.surfs[0];
+        assert_int_equal(dec.model.nsurfs, 1);
+        assert_int_equal(S->p, 1); /* a line revolved: v along the arcs, as the source */
+        assert_int_equal(S->q, 2);
+        assert_int_equal(S->nu, 2);
+        assert_int_equal(S->nv, full ? 9 : 5);
+        double off = off_cylinder(&dec.model, 0);
+        if (!(off <= 2.0 * dec.model.q))
+            fail_msg("the ruled cylinder %.3g grid steps off", off / dec.model.q);
+        encode_result_free(&r);
+        encode_result_free(&r43);
+        model_free(&lm);
+    }
+}
+
+/* one kept ruled surface's record as a writer could send it: the decoded model's two arcs again,
+   the second row's middle point pulled towards its chord by `flatten` (0: as it was) */
+static size_t ruled_section(uint8_t *buf, size_t cap, double flatten)
+{
+    const cm_model *m = &dec.model;
+    const cm_ksurf *S = &m->surfs[0];
+    cm_surf sv;
+    cm_model_surface(m, 0, &sv);
+    int along_v = S->p == 1;
+    int64_t pt[2][3][3];
+    for (int row = 0; row < 2; row++) {
+        /* first point, end, middle */
+        const double at[3] = {0.0, 1.0, 0.5};
+        for (int j = 0; j < 3; j++) {
+            cm_vec3 d[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+            assert_ok(cm_surf_eval(&sv, along_v ? row : at[j], along_v ? at[j] : row, 0, d, NULL));
+            double xyz[3] = {d[0][0].x, d[0][0].y, d[0][0].z};
+            for (int k = 0; k < 3; k++)
+                pt[row][j][k] = llround((xyz[k] - m->origin[k]) / m->q);
+        }
+    }
+    for (int k = 0; k < 3 && flatten > 0; k++) {
+        int64_t mid = cm_pred_arc_mid(pt[1][0][k], pt[1][1][k]);
+        pt[1][2][k] = mid + (int64_t)((double)(pt[1][2][k] - mid) * (1.0 - flatten));
+    }
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, buf, cap);
+    cm_surf_ctx c;
+    cm_surf_ctx_init(&c);
+    cm_ac_enc_uint(&e, &c.count, 1);
+    cm_ac_enc_bit(&e, &c.ruled, 1);
+    cm_ac_enc_bit(&e, &c.closed, 0);
+    cm_ac_enc_bit(&e, &c.along_v, (unsigned)along_v);
+    cm_ac_enc_uint(&e, &c.ruled_step, 0);
+    for (int row = 0; row < 2; row++)
+        for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++)
+                cm_ac_enc_sint(&e, &c.ruled_coord[k], pt[row][j][k] - cm_pred_ruled((const int64_t(*)[3][3])pt, row, j, k));
+    size_t n = cm_ac_enc_finish_trimmed(&e);
+    assert_false(e.overflow);
+    return n;
+}
+
+/* The kept half cylinder's SURF section coded again here decodes to the same net bit for bit; with
+   its second arc flattened to a single piece (the first has two), it is refused by name. */
+static void test_ruled_records_refused(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    load_half_cylinder(&lm);
+    encode_result r;
+    encode_kept(&lm, -1, &r);
+    cm_status st;
+    assert_ok(decode(r.bytes, r.len, &st));
+    static cm_vec3 ctrl[CM_MAX_MODEL_CTRL];
+    static double w[CM_MAX_MODEL_CTRL];
+    uint32_t c0 = dec.model.surfs[0].ctrl0, nc = (uint32_t)dec.model.surfs[0].nu * dec.model.surfs[0].nv;
+    memcpy(ctrl, dec.model.ctrl + c0, nc * sizeof *ctrl);
+    memcpy(w, dec.model.w + c0, nc * sizeof *w);
+    static uint8_t sec[1 << 12];
+    size_t n = ruled_section(sec, sizeof sec, 0), len;
+    uint8_t *b = with_section(&r, CM_SEC_SURF, sec, n, &len);
+    assert_ok(decode(b, len, &st));
+    assert_memory_equal(dec.model.ctrl + dec.model.surfs[0].ctrl0, ctrl, nc * sizeof *ctrl);
+    assert_memory_equal(dec.model.w + dec.model.surfs[0].ctrl0, w, nc * sizeof *w);
+    free(b);
+    assert_ok(decode(r.bytes, r.len, &st));
+    n = ruled_section(sec, sizeof sec, 0.8);
+    b = with_section(&r, CM_SEC_SURF, sec, n, &len);
+    assert_int_equal(decode(b, len, &st), CM_E_FORMAT);
+    assert_string_equal(st.where, "ruled surface's arcs of different pieces");
+    free(b);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_half_circles_as_arcs),
         cmocka_unit_test(test_full_cylinder_band),
         cmocka_unit_test(test_arc_choice),
+        cmocka_unit_test(test_kept_cylinders_ruled),
+        cmocka_unit_test(test_ruled_records_refused),
         cmocka_unit_test(test_arc_records_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -37,6 +37,17 @@ static inline int64_t cm_pred_arc_mid(int64_t first, int64_t last)
     return first + (last - first) / 2;
 }
 
+/* format 4.4: the points of a ruled surface's two arcs (docs/FORMAT.md, SURF, "Ruled"), point j of
+   row `row`, coordinate by coordinate from those before it, pt[row][j]: the first row's first point
+   absolute, its second from its first, its third from the midpoint of those two; the second row's
+   each from the first row's, moved as its first point moved */
+static inline int64_t cm_pred_ruled(const int64_t pt[2][3][3], int row, int j, int k)
+{
+    if (row == 0)
+        return j == 0 ? 0 : (j == 1 ? pt[0][0][k] : cm_pred_arc_mid(pt[0][0][k], pt[0][1][k]));
+    return j == 0 ? pt[0][0][k] : pt[0][j][k] + (pt[1][0][k] - pt[0][0][k]);
+}
+
 /* weight j (j >= 1; weight 0 is one, w_one): the weight two places before it, or for j = 1 the first */
 static inline int64_t cm_pred_weight(int j, int64_t prev, int64_t prev2)
 {

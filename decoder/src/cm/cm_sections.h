@@ -38,6 +38,9 @@ typedef struct cm_surf_ctx {
     cm_ac_int step;               /* format 3: the exponent of the net's own step */
     cm_ac_prob knot_zero;         /* format 3, as for edges */
     cm_ac_int knot_delta;
+    cm_ac_prob ruled, closed;     /* format 4.4: the surface ruled between two arcs (full circles) */
+    cm_ac_prob along_v;           /* ... the arcs along v */
+    cm_ac_int ruled_step, ruled_coord[3]; /* ... their points' step and coordinates */
 } cm_surf_ctx;
 
 /* FACE: count; per face its method, its record (GREGORY: layout, corner, checksum), orientation,
