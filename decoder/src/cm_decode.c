@@ -675,15 +675,20 @@ static cm_err read_arc(reader *r, cm_edge_ctx *ctx, cm_edge *E)
     return CM_OK;
 }
 
-/* edge i's curve as the kernels will take it: degree, count, knots, finite points, weights > 0 */
-static cm_err check_edge_curve(reader *r, uint32_t i)
+/* edge i's curve (or kept surface i) as the kernels will take it: degrees, counts, knots, finite
+   points, weights > 0 */
+static cm_err check_geometry(reader *r, uint32_t i, int surface)
 {
-    cm_curve c;
-    cm_model_edge_curve(&r->d->model, i, &c);
     cm_status cst;
     cm_status_init(&cst);
-    if (cm_curve_check(&c, &cst) != CM_OK)
-        return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, "edge curve");
+    cm_curve c;
+    cm_surf sv;
+    if (surface)
+        cm_model_surface(&r->d->model, i, &sv);
+    else
+        cm_model_edge_curve(&r->d->model, i, &c);
+    if ((surface ? cm_surf_check(&sv, &cst) : cm_curve_check(&c, &cst)) != CM_OK)
+        return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, surface ? "surface" : "edge curve");
     return CM_OK;
 }
 
@@ -707,7 +712,7 @@ static cm_err sec_edge(reader *r)
         E->kind = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.kind);
         int p = 1, n = 2, rational = 0;
         if (E->kind == CM_EDGE_CURVE && arcs && cm_ac_dec_bit(&r->ac, &ctx.arc)) {
-            if ((e = read_arc(r, &ctx, E)) != CM_OK || (e = check_edge_curve(r, i)) != CM_OK)
+            if ((e = read_arc(r, &ctx, E)) != CM_OK || (e = check_geometry(r, i, 0)) != CM_OK)
                 return e;
             continue;
         }
@@ -783,23 +788,11 @@ static cm_err sec_edge(reader *r)
             W[j] = (double)wq / (double)WEIGHT_ONE;
         }
         m->nctrl += (uint32_t)n;
-        if ((e = check_edge_curve(r, i)) != CM_OK)
+        if ((e = check_geometry(r, i, 0)) != CM_OK)
             return e;
     }
     if (vnext != m->nverts)
         return rfail(r, CM_E_FORMAT, "unused vertices");
-    return CM_OK;
-}
-
-/* kept surface s as the kernels will take it: degrees, counts, knots, finite points, weights > 0 */
-static cm_err check_kept_surface(reader *r, uint32_t s)
-{
-    cm_surf sv;
-    cm_model_surface(&r->d->model, s, &sv);
-    cm_status cst;
-    cm_status_init(&cst);
-    if (cm_surf_check(&sv, &cst) != CM_OK)
-        return rfail(r, cst.code == CM_E_LIMIT ? CM_E_FORMAT : cst.code, "surface");
     return CM_OK;
 }
 
@@ -887,7 +880,7 @@ static cm_err sec_surf(reader *r)
     for (uint32_t s = 0; s < m->nsurfs; s++) {
         cm_ksurf *S = &m->surfs[s];
         if (ruled && cm_ac_dec_bit(&r->ac, &ctx.ruled)) {
-            if ((e = read_ruled(r, &ctx, S)) != CM_OK || (e = check_kept_surface(r, s)) != CM_OK)
+            if ((e = read_ruled(r, &ctx, S)) != CM_OK || (e = check_geometry(r, s, 1)) != CM_OK)
                 return e;
             continue;
         }
@@ -951,7 +944,7 @@ static cm_err sec_surf(reader *r)
                 m->w[S->ctrl0 + (uint32_t)idx] = (double)wq / (double)WEIGHT_ONE;
             }
         m->nctrl += (uint32_t)total;
-        if ((e = check_kept_surface(r, s)) != CM_OK)
+        if ((e = check_geometry(r, s, 1)) != CM_OK)
             return e;
     }
     return CM_OK;

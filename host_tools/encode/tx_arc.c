@@ -162,17 +162,17 @@ static double one_way(const cm_curve *a, const cm_curve *b)
     return worst;
 }
 
-/* the parameter (on [0,1]) of c's point farthest from p: the best of 257 samples, then refined
-   about it by golden-section search */
-static int farthest(const cm_curve *c, cm_vec3 p, double *u)
+/* the parameter (on [0,1]) of c's point farthest from p (`far`) or nearest to it: the best of 257
+   samples, then refined about it by golden-section search */
+static int extreme(const cm_curve *c, cm_vec3 p, int far, double *u)
 {
-    double best = -1, at = 0;
+    double best = HUGE_VAL, at = 0, sign = far ? -1.0 : 1.0;
     for (int i = 0; i <= POLY_SEGMENTS; i++) {
         cm_vec3 x;
         if (!eval_at(c, (double)i / POLY_SEGMENTS, &x))
             return 0;
-        if (cm_norm2(cm_sub(x, p)) > best) {
-            best = cm_norm2(cm_sub(x, p));
+        if (sign * cm_norm2(cm_sub(x, p)) < best) {
+            best = sign * cm_norm2(cm_sub(x, p));
             at = (double)i / POLY_SEGMENTS;
         }
     }
@@ -182,7 +182,7 @@ static int farthest(const cm_curve *c, cm_vec3 p, double *u)
         cm_vec3 y1, y2;
         if (!eval_at(c, m1, &y1) || !eval_at(c, m2, &y2))
             return 0;
-        if (cm_norm2(cm_sub(y1, p)) > cm_norm2(cm_sub(y2, p)))
+        if (sign * cm_norm2(cm_sub(y1, p)) < sign * cm_norm2(cm_sub(y2, p)))
             hi = m2;
         else
             lo = m1;
@@ -223,7 +223,7 @@ static int arc_points(const cm_curve *src, cm_vec3 p0, cm_vec3 p2, int closed, c
     *r = p0;
     if (!closed)
         return shoulder(src, p0, p2, &uq) && eval_at(src, uq, q);
-    if (!farthest(src, p0, &uq) || !eval_at(src, uq, q))
+    if (!extreme(src, p0, 1, &uq) || !eval_at(src, uq, q))
         return 0;
     /* the point as far from the vertex as from q, on the way to q */
     double lo = 0, hi = uq;
@@ -340,34 +340,6 @@ int tx_arc_edge(const tx *t, const hcurve *c, int fine, tx_edge *A)
  */
 #define RULED_CHECKS 32 /* parameters along the first row where the rows' correspondence is checked */
 
-/* the parameter (on [0,1]) of c's point nearest to x */
-static int nearest(const cm_curve *c, cm_vec3 x, double *u)
-{
-    double best = HUGE_VAL, at = 0;
-    for (int i = 0; i <= POLY_SEGMENTS; i++) {
-        cm_vec3 y;
-        if (!eval_at(c, (double)i / POLY_SEGMENTS, &y))
-            return 0;
-        if (cm_dist(x, y) < best) {
-            best = cm_dist(x, y);
-            at = (double)i / POLY_SEGMENTS;
-        }
-    }
-    double lo = fmax(0.0, at - 1.0 / POLY_SEGMENTS), hi = fmin(1.0, at + 1.0 / POLY_SEGMENTS);
-    for (int it = 0; it < PROJECT_ITERATIONS; it++) {
-        double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
-        cm_vec3 y1, y2;
-        if (!eval_at(c, m1, &y1) || !eval_at(c, m2, &y2))
-            return 0;
-        if (cm_dist(x, y1) < cm_dist(x, y2))
-            hi = m2;
-        else
-            lo = m1;
-    }
-    *u = 0.5 * (lo + hi);
-    return 1;
-}
-
 int tx_ruled_surface(const tx *t, const hsurf *s, tx_surf *S)
 {
     /* the arcs along u (the net's rows are 2 points: linear in v) or along v */
@@ -418,7 +390,7 @@ int tx_ruled_surface(const tx *t, const hsurf *s, tx_surf *S)
         cm_vec3 x0, x1, y1;
         double u;
         ok = eval_at(&a0, (double)k / RULED_CHECKS, &x0) && eval_at(&a1, (double)k / RULED_CHECKS, &x1) &&
-             nearest(&row[0], x0, &u) && eval_at(&row[1], u, &y1) && cm_dist(x1, y1) <= 2.0 * tol;
+             extreme(&row[0], x0, 0, &u) && eval_at(&row[1], u, &y1) && cm_dist(x1, y1) <= 2.0 * tol;
     }
     free(rc);
     free(rw);

@@ -110,7 +110,8 @@ static void test_arc_off_by_a_step(void **state)
 }
 
 /* What no arc is: coincident ends, a full circle or nearly (the middle point far beyond a short
-   chord), points that are not finite; a middle point on the chord is its straight segment. */
+   chord), points that are not finite; a middle point on the chord is its straight segment.  What
+   no full circle is: one whose far point is its vertex, or whose halves are nearly full circles. */
 static void test_arc_refusals(void **state)
 {
     (void)state;
@@ -141,11 +142,21 @@ static void test_arc_refusals(void **state)
     assert_int_equal(n, 3);
     assert_vec_near(P[1], cm_v3(1, 1, 1), 0);
     assert_near(W[1], 1.0, 0);
+    /* a circle whose far point is its vertex; not finite; each half nearly a full circle */
+    cm_status_init(&st);
+    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(1, 0, 0), P, W, K, &n, &st), CM_E_DEGENERATE);
+    assert_string_equal(st.where, "circle whose far point is its vertex");
+    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(NAN, 0, 0), P, W, K, &n, NULL),
+                     CM_E_NONFINITE);
+    /* the halfway point far beyond a short diameter: each half nearly a full circle */
+    cm_status_init(&st);
+    assert_int_equal(cm_circle_nurbs(cm_v3(0, 0, 0), cm_v3(0, 1e4, 0), cm_v3(1e-1, 0, 0), P, W, K, &n, &st),
+                     CM_E_DEGENERATE);
+    assert_string_equal(st.where, "arc of a full circle");
 }
 
 /* Full circles (closed edges) from their vertex, the point halfway round and the point across:
-   on the circle, through those points at t = 1/4 and 1/2, closed bit for bit, forward; a far point
-   on the vertex is refused. */
+   on the circle, through those points at t = 1/4 and 1/2, closed bit for bit, forward. */
 static void test_full_circle(void **state)
 {
     (void)state;
@@ -182,20 +193,6 @@ static void test_full_circle(void **state)
         assert_ok(cm_curve_eval(&c, 0.5, 0, &x, NULL));
         assert_vec_near(x, q, 1e-10);
     }
-    cm_vec3 P[CM_ARC_MAX_CTRL];
-    double W[CM_ARC_MAX_CTRL], K[CM_ARC_MAX_KNOTS];
-    int n;
-    cm_status st;
-    cm_status_init(&st);
-    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(1, 0, 0), P, W, K, &n, &st), CM_E_DEGENERATE);
-    assert_string_equal(st.where, "circle whose far point is its vertex");
-    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(NAN, 0, 0), P, W, K, &n, NULL),
-                     CM_E_NONFINITE);
-    /* the halfway point far beyond a short diameter: each half nearly a full circle */
-    cm_status_init(&st);
-    assert_int_equal(cm_circle_nurbs(cm_v3(0, 0, 0), cm_v3(0, 1e4, 0), cm_v3(1e-1, 0, 0), P, W, K, &n, &st),
-                     CM_E_DEGENERATE);
-    assert_string_equal(st.where, "arc of a full circle");
 }
 
 int main(void)
