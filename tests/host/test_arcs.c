@@ -381,7 +381,7 @@ static uint8_t *with_section(const encode_result *r, int tag, const uint8_t *edg
 {
     const uint8_t *b = r->bytes;
     uint32_t at = CM_FMT_COMPACT_AT_H, end = (uint32_t)r->section_bytes[0];
-    uint64_t H, flags, N, need[64], S, len[8];
+    uint64_t H = 0, flags = 0, N = 0, need[64], S = 0, len[8];
     assert_true(cm_fmt_get_varint(b, end, &at, &H) && cm_fmt_get_varint(b, end, &at, &flags) &&
                 cm_fmt_get_varint(b, end, &at, &N) && N <= 64);
     for (uint64_t i = 0; i < N; i++)

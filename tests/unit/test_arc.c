@@ -128,8 +128,8 @@ static void test_arc_refusals(void **state)
                      CM_E_DEGENERATE);
     assert_string_equal(st.where, "arc of a full circle");
     cm_status_init(&st);
-    assert_int_equal(cm_arc_nurbs(cm_v3(0, 0, 0), cm_v3(NAN, 0, 0), cm_v3(1, 0, 0), P, W, K, &n, &st), CM_E_NONFINITE);
-    assert_int_equal(cm_arc_nurbs(cm_v3(0, 0, 0), cm_v3(0, 0, 0), cm_v3(INFINITY, 0, 0), P, W, K, &n, NULL),
+    assert_int_equal(cm_arc_nurbs(cm_v3(0, 0, 0), cm_v3((double)NAN, 0, 0), cm_v3(1, 0, 0), P, W, K, &n, &st), CM_E_NONFINITE);
+    assert_int_equal(cm_arc_nurbs(cm_v3(0, 0, 0), cm_v3(0, 0, 0), cm_v3((double)INFINITY, 0, 0), P, W, K, &n, NULL),
                      CM_E_NONFINITE);
     /* 359.8 degrees still builds, its weights positive */
     circle k = tilted(1.0);
@@ -146,7 +146,7 @@ static void test_arc_refusals(void **state)
     cm_status_init(&st);
     assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(1, 0, 0), P, W, K, &n, &st), CM_E_DEGENERATE);
     assert_string_equal(st.where, "circle whose far point is its vertex");
-    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3(NAN, 0, 0), P, W, K, &n, NULL),
+    assert_int_equal(cm_circle_nurbs(cm_v3(1, 0, 0), cm_v3(0, 1, 0), cm_v3((double)NAN, 0, 0), P, W, K, &n, NULL),
                      CM_E_NONFINITE);
     /* the halfway point far beyond a short diameter: each half nearly a full circle */
     cm_status_init(&st);
