@@ -125,3 +125,9 @@ cm_err cm_circle_nurbs(cm_vec3 p0, cm_vec3 r, cm_vec3 q, cm_vec3 ctrl[CM_ARC_MAX
     piece_knots(knots, 4);
     return CM_OK;
 }
+
+cm_err cm_arc_record(int closed, cm_vec3 p0, cm_vec3 mid, cm_vec3 end, cm_vec3 ctrl[CM_ARC_MAX_CTRL],
+                     double w[CM_ARC_MAX_CTRL], double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st)
+{
+    return closed ? cm_circle_nurbs(p0, mid, end, ctrl, w, knots, n, st) : cm_arc_nurbs(p0, mid, end, ctrl, w, knots, n, st);
+}

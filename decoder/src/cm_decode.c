@@ -647,9 +647,8 @@ static cm_err read_arc(reader *r, cm_edge_ctx *ctx, cm_edge *E)
     int n;
     cm_status cst;
     cm_status_init(&cst);
-    cm_err b = closed ? cm_circle_nurbs(m->verts[E->v0], grid_point(m, rk), grid_point(m, qk), P, W, K, &n, &cst)
-                      : cm_arc_nurbs(m->verts[E->v0], grid_point(m, qk), m->verts[E->v1], P, W, K, &n, &cst);
-    if (b != CM_OK)
+    if (cm_arc_record(closed, m->verts[E->v0], grid_point(m, closed ? rk : qk), closed ? grid_point(m, qk) : m->verts[E->v1],
+                      P, W, K, &n, &cst) != CM_OK)
         return rfail(r, cst.code, cst.where ? cst.where : "arc edge");
     if (2 > CM_MAX_DEGREE)
         return rlimit(r, CM_LIMIT_MAX_DEGREE, 2, CM_MAX_DEGREE, "edge degree");
@@ -825,9 +824,7 @@ static cm_err read_ruled(reader *r, cm_surf_ctx *ctx, cm_ksurf *S)
         cm_status cst;
         cm_status_init(&cst);
         /* an arc from a through c to b; a circle from a through c to b and round */
-        cm_err b2 = closed ? cm_circle_nurbs(a, c, b, P[row], W[row], K[row], &n[row], &cst)
-                           : cm_arc_nurbs(a, c, b, P[row], W[row], K[row], &n[row], &cst);
-        if (b2 != CM_OK)
+        if (cm_arc_record(closed, a, c, b, P[row], W[row], K[row], &n[row], &cst) != CM_OK)
             return rfail(r, cst.code, cst.where ? cst.where : "ruled surface");
     }
     if (n[0] != n[1])

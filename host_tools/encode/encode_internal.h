@@ -270,6 +270,8 @@ void tx_coarsen_edge(const tx *t, tx_edge *X, int fine, double tol_mm);
    to half as many more where it is rational or on uneven knots) that stays within a sixteenth of the
    tolerance of a face its size, matched at equal steps of length; 1 if it was replaced. */
 int tx_reapproximate_curve(const tx *t, hcurve *c);
+/* p on the grid; 0 when it is not finite or beyond what the decoder accepts (out is then 0) */
+int tx_quantise(const tx *t, cm_vec3 p, int64_t out[3]);
 /* of the faces' tolerance, for the points of a curve or net (tx_coarsen.c) and an arc (tx_arc.c) */
 #define ENC_CURVE_SHARE (1.0 / 16.0)
 /* Format 4.4 (tx_arc.c): 1 and A an arc edge (its vertices and G1 flag as set) when curve c, from A's

@@ -59,10 +59,10 @@ static int eval_at(const cm_curve *c, double u, cm_vec3 *p)
     return cm_curve_eval(c, a + (b - a) * u, 0, p, &st) == CM_OK;
 }
 
-/* the parameter (on [0,1] of the domain) of c's point as far from p0 as from p2 */
-static int shoulder(const cm_curve *c, cm_vec3 p0, cm_vec3 p2, double *u)
+/* the parameter (on [0, hi] of the domain's [0,1]) of c's point as far from p0 as from p2 */
+static int shoulder(const cm_curve *c, cm_vec3 p0, cm_vec3 p2, double hi, double *u)
 {
-    double lo = 0, hi = 1;
+    double lo = 0;
     for (int i = 0; i < SHOULDER_ITERATIONS; i++) {
         double mid = 0.5 * (lo + hi);
         cm_vec3 x;
@@ -191,19 +191,6 @@ static int extreme(const cm_curve *c, cm_vec3 p, int far, double *u)
     return 1;
 }
 
-/* x (mm) on the grid, 0 when beyond what the format takes */
-static int to_grid(const tx *t, cm_vec3 x, int64_t g[3])
-{
-    double v[3] = {x.x, x.y, x.z};
-    for (int k = 0; k < 3; k++) {
-        double d = (v[k] - t->origin[k]) / t->q;
-        if (!(fabs(d) < 0x1p40))
-            return 0;
-        g[k] = llround(d);
-    }
-    return 1;
-}
-
 /* g as its prediction plus a multiple of 2^s, nearest to g; 0 when beyond what the terminal takes */
 static int on_step(const int64_t g[3], const int64_t pred[3], int s, int64_t out[3])
 {
@@ -222,22 +209,12 @@ static int arc_points(const cm_curve *src, cm_vec3 p0, cm_vec3 p2, int closed, c
     double uq;
     *r = p0;
     if (!closed)
-        return shoulder(src, p0, p2, &uq) && eval_at(src, uq, q);
+        return shoulder(src, p0, p2, 1.0, &uq) && eval_at(src, uq, q);
     if (!extreme(src, p0, 1, &uq) || !eval_at(src, uq, q))
         return 0;
     /* the point as far from the vertex as from q, on the way to q */
-    double lo = 0, hi = uq;
-    for (int i = 0; i < SHOULDER_ITERATIONS; i++) {
-        double mid = 0.5 * (lo + hi);
-        cm_vec3 x;
-        if (!eval_at(src, mid, &x))
-            return 0;
-        if (cm_norm2(cm_sub(x, p0)) < cm_norm2(cm_sub(x, *q)))
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return eval_at(src, 0.5 * (lo + hi), r);
+    double ur;
+    return shoulder(src, p0, *q, uq, &ur) && eval_at(src, ur, r);
 }
 
 #define KINK_COS 0.99996192306417131 /* cos 0.5 deg */
@@ -265,7 +242,7 @@ static int fit_arc(const tx *t, const cm_curve *src, const int64_t k0[3], const 
                    cm_vec3 r, int s, double tol, int max_ctrl, int64_t qk[3], int64_t rk[3], built_arc *b)
 {
     int64_t qg[3], rg[3], qpred[3], rpred[3];
-    if (!to_grid(t, q, qg) || !to_grid(t, r, rg))
+    if (!tx_quantise(t, q, qg) || !tx_quantise(t, r, rg))
         return 0;
     for (int k = 0; k < 3; k++)
         qpred[k] = closed ? k0[k] : cm_pred_arc_mid(k0[k], k2[k]);
@@ -278,8 +255,9 @@ static int fit_arc(const tx *t, const cm_curve *src, const int64_t k0[3], const 
     cm_status st;
     cm_status_init(&st);
     cm_vec3 p0 = grid_mm(t, k0), p2 = grid_mm(t, k2);
-    if (!inside || (closed ? cm_circle_nurbs(p0, grid_mm(t, rk), grid_mm(t, qk), b->P, b->W, b->K, &b->n, &st)
-                           : cm_arc_nurbs(p0, grid_mm(t, qk), p2, b->P, b->W, b->K, &b->n, &st)) != CM_OK ||
+    if (!inside ||
+        cm_arc_record(closed, p0, grid_mm(t, closed ? rk : qk), closed ? grid_mm(t, qk) : p2, b->P, b->W, b->K, &b->n,
+                      &st) != CM_OK ||
         b->n > max_ctrl)
         return 0;
     /* a circle's halves are two conics: with the middle point a step off the circle they meet at an
@@ -370,8 +348,8 @@ int tx_ruled_surface(const tx *t, const hsurf *s, tx_surf *S)
                          : (cm_curve){s->p, na, s->U, rc + j * na, s->w ? rw + j * na : NULL};
         cm_vec3 e0, e1, q, r;
         int64_t qk[3], rk[3];
-        ok = eval_at(&row[j], 0.0, &e0) && eval_at(&row[j], 1.0, &e1) && to_grid(t, e0, pt[j][0]) &&
-             to_grid(t, e1, pt[j][1]);
+        ok = eval_at(&row[j], 0.0, &e0) && eval_at(&row[j], 1.0, &e1) && tx_quantise(t, e0, pt[j][0]) &&
+             tx_quantise(t, e1, pt[j][1]);
         closed[j] = ok && memcmp(pt[j][0], pt[j][1], sizeof pt[j][0]) == 0;
         cm_vec3 p0 = grid_mm(t, pt[j][0]), p2 = grid_mm(t, pt[j][1]);
         ok = ok && arc_points(&row[j], p0, p2, closed[j], &q, &r) &&

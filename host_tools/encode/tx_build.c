@@ -79,8 +79,8 @@ void tx_free(tx *t)
 }
 
 
-/* p on the grid; 0 when it is not finite or beyond what the decoder accepts (out is then 0) */
-static int quantise(const tx *t, cm_vec3 p, int64_t out[3])
+/* (encode_internal.h) */
+int tx_quantise(const tx *t, cm_vec3 p, int64_t out[3])
 {
     double c[3] = {(p.x - t->origin[0]) / t->q, (p.y - t->origin[1]) / t->q, (p.z - t->origin[2]) / t->q};
     int ok = 1;
@@ -203,7 +203,7 @@ static cm_err tx_edge_fill(const tx *t, tx_edge *X, const hcurve *cv, int fine, 
         X->wq[j] = WEIGHT_ONE;
     if (X->kind == CM_EDGE_CURVE) {
         for (int j = 1; j < n - 1; j++)
-            if (!quantise(t, c.ctrl[j], X->cq[j]))
+            if (!tx_quantise(t, c.ctrl[j], X->cq[j]))
                 *why = "an edge's control point lies off the coordinate grid";
         if (c.w)
             for (int j = 0; j < n; j++) {
@@ -274,7 +274,7 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st)
         int vs[2] = {E->v0, E->v1};
         for (int k = 0; k < 2; k++)
             if (t->vert_tx[vs[k]] < 0) {
-                off_grid[vs[k]] = !quantise(t, cm->verts[vs[k]], t->vq[t->nverts]);
+                off_grid[vs[k]] = !tx_quantise(t, cm->verts[vs[k]], t->vq[t->nverts]);
                 t->vert_tx[vs[k]] = t->nverts++;
             }
     }
@@ -504,7 +504,7 @@ static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st)
     }
     S->rational = 0;
     for (long i = 0; i < total && e == CM_OK; i++) {
-        if (!quantise(t, s.ctrl[i], S->cq[i]))
+        if (!tx_quantise(t, s.ctrl[i], S->cq[i]))
             e = cm_fail(st, CM_E_RANGE, "a surface control point lies off the coordinate grid");
         S->wq[i] = WEIGHT_ONE;
         if (s.w) {

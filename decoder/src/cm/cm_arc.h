@@ -44,4 +44,11 @@ CM_NODISCARD cm_err cm_arc_nurbs(cm_vec3 p0, cm_vec3 q, cm_vec3 p2, cm_vec3 ctrl
 CM_NODISCARD cm_err cm_circle_nurbs(cm_vec3 p0, cm_vec3 r, cm_vec3 q, cm_vec3 ctrl[CM_ARC_MAX_CTRL],
                                     double w[CM_ARC_MAX_CTRL], double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st);
 
+/**
+ * The arc a format 4.4 record names: from p0 through mid to end (cm_arc_nurbs), or when `closed`
+ * the full circle from p0 through mid and round by its far point `end` (cm_circle_nurbs).
+ */
+CM_NODISCARD cm_err cm_arc_record(int closed, cm_vec3 p0, cm_vec3 mid, cm_vec3 end, cm_vec3 ctrl[CM_ARC_MAX_CTRL],
+                                  double w[CM_ARC_MAX_CTRL], double knots[CM_ARC_MAX_KNOTS], int *n, cm_status *st);
+
 #endif /* CM_ARC_H */
