@@ -36,7 +36,7 @@ $(call bdir,$(1))/cmz-terminal: $(call bdir,$(1))/platform/cmz_terminal_main.o \
 		$(call bdir,$(1))/platform/cm_decode_file.o $(call bdir,$(1))/platform/cm_report.o \
 		$(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
-	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(LINK_USB_LIBS) $$(GPIO_LIBS) -lm
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(LINK_USB_LIBS) $$(GPIO_LIBS) -lm
 endef
 $(foreach p,$(PROFILES),$(eval $(call TERMINAL_RULES,$(p))))
 
@@ -162,5 +162,6 @@ check-stack-programs: $(B)/libcmdecoder.a $(BUILD_ROOT)/tools/check_stack $(STAC
 # data + bss of cmz-decode and cmz-terminal within CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET
 .PHONY: check-ram
 check-ram: $(B)/cmz-decode $(B)/cmz-terminal
-	$(Q)tests/tools/check_ram.sh $(CROSS_COMPILE)size $(CROSS_COMPILE)nm $(call limit_of,$(PROFILE),CM_DECODE_STATE_BUDGET) \
+	$(Q)CM_TEXT_BUDGET=$(if $(filter aarch64-%,$(TRIPLET)),$(call limit_of,$(PROFILE),CM_PROGRAM_TEXT_BUDGET)) \
+		tests/tools/check_ram.sh $(CROSS_COMPILE)size $(CROSS_COMPILE)nm $(call limit_of,$(PROFILE),CM_DECODE_STATE_BUDGET) \
 		$(call limit_of,$(PROFILE),CM_PROGRAM_STATIC_BUDGET) $(B)/cmz-decode $(B)/cmz-terminal

@@ -3,8 +3,10 @@
 # programs (issue 15.3): each program's data + bss within CM_DECODE_STATE_BUDGET (its one decode
 # state) + CM_PROGRAM_STATIC_BUDGET (everything else: link, transports, store, I/O chunks).  Prints
 # each program's total, what is not the decode state, and its five largest static objects; exits 1
-# when one is over, naming it.  TAP.
+# when one is over, naming it.  With CM_TEXT_BUDGET set (the aarch64 build: CM_PROGRAM_TEXT_BUDGET),
+# also each program's text (code, read-only data and tables, as `size` counts it) within it.  TAP.
 set -u
+text_budget=${CM_TEXT_BUDGET:-}
 size=$1 nm=$2 decode=$3 program=$4
 shift 4
 budget=$((decode + program))
@@ -28,6 +30,16 @@ for bin in "$@"; do
     else
         echo "not ok $n - $msg: over CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET ($decode + $program); largest:$largest"
         bad=$((bad + 1))
+    fi
+    if [ -n "$text_budget" ]; then
+        n=$((n + 1))
+        text=$("$size" -B "$bin" | awk 'NR == 2 { print $1 }')
+        if [ -n "$text" ] && [ "$text" -le "$text_budget" ]; then
+            echo "ok $n - $bin: text $text bytes, budget $text_budget (CM_PROGRAM_TEXT_BUDGET)"
+        else
+            echo "not ok $n - $bin: text ${text:-?} bytes, over CM_PROGRAM_TEXT_BUDGET ($text_budget)"
+            bad=$((bad + 1))
+        fi
     fi
     # --limits names the program's own storage part by part: what it leaves unnamed stays small (a new
     # buffer of 32 KiB or more must have its row); a foreign binary (a cross build) is not run
