@@ -13,6 +13,7 @@
 #include "cm/cm_method.h"
 #include "cm/cm_predict.h"
 #include "cm/cm_sections.h"
+#include "cm/cm_use_adj.h"
 
 #define COORD_MAX CM_FMT_COORD_MAX
 #define WEIGHT_ONE (1ll << CM_FMT_WEIGHT_BITS)
@@ -1006,6 +1007,57 @@ static cm_err read_placements(reader *r, cm_face_ctx *ctx)
 }
 
 
+/* format 4.5: edge e has been used once more; a new one joins the lists first */
+static void use_adj_note(cm_use_adj *adj, const cm_model *m, uint32_t e, int is_new)
+{
+    if (is_new)
+        cm_use_adj_add(adj, m->edges, e);
+    cm_use_adj_count(adj, e);
+}
+
+/*
+ * Format 4.5: a use after the first of its loop, which begins where the use before ended (v): bit
+ * "the next edge not referenced yet", else its place among the candidates at v (cm_use_adj.h), or
+ * one past them and `back` as in 4.4; the direction is the one that begins at v, sent only for a
+ * closed edge.  An edge that does not meet v fails the loop's closing test.
+ */
+static cm_err read_use_at(reader *r, cm_face_ctx *ctx, cm_use_adj *adj, cm_use *U, uint32_t *enext)
+{
+    cm_model *m = &r->d->model;
+    const cm_use *prev = U - 1;
+    int32_t v = prev->rev ? m->edges[prev->edge].v0 : m->edges[prev->edge].v1;
+    uint32_t e;
+    int is_new = (int)cm_ac_dec_bit(&r->ac, &ctx->is_new);
+    if (is_new) {
+        if (*enext >= m->nedges)
+            return rfail(r, CM_E_RANGE, "edge reference");
+        e = (*enext)++;
+    } else {
+        uint32_t cand[CM_USE_CANDIDATES];
+        int n = cm_use_adj_list(adj, m->edges, v, cand);
+        uint64_t i = cm_ac_dec_uint(&r->ac, &ctx->cand);
+        if (r->ac.overrun)
+            return rfail(r, CM_E_TRUNCATED, "edge reference");
+        if (i < (uint64_t)n) {
+            e = cand[i];
+        } else if (i == (uint64_t)n) {
+            uint64_t back = cm_ac_dec_uint(&r->ac, &ctx->back);
+            if (r->ac.overrun)
+                return rfail(r, CM_E_TRUNCATED, "edge reference");
+            if (back >= *enext)
+                return rfail(r, CM_E_RANGE, "edge reference");
+            e = (uint32_t)(*enext - 1 - back);
+        } else {
+            return rfail(r, CM_E_RANGE, "edge reference at its vertex");
+        }
+    }
+    U->edge = e;
+    U->rev = m->edges[e].v0 == m->edges[e].v1 ? (uint8_t)cm_ac_dec_bit(&r->ac, &ctx->rev_closed)
+                                              : cm_use_adj_rev(m->edges, e, v);
+    use_adj_note(adj, m, e, is_new);
+    return CM_OK;
+}
+
 static cm_err sec_face(reader *r)
 {
     cm_model *m = &r->d->model;
@@ -1018,6 +1070,13 @@ static cm_err sec_face(reader *r)
         return e;
     uint32_t enext = 0, snext = 0;
     m->nloops = m->nuses = 0;
+    /* format 4.5: the lists of referenced edges at each vertex (cm_use_adj.h), in arrays that are
+       free while FACE is read: the vertices' grid coordinates (read by VERT, EDGE and SURF only),
+       and edge_face and edge_split, which cm_model_adjacency fills from the loops at the end */
+    int by_vertex = at_least_4(r, CM_FMT_USE_ADJ_MINOR);
+    cm_use_adj adj = {r->d->vhead, m->edge_face, m->edge_split};
+    if (by_vertex)
+        cm_use_adj_begin(&adj, m->nverts);
     for (uint32_t f = 0; f < m->nfaces; f++) {
         cm_face *F = &m->faces[f];
         r->face = f;
@@ -1077,7 +1136,13 @@ static cm_err sec_face(reader *r)
             L->nuse = (uint16_t)nu;
             for (uint32_t k = 0; k < nu; k++) {
                 cm_use *U = &m->uses[m->nuses++];
-                if (cm_ac_dec_bit(&r->ac, &ctx.is_new)) {
+                if (by_vertex && k > 0) {
+                    if ((e = read_use_at(r, &ctx, &adj, U, &enext)) != CM_OK)
+                        return e;
+                    continue;
+                }
+                int fresh = (int)cm_ac_dec_bit(&r->ac, &ctx.is_new);
+                if (fresh) {
                     if (enext >= m->nedges)
                         return rfail(r, CM_E_RANGE, "edge reference");
                     U->edge = enext++;
@@ -1091,6 +1156,8 @@ static cm_err sec_face(reader *r)
                     U->edge = (uint32_t)(enext - 1 - back);
                     U->rev = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.rev_old);
                 }
+                if (by_vertex)
+                    use_adj_note(&adj, m, U->edge, fresh);
             }
             /* the loop must close: each use ends where the next begins */
             for (uint32_t k = 0; k < nu; k++) {

@@ -74,6 +74,8 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_prob_init(&c->is_new);
     cm_ac_prob_init(&c->rev_new);
     cm_ac_prob_init(&c->rev_old);
+    cm_ac_int_init(&c->cand);
+    cm_ac_prob_init(&c->rev_closed);
     cm_ac_int_init(&c->fit_m);
     cm_ac_int_init(&c->fit_patches);
     cm_ac_int_init(&c->fit_exp);

@@ -210,6 +210,12 @@ cm_err enc_check_placements(const tx *t, const loaded_model *lm, cm_status *st);
 /* the decoded file's copies are lm's (faces, linear part exactly, translation within half a grid
    step): CM_E_FORMAT naming the copy when not (an encoder bug) */
 cm_err enc_placements_decoded(const tx *t, const loaded_model *lm, const cm_model *dm, cm_status *st);
+/* format 4.5 on: an edge use after the first of its loop is named among the edges at its vertex
+   (cm_use_adj.h) */
+static inline int enc_use_adj(const encode_opts *o)
+{
+    return enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_USE_ADJ_MINOR;
+}
 /* format 4.4 on: curves may be sent as arcs (tx_arc.c) */
 static inline int enc_arcs(const encode_opts *o)
 {

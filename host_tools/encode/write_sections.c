@@ -13,6 +13,7 @@
 #include "cm/cm_method.h"
 #include "fit_correction.h"
 #include "cm/cm_sections.h"
+#include "cm/cm_use_adj.h"
 
 /* ---- writing ---- */
 
@@ -21,7 +22,8 @@ typedef struct outbuf {
     size_t len;
 } outbuf;
 
-typedef void (*section_fn)(const tx *t, cm_ac_enc *e, const loaded_model *lm);
+/* a section's writer: 0, or -1 when memory runs out */
+typedef int (*section_fn)(const tx *t, cm_ac_enc *e, const loaded_model *lm);
 
 /* a knot vector's interior knots (docs/FORMAT.md, "Knots"): format 2 sends each gap, format 3 the
    first gap, then per gap a bit "zero" and otherwise the gap less the last gap that was not zero */
@@ -51,7 +53,7 @@ static void put_knots(cm_ac_enc *e, const knot_models *km, int predicted, int un
     }
 }
 
-static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+static int sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
     cm_vert_ctx ctx;
@@ -78,6 +80,7 @@ static void sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
                 cm_vcache_front(&cache[k], slot, t->vq[i][k]);
             prev[k] = t->vq[i][k];
         }
+    return 0;
 }
 
 static void put_vref(cm_ac_enc *e, cm_ac_prob *pnew, cm_ac_int *mb, int *next, int v)
@@ -91,7 +94,7 @@ static void put_vref(cm_ac_enc *e, cm_ac_prob *pnew, cm_ac_int *mb, int *next, i
     }
 }
 
-static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+static int sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
     int pred = t->o->predicted;
@@ -136,6 +139,7 @@ static void sec_edge(const tx *t, cm_ac_enc *e, const loaded_model *lm)
                 cm_ac_enc_sint(e, &ctx.weight, X->wq[j] - (pred ? cm_pred_weight(j, X->wq[j - 1], j >= 2 ? X->wq[j - 2] : 0)
                                                                 : X->wq[j - 1]));
     }
+    return 0;
 }
 
 /* a kept surface's control point (i, j), coordinate k, less its prediction from the points before
@@ -264,7 +268,7 @@ double enc_fit_record_bits(const fit_record *fr)
 
 static void put_net(const tx *t, cm_ac_enc *e, cm_surf_ctx *cx, const tx_surf *S);
 
-static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+static int sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
     cm_surf_ctx ctx;
@@ -278,6 +282,7 @@ static void sec_surf(const tx *t, cm_ac_enc *e, const loaded_model *lm)
             continue;
         put_net(t, e, &ctx, &t->surfs[f]);
     }
+    return 0;
 }
 
 size_t enc_net_bytes(const tx *t, const tx_surf *S)
@@ -458,7 +463,60 @@ cm_err enc_placements_decoded(const tx *t, const loaded_model *lm, const cm_mode
     return k == dm->nplacements ? CM_OK : cm_fail(st, CM_E_FORMAT, "the encoder's check of its own file: placed copies");
 }
 
-static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+/* format 4.5's lists of the edges at each vertex (cm_use_adj.h), over the transmitted edges */
+typedef struct use_lists {
+    cm_edge *edges;
+    cm_use_adj adj;
+} use_lists;
+
+static int use_lists_begin(use_lists *ul, const tx *t)
+{
+    ul->edges = calloc((size_t)t->nedges + 1, sizeof *ul->edges);
+    ul->adj.head = malloc(((size_t)t->nverts + 1) * sizeof *ul->adj.head);
+    ul->adj.next = malloc(((size_t)t->nedges + 1) * sizeof *ul->adj.next);
+    ul->adj.nuse = malloc((size_t)t->nedges + 1);
+    if (!ul->edges || !ul->adj.head || !ul->adj.next || !ul->adj.nuse)
+        return 0;
+    for (int i = 0; i < t->nedges; i++) {
+        ul->edges[i].v0 = t->edges[i].v0;
+        ul->edges[i].v1 = t->edges[i].v1;
+    }
+    cm_use_adj_begin(&ul->adj, (uint32_t)t->nverts);
+    return 1;
+}
+
+static void use_lists_end(use_lists *ul)
+{
+    free(ul->edges);
+    free(ul->adj.head);
+    free(ul->adj.next);
+    free(ul->adj.nuse);
+}
+
+/* format 4.5: use k > 0 of a loop (the reader's read_use_at), of transmitted edge ex, beginning at v */
+static void put_use_at(cm_ac_enc *e, cm_face_ctx *ctx, use_lists *ul, int ex, int rev, int32_t v, int *enext)
+{
+    int fresh = ex == *enext;
+    cm_ac_enc_bit(e, &ctx->is_new, (unsigned)fresh);
+    if (fresh) {
+        (*enext)++;
+    } else {
+        uint32_t cand[CM_USE_CANDIDATES];
+        int n = cm_use_adj_list(&ul->adj, ul->edges, v, cand), i = 0;
+        while (i < n && cand[i] != (uint32_t)ex)
+            i++;
+        cm_ac_enc_uint(e, &ctx->cand, (uint64_t)i);
+        if (i == n) /* beyond the entries looked at: named as in 4.4 */
+            cm_ac_enc_uint(e, &ctx->back, (uint64_t)(*enext - 1 - ex));
+    }
+    if (ul->edges[ex].v0 == ul->edges[ex].v1)
+        cm_ac_enc_bit(e, &ctx->rev_closed, (unsigned)rev);
+    if (fresh)
+        cm_use_adj_add(&ul->adj, ul->edges, (uint32_t)ex);
+    cm_use_adj_count(&ul->adj, (uint32_t)ex);
+}
+
+static int sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     const cmesh *cm = &lm->mesh;
     cm_face_ctx ctx;
@@ -467,6 +525,12 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     ctx.placements = enc_placement_tail(t->o);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nfaces);
     int enext = 0;
+    use_lists ul = {0};
+    int by_vertex = enc_use_adj(t->o);
+    if (by_vertex && !use_lists_begin(&ul, t)) {
+        use_lists_end(&ul);
+        return -1;
+    }
     for (int f = 0; f < t->nfaces; f++) {
         const cmesh_face *cf = &cm->faces[f];
         cm_ac_enc_uint(e, &ctx.method, (uint64_t)t->method[f]);
@@ -489,6 +553,17 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
                 const cmesh_use *u = &cm->uses[cl->first + i];
                 int ex = t->edge_tx[u->edge];
                 /* the transmitted edge runs in its cmesh direction: rev carries over */
+                if (by_vertex && i > 0) {
+                    const cmesh_use *p = u - 1;
+                    const tx_edge *P = &t->edges[t->edge_tx[p->edge]];
+                    put_use_at(e, &ctx, &ul, ex, u->rev, p->rev ? P->v0 : P->v1, &enext);
+                    continue;
+                }
+                if (by_vertex) {
+                    if (ex == enext)
+                        cm_use_adj_add(&ul.adj, ul.edges, (uint32_t)ex);
+                    cm_use_adj_count(&ul.adj, (uint32_t)ex);
+                }
                 if (ex == enext) {
                     cm_ac_enc_bit(e, &ctx.is_new, 1);
                     cm_ac_enc_bit(e, &ctx.rev_new, (unsigned)u->rev);
@@ -503,9 +578,11 @@ static void sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     }
     if (ctx.placements)
         write_placements(t, e, lm, &ctx);
+    use_lists_end(&ul);
+    return 0;
 }
 
-static void sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
+static int sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
     cm_colr_ctx ctx;
@@ -514,9 +591,10 @@ static void sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     for (int i = 1; i <= t->npalette; i++)
         cm_ac_enc_direct(e, t->palette[i], 24);
     if (t->npalette == 0)
-        return;
+        return 0;
     for (int f = 0; f < t->nfaces; f++)
         cm_ac_enc_uint(e, &ctx.index, (uint64_t)t->color[f]);
+    return 0;
 }
 
 static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, outbuf *out, cm_status *st)
@@ -528,7 +606,10 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
             return cm_fail(st, CM_E_NOMEM, "out of memory");
         cm_ac_enc e;
         cm_ac_enc_init(&e, buf, cap);
-        fn(t, &e, lm);
+        if (fn(t, &e, lm) != 0) {
+            free(buf);
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
+        }
         /* format 4 trims each stream (cm_arith.h), which may leave no byte at all */
         size_t n = enc_compact_header(t->o) ? cm_ac_enc_finish_trimmed(&e) : cm_ac_enc_finish(&e);
         if (!e.overflow) {

@@ -274,6 +274,27 @@ static void plane_face_144(igw *w, v3 p00, v3 p10, v3 p11, v3 p01, int hole_curv
         igw_add(w, 144, 0, "%d,1,0,%d", s, outer);
 }
 
+void igw_pyramid_144(igw *w, int n, double r, double h)
+{
+    v3 apex = {0, 0, h}, b[128];
+    if (n > 128)
+        n = 128;
+    for (int i = 0; i < n; i++)
+        b[i] = (v3){r * cos(2 * M_PI * i / n), r * sin(2 * M_PI * i / n), 0};
+    for (int i = 0; i < n; i++) { /* each side on the parallelogram that holds it */
+        v3 p = b[i], q = b[(i + 1) % n];
+        v3 far = {apex.x + q.x - p.x, apex.y + q.y - p.y, apex.z + q.z - p.z};
+        int s = bilinear_128(w, p, q, apex, far);
+        int m[3] = {line(w, p, q), line(w, q, apex), line(w, apex, p)};
+        igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, 3)));
+    }
+    int m[128];
+    for (int i = 0; i < n; i++) /* the base, clockwise seen from above: outward down */
+        m[i] = line(w, b[(n - i) % n], b[(n - i - 1 + n) % n]);
+    int s = bilinear_128(w, (v3){-r, r, 0}, (v3){r, r, 0}, (v3){-r, -r, 0}, (v3){r, -r, 0});
+    igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, n)));
+}
+
 void igw_box_with_hole_144(igw *w, double a, double b, double c, double r)
 {
     double cx = a / 2, cy = b / 2;

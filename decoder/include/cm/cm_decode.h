@@ -60,7 +60,13 @@ typedef struct cm_decoder {
     uint32_t need[CM_LIMIT_COUNT];     /* the model's needs, by limit id */
     uint32_t nsec;                     /* CM_SEC_COUNT once the header is accepted (0 before) */
     cm_dec_section sec[CM_SEC_COUNT];
-    int64_t vq[CM_MAX_VERTICES][3];    /* vertices on the integer grid (predictors) */
+    /* one storage, two uses in turn: the vertices on the integer grid, the predictors of VERT, EDGE
+       and SURF; then, while FACE is read (format 4.5 on), the heads of the lists of edges at each
+       vertex (cm_use_adj.h).  So vq holds the vertices after a decode only up to format 4.4. */
+    union {
+        int64_t vq[CM_MAX_VERTICES][3];
+        int32_t vhead[CM_MAX_VERTICES];
+    };
     int64_t sq[CM_MAX_SURF_CTRL][3];   /* one kept surface's net on the grid (predictor) */
     int64_t sw[CM_MAX_SURF_CTRL];      /* ... and its quantised weights */
     uint8_t buf[CM_MAX_FILE_BYTES];    /* the compressed file */

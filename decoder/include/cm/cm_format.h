@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 4     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 5     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -93,6 +93,7 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_NET_FIT_MINOR 2u        /* 4.2: NFILL and G1FIT records may carry an interior correction */
 #define CM_FMT_PLACE_MINOR 3u          /* 4.3: the FACE section ends with the placed copies (cm_placement) */
 #define CM_FMT_ARC_MINOR 4u            /* 4.4: a curve may be sent as an arc through its middle point (cm_arc.h) */
+#define CM_FMT_USE_ADJ_MINOR 5u        /* 4.5: an edge use named among the edges at its loop's vertex (cm_use_adj.h) */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9

@@ -48,6 +48,8 @@ typedef struct cm_surf_ctx {
 typedef struct cm_face_ctx {
     cm_ac_int count, method, loops, uses, back, layout, corner;
     cm_ac_prob flip, is_new, rev_new, rev_old;
+    cm_ac_int cand;     /* format 4.5: a use's place among the edges at its vertex (cm_use_adj.h) */
+    cm_ac_prob rev_closed; /* ... and the direction of a closed edge's use */
     cm_ac_int fit_m, fit_patches, fit_exp, fit_coef; /* GREGORY-FIT's correction (and the nets') */
     cm_ac_prob twist_on, twist_use;                  /* G1FIT's twists (format 4.2): any, per use */
     cm_ac_int twist_n, twist;                        /* ... their count, and each sample's change */

@@ -1,0 +1,18 @@
+/*
+ * cmz_splice.h - a test's edit of a format 4 file: one section replaced by bytes the test coded
+ * itself (a broken or hostile writer's records), the header's section length, the file's length
+ * among the needs and both CRCs made right, so that the decoder reads the records.
+ */
+#ifndef CMZ_SPLICE_H
+#define CMZ_SPLICE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "encode/encode.h"
+
+/** File r with its section `tag` (CM_SEC_EDGE, CM_SEC_FACE, ...) replaced by sec[0..slen) (malloc'd,
+    *out_len its length), or NULL when r's header does not parse. */
+uint8_t *cmz_with_section(const encode_result *r, int tag, const uint8_t *sec, size_t slen, size_t *out_len);
+
+#endif
