@@ -1048,7 +1048,7 @@ static cm_err read_use_at(reader *r, cm_face_ctx *ctx, cm_use_adj *adj, cm_use *
                 return rfail(r, CM_E_RANGE, "edge reference");
             e = (uint32_t)(*enext - 1 - back);
         } else {
-            return rfail(r, CM_E_RANGE, "edge reference at its vertex");
+            return rfail(r, CM_E_RANGE, "edge candidate at its vertex");
         }
     }
     U->edge = e;

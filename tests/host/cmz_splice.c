@@ -1,6 +1,7 @@
 /* cmz_splice.c - a test's edit of a format 4 file (cmz_splice.h) */
 #include "cmz_splice.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -72,4 +73,30 @@ uint8_t *cmz_with_section(const encode_result *r, int tag, const uint8_t *edge, 
     }
     *out_len = total;
     return out;
+}
+
+cm_err cmz_decode(cm_decoder *d, const uint8_t *b, size_t len, cm_status *st)
+{
+    cm_status_init(st);
+    cm_dec_init(d);
+    cm_err e = cm_dec_feed(d, b, len, st);
+    return e == CM_OK ? cm_dec_finish(d, st) : e;
+}
+
+const char *cmz_section_refused(cm_decoder *d, const encode_result *r, int tag, const uint8_t *sec, size_t slen,
+                                cm_err code, const char *cause)
+{
+    static char why[512];
+    size_t len;
+    uint8_t *b = cmz_with_section(r, tag, sec, slen, &len);
+    if (!b)
+        return "the file's header does not parse";
+    cm_status st;
+    cm_err e = cmz_decode(d, b, len, &st);
+    free(b);
+    const char *where = st.where ? st.where : "-";
+    if (e == code && strstr(where, cause))
+        return NULL;
+    snprintf(why, sizeof why, "%s (%s), expected %s (\"%s\")", cm_err_name(e), where, cm_err_name(code), cause);
+    return why;
 }

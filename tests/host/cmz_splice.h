@@ -9,10 +9,19 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "cm/cm_decode.h"
 #include "encode/encode.h"
 
 /** File r with its section `tag` (CM_SEC_EDGE, CM_SEC_FACE, ...) replaced by sec[0..slen) (malloc'd,
     *out_len its length), or NULL when r's header does not parse. */
 uint8_t *cmz_with_section(const encode_result *r, int tag, const uint8_t *sec, size_t slen, size_t *out_len);
+
+/** Decode b[0..len) into d as the terminal does (cm_dec_feed, then cm_dec_finish). */
+cm_err cmz_decode(cm_decoder *d, const uint8_t *b, size_t len, cm_status *st);
+
+/** r with its section `tag` replaced by sec[0..slen), decoded into d: NULL when refused with `code`
+    and a reason that contains `cause`, else what happened instead (a static string). */
+const char *cmz_section_refused(cm_decoder *d, const encode_result *r, int tag, const uint8_t *sec, size_t slen,
+                                cm_err code, const char *cause);
 
 #endif

@@ -52,10 +52,7 @@ static void encode_minor(loaded_model *lm, int minor, encode_result *r)
 
 static cm_err decode(const uint8_t *b, size_t len, cm_status *st)
 {
-    cm_status_init(st);
-    cm_dec_init(&dec);
-    cm_err e = cm_dec_feed(&dec, b, len, st);
-    return e == CM_OK ? cm_dec_finish(&dec, st) : e;
+    return cmz_decode(&dec, b, len, st);
 }
 
 /* the rational quadratic edges of the decoded model: how many, and how far their points (at 64
@@ -375,16 +372,10 @@ static void assert_refused(const encode_result *r, const arc_edit *ed, cm_err co
     static uint8_t sec[1 << 16];
     cm_status st;
     assert_ok(decode(r->bytes, r->len, &st)); /* the model the section is coded from */
-    size_t n = edge_section(sec, sizeof sec, ed), len;
-    uint8_t *b = cmz_with_section(r, CM_SEC_EDGE, sec, n, &len);
-    assert_non_null(b);
-    cm_err e = decode(b, len, &st);
-    if (e != code)
-        fail_msg("%s: %s (%s), expected %s", cause, cm_err_name(e), st.where ? st.where : "-", cm_err_name(code));
-    assert_non_null(st.where);
-    if (!strstr(st.where, cause))
-        fail_msg("refused as \"%s\", expected \"%s\"", st.where, cause);
-    free(b);
+    size_t n = edge_section(sec, sizeof sec, ed);
+    const char *why = cmz_section_refused(&dec, r, CM_SEC_EDGE, sec, n, code, cause);
+    if (why)
+        fail_msg("%s", why);
 }
 
 /* model lm encoded, its EDGE section coded again here as the encoder meant it (every point on the
