@@ -38,13 +38,17 @@ steps=(part-created incoming-mid-write incoming-renamed gen-created stl-created 
 # shows it itself; after that the model is shown and the restart only answers the sender's END
 recovered_from=2 shown_from=14
 
-# A is on screen, B is sent (B's GLB is over 64 KiB: glb-written is a half-written file)
+# A is on screen, B is sent (B's GLB is over 64 KiB: glb-written is a half-written file).  B is the
+# larger .cmz (5.9 KB): incoming-mid-write fires after a terminal poll that leaves the file between
+# half and whole received, and as1_pe_203's 2.2 KB in format 4.5 (2.5 KB in 4.4) left that window
+# short enough to be missed once on a loaded machine (local CI: "never reached step
+# incoming-mid-write")
 cp_model() { # cp_model IGES NAME
     "$cmz" encode -q "$1" -o "$tmp/$2.cmz" > /dev/null && "$dec" "$tmp/$2.cmz" -o "$tmp/$2.glb" > /dev/null &&
         "$dec" "$tmp/$2.cmz" -o "$tmp/$2.stl" > /dev/null
 }
-cp_model tests/data/geo_example.igs A || { nok "encode/decode model A"; exit 1; }
-cp_model tests/data/as1_pe_203.igs B || { nok "encode/decode model B"; exit 1; }
+cp_model tests/data/as1_pe_203.igs A || { nok "encode/decode model A"; exit 1; }
+cp_model tests/data/geo_example.igs B || { nok "encode/decode model B"; exit 1; }
 
 start_relay() { # start_relay NAME: ptys $tmp/NAME.a (sender) and $tmp/NAME.b (terminal), paced like a slow line
     "$relay" --link-a "$tmp/$1.a" --link-b "$tmp/$1.b" --baud 57600 > /dev/null 2> "$tmp/$1.relay.log" &
