@@ -1007,14 +1007,6 @@ static cm_err read_placements(reader *r, cm_face_ctx *ctx)
 }
 
 
-/* format 4.5: edge e has been used once more; a new one joins the lists first */
-static void use_adj_note(cm_use_adj *adj, const cm_model *m, uint32_t e, int is_new)
-{
-    if (is_new)
-        cm_use_adj_add(adj, m->edges, e);
-    cm_use_adj_count(adj, e);
-}
-
 /*
  * Format 4.5: a use after the first of its loop, which begins where the use before ended (v): bit
  * "the next edge not referenced yet", else its place among the candidates at v (cm_use_adj.h), or
@@ -1054,7 +1046,7 @@ static cm_err read_use_at(reader *r, cm_face_ctx *ctx, cm_use_adj *adj, cm_use *
     U->edge = e;
     U->rev = m->edges[e].v0 == m->edges[e].v1 ? (uint8_t)cm_ac_dec_bit(&r->ac, &ctx->rev_closed)
                                               : cm_use_adj_rev(m->edges, e, v);
-    use_adj_note(adj, m, e, is_new);
+    cm_use_adj_use(adj, m->edges, e, is_new);
     return CM_OK;
 }
 
@@ -1157,7 +1149,7 @@ static cm_err sec_face(reader *r)
                     U->rev = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.rev_old);
                 }
                 if (by_vertex)
-                    use_adj_note(&adj, m, U->edge, fresh);
+                    cm_use_adj_use(&adj, m->edges, U->edge, fresh);
             }
             /* the loop must close: each use ends where the next begins */
             for (uint32_t k = 0; k < nu; k++) {

@@ -511,9 +511,7 @@ static void put_use_at(cm_ac_enc *e, cm_face_ctx *ctx, use_lists *ul, int ex, in
     }
     if (ul->edges[ex].v0 == ul->edges[ex].v1)
         cm_ac_enc_bit(e, &ctx->rev_closed, (unsigned)rev);
-    if (fresh)
-        cm_use_adj_add(&ul->adj, ul->edges, (uint32_t)ex);
-    cm_use_adj_count(&ul->adj, (uint32_t)ex);
+    cm_use_adj_use(&ul->adj, ul->edges, (uint32_t)ex, fresh);
 }
 
 static int sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
@@ -559,11 +557,8 @@ static int sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
                     put_use_at(e, &ctx, &ul, ex, u->rev, p->rev ? P->v0 : P->v1, &enext);
                     continue;
                 }
-                if (by_vertex) {
-                    if (ex == enext)
-                        cm_use_adj_add(&ul.adj, ul.edges, (uint32_t)ex);
-                    cm_use_adj_count(&ul.adj, (uint32_t)ex);
-                }
+                if (by_vertex)
+                    cm_use_adj_use(&ul.adj, ul.edges, (uint32_t)ex, ex == enext);
                 if (ex == enext) {
                     cm_ac_enc_bit(e, &ctx.is_new, 1);
                     cm_ac_enc_bit(e, &ctx.rev_new, (unsigned)u->rev);

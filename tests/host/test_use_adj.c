@@ -62,10 +62,9 @@ static void test_lists(void **state)
     for (uint32_t e = 0; e < 100; e++) {
         edges[e].v0 = 0;
         edges[e].v1 = (int32_t)e + 1;
-        cm_use_adj_add(&a, edges, e);
-        cm_use_adj_count(&a, e);
+        cm_use_adj_use(&a, edges, e, 1);
         if (e % 2 == 0) /* the even ones used twice */
-            cm_use_adj_count(&a, e);
+            cm_use_adj_use(&a, edges, e, 0);
     }
     uint32_t c[CM_USE_CANDIDATES];
     int n = cm_use_adj_list(&a, edges, 0, c);
@@ -176,11 +175,9 @@ static size_t face_section(uint8_t *buf, size_t cap, const face_edit *ed)
                     if (m->edges[U->edge].v0 == m->edges[U->edge].v1)
                         cm_ac_enc_bit(&e, &c.rev_closed, U->rev);
                 }
-                if (fresh) {
+                if (fresh)
                     enext++;
-                    cm_use_adj_add(&a, m->edges, U->edge);
-                }
-                cm_use_adj_count(&a, U->edge);
+                cm_use_adj_use(&a, m->edges, U->edge, fresh);
             }
         }
     }

@@ -3,10 +3,9 @@
  *
  * A loop is closed: each use of it begins at the vertex where the use before ended.  So the
  * second use of an edge (the face across it) need not name the edge among all edges referenced
- * so far, as formats up to 4.4 do (a uint "back", 4.3 bits over the corpus' uses of old edges):
- * the writer names it among the referenced edges that meet at that vertex, which are few (in
- * the candidates' order below the one wanted is first for most uses), and its direction follows
- * from which of its ends is there.  Over the 34 corpus models the uses took 13 199 bytes in 4.4 and
+ * so far, as formats up to 4.4 do (a uint "back"): the writer names it among the referenced
+ * edges that meet at that vertex, which are few, and its direction follows from which of its
+ * ends is there.  Over the 34 corpus models the uses took 13 199 bytes in 4.4 and
  * take 6 855.
  *
  * The candidates at vertex v: the referenced edges at v as a list, most recently referenced
@@ -42,9 +41,12 @@ void cm_use_adj_begin(cm_use_adj *a, uint32_t nverts);
 /** Edge e (its ends valid vertices) is referenced for the first time: it heads the lists at its ends. */
 void cm_use_adj_add(cm_use_adj *a, const cm_edge *edges, uint32_t e);
 
-/** One more use of edge e. */
-static inline void cm_use_adj_count(cm_use_adj *a, uint32_t e)
+/** Edge e has been used once more; a new one (`fresh`: referenced for the first time) joins the
+    lists first.  Writer and reader call it after every use, a loop's first too. */
+static inline void cm_use_adj_use(cm_use_adj *a, const cm_edge *edges, uint32_t e, int fresh)
 {
+    if (fresh)
+        cm_use_adj_add(a, edges, e);
     if (a->nuse[e] < 255)
         a->nuse[e]++;
 }
