@@ -327,11 +327,12 @@ check-fuzz-replay-fast:
 # headers declaring fewer triangles than the faces make: 60 % decodes whole (the host grows its mesh),
 # 1 is refused by both decoders, naming MAX_TRIS and the header (issues 10, 11)
 .PHONY: check-lying-header
-check-lying-header: $(CMZ) $(call bdir,terminal)/cmz-decode
-	$(Q)tests/tools/check_lying_header.sh $(CMZ) $(call bdir,terminal)/cmz-decode tests/data/geo_example.igs
+check-lying-header: $(CMZ) $(call bdir,terminal)/cmz-decode $(CMZ_HEADER)
+	$(Q)tests/tools/check_lying_header.sh $(CMZ) $(call bdir,terminal)/cmz-decode tests/data/geo_example.igs $(CMZ_HEADER)
 
-check-bundled-roundtrip: $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK)
-	$(Q)tests/tools/check_bundled_roundtrip.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(wildcard tests/data/*.igs)
+check-bundled-roundtrip: $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(CMZ_HEADER)
+	$(Q)tests/tools/check_bundled_roundtrip.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(CMZ_HEADER) \
+		$(wildcard tests/data/*.igs)
 
 # the VM computes, the pty transfers mostly wait (paced like a serial line): run the two side by side
 .PHONY: check-hw-and-links
@@ -606,6 +607,10 @@ clean:
 	rm -rf $(BUILD_ROOT)
 
 # ---- hostile input (issue 10): mutated IGES and .cmz files against cmz and the terminal's decoder ----
+CMZ_HEADER := $(call bdir,host)/tests/tools/cmz_header
+$(CMZ_HEADER): $(call bdir,host)/tests/tools/cmz_header.o $(call bdir,host)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
 MUTATE := $(call bdir,host)/tests/tools/mutate
 $(MUTATE): $(call bdir,host)/tests/tools/mutate.o $(call bdir,host)/libcmdecoder.a
 	$(call say,LD      ,$@)

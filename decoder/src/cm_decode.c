@@ -193,6 +193,46 @@ static cm_err header_varint(cm_decoder *d, cm_status *st, uint32_t *at, uint64_t
     return CM_OK;
 }
 
+/*
+ * Format 4.6: the fields are one range-coded stream (cm_fmt_stream_unpack); a malformed one is
+ * named, then the file's length and each need are checked against this build in the order of 4.5's
+ * header.  Offsets in messages are the stream's start: its fields have no byte of their own.
+ */
+static cm_err parse_stream(cm_decoder *d, cm_status *st, header_view *v)
+{
+    uint32_t at = CM_FMT_COMPACT_AT_H, unknown;
+    uint32_t need[CM_LIMIT_COUNT];
+    uint64_t H;
+    (void)cm_fmt_get_varint(d->buf, d->header_len, &at, &H); /* feed_header read it: at is after it */
+    const char *fault = cm_fmt_stream_unpack(d->buf, d->header_len, &v->h, need, CM_LIMIT_COUNT, &unknown);
+    if (fault)
+        return fail(d, st, CM_E_FORMAT, at, fault);
+    v->at_nlimits = v->at_nsec = v->at_file_len = v->at_qexp = v->at_tess = v->at_rel = at;
+    for (uint32_t k = 0; k < 3; k++)
+        v->at_origin[k] = at;
+    cm_err e = check_counts(d, st, v);
+    if (e != CM_OK)
+        return e;
+    if (v->h.file_len > (uint32_t)CM_MAX_FILE_BYTES)
+        return header_limit(d, st, CM_LIMIT_MAX_FILE_BYTES, v->h.file_len, CM_MAX_FILE_BYTES, at, "file length");
+    for (uint32_t i = 0; i < v->h.nlimits && i < (uint32_t)CM_LIMIT_COUNT; i++)
+        if ((e = check_need(d, st, i, need[i], at)) != CM_OK)
+            return e;
+    if (unknown != UINT32_MAX)
+        return fail(d, st, CM_E_VERSION, at, "unknown limit");
+    d->file_len = v->h.file_len;
+    /* one stream of the five sections fills the body: cm_dec_finish reads it through */
+    for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+        cm_dec_section *sec = &d->sec[s];
+        sec->tag = (uint8_t)(s + 1);
+        sec->off = s == 0 ? d->header_len : d->file_len - 4u;
+        sec->len = s == 0 ? d->file_len - 4u - d->header_len : 0u;
+        sec->crc = 0;
+        sec->has_crc = 0;
+    }
+    return CM_OK;
+}
+
 /* format 4: the compact header (cm_format.h), CRC first, then each field in order */
 static cm_err parse_compact(cm_decoder *d, cm_status *st, header_view *v)
 {
@@ -200,6 +240,8 @@ static cm_err parse_compact(cm_decoder *d, cm_status *st, header_view *v)
     uint32_t H = d->header_len;
     if (crc_differs(cm_crc32(b, H - 4), cm_get_u32(b + H - 4)))
         return fail(d, st, CM_E_CRC, H - 4, "header CRC");
+    if (b[CM_HDR_MINOR] >= CM_FMT_ONE_STREAM_MINOR)
+        return parse_stream(d, st, v);
     memset(&v->h, 0, sizeof v->h);
     v->h.major = b[CM_HDR_MAJOR];
     v->h.minor = b[CM_HDR_MINOR];
@@ -359,8 +401,10 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
         /* format 4: a varint at byte 6, within the 12 bytes in (a header holds at least 25 needs) */
         uint32_t at = CM_FMT_COMPACT_AT_H;
         uint64_t h;
-        if (!cm_fmt_get_varint(d->buf, d->len, &at, &h) || at > CM_FMT_COMPACT_AT_H + 5u ||
-            h < CM_FMT_COMPACT_AT_H + CM_FMT_MIN_NEEDS + 4u || h > CM_FMT_MAX_HEADER)
+        uint32_t least = d->buf[CM_HDR_MINOR] >= CM_FMT_ONE_STREAM_MINOR ? CM_FMT_STREAM_MIN_HEADER
+                                                                         : CM_FMT_COMPACT_AT_H + CM_FMT_MIN_NEEDS + 4u;
+        if (!cm_fmt_get_varint(d->buf, d->len, &at, &h) || at > CM_FMT_COMPACT_AT_H + 5u || h < least ||
+            h > CM_FMT_MAX_HEADER)
             return fail(d, st, CM_E_FORMAT, CM_FMT_COMPACT_AT_H, "header length");
         d->header_len = (uint32_t)h;
     } else {
@@ -1223,16 +1267,20 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
     /* check_header accepted exactly CM_SEC_COUNT sections, each within the file */
     if (d->nsec != CM_SEC_COUNT)
         return fail(d, st, CM_E_FORMAT, CM_HDR_NSECTIONS, "section count (a .cmz has 5 sections)");
+    /* format 4.6: the sections are one stream, which the first holds whole (parse_stream) */
+    int one_stream = d->version_major == CM_FMT_COMPACT_MAJOR && d->version_minor >= CM_FMT_ONE_STREAM_MINOR;
+    reader r;
     for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
         const cm_dec_section *sec = &d->sec[s];
         if (sec->has_crc && crc_differs(cm_crc32(d->buf + sec->off, sec->len), sec->crc))
             return fail(d, st, CM_E_CRC, sec->off, "section CRC");
-        reader r;
-        if (d->version_major >= CM_FMT_COMPACT_MAJOR)
-            cm_ac_dec_init_trimmed(&r.ac, d->buf + sec->off, sec->len);
-        else
-            cm_ac_dec_init(&r.ac, d->buf + sec->off, sec->len);
-        r.base = sec->off;
+        if (s == 0 || !one_stream) {
+            if (d->version_major >= CM_FMT_COMPACT_MAJOR)
+                cm_ac_dec_init_trimmed(&r.ac, d->buf + sec->off, sec->len);
+            else
+                cm_ac_dec_init(&r.ac, d->buf + sec->off, sec->len);
+            r.base = sec->off;
+        }
         r.face = CM_NO_FACE_INDEX;
         r.d = d;
         r.st = st;

@@ -4,8 +4,10 @@
 #include <math.h>
 #include <string.h>
 
+#include "cm/cm_arith.h"
 #include "cm/cm_bspline.h"
 #include "cm/cm_crc32.h"
+#include "cm/cm_limits_info.h"
 #include "cm/cm_method.h"
 
 double cm_get_f64(const uint8_t *p)
@@ -117,6 +119,49 @@ double cm_fmt_compact_tess(double tess, int q_exp)
     return (m >= 1.0 ? m : 1.0) * q;
 }
 
+/* the origin's largest common power-of-two factor of q (4.1 on), and the multiples of it */
+static uint32_t origin_multiples(const cm_fmt_header *h, int64_t m[3])
+{
+    double q = cm_fmt_grid_step(h->q_exp);
+    uint32_t shift = CM_FMT_MAX_ORIGIN_SHIFT;
+    for (int k = 0; k < 3; k++) {
+        m[k] = (int64_t)(h->origin[k] / q);
+        uint32_t z = 0;
+        while (m[k] != 0 && z < shift && (m[k] & ((int64_t)1 << z)) == 0)
+            z++;
+        if (m[k] != 0 && z < shift)
+            shift = z;
+    }
+    if (m[0] == 0 && m[1] == 0 && m[2] == 0)
+        shift = 0;
+    for (int k = 0; k < 3; k++)
+        m[k] /= (int64_t)1 << shift;
+    return shift;
+}
+
+/* magic, version, the varint H (which counts itself), the n bytes of fields written at
+   b + CM_FMT_COMPACT_AT_H + 5, the CRC: H, or 0 past CM_FMT_MAX_HEADER */
+static uint32_t close_header(uint8_t *b, cm_fmt_header *h, uint32_t n, uint64_t body_len)
+{
+    uint8_t hb[CM_FMT_VARINT_MAX];
+    uint32_t H = 0;
+    for (uint32_t lh = 1; lh <= 5 && !H; lh++) {
+        uint32_t cand = CM_FMT_COMPACT_AT_H + lh + n + 4u;
+        if (cm_fmt_put_varint(hb, cand) == lh)
+            H = cand;
+    }
+    if (H == 0 || H > CM_FMT_MAX_HEADER)
+        return 0;
+    put_magic_version(b, h);
+    uint32_t lh = cm_fmt_put_varint(hb, H);
+    memmove(b + CM_FMT_COMPACT_AT_H + lh, b + CM_FMT_COMPACT_AT_H + 5u, n);
+    memcpy(b + CM_FMT_COMPACT_AT_H, hb, lh);
+    cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
+    h->header_len = H;
+    h->file_len = (uint32_t)(H + body_len + 4u);
+    return H;
+}
+
 uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, const uint32_t *sec_len)
 {
     /* everything after H's varint and before the CRC, written first after room for the longest H
@@ -139,23 +184,12 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
     n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(h->q_exp));
     uint64_t rel = (uint64_t)floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
     if (h->minor >= CM_FMT_SHORT_ORIGIN_MINOR) {
-        /* the origin's largest common power-of-two factor of q (the writer may floor it onto a coarse
-           step), then the multiples of that */
+        /* the origin's step (the writer may floor it onto a coarse one), then its multiples */
         int64_t m[3];
-        uint32_t shift = CM_FMT_MAX_ORIGIN_SHIFT;
-        for (int k = 0; k < 3; k++) {
-            m[k] = (int64_t)(h->origin[k] / q);
-            uint32_t z = 0;
-            while (m[k] != 0 && z < shift && (m[k] & ((int64_t)1 << z)) == 0)
-                z++;
-            if (m[k] != 0 && z < shift)
-                shift = z;
-        }
-        if (m[0] == 0 && m[1] == 0 && m[2] == 0)
-            shift = 0;
+        uint32_t shift = origin_multiples(h, m);
         n += cm_fmt_put_varint(body + n, shift);
         for (int k = 0; k < 3; k++)
-            n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(m[k] / ((int64_t)1 << shift)));
+            n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(m[k]));
         n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
         n += cm_fmt_put_varint(body + n, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
     } else {
@@ -164,23 +198,179 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
         n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
         n += cm_fmt_put_varint(body + n, rel);
     }
-    uint8_t hb[CM_FMT_VARINT_MAX];
-    uint32_t H = 0;
-    for (uint32_t lh = 1; lh <= 5 && !H; lh++) {
-        uint32_t cand = CM_FMT_COMPACT_AT_H + lh + n + 4u;
-        if (cm_fmt_put_varint(hb, cand) == lh)
-            H = cand;
+    return close_header(b, h, n, sections);
+}
+
+/* ---- format 4.6: the header's fields range-coded ---- */
+
+/* each field its own model, all needs one (the unpredicted ones) or another (the differences) */
+typedef struct hdr_models {
+    cm_ac_int flags, extra_needs, body, need, need_diff, qexp, origin_shift, origin, tess, rel;
+} hdr_models;
+
+static void hdr_models_init(hdr_models *m)
+{
+    cm_ac_int *all[] = {&m->flags, &m->extra_needs, &m->body, &m->need, &m->need_diff,
+                        &m->qexp, &m->origin_shift, &m->origin, &m->tess, &m->rel};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+        cm_ac_int_init(all[i]);
+}
+
+/*
+ * A model's counts and totals follow from each other more often than not: a closed shell has
+ * V = E - F + 2 vertices, two uses per edge, one loop per face; a straight edge two points and
+ * four knots; a loop's uses are its face's.  Only earlier needs are used, so the reader can follow.
+ */
+int64_t cm_fmt_need_pred(uint32_t i, const uint32_t *need)
+{
+    switch (i) {
+    case CM_LIMIT_MAX_FACE_EDGES: return need[CM_LIMIT_MAX_LOOP_EDGES];
+    case CM_LIMIT_MAX_EDGES: return 2 * (int64_t)need[CM_LIMIT_MAX_FACES];
+    case CM_LIMIT_MAX_VERTICES: return (int64_t)need[CM_LIMIT_MAX_EDGES] - need[CM_LIMIT_MAX_FACES] + 2;
+    case CM_LIMIT_MAX_MODEL_CTRL: return 2 * (int64_t)need[CM_LIMIT_MAX_EDGES];
+    case CM_LIMIT_MAX_MODEL_KNOTS: return (int64_t)need[CM_LIMIT_MAX_MODEL_CTRL] + 2 * (int64_t)need[CM_LIMIT_MAX_EDGES];
+    case CM_LIMIT_MAX_MODEL_LOOPS: return need[CM_LIMIT_MAX_FACES];
+    case CM_LIMIT_MAX_MODEL_USES: return 2 * (int64_t)need[CM_LIMIT_MAX_EDGES];
+    default: return 0;
     }
-    if (H == 0 || H > CM_FMT_MAX_HEADER)
+}
+_Static_assert(CM_LIMIT_MAX_FACE_EDGES > CM_LIMIT_MAX_LOOP_EDGES && CM_LIMIT_MAX_VERTICES > CM_LIMIT_MAX_EDGES &&
+                   CM_LIMIT_MAX_EDGES > CM_LIMIT_MAX_FACES && CM_LIMIT_MAX_MODEL_CTRL > CM_LIMIT_MAX_EDGES &&
+                   CM_LIMIT_MAX_MODEL_KNOTS > CM_LIMIT_MAX_MODEL_CTRL && CM_LIMIT_MAX_MODEL_LOOPS > CM_LIMIT_MAX_FACES &&
+                   CM_LIMIT_MAX_MODEL_USES > CM_LIMIT_MAX_EDGES,
+               "a need is predicted from needs before it");
+
+/* a value of up to 64 bits: below 2^33 - 1 as a uint, else that escape and the value's 64 bits */
+#define WIDE_ESCAPE ((1ull << 33) - 1u)
+static void put_wide(cm_ac_enc *e, cm_ac_int *m, uint64_t v)
+{
+    cm_ac_enc_uint(e, m, v < WIDE_ESCAPE ? v : WIDE_ESCAPE);
+    if (v >= WIDE_ESCAPE)
+        for (int k = 3; k >= 0; k--)
+            cm_ac_enc_direct(e, (uint32_t)(v >> (16 * k)) & 0xFFFFu, 16);
+}
+
+static uint64_t get_wide(cm_ac_dec *d, cm_ac_int *m)
+{
+    uint64_t v = cm_ac_dec_uint(d, m);
+    if (v == WIDE_ESCAPE) {
+        v = 0;
+        for (int k = 0; k < 4; k++)
+            v = (v << 16) | cm_ac_dec_direct(d, 16);
+    }
+    return v;
+}
+
+uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, uint32_t body_len)
+{
+    /* the fields' stream first, after room for the longest H (5 bytes), then moved up to it */
+    uint8_t *fields = b + CM_FMT_COMPACT_AT_H + 5u;
+    uint32_t room = CM_FMT_MAX_HEADER - CM_FMT_COMPACT_AT_H - 5u - 4u;
+    hdr_models m;
+    hdr_models_init(&m);
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, fields, room);
+    double q = cm_fmt_grid_step(h->q_exp);
+    cm_ac_enc_uint(&e, &m.flags, h->flags);
+    cm_ac_enc_uint(&e, &m.extra_needs, h->nlimits >= CM_FMT_MIN_NEEDS ? h->nlimits - CM_FMT_MIN_NEEDS : 0u);
+    cm_ac_enc_uint(&e, &m.body, body_len);
+    uint32_t nd[CM_LIMIT_COUNT] = {0};
+    for (uint32_t i = 0; i < h->nlimits; i++) {
+        uint32_t v = need ? need[i] : 0;
+        if (i < (uint32_t)CM_LIMIT_COUNT)
+            nd[i] = v;
+        if (i == CM_LIMIT_MAX_FILE_BYTES)
+            continue;
+        int64_t pred = i < (uint32_t)CM_LIMIT_COUNT ? cm_fmt_need_pred(i, nd) : 0;
+        if (pred == 0)
+            cm_ac_enc_uint(&e, &m.need, v);
+        else
+            cm_ac_enc_sint(&e, &m.need_diff, (int64_t)v - pred);
+    }
+    cm_ac_enc_sint(&e, &m.qexp, h->q_exp);
+    int64_t om[3];
+    uint32_t shift = origin_multiples(h, om);
+    cm_ac_enc_uint(&e, &m.origin_shift, shift);
+    for (int k = 0; k < 3; k++)
+        put_wide(&e, &m.origin, cm_fmt_zigzag(om[k]));
+    put_wide(&e, &m.tess, (uint64_t)(h->tess_tol / q));
+    uint64_t rel = (uint64_t)floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    put_wide(&e, &m.rel, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
+    size_t n = cm_ac_enc_finish_trimmed(&e);
+    if (e.overflow)
         return 0;
-    put_magic_version(b, h);
-    uint32_t lh = cm_fmt_put_varint(hb, H);
-    memmove(b + CM_FMT_COMPACT_AT_H + lh, body, n);
-    memcpy(b + CM_FMT_COMPACT_AT_H, hb, lh);
-    cm_put_u32(b + H - 4, cm_crc32(b, H - 4));
+    /* a header holds at least its minimum (zeros the trimmed stream left out count as its own) */
+    while (CM_FMT_COMPACT_AT_H + 1u + n + 4u < CM_FMT_STREAM_MIN_HEADER)
+        fields[n++] = 0;
+    return close_header(b, h, (uint32_t)n, body_len);
+}
+
+const char *cm_fmt_stream_unpack(const uint8_t *b, uint32_t H, cm_fmt_header *h, uint32_t *need, uint32_t cap,
+                                 uint32_t *unknown)
+{
+    uint32_t at = CM_FMT_COMPACT_AT_H;
+    uint64_t x;
+    if (H < CM_FMT_STREAM_MIN_HEADER || !cm_fmt_get_varint(b, H - 4u, &at, &x) || x != H)
+        return "header length";
+    memset(h, 0, sizeof *h);
+    h->major = b[CM_HDR_MAJOR];
+    h->minor = b[CM_HDR_MINOR];
     h->header_len = H;
-    h->file_len = (uint32_t)(H + sections + 4u);
-    return H;
+    h->nsections = CM_SEC_COUNT;
+    *unknown = UINT32_MAX;
+    hdr_models m;
+    hdr_models_init(&m);
+    cm_ac_dec d;
+    cm_ac_dec_init_trimmed(&d, b + at, H - 4u - at);
+    x = cm_ac_dec_uint(&d, &m.flags);
+    if (x > UINT16_MAX)
+        return "header flags";
+    h->flags = (uint16_t)x;
+    x = cm_ac_dec_uint(&d, &m.extra_needs);
+    if (x > 255u - CM_FMT_MIN_NEEDS)
+        return "need count";
+    h->nlimits = (uint8_t)(x + CM_FMT_MIN_NEEDS);
+    uint64_t body = cm_ac_dec_uint(&d, &m.body);
+    if (body > UINT32_MAX - 4u - H)
+        return "file length";
+    h->file_len = (uint32_t)(H + body + 4u);
+    uint32_t nd[CM_LIMIT_COUNT] = {0};
+    for (uint32_t i = 0; i < h->nlimits; i++) {
+        int64_t v;
+        if (i == CM_LIMIT_MAX_FILE_BYTES) {
+            v = h->file_len;
+        } else {
+            int64_t pred = i < (uint32_t)CM_LIMIT_COUNT ? cm_fmt_need_pred(i, nd) : 0;
+            v = pred == 0 ? (int64_t)cm_ac_dec_uint(&d, &m.need) : pred + cm_ac_dec_sint(&d, &m.need_diff);
+            if (v < 0 || v > (int64_t)UINT32_MAX)
+                return "header needs";
+        }
+        if (i < (uint32_t)CM_LIMIT_COUNT)
+            nd[i] = (uint32_t)v;
+        if (i < cap)
+            need[i] = (uint32_t)v;
+        else if (v != 0 && *unknown == UINT32_MAX)
+            *unknown = i;
+    }
+    int64_t qe = cm_ac_dec_sint(&d, &m.qexp);
+    if (qe < -128 || qe > 127)
+        return "quantisation exponent";
+    h->q_exp = (int8_t)qe;
+    uint64_t shift = cm_ac_dec_uint(&d, &m.origin_shift);
+    if (shift > CM_FMT_MAX_ORIGIN_SHIFT)
+        return "grid origin step";
+    /* the range of e, and so of the origin, is the reader's to check (CM_E_RANGE): here only what
+       keeps the arithmetic defined */
+    double oq = cm_fmt_grid_step(qe < -60 || qe > 20 ? 0 : (int)qe + (int)shift);
+    for (int k = 0; k < 3; k++)
+        h->origin[k] = (double)cm_fmt_unzigzag(get_wide(&d, &m.origin)) * oq;
+    h->tess_tol = (double)get_wide(&d, &m.tess) * cm_fmt_grid_step(qe < -60 || qe > 20 ? 0 : (int)qe);
+    int64_t r = cm_fmt_unzigzag(get_wide(&d, &m.rel));
+    h->rel_tol = r < -(int64_t)CM_FMT_REL_TOL_DEFAULT ? -1.0
+                                                       : (double)(r + (int64_t)CM_FMT_REL_TOL_DEFAULT) / (double)CM_FMT_REL_TOL_ONE;
+    if (d.overrun)
+        return "header fields (past the header CRC)";
+    return NULL;
 }
 
 int cm_fmt_header_needs(const uint8_t *b, uint32_t n, uint32_t *need, uint32_t cap, uint32_t *count)
@@ -198,6 +388,15 @@ int cm_fmt_header_needs(const uint8_t *b, uint32_t n, uint32_t *need, uint32_t c
     }
     uint32_t at = CM_FMT_COMPACT_AT_H;
     uint64_t v, nn;
+    if (b[CM_HDR_MINOR] >= CM_FMT_ONE_STREAM_MINOR) {
+        cm_fmt_header h;
+        uint32_t unknown;
+        if (!cm_fmt_get_varint(b, n, &at, &v) || v > n || cm_fmt_stream_unpack(b, (uint32_t)v, &h, need, cap, &unknown))
+            return 0;
+        *count = h.nlimits;
+        return 1;
+    }
+    at = CM_FMT_COMPACT_AT_H;
     if (!cm_fmt_get_varint(b, n, &at, &v) || !cm_fmt_get_varint(b, n, &at, &v) || !cm_fmt_get_varint(b, n, &at, &nn) ||
         nn > 255)
         return 0;

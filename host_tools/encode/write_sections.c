@@ -53,6 +53,24 @@ static void put_knots(cm_ac_enc *e, const knot_models *km, int predicted, int un
     }
 }
 
+/*
+ * The vertices' step: the one the tolerance allows (tx_coarsen_vertices), or a coarser one on which
+ * every vertex already lies.  Parts drawn in round units put their corners on a round grid (the
+ * 10 mm cube's are 10 mm from the origin: 2^17 grid steps divide them, where the tolerance allowed
+ * 2^8): the same vertices, each coordinate sent in 9 fewer bits.  Lossless, so nothing else changes.
+ */
+static int vert_step(const tx *t)
+{
+    uint64_t all = 0; /* the bits set in any coordinate: its lowest is the common power of two */
+    for (int i = 0; i < t->nverts; i++)
+        for (int k = 0; k < 3; k++)
+            all |= (uint64_t)t->vq[i][k];
+    int s = t->vstep;
+    while (s < CM_FMT_MAX_STEP && (all & ((uint64_t)1 << s)) == 0)
+        s++;
+    return s;
+}
+
 static int sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
     (void)lm;
@@ -60,7 +78,7 @@ static int sec_vert(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     cm_vert_ctx_init(&ctx);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nverts);
     /* format 3: the vertices' step (tx_coarsen_vertices), the deltas in steps */
-    int step = t->o->predicted ? t->vstep : 0;
+    int step = t->o->predicted ? vert_step(t) : 0;
     if (t->o->predicted)
         cm_ac_enc_uint(e, &ctx.step, (uint64_t)step);
     /* format 4: a coordinate met lately on its axis as its place in the list (cm_vcache) */
@@ -617,6 +635,45 @@ static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, ou
     return cm_fail(st, CM_E_NOSPACE, "section too large");
 }
 
+/*
+ * Format 4.6: the five sections as one stream (each still starts its own models), so that no
+ * section pays its own flush and the header no length per section.  What each section took is the
+ * coder's output position at its end (bytes written and the pending carry run); the flush goes to
+ * the last, so the five add up to the body.
+ */
+static cm_err run_one_stream(const section_fn *fns, const tx *t, const loaded_model *lm, outbuf *out,
+                             size_t bytes[CM_SEC_COUNT], cm_status *st)
+{
+    size_t cap = 1 << 16;
+    for (int attempt = 0; attempt < 24; attempt++, cap *= 2) {
+        uint8_t *buf = malloc(cap);
+        if (!buf)
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
+        cm_ac_enc e;
+        cm_ac_enc_init(&e, buf, cap);
+        size_t at = 0;
+        for (int s = 0; s < CM_SEC_COUNT; s++) {
+            if (fns[s](t, &e, lm) != 0) {
+                free(buf);
+                return cm_fail(st, CM_E_NOMEM, "out of memory");
+            }
+            size_t now = e.pos + (size_t)e.cache_size;
+            now = now > 0 ? now - 1 : 0; /* the coder's first byte, always 0, is trimmed */
+            bytes[s] = now > at ? now - at : 0;
+            at += bytes[s];
+        }
+        size_t n = cm_ac_enc_finish_trimmed(&e);
+        if (!e.overflow) {
+            bytes[CM_SEC_COUNT - 1] = n >= at - bytes[CM_SEC_COUNT - 1] ? n - (at - bytes[CM_SEC_COUNT - 1]) : 0;
+            out->p = buf;
+            out->len = n;
+            return CM_OK;
+        }
+        free(buf);
+    }
+    return cm_fail(st, CM_E_NOSPACE, "section too large");
+}
+
 double enc_file_tess(const tx *t, double tess)
 {
     return enc_compact_header(t->o) ? cm_fmt_compact_tess(tess, t->q_exp) : tess;
@@ -630,9 +687,15 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     outbuf sec[CM_SEC_COUNT];
     memset(sec, 0, sizeof sec);
     cm_err e = enc_check_placements(t, lm, st);
-    for (int s = 0; s < CM_SEC_COUNT && e == CM_OK; s++)
-        e = run_section(fns[s], t, lm, &sec[s], st);
     int compact = enc_compact_header(t->o);
+    int one_stream = compact && t->o->compact_minor >= (int)CM_FMT_ONE_STREAM_MINOR;
+    size_t sec_bytes[CM_SEC_COUNT];
+    if (one_stream && e == CM_OK)
+        e = run_one_stream(fns, t, lm, &sec[0], sec_bytes, st);
+    for (int s = 0; s < CM_SEC_COUNT && e == CM_OK && !one_stream; s++) {
+        e = run_section(fns[s], t, lm, &sec[s], st);
+        sec_bytes[s] = sec[s].len;
+    }
     uint8_t hb[CM_FMT_MAX_HEADER];
     cm_fmt_header h = {0};
     uint32_t seclen[CM_SEC_COUNT];
@@ -663,7 +726,7 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
         if (need)
             memcpy(nd, need, sizeof nd);
         for (int k = 0; k < 4; k++) {
-            H = cm_fmt_compact_pack(hb, &h, nd, seclen);
+            H = one_stream ? cm_fmt_stream_pack(hb, &h, nd, (uint32_t)sec[0].len) : cm_fmt_compact_pack(hb, &h, nd, seclen);
             if (!need || H == 0 || nd[CM_LIMIT_MAX_FILE_BYTES] == h.file_len)
                 break;
             nd[CM_LIMIT_MAX_FILE_BYTES] = h.file_len;
@@ -674,7 +737,7 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     size_t total = H + 4;
     for (int s = 0; s < CM_SEC_COUNT; s++) {
         total += sec[s].len;
-        r->section_bytes[s + 1] = sec[s].len;
+        r->section_bytes[s + 1] = e == CM_OK ? sec_bytes[s] : 0;
     }
     r->section_bytes[0] = H;
     uint8_t *b = e == CM_OK ? calloc(1, total) : NULL;
@@ -728,7 +791,8 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
         /* the sections back to back after the header, then the file's CRC */
         size_t off = H;
         for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
-            memcpy(b + off, sec[s].p, sec[s].len);
+            if (sec[s].len)
+                memcpy(b + off, sec[s].p, sec[s].len);
             off += sec[s].len;
         }
         cm_put_u32(b + total - 4, cm_crc32(b, total - 4));

@@ -1,5 +1,6 @@
 /*
- * cmz_splice.h - a test's edit of a format 4 file: one section replaced by bytes the test coded
+ * cmz_splice.h - a test's edit of a format 4.0-4.5 file (4.6's five sections are one stream, which
+ * bytes cannot be spliced into): one section replaced by bytes the test coded
  * itself (a broken or hostile writer's records), the header's section length, the file's length
  * among the needs and both CRCs made right, so that the decoder reads the records.
  */

@@ -317,6 +317,19 @@ void igw_box_with_hole_144(igw *w, double a, double b, double c, double r)
     igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, 4)));
 }
 
+void igw_box_144(igw *w, double a, double b, double c)
+{
+    v3 p[8];
+    for (int i = 0; i < 8; i++)
+        p[i] = (v3){i & 1 ? a : 0, i & 2 ? b : 0, i & 4 ? c : 0};
+    plane_face_144(w, p[0], p[2], p[3], p[1], 0); /* z = 0, outward down */
+    plane_face_144(w, p[4], p[5], p[7], p[6], 0); /* z = c */
+    plane_face_144(w, p[0], p[1], p[5], p[4], 0); /* y = 0 */
+    plane_face_144(w, p[1], p[3], p[7], p[5], 0); /* x = a */
+    plane_face_144(w, p[3], p[2], p[6], p[7], 0); /* y = b */
+    plane_face_144(w, p[2], p[0], p[4], p[6], 0); /* x = 0 */
+}
+
 void igw_square_scrambled_144(igw *w, double a)
 {
     v3 p00 = {0, 0, 0}, p10 = {a, 0, 0}, p11 = {a, a, 0}, p01 = {0, a, 0};

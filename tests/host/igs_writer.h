@@ -45,6 +45,9 @@ int igw_save(const igw *w, const char *path);
 /** Box [0,a]x[0,b]x[0,c] with a through hole of radius r along z at (a/2, b/2), as 7 trimmed (144) faces. */
 void igw_box_with_hole_144(igw *w, double a, double b, double c, double r);
 
+/** Box [0,a]x[0,b]x[0,c] as 6 trimmed (144) plane faces on bilinear patches. */
+void igw_box_144(igw *w, double a, double b, double c);
+
 /** A pyramid: n (3..128) triangular sides from a regular n-gon of radius r at z = 0 to the apex at
  *  height h, and the n-gon base, as n + 1 trimmed (144) faces on planar bilinear patches: n + 1
  *  edges meet at the apex. */

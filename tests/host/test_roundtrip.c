@@ -596,9 +596,10 @@ static void test_bicubic_net(void **state)
 static uint8_t *good;
 static size_t good_len;
 
-/* the box with a hole, written by the default encoder (format 4's compact header) or for format 3
-   readers (the fixed header) */
-static int setup_good_as(int major)
+/* the box with a hole, written by the default encoder (format 4.6: the header's fields and the
+   sections each one stream), for format 4.5 readers (the varint header) or for format 3 readers (the
+   fixed header) */
+static int setup_good_as(int major, int minor)
 {
     igw w;
     igw_init(&w);
@@ -608,7 +609,7 @@ static int setup_good_as(int major)
     encode_opts o;
     encode_opts_default(&o);
     if (major)
-        encode_opts_for_format(&o, major, 0);
+        encode_opts_for_format(&o, major, minor);
     encode_igw_opts(&w, &lm, &r, &o);
     igw_free(&w);
     good = r.bytes;
@@ -622,13 +623,19 @@ static int setup_good_as(int major)
 static int setup_good(void **state)
 {
     (void)state;
-    return setup_good_as(0);
+    return setup_good_as(0, 0);
+}
+
+static int setup_good45(void **state)
+{
+    (void)state;
+    return setup_good_as(CM_FMT_COMPACT_MAJOR, (int)CM_FMT_USE_ADJ_MINOR);
 }
 
 static int setup_good3(void **state)
 {
     (void)state;
-    return setup_good_as(3);
+    return setup_good_as(3, 0);
 }
 
 static int teardown_good(void **state)
@@ -641,6 +648,7 @@ static int teardown_good(void **state)
 /* where a file's fields are, either header (docs/FORMAT.md) */
 typedef struct layout {
     int compact;                      /* format 4 */
+    int stream;                       /* format 4.6: the fields one stream, the sections one stream */
     uint32_t H, L;                    /* header (its CRC included) and file lengths */
     uint32_t off[CM_SEC_COUNT], len[CM_SEC_COUNT];
     uint32_t need_at[CM_LIMIT_COUNT]; /* each need's first byte */
@@ -669,6 +677,17 @@ static int layout_of(const uint8_t *p, size_t n, int compact, layout *l)
     if (!cm_fmt_get_varint(p, (uint32_t)n, &at, &v) || v > n || v < 8)
         return 0;
     l->H = (uint32_t)v;
+    if (p[CM_HDR_MINOR] >= CM_FMT_ONE_STREAM_MINOR) {
+        /* the needs have no byte of their own: the stream's start; the body one section */
+        l->stream = 1;
+        for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+            l->need_at[i] = at;
+        for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
+            l->off[s] = s == 0 ? l->H : l->L - 4;
+            l->len[s] = s == 0 ? l->L - 4 - l->H : 0;
+        }
+        return 1;
+    }
     /* flags, N, the needs, S, the lengths, grid exponent, origin, tolerances */
     while (at < l->H - 4) {
         uint32_t i = l->nfields, field_at = at;
@@ -707,6 +726,19 @@ static void set_need(uint8_t *p, size_t *n, uint32_t i, uint32_t v)
     assert_true(layout_of(p, *n, p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR, &l));
     if (!l.compact) {
         cm_put_u32(p + l.need_at[i], v);
+        return;
+    }
+    if (l.stream) {
+        /* format 4.6: the fields read, the need changed, written again (the decoder's own code) */
+        cm_fmt_header h;
+        uint32_t need[CM_LIMIT_COUNT], unknown;
+        uint8_t hb[CM_FMT_MAX_HEADER];
+        assert_null(cm_fmt_stream_unpack(p, l.H, &h, need, CM_LIMIT_COUNT, &unknown));
+        need[i] = v;
+        uint32_t H = cm_fmt_stream_pack(hb, &h, need, l.L - l.H - 4);
+        memmove(p + H, p + l.H, *n - l.H);
+        memcpy(p, hb, H);
+        *n = H + *n - l.H;
         return;
     }
     l.fields[2 + i] = v;
@@ -831,7 +863,7 @@ static void test_damaged_files(void **state)
     /* format 4: H a varint at byte 6, the section lengths varints (their offsets follow), no CRC
        per section (the file's, checked first, covers them) */
     uint32_t colr_len_at = 0;
-    if (l.compact) {
+    if (l.compact && !l.stream) {
         uint32_t at = CM_FMT_COMPACT_AT_H;
         uint64_t v;
         for (uint32_t k = 0; k < 1 + 3 + CM_FMT_MIN_NEEDS + CM_SEC_COUNT - 1; k++) /* (no placed copies: 25 needs) */
@@ -850,12 +882,26 @@ static void test_damaged_files(void **state)
         {"face section damaged", FLIP_BYTE, l.off[3] + 3, 0, 0, CM_E_CRC, (int64_t)L - 4}, /* the file's CRC */
         {"a byte too many", APPEND, 0, 0, 0, CM_E_RANGE, L},
     };
+    /* format 4.6: no section lengths; the body one stream, which the file's CRC covers */
+    const damage stream_cases[] = {
+        {"cut inside the body", CUT, (int64_t)L - 9, 0, 0, CM_E_TRUNCATED, (int64_t)L - 9},
+        {"cut before the trailer", CUT, (int64_t)L - 4, 0, 0, CM_E_TRUNCATED, (int64_t)L - 4},
+        {"header damaged", FLIP_BYTE, l.need_at[0], 0, 0, CM_E_CRC, (int64_t)H - 4},
+        {"header length below any header", SET_U8, CM_FMT_COMPACT_AT_H, 1, 0, CM_E_FORMAT, CM_FMT_COMPACT_AT_H},
+        {"header length past the bound", SET_U32, CM_FMT_COMPACT_AT_H, 0x7FFFFFFFu, 0, CM_E_FORMAT,
+         CM_FMT_COMPACT_AT_H},
+        {"body damaged", FLIP_BYTE, (int64_t)H + 3, 0, 0, CM_E_CRC, (int64_t)L - 4}, /* the file's CRC */
+        {"a byte too many", APPEND, 0, 0, 0, CM_E_RANGE, L},
+    };
     uint8_t *buf = malloc(good_len + 16);
     assert_non_null(buf);
     size_t c = 0;
     for (size_t i = 0; i < sizeof shared_cases / sizeof shared_cases[0]; i++)
         check_damage(&shared_cases[i], buf, c++, &l);
-    if (l.compact)
+    if (l.stream)
+        for (size_t i = 0; i < sizeof stream_cases / sizeof stream_cases[0]; i++)
+            check_damage(&stream_cases[i], buf, c++, &l);
+    else if (l.compact)
         for (size_t i = 0; i < sizeof compact_cases / sizeof compact_cases[0]; i++)
             check_damage(&compact_cases[i], buf, c++, &l);
     else
@@ -878,6 +924,7 @@ int main(void)
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test(test_refine_skips_passed_pieces),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
+        cmocka_unit_test_setup_teardown(test_damaged_files, setup_good45, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good3, teardown_good),
     };
     return cmocka_run_group_tests_name("roundtrip", tests, NULL, NULL);

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# check_bundled_roundtrip.sh CMZ CMZ_DECODE MESH_CHECK MODEL.igs... - the product end to end on the
+# check_bundled_roundtrip.sh CMZ CMZ_DECODE MESH_CHECK CMZ_HEADER MODEL.igs... - the product end to end on the
 # models bundled in tests/data (make test's quick round trip; the shared corpus is make check's):
 # cmz encode -> the terminal build's cmz-decode -> GLB and STL, the mesh welded and closed where
 # the model is (mesh_check), every rebuilt face within its tolerance (cmz eval), and the triangles
@@ -7,16 +7,16 @@
 # the same code: a decoder bounds a model's work by it).  One TAP line per model; stands alone
 # without ../shared.
 set -u
-cmz=$1 decode=$2 mesh_check=$3
-shift 3
+cmz=$1 decode=$2 mesh_check=$3 cmz_header=$4
+shift 4
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 n=0 fail=0
 size() { stat -c %s "$1" 2>/dev/null || echo 0; }
 # MAX_TRIS's id: its line in --limits (the need table's order); its need read from the header by
-# cmz_header.py (format 4's varints or format 3's u32 at 60 + 4 id)
+# cmz_header (tests/tools/cmz_header.c: the header of any format, 4.6's stream with the reader's code)
 tris_id=$("$cmz" --limits | awk 'NR > 2 && $1 == "MAX_TRIS" { print NR - 3; exit }')
-declared_tris() { python3 "$(dirname "$0")/cmz_header.py" need "$1" "$tris_id"; }
+declared_tris() { "$cmz_header" need "$1" "$tris_id"; }
 for f in "$@"; do
     n=$((n + 1))
     b=$(basename "$f")

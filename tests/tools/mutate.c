@@ -24,7 +24,8 @@
  *                   fixed
  * Format 4's compact header (varints): cmz-header sets a byte of it, cmz-needs a need and
  * cmz-table the count of sections or of needs or a section's length (or adds empty sections), the
- * varints written again around the change and H with them.
+ * varints written again around the change and H with them.  Format 4.6 (the fields range-coded):
+ * cmz-needs a need, cmz-table the need count or the body's length, the stream written again.
  *
  * Deterministic: the same SEED gives the same file.  Exit status 0, or 2 on a usage or I/O error.
  */
@@ -343,13 +344,50 @@ static void compact_mutate(const char *fam, buf *b)
     fix_crcs(b);
 }
 
+/* format 4.6's cmz-table and cmz-needs: the header's stream read, a need, the need count or the body's
+   length changed, the stream written again (cm_fmt_stream_pack) before the unchanged body */
+static void stream_mutate(const char *fam, buf *b)
+{
+    uint32_t H = header_len(b), unknown;
+    cm_fmt_header h;
+    uint32_t need[256] = {0};
+    if (H < CM_FMT_STREAM_MIN_HEADER || H > b->n || cm_fmt_stream_unpack(b->p, H, &h, need, 256, &unknown))
+        return;
+    uint32_t body = h.file_len - H - 4u;
+    if (strcmp(fam, "cmz-needs") == 0) {
+        static const uint32_t nv[] = {0, 1, 0xffffffffu};
+        need[pick(h.nlimits)] = nv[pick(3)];
+    } else if (pick(2)) {
+        static const uint32_t nn[] = {25, 26, 27, 100, 255};
+        h.nlimits = (uint8_t)nn[pick(5)];
+    } else {
+        static const uint32_t bl[] = {0, 1, 0x7fffffffu, 0xfffffff0u};
+        body = pick(2) ? bl[pick(4)] : body + (uint32_t)pick(64) - 32u;
+    }
+    static uint8_t hb[CM_FMT_MAX_HEADER];
+    uint32_t nh = cm_fmt_stream_pack(hb, &h, need, body);
+    if (nh == 0)
+        return;
+    size_t rest = b->n - H, n = nh + rest;
+    uint8_t *p = malloc(n);
+    memcpy(p, hb, nh);
+    memcpy(p + nh, b->p + H, rest);
+    free(b->p);
+    b->p = p;
+    b->n = b->cap = n;
+    fix_crcs(b);
+}
+
 static void cmz_mutate(const char *fam, buf *b)
 {
     if (b->n < 80)
         return;
     uint32_t H = header_len(b);
     if (b->p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR && (strcmp(fam, "cmz-table") == 0 || strcmp(fam, "cmz-needs") == 0)) {
-        compact_mutate(fam, b);
+        if (b->p[CM_HDR_MINOR] >= CM_FMT_ONE_STREAM_MINOR)
+            stream_mutate(fam, b);
+        else
+            compact_mutate(fam, b);
         return;
     }
     if (strcmp(fam, "cmz-truncate") == 0) {

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 5     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 6     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -94,6 +94,7 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_PLACE_MINOR 3u          /* 4.3: the FACE section ends with the placed copies (cm_placement) */
 #define CM_FMT_ARC_MINOR 4u            /* 4.4: a curve may be sent as an arc through its middle point (cm_arc.h) */
 #define CM_FMT_USE_ADJ_MINOR 5u        /* 4.5: an edge use named among the edges at its loop's vertex (cm_use_adj.h) */
+#define CM_FMT_ONE_STREAM_MINOR 6u     /* 4.6: the header's fields range-coded, the five sections one stream */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -118,6 +119,31 @@ double cm_fmt_grid_step(int q_exp);
  * Returns the header's length, CRC included, or 0 when it would pass CM_FMT_MAX_HEADER.
  */
 uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, const uint32_t *sec_len);
+/*
+ * Format 4.6's header (docs/FORMAT.md, "Header, format 4.6"): magic, major, minor, the varint H, then
+ * one trimmed range-coded stream of the fields up to the CRC at H - 4: flags, N - 25, the body's
+ * length B (the file is H + B + 4 bytes), the needs but MAX_FILE_BYTES (which is the file's length),
+ * each as its difference from what the ones before it predict (cm_fmt_need_pred), the grid exponent,
+ * the origin's step and multiples, the chordal and the rebuild tolerance.  The 10 mm cube's header:
+ * 52 bytes in 4.5, 27 here.
+ */
+#define CM_FMT_STREAM_MIN_HEADER 12u /* magic, version, H, at least one byte of fields, the CRC */
+/** What the needs before limit i predict of it (0: nothing; the Euler formula of a closed shell, two
+    uses per edge, a loop per face, ...): the writer sends the difference. */
+int64_t cm_fmt_need_pred(uint32_t i, const uint32_t *need);
+/** Write format 4.6's header into b (room for CM_FMT_MAX_HEADER bytes) for h (its header_len and
+    file_len are set here), h->nlimits needs (need[MAX_FILE_BYTES] is not sent: it is the file's
+    length) and a body of body_len bytes.  Returns the header's length, or 0 past CM_FMT_MAX_HEADER. */
+uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, uint32_t body_len);
+/**
+ * Read format 4.6's header from b[0..H) (H from its varint; the CRC is the caller's): its fields into
+ * h, the first `cap` needs into need (need[MAX_FILE_BYTES] = the file's length), the first need at or
+ * past `cap` that is not 0 into *unknown (else UINT32_MAX).  Returns NULL, or the field that is
+ * malformed (past the CRC, out of its range).  Nothing else is checked: the reader does that.
+ */
+const char *cm_fmt_stream_unpack(const uint8_t *b, uint32_t H, cm_fmt_header *h, uint32_t *need, uint32_t cap,
+                                 uint32_t *unknown);
+
 /** The needs a header of any format in b[0..n) declares (nothing checked but that they are in b):
     the first min(count, cap) of them into need, their number into *count; 0 when they are not in b. */
 int cm_fmt_header_needs(const uint8_t *b, uint32_t n, uint32_t *need, uint32_t cap, uint32_t *count);
