@@ -293,8 +293,11 @@ uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, 
     cm_ac_enc_uint(&e, &m.origin_shift, shift);
     for (int k = 0; k < 3; k++)
         put_wide(&e, &m.origin, cm_fmt_zigzag(om[k]));
-    put_wide(&e, &m.tess, (uint64_t)(h->tess_tol / q));
-    uint64_t rel = (uint64_t)floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    /* (a tolerance out of range is written as its nearest that the field holds: the reader refuses it) */
+    double tm = h->tess_tol / q;
+    put_wide(&e, &m.tess, !(tm >= 0.0) ? 0u : tm >= 0x1p63 ? (uint64_t)1 << 63 : (uint64_t)tm);
+    double rel = floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    rel = rel < -0x1p40 ? -0x1p40 : rel > 0x1p40 ? 0x1p40 : rel;
     put_wide(&e, &m.rel, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
     size_t n = cm_ac_enc_finish_trimmed(&e);
     if (e.overflow)
