@@ -296,6 +296,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
 		"gate:vault:$(MAKE) --no-print-directory -s check-vault" \
 		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header" \
+		"gate:old-files:$(MAKE) --no-print-directory -s check-old-files" \
 		"gate:hostile-input:$(MAKE) --no-print-directory -s hostile HOSTILE_TRIES=2 HOSTILE_TAP=--tap" \
 		"gate:store-kill:$(MAKE) --no-print-directory -s check-store-kill" \
 		"gate:hw-and-links:$(MAKE) --no-print-directory -s check-hw-and-links"
@@ -314,7 +315,8 @@ test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,termi
 		"gate:fuzz-replays:$(MAKE) --no-print-directory -s check-fuzz-replay-fast" \
 		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip" \
 		"gate:vault:$(MAKE) --no-print-directory -s check-vault" \
-		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header"
+		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header" \
+		"gate:old-files:$(MAKE) --no-print-directory -s check-old-files"
 
 # every fuzz target's seeds and regressions replayed under the sanitizers, the shared corpus left
 # to check-fuzz-replay (2.5 minutes of 2-4 MB models under ASan)
@@ -329,6 +331,11 @@ check-fuzz-replay-fast:
 .PHONY: check-lying-header
 check-lying-header: $(CMZ) $(call bdir,terminal)/cmz-decode $(CMZ_HEADER)
 	$(Q)tests/tools/check_lying_header.sh $(CMZ) $(call bdir,terminal)/cmz-decode tests/data/geo_example.igs $(CMZ_HEADER)
+
+# files written by an earlier version decode to the very GLB that version's terminal decoder made
+.PHONY: check-old-files
+check-old-files: $(CMZ) $(call bdir,terminal)/cmz-decode
+	$(Q)tests/tools/check_old_files.sh $(CMZ) $(call bdir,terminal)/cmz-decode tests/data/old_formats
 
 check-bundled-roundtrip: $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(CMZ_HEADER)
 	$(Q)tests/tools/check_bundled_roundtrip.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(MESH_CHECK) $(CMZ_HEADER) \
