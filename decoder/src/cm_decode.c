@@ -317,9 +317,7 @@ static cm_err parse_compact(cm_decoder *d, cm_status *st, header_view *v)
         return e;
     if (short_origin) {
         /* the difference from the default; a negative tolerance is refused by check_header */
-        int64_t r = cm_fmt_unzigzag(x);
-        v->h.rel_tol = r < -(int64_t)CM_FMT_REL_TOL_DEFAULT ? -1.0
-                                                            : (double)(r + (int64_t)CM_FMT_REL_TOL_DEFAULT) / (double)CM_FMT_REL_TOL_ONE;
+        v->h.rel_tol = cm_fmt_rel_tol(cm_fmt_unzigzag(x));
     } else {
         v->h.rel_tol = (double)x / (double)CM_FMT_REL_TOL_ONE;
     }
@@ -398,7 +396,8 @@ static cm_err feed_header(cm_decoder *d, const uint8_t *p, size_t n, cm_status *
     if (d->len < CM_HDR_LENGTH + 4)
         return CM_OK;
     if (d->buf[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR) {
-        /* format 4: a varint at byte 6, within the 12 bytes in (a header holds at least 25 needs) */
+        /* format 4: a varint at byte 6, within the 12 bytes in (a header holds at least 25 needs in
+           4.0-4.5, and is at least CM_FMT_STREAM_MIN_HEADER = 12 bytes long in 4.6) */
         uint32_t at = CM_FMT_COMPACT_AT_H;
         uint64_t h;
         uint32_t least = d->buf[CM_HDR_MINOR] >= CM_FMT_ONE_STREAM_MINOR ? CM_FMT_STREAM_MIN_HEADER
@@ -1296,6 +1295,10 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         if (e != CM_OK)
             return e;
     }
+    /* format 4.6: the stream read to its end (its trimmed zeros past it); bytes no section read are
+       not the writer's (an honest stream's reader ends at or past its last byte) */
+    if (one_stream && r.ac.pos < r.ac.len)
+        return fail(d, st, CM_E_FORMAT, r.base + (uint32_t)r.ac.pos, "bytes after the sections");
     d->state = CM_DEC_DONE;
     return CM_OK;
 }

@@ -125,7 +125,8 @@ static uint32_t origin_multiples(const cm_fmt_header *h, int64_t m[3])
     double q = cm_fmt_grid_step(h->q_exp);
     uint32_t shift = CM_FMT_MAX_ORIGIN_SHIFT;
     for (int k = 0; k < 3; k++) {
-        m[k] = (int64_t)(h->origin[k] / q);
+        double g = h->origin[k] / q; /* (beyond +-2^62 steps: the nearest the field holds; the reader refuses it) */
+        m[k] = !(g > -0x1p62) ? -((int64_t)1 << 62) : !(g < 0x1p62) ? (int64_t)1 << 62 : (int64_t)g;
         uint32_t z = 0;
         while (m[k] != 0 && z < shift && (m[k] & ((int64_t)1 << z)) == 0)
             z++;
@@ -182,7 +183,10 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
         sections += sec_len[s];
     }
     n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(h->q_exp));
-    uint64_t rel = (uint64_t)floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    double relq = floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    uint64_t rel = !(relq >= 0.0) ? 0u : relq > 0x1p40 ? (uint64_t)1 << 40 : (uint64_t)relq;
+    double tq = h->tess_tol / q;
+    uint64_t tess = !(tq >= 0.0) ? 0u : tq >= 0x1p63 ? (uint64_t)1 << 63 : (uint64_t)tq;
     if (h->minor >= CM_FMT_SHORT_ORIGIN_MINOR) {
         /* the origin's step (the writer may floor it onto a coarse one), then its multiples */
         int64_t m[3];
@@ -190,12 +194,12 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
         n += cm_fmt_put_varint(body + n, shift);
         for (int k = 0; k < 3; k++)
             n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(m[k]));
-        n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
+        n += cm_fmt_put_varint(body + n, tess);
         n += cm_fmt_put_varint(body + n, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
     } else {
         for (int k = 0; k < 3; k++)
             n += cm_fmt_put_varint(body + n, cm_fmt_zigzag((int64_t)(h->origin[k] / q)));
-        n += cm_fmt_put_varint(body + n, (uint64_t)(h->tess_tol / q));
+        n += cm_fmt_put_varint(body + n, tess);
         n += cm_fmt_put_varint(body + n, rel);
     }
     return close_header(b, h, n, sections);
@@ -221,7 +225,7 @@ static void hdr_models_init(hdr_models *m)
  * V = E - F + 2 vertices, two uses per edge, one loop per face; a straight edge two points and
  * four knots; a loop's uses are its face's.  Only earlier needs are used, so the reader can follow.
  */
-int64_t cm_fmt_need_pred(uint32_t i, const uint32_t *need)
+static int64_t need_pred_raw(uint32_t i, const uint32_t *need)
 {
     switch (i) {
     case CM_LIMIT_MAX_FACE_EDGES: return need[CM_LIMIT_MAX_LOOP_EDGES];
@@ -234,6 +238,17 @@ int64_t cm_fmt_need_pred(uint32_t i, const uint32_t *need)
     default: return 0;
     }
 }
+
+/* held to a need's range, so that a need less its prediction is within the coder's 2^33 - 1 */
+int64_t cm_fmt_need_pred(uint32_t i, const uint32_t *need)
+{
+    int64_t p = need_pred_raw(i, need);
+    return p < 0 ? 0 : p > (int64_t)UINT32_MAX ? (int64_t)UINT32_MAX : p;
+}
+/* (MAX_FILE_BYTES predicts nothing: the writer's value of it and the reader's are made apart) */
+_Static_assert(CM_LIMIT_MAX_FILE_BYTES != CM_LIMIT_MAX_LOOP_EDGES && CM_LIMIT_MAX_FILE_BYTES != CM_LIMIT_MAX_FACES &&
+                   CM_LIMIT_MAX_FILE_BYTES != CM_LIMIT_MAX_EDGES && CM_LIMIT_MAX_FILE_BYTES != CM_LIMIT_MAX_MODEL_CTRL,
+               "no need is predicted from MAX_FILE_BYTES");
 _Static_assert(CM_LIMIT_MAX_FACE_EDGES > CM_LIMIT_MAX_LOOP_EDGES && CM_LIMIT_MAX_VERTICES > CM_LIMIT_MAX_EDGES &&
                    CM_LIMIT_MAX_EDGES > CM_LIMIT_MAX_FACES && CM_LIMIT_MAX_MODEL_CTRL > CM_LIMIT_MAX_EDGES &&
                    CM_LIMIT_MAX_MODEL_KNOTS > CM_LIMIT_MAX_MODEL_CTRL && CM_LIMIT_MAX_MODEL_LOOPS > CM_LIMIT_MAX_FACES &&
@@ -263,6 +278,8 @@ static uint64_t get_wide(cm_ac_dec *d, cm_ac_int *m)
 
 uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, uint32_t body_len)
 {
+    if (h->nlimits < CM_FMT_MIN_NEEDS)
+        return 0; /* every writer declares format 1.0's 25 */
     /* the fields' stream first, after room for the longest H (5 bytes), then moved up to it */
     uint8_t *fields = b + CM_FMT_COMPACT_AT_H + 5u;
     uint32_t room = CM_FMT_MAX_HEADER - CM_FMT_COMPACT_AT_H - 5u - 4u;
@@ -272,7 +289,7 @@ uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, 
     cm_ac_enc_init(&e, fields, room);
     double q = cm_fmt_grid_step(h->q_exp);
     cm_ac_enc_uint(&e, &m.flags, h->flags);
-    cm_ac_enc_uint(&e, &m.extra_needs, h->nlimits >= CM_FMT_MIN_NEEDS ? h->nlimits - CM_FMT_MIN_NEEDS : 0u);
+    cm_ac_enc_uint(&e, &m.extra_needs, h->nlimits - CM_FMT_MIN_NEEDS);
     cm_ac_enc_uint(&e, &m.body, body_len);
     uint32_t nd[CM_LIMIT_COUNT] = {0};
     for (uint32_t i = 0; i < h->nlimits; i++) {
@@ -297,7 +314,7 @@ uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, 
     double tm = h->tess_tol / q;
     put_wide(&e, &m.tess, !(tm >= 0.0) ? 0u : tm >= 0x1p63 ? (uint64_t)1 << 63 : (uint64_t)tm);
     double rel = floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
-    rel = rel < -0x1p40 ? -0x1p40 : rel > 0x1p40 ? 0x1p40 : rel;
+    rel = !(rel >= -0x1p40) ? -0x1p40 : rel > 0x1p40 ? 0x1p40 : rel;
     put_wide(&e, &m.rel, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
     size_t n = cm_ac_enc_finish_trimmed(&e);
     if (e.overflow)
@@ -368,11 +385,13 @@ const char *cm_fmt_stream_unpack(const uint8_t *b, uint32_t H, cm_fmt_header *h,
     for (int k = 0; k < 3; k++)
         h->origin[k] = (double)cm_fmt_unzigzag(get_wide(&d, &m.origin)) * oq;
     h->tess_tol = (double)get_wide(&d, &m.tess) * cm_fmt_grid_step(qe < -60 || qe > 20 ? 0 : (int)qe);
-    int64_t r = cm_fmt_unzigzag(get_wide(&d, &m.rel));
-    h->rel_tol = r < -(int64_t)CM_FMT_REL_TOL_DEFAULT ? -1.0
-                                                       : (double)(r + (int64_t)CM_FMT_REL_TOL_DEFAULT) / (double)CM_FMT_REL_TOL_ONE;
+    h->rel_tol = cm_fmt_rel_tol(cm_fmt_unzigzag(get_wide(&d, &m.rel)));
     if (d.overrun)
         return "header fields (past the header CRC)";
+    /* an honest trimmed stream is read up to its end or past it (its zeros): bytes left unread are
+       no field's, and a header padded with them would say the same in other bytes */
+    if (d.pos < d.len)
+        return "header length: fields end before the header CRC";
     return NULL;
 }
 

@@ -244,7 +244,7 @@ static const char *limit_hint(unsigned id)
 /* would the terminal load this .cmz?  0 yes, else prints why */
 static int check_cmz(const char *path, const uint8_t *b, uint32_t n, const cm_link_hello *h, const cm_limit_info *tab)
 {
-    if (n < 64 || b[0] != 0x89 || b[1] != 'C' || b[2] != 'M' || b[3] != 'Z') {
+    if (n < CM_FMT_STREAM_MIN_HEADER + 4u || b[0] != 0x89 || b[1] != 'C' || b[2] != 'M' || b[3] != 'Z') {
         fprintf(stderr, "cmz send: %s: not a .cmz file (give a .cmz, or an IGES or STEP model to encode)\n", path);
         return -1;
     }

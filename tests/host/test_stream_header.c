@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cm/cm_arith.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
@@ -54,7 +55,8 @@ static void test_fields_round_trip(void **state)
     assert_int_equal(h.file_len, H + 123456u + 4u);
     assert_int_equal(cm_get_u32(b + H - 4), cm_crc32(b, H - 4));
     uint32_t unknown;
-    assert_null(cm_fmt_stream_unpack(b, H, &back, got, CM_LIMIT_COUNT, &unknown));
+    const char *why = cm_fmt_stream_unpack(b, H, &back, got, CM_LIMIT_COUNT, &unknown);
+    assert_null(why);
     assert_int_equal(unknown, CM_LIMIT_COUNT + 1);
     for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
         assert_int_equal(got[i], i == CM_LIMIT_MAX_FILE_BYTES ? h.file_len : need[i]);
@@ -71,12 +73,35 @@ static void test_fields_round_trip(void **state)
     assert_true(cm_fmt_header_needs(b, H, got, CM_LIMIT_COUNT, &count));
     assert_int_equal(count, CM_LIMIT_COUNT + 3);
     assert_int_equal(got[CM_LIMIT_MAX_EDGES], need[CM_LIMIT_MAX_EDGES]);
+    /* needs far from what the others predict (a prediction past 2^32 - 1, one below 0): still exact */
+    uint32_t far[CM_LIMIT_COUNT] = {0};
+    far[CM_LIMIT_MAX_EDGES] = far[CM_LIMIT_MAX_MODEL_CTRL] = UINT32_MAX; /* knots predicted past 2^33 */
+    far[CM_LIMIT_MAX_FACES] = UINT32_MAX;                                /* vertices predicted below 0 */
+    far[CM_LIMIT_MAX_VERTICES] = 5;
+    h.nlimits = CM_LIMIT_COUNT;
+    H = cm_fmt_stream_pack(b, &h, far, 10u);
+    assert_true(H > 0);
+    assert_null(cm_fmt_stream_unpack(b, H, &back, got, CM_LIMIT_COUNT, &unknown));
+    for (uint32_t i = 0; i < CM_LIMIT_COUNT; i++)
+        if (i != CM_LIMIT_MAX_FILE_BYTES)
+            assert_int_equal(got[i], far[i]);
+    /* bytes after the fields, before the CRC: no field's, refused */
+    H = cm_fmt_stream_pack(b, &h, far, 10u);
+    assert_true(H + 8 < 128);
+    uint8_t pad[CM_FMT_MAX_HEADER];
+    memcpy(pad, b, H - 4);
+    memset(pad + H - 4, 0x5A, 8);
+    pad[CM_FMT_COMPACT_AT_H] = (uint8_t)(H + 8); /* (one byte) */
+    cm_put_u32(pad + H + 4, cm_crc32(pad, H + 4));
+    why = cm_fmt_stream_unpack(pad, H + 8, &back, got, CM_LIMIT_COUNT, &unknown);
+    assert_non_null(why);
+    assert_non_null(strstr(why, "fields end before the header CRC"));
     /* the stream cut: its fields run past the CRC */
     uint8_t cut[CM_FMT_MAX_HEADER];
     memcpy(cut, b, 8);
     cut[CM_FMT_COMPACT_AT_H] = 12; /* H = 12: one byte of fields */
     cm_put_u32(cut + 8, cm_crc32(cut, 8));
-    const char *why = cm_fmt_stream_unpack(cut, 12, &back, got, CM_LIMIT_COUNT, &unknown);
+    why = cm_fmt_stream_unpack(cut, 12, &back, got, CM_LIMIT_COUNT, &unknown);
     assert_non_null(why);
     assert_non_null(strstr(why, "past the header CRC"));
 }
@@ -242,6 +267,56 @@ static void assert_refused(const uint8_t *b, size_t n, size_t hl, cm_err want, u
     }
 }
 
+/* the good header coded here field by field as cm_fmt_stream_pack does, but its rebuild tolerance's
+   field the raw 64-bit value `rel` (what no writer sends: the reader must not overflow on it) */
+static void put_wide_raw(cm_ac_enc *e, cm_ac_int *m, uint64_t v)
+{
+    const uint64_t esc = (1ull << 33) - 1u;
+    cm_ac_enc_uint(e, m, v < esc ? v : esc);
+    if (v >= esc)
+        for (int k = 3; k >= 0; k--)
+            cm_ac_enc_direct(e, (uint32_t)(v >> (16 * k)) & 0xFFFFu, 16);
+}
+
+static uint32_t header_with_rel(uint8_t *out, uint64_t rel, uint32_t body)
+{
+    cm_ac_int flags, extra, bodym, need, diff, qexp, oshift, origin, tess, relm;
+    cm_ac_int *all[] = {&flags, &extra, &bodym, &need, &diff, &qexp, &oshift, &origin, &tess, &relm};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+        cm_ac_int_init(all[i]);
+    uint8_t fields[CM_FMT_MAX_HEADER];
+    cm_ac_enc e;
+    cm_ac_enc_init(&e, fields, sizeof fields);
+    cm_ac_enc_uint(&e, &flags, good_h.flags);
+    cm_ac_enc_uint(&e, &extra, good_h.nlimits - CM_FMT_MIN_NEEDS);
+    cm_ac_enc_uint(&e, &bodym, body);
+    for (uint32_t i = 0; i < good_h.nlimits; i++) {
+        if (i == CM_LIMIT_MAX_FILE_BYTES)
+            continue;
+        int64_t pred = cm_fmt_need_pred(i, good_need);
+        if (pred == 0)
+            cm_ac_enc_uint(&e, &need, good_need[i]);
+        else
+            cm_ac_enc_sint(&e, &diff, (int64_t)good_need[i] - pred);
+    }
+    /* grid and origin as the good header's: read back from its own bytes below is not needed, the
+       reader only has to reach the tolerance; e = the good one, the origin at 0, a tolerance of 1 */
+    cm_ac_enc_sint(&e, &qexp, good_h.q_exp);
+    cm_ac_enc_uint(&e, &oshift, 0);
+    for (int k = 0; k < 3; k++)
+        put_wide_raw(&e, &origin, 0);
+    put_wide_raw(&e, &tess, 1);
+    put_wide_raw(&e, &relm, rel);
+    size_t n = cm_ac_enc_finish_trimmed(&e);
+    uint32_t H = (uint32_t)(CM_FMT_COMPACT_AT_H + 1u + n + 4u);
+    assert_true(H < 128);
+    memcpy(out, good.bytes, CM_FMT_COMPACT_AT_H);
+    out[CM_FMT_COMPACT_AT_H] = (uint8_t)H;
+    memcpy(out + CM_FMT_COMPACT_AT_H + 1, fields, n);
+    cm_put_u32(out + H - 4, cm_crc32(out, H - 4));
+    return H;
+}
+
 static void test_hostile_stream_headers(void **state)
 {
     (void)state;
@@ -308,6 +383,33 @@ static void test_hostile_stream_headers(void **state)
     n = with_header(b, good_h, good_need, body, &hl);
     b[CM_HDR_MINOR] = CM_FMT_VERSION_MINOR + 1;
     assert_refused(b, n, hl, CM_E_VERSION, CM_HDR_MINOR, "minor newer");
+    /* a rebuild tolerance's field at the top of 64 bits (zigzag: +2^63 - 1): read without overflow,
+       a huge tolerance, finite and positive (it is informative); the body is read as before */
+    {
+        uint32_t H = header_with_rel(b, UINT64_MAX - 1u, body);
+        memcpy(b + H, good.bytes + good.section_bytes[0], body);
+        n = H + body + 4;
+        cm_put_u32(b + n - 4, cm_crc32(b, n - 4));
+        decode_into(&dec, b, n);
+        assert_true(dec.model.rel_tol > 1e11 && isfinite(dec.model.rel_tol));
+    }
+    /* bytes after the sections' stream (the header counting them): no section's, refused */
+    {
+        n = with_header(b, good_h, good_need, body + 16, &hl);
+        size_t end = hl + body;
+        memset(b + end, 0x77, 16);
+        n = end + 16 + 4;
+        cm_put_u32(b + n - 4, cm_crc32(b, n - 4));
+        cm_status st;
+        cm_status_init(&st);
+        cm_dec_init(&dec);
+        assert_ok(cm_dec_feed(&dec, b, n, &st));
+        cm_err e = cm_dec_finish(&dec, &st);
+        if (e == CM_OK)
+            fail_msg("16 bytes after the sections: read");
+        if (e == CM_E_FORMAT && !strstr(st.where, "bytes after the sections"))
+            fail_msg("16 bytes after the sections: says \"%s\"", st.where);
+    }
     /* the sections' stream cut by a few bytes (the header saying so, every CRC valid): truncated */
     for (uint32_t cut = 1; cut <= 8 && cut < body; cut++) {
         n = with_header(b, good_h, good_need, body - cut, &hl);

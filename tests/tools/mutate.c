@@ -288,7 +288,7 @@ static uint32_t header_len(const buf *b)
 /* every CRC the file holds made right for its present bytes */
 static void fix_crcs(buf *b)
 {
-    if (b->n < CM_FMT_FIXED_HEADER + 8)
+    if (b->n < (b->n > CM_HDR_MAJOR && b->p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR ? 16u : CM_FMT_FIXED_HEADER + 8u))
         return;
     uint32_t H = header_len(b);
     if (H < 16 || H > b->n)
@@ -380,7 +380,7 @@ static void stream_mutate(const char *fam, buf *b)
 
 static void cmz_mutate(const char *fam, buf *b)
 {
-    if (b->n < 80)
+    if (b->n < CM_FMT_STREAM_MIN_HEADER + 4u) /* (a format 4.6 file can be 58 bytes) */
         return;
     uint32_t H = header_len(b);
     if (b->p[CM_HDR_MAJOR] >= CM_FMT_COMPACT_MAJOR && (strcmp(fam, "cmz-table") == 0 || strcmp(fam, "cmz-needs") == 0)) {
@@ -403,7 +403,7 @@ static void cmz_mutate(const char *fam, buf *b)
     } else if (strcmp(fam, "cmz-header") == 0) {
         static const uint32_t vals[] = {0, 1, 5, 6, 200, 255, 0xffffffffu, 0x7fffffffu, 60, 4096};
         /* a byte after the magic and before the header's CRC (the first 64 bytes if H is no use) */
-        size_t at = CM_HDR_MAJOR + pick((H > 8 && H <= b->n ? H - 4 : 64) - CM_HDR_MAJOR);
+        size_t at = CM_HDR_MAJOR + pick((H > 8 && H <= b->n ? H - 4 : b->n < 64 ? b->n : 64) - CM_HDR_MAJOR);
         uint32_t v = vals[pick(10)];
         if (at == CM_HDR_NLIMITS || at == CM_HDR_NSECTIONS || at == CM_HDR_QEXP || at == CM_HDR_MAJOR ||
             at == CM_HDR_MINOR || pick(2)) /* the one-byte fields, and any byte half the time */

@@ -108,6 +108,13 @@ uint32_t cm_fmt_put_varint(uint8_t *b, uint64_t v);
 /** Read a varint from b[*at..end) into *v, advancing *at; 0 when it does not end before `end` or
     runs past 64 bits (then *at is where it failed). */
 int cm_fmt_get_varint(const uint8_t *b, uint32_t end, uint32_t *at, uint64_t *v);
+/** Format 4.1 on: the rebuild tolerance whose difference from the default (167772 / 2^24) is d;
+    -1 below zero (the reader refuses it); in double, so that no d overflows. */
+static inline double cm_fmt_rel_tol(int64_t d)
+{
+    return d < -(int64_t)CM_FMT_REL_TOL_DEFAULT ? -1.0
+                                                : ((double)d + (double)CM_FMT_REL_TOL_DEFAULT) / (double)CM_FMT_REL_TOL_ONE;
+}
 static inline uint64_t cm_fmt_zigzag(int64_t v) { return v < 0 ? ((uint64_t)(-(v + 1)) << 1) | 1u : (uint64_t)v << 1; }
 static inline int64_t cm_fmt_unzigzag(uint64_t u) { return (u & 1u) ? -(int64_t)(u >> 1) - 1 : (int64_t)(u >> 1); }
 /** The grid step 2^e mm (e in -60..20, exact). */
