@@ -610,40 +610,18 @@ static int sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     return 0;
 }
 
-static cm_err run_section(section_fn fn, const tx *t, const loaded_model *lm, outbuf *out, cm_status *st)
-{
-    size_t cap = 1 << 16;
-    for (int attempt = 0; attempt < 24; attempt++, cap *= 2) {
-        uint8_t *buf = malloc(cap);
-        if (!buf)
-            return cm_fail(st, CM_E_NOMEM, "out of memory");
-        cm_ac_enc e;
-        cm_ac_enc_init(&e, buf, cap);
-        if (fn(t, &e, lm) != 0) {
-            free(buf);
-            return cm_fail(st, CM_E_NOMEM, "out of memory");
-        }
-        /* format 4 trims each stream (cm_arith.h), which may leave no byte at all */
-        size_t n = enc_compact_header(t->o) ? cm_ac_enc_finish_trimmed(&e) : cm_ac_enc_finish(&e);
-        if (!e.overflow) {
-            out->p = buf;
-            out->len = n;
-            return CM_OK;
-        }
-        free(buf);
-    }
-    return cm_fail(st, CM_E_NOSPACE, "section too large");
-}
-
 /*
- * Format 4.6: the five sections as one stream (each still starts its own models), so that no
- * section pays its own flush and the header no length per section.  What each section took is the
- * coder's output position at its end (bytes written and the pending carry run); the flush goes to
- * the last, so the five add up to the body.
+ * The sections fns[0..n) coded into one stream of the range coder (each starting its own models),
+ * into a buffer grown until it holds them.  Format 4 trims the stream (cm_arith.h), which may leave
+ * no byte at all.  bytes[s]: what section s took, the coder's output position at its end (bytes
+ * written and the pending carry run, less the trimmed leading 0); the flush goes to the last, so
+ * they add up to the stream.  Format 4.6 codes the five sections so, one stream (no section pays its
+ * own flush, the header no length per section); older formats one stream per section.
  */
-static cm_err run_one_stream(const section_fn *fns, const tx *t, const loaded_model *lm, outbuf *out,
-                             size_t bytes[CM_SEC_COUNT], cm_status *st)
+static cm_err run_stream(const section_fn *fns, int n, const tx *t, const loaded_model *lm, outbuf *out,
+                         size_t *bytes, cm_status *st)
 {
+    int trimmed = enc_compact_header(t->o);
     size_t cap = 1 << 16;
     for (int attempt = 0; attempt < 24; attempt++, cap *= 2) {
         uint8_t *buf = malloc(cap);
@@ -652,21 +630,22 @@ static cm_err run_one_stream(const section_fn *fns, const tx *t, const loaded_mo
         cm_ac_enc e;
         cm_ac_enc_init(&e, buf, cap);
         size_t at = 0;
-        for (int s = 0; s < CM_SEC_COUNT; s++) {
+        for (int s = 0; s < n; s++) {
             if (fns[s](t, &e, lm) != 0) {
                 free(buf);
                 return cm_fail(st, CM_E_NOMEM, "out of memory");
             }
             size_t now = e.pos + (size_t)e.cache_size;
-            now = now > 0 ? now - 1 : 0; /* the coder's first byte, always 0, is trimmed */
+            now = now > 0 ? now - 1 : 0;
             bytes[s] = now > at ? now - at : 0;
             at += bytes[s];
         }
-        size_t n = cm_ac_enc_finish_trimmed(&e);
+        size_t len = trimmed ? cm_ac_enc_finish_trimmed(&e) : cm_ac_enc_finish(&e);
         if (!e.overflow) {
-            bytes[CM_SEC_COUNT - 1] = n >= at - bytes[CM_SEC_COUNT - 1] ? n - (at - bytes[CM_SEC_COUNT - 1]) : 0;
+            size_t before = at - bytes[n - 1];
+            bytes[n - 1] = len >= before ? len - before : 0;
             out->p = buf;
-            out->len = n;
+            out->len = len;
             return CM_OK;
         }
         free(buf);
@@ -691,11 +670,9 @@ cm_err enc_write_file(const tx *t, const loaded_model *lm, const encode_opts *o,
     int one_stream = compact && t->o->compact_minor >= (int)CM_FMT_ONE_STREAM_MINOR;
     size_t sec_bytes[CM_SEC_COUNT];
     if (one_stream && e == CM_OK)
-        e = run_one_stream(fns, t, lm, &sec[0], sec_bytes, st);
-    for (int s = 0; s < CM_SEC_COUNT && e == CM_OK && !one_stream; s++) {
-        e = run_section(fns[s], t, lm, &sec[s], st);
-        sec_bytes[s] = sec[s].len;
-    }
+        e = run_stream(fns, CM_SEC_COUNT, t, lm, &sec[0], sec_bytes, st);
+    for (int s = 0; s < CM_SEC_COUNT && e == CM_OK && !one_stream; s++)
+        e = run_stream(&fns[s], 1, t, lm, &sec[s], &sec_bytes[s], st);
     uint8_t hb[CM_FMT_MAX_HEADER];
     cm_fmt_header h = {0};
     uint32_t seclen[CM_SEC_COUNT];

@@ -100,3 +100,20 @@ const char *cmz_section_refused(cm_decoder *d, const encode_result *r, int tag, 
     snprintf(why, sizeof why, "%s (%s), expected %s (\"%s\")", cm_err_name(e), where, cm_err_name(code), cause);
     return why;
 }
+
+const char *cmz_header_refused(cm_decoder *d, const uint8_t *b, size_t n, size_t hl, cm_err want, uint32_t at,
+                               const char *where)
+{
+    static char why[512];
+    for (int whole = 0; whole < 2; whole++) {
+        cm_status st;
+        cm_err e = cmz_decode(d, b, whole ? n : hl, &st);
+        const char *said = st.where ? st.where : "?";
+        if (e != want || st.offset != at || !st.where || !strstr(st.where, where)) {
+            snprintf(why, sizeof why, "%s, fed %s: %s (%s) at byte %u, expected %s at byte %u", where,
+                     whole ? "whole" : "its header alone", cm_err_name(e), said, st.offset, cm_err_name(want), at);
+            return why;
+        }
+    }
+    return NULL;
+}

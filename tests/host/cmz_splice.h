@@ -25,4 +25,9 @@ cm_err cmz_decode(cm_decoder *d, const uint8_t *b, size_t len, cm_status *st);
 const char *cmz_section_refused(cm_decoder *d, const encode_result *r, int tag, const uint8_t *sec, size_t slen,
                                 cm_err code, const char *cause);
 
+/** The header alone (b[0..hl)), then the whole file b[0..n), decoded into d: NULL when both are refused
+    with `want` at byte `at`, naming `where`, else what happened instead (a static string). */
+const char *cmz_header_refused(cm_decoder *d, const uint8_t *b, size_t n, size_t hl, cm_err want, uint32_t at,
+                               const char *where);
+
 #endif

@@ -21,6 +21,7 @@
 #include "cm/cm_predict.h"
 #include "cm/cm_sections.h"
 #include "encode/encode.h"
+#include "cmz_splice.h"
 #include "igs_writer.h"
 #include "model_load.h"
 
@@ -333,25 +334,12 @@ static size_t with_header_body(uint8_t *out, const uint64_t *f, uint32_t n, uint
     return total;
 }
 
-/* the header alone (and then the file) fed: refused with `want` at field `fi`'s byte (or `at`
-   when fi < 0), where naming `where` */
+/* the header alone (and then the file) fed: refused with `want` at byte `at`, naming `where` */
 static void assert_refused(const uint8_t *b, size_t n, size_t hl, cm_err want, uint32_t at, const char *where)
 {
-    for (int whole = 0; whole < 2; whole++) {
-        cm_status st;
-        cm_status_init(&st);
-        cm_dec_init(&dec4);
-        cm_err e = cm_dec_feed(&dec4, b, whole ? n : hl, &st);
-        if (e == CM_OK)
-            e = cm_dec_finish(&dec4, &st);
-        if (e != want)
-            fail_msg("%s: %s (%s), expected %s", where, cm_err_name(e), st.where ? st.where : "?", cm_err_name(want));
-        if (st.offset != at)
-            fail_msg("%s: at byte %u, expected %u", where, st.offset, at);
-        assert_non_null(st.where);
-        if (!strstr(st.where, where))
-            fail_msg("%s: says \"%s\"", where, st.where);
-    }
+    const char *why = cmz_header_refused(&dec4, b, n, hl, want, at, where);
+    if (why)
+        fail_msg("%s", why);
 }
 
 static void test_hostile_headers(void **state)

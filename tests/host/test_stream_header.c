@@ -19,6 +19,7 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
 #include "encode/encode.h"
+#include "cmz_splice.h"
 #include "igs_writer.h"
 #include "model_load.h"
 
@@ -110,13 +111,8 @@ static void test_fields_round_trip(void **state)
 
 static void load(igw *w, const char *name, loaded_model *lm)
 {
-    size_t len = 0;
-    char *text = igw_text(w, &len);
     cm_status st;
-    cm_status_init(&st);
-    assert_ok(model_load_data(name, text, len, lm, NULL, NULL, &st));
-    free(text);
-    igw_free(w);
+    assert_ok(igw_load(w, name, lm, &st));
 }
 
 static void encode_minor(loaded_model *lm, int minor, encode_result *r)
@@ -133,10 +129,7 @@ static void encode_minor(loaded_model *lm, int minor, encode_result *r)
 static void decode_into(cm_decoder *d, const uint8_t *b, size_t len)
 {
     cm_status st;
-    cm_status_init(&st);
-    cm_dec_init(d);
-    assert_ok(cm_dec_feed(d, b, len, &st));
-    assert_ok(cm_dec_finish(d, &st));
+    assert_ok(cmz_decode(d, b, len, &st));
 }
 
 /* r5 and r6 decode to one model, bit for bit, with the same needs; 4.6 saves at least `saved` */
@@ -247,24 +240,12 @@ static size_t with_header(uint8_t *out, cm_fmt_header h, const uint32_t *need, u
     return total;
 }
 
-/* the header alone, then the whole file, fed: refused with `want` at byte `at`, naming `where` */
+/* the header alone (and then the file) fed: refused with `want` at byte `at`, naming `where` */
 static void assert_refused(const uint8_t *b, size_t n, size_t hl, cm_err want, uint32_t at, const char *where)
 {
-    for (int whole = 0; whole < 2; whole++) {
-        cm_status st;
-        cm_status_init(&st);
-        cm_dec_init(&dec);
-        cm_err e = cm_dec_feed(&dec, b, whole ? n : hl, &st);
-        if (e == CM_OK)
-            e = cm_dec_finish(&dec, &st);
-        if (e != want)
-            fail_msg("%s: %s (%s), expected %s", where, cm_err_name(e), st.where ? st.where : "?", cm_err_name(want));
-        if (st.offset != at)
-            fail_msg("%s: at byte %u, expected %u", where, st.offset, at);
-        assert_non_null(st.where);
-        if (!strstr(st.where, where))
-            fail_msg("%s: says \"%s\"", where, st.where);
-    }
+    const char *why = cmz_header_refused(&dec, b, n, hl, want, at, where);
+    if (why)
+        fail_msg("%s", why);
 }
 
 /* the good header coded here field by field as cm_fmt_stream_pack does, but its rebuild tolerance's
@@ -348,10 +329,7 @@ static void test_hostile_stream_headers(void **state)
     n = with_header(b, good_h, good_need, body + 1, &hl);
     {
         cm_status st;
-        cm_status_init(&st);
-        cm_dec_init(&dec);
-        assert_ok(cm_dec_feed(&dec, b, n, &st));
-        assert_err(cm_dec_finish(&dec, &st), CM_E_TRUNCATED);
+        assert_err(cmz_decode(&dec, b, n, &st), CM_E_TRUNCATED);
     }
     /* grid and tolerances */
     h = good_h;
@@ -401,10 +379,7 @@ static void test_hostile_stream_headers(void **state)
         n = end + 16 + 4;
         cm_put_u32(b + n - 4, cm_crc32(b, n - 4));
         cm_status st;
-        cm_status_init(&st);
-        cm_dec_init(&dec);
-        assert_ok(cm_dec_feed(&dec, b, n, &st));
-        cm_err e = cm_dec_finish(&dec, &st);
+        cm_err e = cmz_decode(&dec, b, n, &st);
         if (e == CM_OK)
             fail_msg("16 bytes after the sections: read");
         if (e == CM_E_FORMAT && !strstr(st.where, "bytes after the sections"))
@@ -416,10 +391,7 @@ static void test_hostile_stream_headers(void **state)
         n -= cut;
         cm_put_u32(b + n - 4, cm_crc32(b, n - 4));
         cm_status st;
-        cm_status_init(&st);
-        cm_dec_init(&dec);
-        assert_ok(cm_dec_feed(&dec, b, n, &st));
-        cm_err e = cm_dec_finish(&dec, &st);
+        cm_err e = cmz_decode(&dec, b, n, &st);
         if (e != CM_E_TRUNCATED && e != CM_E_RANGE && e != CM_E_FORMAT)
             fail_msg("body cut by %u: %s (%s)", cut, cm_err_name(e), st.where ? st.where : "?");
     }
