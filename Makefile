@@ -205,6 +205,12 @@ $(call bdir,host)/host_tools/profile_table_%.o: host_tools/profile_table.c
 		$(CM_STD) $(CM_WARN) $(CFLAGS) -c $< -o $@
 
 # test tool: the decoded mesh's topology (host profile)
+# a .cmz header's needs read or rewritten, any format (the lying-header and bundled round-trip gates);
+# defined before the rules that name it as a prerequisite (make expands those when it reads them)
+CMZ_HEADER := $(call bdir,host)/tests/tools/cmz_header
+$(CMZ_HEADER): $(call bdir,host)/tests/tools/cmz_header.o $(call bdir,host)/libcmdecoder.a
+	$(call say,LD      ,$@)
+	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
 MESH_CHECK := $(call bdir,host)/tests/tools/mesh_check
 $(MESH_CHECK): $(call bdir,host)/tests/tools/mesh_check.o $(call bdir,host)/host_tools/mesh/mesh_topo.o \
 		$(call bdir,host)/platform/cm_decode_file.o $(call bdir,host)/platform/cm_report.o $(call bdir,host)/libcmdecoder.a
@@ -614,10 +620,6 @@ clean:
 	rm -rf $(BUILD_ROOT)
 
 # ---- hostile input (issue 10): mutated IGES and .cmz files against cmz and the terminal's decoder ----
-CMZ_HEADER := $(call bdir,host)/tests/tools/cmz_header
-$(CMZ_HEADER): $(call bdir,host)/tests/tools/cmz_header.o $(call bdir,host)/libcmdecoder.a
-	$(call say,LD      ,$@)
-	$(Q)$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
 MUTATE := $(call bdir,host)/tests/tools/mutate
 $(MUTATE): $(call bdir,host)/tests/tools/mutate.o $(call bdir,host)/libcmdecoder.a
 	$(call say,LD      ,$@)
