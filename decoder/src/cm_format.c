@@ -140,6 +140,21 @@ static uint32_t origin_multiples(const cm_fmt_header *h, int64_t m[3])
     return shift;
 }
 
+/* the writers' tolerances as the header's integers, whatever the writer was given: the chordal one
+   in grid steps q (0 .. 2^63), the rebuild one in units of 2^-24 (-2^40 .. 2^40; a NaN as the
+   lowest); out of range, the nearest the field holds, which the reader refuses */
+static uint64_t tess_steps(const cm_fmt_header *h, double q)
+{
+    double t = h->tess_tol / q;
+    return !(t >= 0.0) ? 0u : t >= 0x1p63 ? (uint64_t)1 << 63 : (uint64_t)t;
+}
+
+static int64_t rel_units(const cm_fmt_header *h)
+{
+    double r = floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
+    return !(r >= -0x1p40) ? -((int64_t)1 << 40) : r > 0x1p40 ? (int64_t)1 << 40 : (int64_t)r;
+}
+
 /* magic, version, the varint H (which counts itself), the n bytes of fields written at
    b + CM_FMT_COMPACT_AT_H + 5, the CRC: H, or 0 past CM_FMT_MAX_HEADER */
 static uint32_t close_header(uint8_t *b, cm_fmt_header *h, uint32_t n, uint64_t body_len)
@@ -183,10 +198,8 @@ uint32_t cm_fmt_compact_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need,
         sections += sec_len[s];
     }
     n += cm_fmt_put_varint(body + n, cm_fmt_zigzag(h->q_exp));
-    double relq = floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
-    uint64_t rel = !(relq >= 0.0) ? 0u : relq > 0x1p40 ? (uint64_t)1 << 40 : (uint64_t)relq;
-    double tq = h->tess_tol / q;
-    uint64_t tess = !(tq >= 0.0) ? 0u : tq >= 0x1p63 ? (uint64_t)1 << 63 : (uint64_t)tq;
+    int64_t relu = rel_units(h);
+    uint64_t rel = relu < 0 ? 0u : (uint64_t)relu, tess = tess_steps(h, q);
     if (h->minor >= CM_FMT_SHORT_ORIGIN_MINOR) {
         /* the origin's step (the writer may floor it onto a coarse one), then its multiples */
         int64_t m[3];
@@ -310,12 +323,8 @@ uint32_t cm_fmt_stream_pack(uint8_t *b, cm_fmt_header *h, const uint32_t *need, 
     cm_ac_enc_uint(&e, &m.origin_shift, shift);
     for (int k = 0; k < 3; k++)
         put_wide(&e, &m.origin, cm_fmt_zigzag(om[k]));
-    /* (a tolerance out of range is written as its nearest that the field holds: the reader refuses it) */
-    double tm = h->tess_tol / q;
-    put_wide(&e, &m.tess, !(tm >= 0.0) ? 0u : tm >= 0x1p63 ? (uint64_t)1 << 63 : (uint64_t)tm);
-    double rel = floor(h->rel_tol * (double)CM_FMT_REL_TOL_ONE + 0.5);
-    rel = !(rel >= -0x1p40) ? -0x1p40 : rel > 0x1p40 ? 0x1p40 : rel;
-    put_wide(&e, &m.rel, cm_fmt_zigzag((int64_t)rel - (int64_t)CM_FMT_REL_TOL_DEFAULT));
+    put_wide(&e, &m.tess, tess_steps(h, q));
+    put_wide(&e, &m.rel, cm_fmt_zigzag(rel_units(h) - (int64_t)CM_FMT_REL_TOL_DEFAULT));
     size_t n = cm_ac_enc_finish_trimmed(&e);
     if (e.overflow)
         return 0;
@@ -381,10 +390,11 @@ const char *cm_fmt_stream_unpack(const uint8_t *b, uint32_t H, cm_fmt_header *h,
         return "grid origin step";
     /* the range of e, and so of the origin, is the reader's to check (CM_E_RANGE): here only what
        keeps the arithmetic defined */
-    double oq = cm_fmt_grid_step(qe < -60 || qe > 20 ? 0 : (int)qe + (int)shift);
+    int e_ok = qe >= -60 && qe <= 20;
+    double oq = cm_fmt_grid_step(e_ok ? (int)qe + (int)shift : 0);
     for (int k = 0; k < 3; k++)
         h->origin[k] = (double)cm_fmt_unzigzag(get_wide(&d, &m.origin)) * oq;
-    h->tess_tol = (double)get_wide(&d, &m.tess) * cm_fmt_grid_step(qe < -60 || qe > 20 ? 0 : (int)qe);
+    h->tess_tol = (double)get_wide(&d, &m.tess) * cm_fmt_grid_step(e_ok ? (int)qe : 0);
     h->rel_tol = cm_fmt_rel_tol(cm_fmt_unzigzag(get_wide(&d, &m.rel)));
     if (d.overrun)
         return "header fields (past the header CRC)";
@@ -418,7 +428,6 @@ int cm_fmt_header_needs(const uint8_t *b, uint32_t n, uint32_t *need, uint32_t c
         *count = h.nlimits;
         return 1;
     }
-    at = CM_FMT_COMPACT_AT_H;
     if (!cm_fmt_get_varint(b, n, &at, &v) || !cm_fmt_get_varint(b, n, &at, &v) || !cm_fmt_get_varint(b, n, &at, &nn) ||
         nn > 255)
         return 0;
