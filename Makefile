@@ -362,7 +362,8 @@ check-noheap: $(B)/libcmdecoder.a
 
 check-stack: $(B)/libcmdecoder.a $(STACK_CHECK)
 	$(Q)$(STACK_CHECK) --fn-max $(call limit_of,$(PROFILE),CM_STACK_FN_MAX) \
-		--budget $(call limit_of,$(PROFILE),CM_STACK_BUDGET) $$(find $(B)/decoder -name '*.ci' | sort)
+		--budget $(call limit_of,$(PROFILE),CM_STACK_BUDGET) --indirect tests/tools/stack_indirect_decoder.txt \
+		$$(find $(B)/decoder -name '*.ci' | sort)
 
 # gcc built the suites above; clang builds and runs them again with ASan+UBSan
 CLANG_SAN := -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer

@@ -158,6 +158,13 @@
 #  define CM_TESS_PASS_SLOTS 16384
 #endif
 
+/* Bytes of each of the three pages (positions, normals, indices) through which a streaming
+ * terminal reads its spilled output mesh back (cm_mesh.h): sequential reads, so a page is a read
+ * call.  Unit: bytes, at least 12.  Not a limit of the format (cm-limits does not list it). */
+#ifndef CM_SPILL_PAGE_BYTES
+#  define CM_SPILL_PAGE_BYTES 24576u
+#endif
+
 /* Size of one .cmz file.  Unit: bytes.  Hard bound 2^31-1.  The decoder
  * holds the whole compressed file while decoding it. */
 #ifndef CM_MAX_FILE_BYTES

@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdint.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -82,13 +83,99 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
     return e;
 }
 
+/* ---- the output mesh's spill (issue 15): three unlinked files in the output's directory ---- */
+
+typedef struct spill_files {
+    char dir[4096];            /* where the files go: the output's directory */
+    int fd[CM_SPILL_STREAMS];  /* opened at the first spill; -1 before */
+} spill_files;
+
+static spill_files spill_fs = {"", {-1, -1, -1}};
+
+/* an unlinked read-write file in spill_fs.dir: O_TMPFILE where the file system has it, else a named
+   file removed at once (nothing is left behind when the program dies) */
+static int open_spill_file(void)
+{
+    int dirfd = open(spill_fs.dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dirfd < 0)
+        return -1;
+    int fd = -1;
+#ifdef O_TMPFILE
+    fd = openat(dirfd, ".", O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+#endif
+    for (int k = 0; fd < 0 && k < 64; k++) {
+        char name[64];
+        snprintf(name, sizeof name, ".cmz-spill-%ld-%d", (long)getpid(), k);
+        fd = openat(dirfd, name, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        if (fd >= 0)
+            unlinkat(dirfd, name, 0);
+        else if (errno != EEXIST)
+            break;
+    }
+    close(dirfd);
+    return fd;
+}
+
+static int spill_file_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n)
+{
+    spill_files *sf = ctx;
+    if (s >= CM_SPILL_STREAMS || off > (uint64_t)INT64_MAX - n)
+        return -1;
+    if (sf->fd[s] < 0 && (!write || (sf->fd[s] = open_spill_file()) < 0))
+        return -1;
+    uint8_t *p = buf;
+    while (n > 0) {
+        ssize_t k = write ? pwrite(sf->fd[s], p, n, (off_t)off) : pread(sf->fd[s], p, n, (off_t)off);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return -1;
+        p += k;
+        off += (uint64_t)k;
+        n -= (size_t)k;
+    }
+    return 0;
+}
+
+cm_mesh cm_decode_stream_mesh(cm_decode_state *s, const char *out_path, int is_dir)
+{
+    cm_decode_spill_close();
+    size_t n = strlen(out_path);
+    if (!is_dir) { /* the output file's directory */
+        while (n > 0 && out_path[n - 1] != '/')
+            n--;
+        while (n > 1 && out_path[n - 1] == '/')
+            n--;
+    }
+    if (n == 0)
+        snprintf(spill_fs.dir, sizeof spill_fs.dir, ".");
+    else
+        snprintf(spill_fs.dir, sizeof spill_fs.dir, "%.*s", (int)n, out_path);
+    return cm_decode_state_mesh(s, spill_file_io, &spill_fs);
+}
+
+void cm_decode_spill_close(void)
+{
+    for (int k = 0; k < CM_SPILL_STREAMS; k++) {
+        if (spill_fs.fd[k] >= 0)
+            close(spill_fs.fd[k]);
+        spill_fs.fd[k] = -1;
+    }
+}
+
 /* a face's output must be finite (the writers refuse the whole mesh otherwise, naming no face) */
 static cm_err check_face_finite(const cm_mesh *mesh, const cm_mesh_mark *from, cm_status *st)
 {
-    for (uint32_t i = from->nverts; i < mesh->nverts; i++)
+    for (uint32_t i = from->nverts; i < mesh->nverts; i++) {
+        float p[3], q[3];
+        cm_mesh_pos(mesh, i, p);
+        cm_mesh_nrm(mesh, i, q);
         for (int k = 0; k < 3; k++)
-            if (!isfinite(mesh->pos[i][k]) || !isfinite(mesh->nrm[i][k]))
+            if (!isfinite(p[k]) || !isfinite(q[k]))
                 return cm_fail(st, CM_E_NONFINITE, "tessellation: a vertex beyond float range");
+    }
+    if (cm_mesh_spill_failed(mesh))
+        return cm_fail(st, CM_E_IO, "mesh spill");
     return CM_OK;
 }
 

@@ -35,6 +35,16 @@ typedef struct cm_decode_summary {
 int cm_out_format_of(const char *path);
 
 /**
+ * s's mesh, streaming: its arrays a window, the rest spilled into unlinked files (created at the
+ * first spill, gone when closed or when the program ends) in out_path's directory, or in out_path
+ * when is_dir.  Closes the files of an earlier mesh.
+ */
+cm_mesh cm_decode_stream_mesh(cm_decode_state *s, const char *out_path, int is_dir);
+
+/** Close the spill files (the mesh they held is gone). */
+void cm_decode_spill_close(void);
+
+/**
  * Read and decode `in_path` into dec (fed in chunks), check it.
  * @return the decoder's errors; CM_E_IO (with errno) for the file
  */

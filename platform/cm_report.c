@@ -34,8 +34,8 @@ void cm_report_limits(FILE *f)
         {"  model", "the decoded model: curves, pools, faces, copies", sizeof s->dec.model},
         {"  predictors", "vertices and one kept net on the integer grid", sizeof s->dec.vq + sizeof s->dec.sq + sizeof s->dec.sw},
         {"  triangulator", "one face's tessellation workspace", sizeof s->tess},
-        {"  output mesh", "positions, normals, indices, faces of the whole model (MAX_TRIS)",
-         sizeof s->pos + sizeof s->nrm + sizeof s->idx + sizeof s->faces},
+        {"  output mesh", "the mesh's window (one face's tessellation), its faces and spill pages",
+         sizeof s->pos + sizeof s->nrm + sizeof s->idx + sizeof s->faces + sizeof s->spill},
     };
     for (size_t i = 0; i < sizeof part / sizeof part[0]; i++)
         fprintf(f, "%-18s %12llu %12s  %-10s %s (%.1f MiB)\n", part[i].name, part[i].bytes, "", "bytes", part[i].doc,

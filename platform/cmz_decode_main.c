@@ -91,7 +91,7 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    cm_mesh mesh = cm_decode_state_mesh(&state);
+    cm_mesh mesh = cm_decode_stream_mesh(&state, out, 0);
     cm_status st;
     cm_status_init(&st);
     cm_decode_summary sum;

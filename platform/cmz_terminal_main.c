@@ -316,7 +316,7 @@ static void nap_ms(int ms)
 static int decode_into_place(const config *c, int fed, char *text, size_t cap)
 {
     static cm_mesh mesh;
-    mesh = cm_decode_state_mesh(&state);
+    mesh = cm_decode_stream_mesh(&state, c->out, 1);
     cm_status st;
     cm_status_init(&st);
     cm_decode_summary sum;
@@ -329,6 +329,7 @@ static int decode_into_place(const config *c, int fed, char *text, size_t cap)
         e = cm_decode_mesh(&state.dec, c->tess, &mesh, &state.tess, &sum, &st);
     if (e == CM_OK)
         e = cm_term_store_install(&store, &mesh, term.in_path, &bytes, &st);
+    cm_decode_spill_close(); /* the mesh is in the store, or gone */
     if (e != CM_OK) {
         /* the model on screen is untouched (the store changes nothing until its one rename) */
         cm_format_status(text, cap, &st);

@@ -319,16 +319,17 @@ static void json_accessor(cm_out *w, cm_buf *b)
         cm_buf_u64(b, fc->nverts);
         cm_buf_str(b, ",\"type\":\"VEC3\"");
         if (w->sub == 0) { /* exact bounds of the vertices this accessor covers */
-            float lo[3], hi[3];
-            const float(*p)[3] = m->pos + fc->first_vert;
+            float lo[3], hi[3], p[3];
+            cm_mesh_pos(m, fc->first_vert, p);
             for (int k = 0; k < 3; k++)
-                lo[k] = hi[k] = p[0][k];
+                lo[k] = hi[k] = p[k];
             for (uint32_t i = 1; i < fc->nverts; i++) {
+                cm_mesh_pos(m, fc->first_vert + i, p);
                 for (int k = 0; k < 3; k++) {
-                    if (p[i][k] < lo[k])
-                        lo[k] = p[i][k];
-                    if (p[i][k] > hi[k])
-                        hi[k] = p[i][k];
+                    if (p[k] < lo[k])
+                        lo[k] = p[k];
+                    if (p[k] > hi[k])
+                        hi[k] = p[k];
                 }
             }
             cm_buf_str(b, ",\"min\":");
@@ -371,7 +372,7 @@ static void json_tail(const cm_out *w, cm_buf *b)
 
 /* ---- binary pieces ---- */
 
-static void bin_vec3(cm_out *w, cm_buf *b, const float (*v)[3], uint32_t next)
+static void bin_vec3(cm_out *w, cm_buf *b, int normals, uint32_t next)
 {
     uint32_t nv = w->m->nverts, i = w->item;
     if (i >= nv) {
@@ -379,9 +380,15 @@ static void bin_vec3(cm_out *w, cm_buf *b, const float (*v)[3], uint32_t next)
         return;
     }
     uint32_t end = nv - i > GLB_VERTS_PER_PIECE ? i + GLB_VERTS_PER_PIECE : nv;
-    for (; i < end; i++)
+    for (; i < end; i++) {
+        float v[3];
+        if (normals)
+            cm_mesh_nrm(w->m, i, v);
+        else
+            cm_mesh_pos(w->m, i, v);
         for (int k = 0; k < 3; k++)
-            cm_buf_lef32(b, v[i][k]);
+            cm_buf_lef32(b, v[k]);
+    }
     w->item = end;
 }
 
@@ -396,7 +403,7 @@ static void bin_indices(cm_out *w, cm_buf *b)
     uint32_t k = w->sub;
     uint32_t end = fc->nindex - k > GLB_INDICES_PER_PIECE ? k + GLB_INDICES_PER_PIECE : fc->nindex;
     for (; k < end; k++)
-        cm_buf_le32(b, m->idx[fc->first_index + k] - fc->first_vert); /* validated: inside the face */
+        cm_buf_le32(b, cm_mesh_idx(m, fc->first_index + k) - fc->first_vert); /* validated: inside the face */
     w->sub = end;
     if (w->sub == fc->nindex) {
         w->sub = 0;
@@ -466,10 +473,10 @@ void cm_glb_fill(cm_out *w, cm_buf *b)
         set_stage(w, GLB_BIN_POS);
         break;
     case GLB_BIN_POS:
-        bin_vec3(w, b, w->m->pos, GLB_BIN_NRM);
+        bin_vec3(w, b, 0, GLB_BIN_NRM);
         break;
     case GLB_BIN_NRM:
-        bin_vec3(w, b, w->m->nrm, GLB_BIN_IDX);
+        bin_vec3(w, b, 1, GLB_BIN_IDX);
         break;
     case GLB_BIN_IDX:
         bin_indices(w, b);

@@ -1,7 +1,9 @@
-/* cm_mesh.c - the decoded triangle mesh: clearing, rolling back a failed face, bounds. */
+/* cm_mesh.c - the decoded triangle mesh: clearing, rolling back a failed face, the spill, bounds. */
 #include "cm/cm_mesh.h"
+#include "cm/cm_limits_info.h"
 
 #include <stddef.h>
+#include <string.h>
 
 void cm_mesh_clear(cm_mesh *m)
 {
@@ -12,6 +14,83 @@ void cm_mesh_clear(cm_mesh *m)
     m->nfaces = 0;
     m->nplace = 0;
     m->place = NULL;
+    m->win_vert = m->win_index = 0;
+    if (m->spill) {
+        m->spill->failed = 0;
+        memset(m->spill->page_n, 0, sizeof m->spill->page_n);
+    }
+}
+
+void cm_mesh_set_spill(cm_mesh *m, cm_mesh_spill *s, uint32_t win_verts, uint32_t win_index, uint32_t cap_verts,
+                       uint32_t cap_index)
+{
+    m->spill = s;
+    s->failed = 0;
+    memset(s->page_n, 0, sizeof s->page_n);
+    m->win_vert = m->win_index = 0;
+    m->win_cap_verts = win_verts;
+    m->win_cap_index = win_index;
+    m->cap_verts = cap_verts;
+    m->cap_index = cap_index;
+}
+
+static int spill_io(cm_mesh_spill *s, int write, unsigned stream, uint64_t off, void *buf, size_t n)
+{
+    if (n > 0 && !s->failed && s->io(s->ctx, write, stream, off, buf, n) != 0)
+        s->failed = 1;
+    return !s->failed;
+}
+
+cm_err cm_mesh_make_room(cm_mesh *m, uint32_t nv, uint32_t ni, cm_status *st)
+{
+    cm_mesh_spill *s = m->spill;
+    if (s == NULL)
+        return CM_OK; /* the arrays are the whole mesh: the callers' capacity checks decide */
+    if (s->failed)
+        return cm_fail(st, CM_E_IO, "mesh spill");
+    if (nv <= m->win_cap_verts - (m->nverts - m->win_vert) && ni <= m->win_cap_index - (m->nindex - m->win_index))
+        return CM_OK;
+    uint32_t rv = m->nverts - m->win_vert, ri = m->nindex - m->win_index;
+    if (!spill_io(s, 1, CM_SPILL_POS, 12u * (uint64_t)m->win_vert, m->pos, 12u * (size_t)rv) ||
+        !spill_io(s, 1, CM_SPILL_NRM, 12u * (uint64_t)m->win_vert, m->nrm, 12u * (size_t)rv) ||
+        !spill_io(s, 1, CM_SPILL_IDX, 4u * (uint64_t)m->win_index, m->idx, 4u * (size_t)ri))
+        return cm_fail(st, CM_E_IO, "mesh spill");
+    m->win_vert = m->nverts;
+    m->win_index = m->nindex;
+    if (nv > m->win_cap_verts || ni > m->win_cap_index)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, nv, m->win_cap_verts, "mesh window (one face)");
+    return CM_OK;
+}
+
+/* the page of stream s holding spilled element i (es bytes each), loaded when not cached */
+static const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, uint32_t es)
+{
+    static const uint8_t zeros[12];
+    cm_mesh_spill *sp = m->spill;
+    if (sp == NULL)
+        return zeros;
+    uint32_t per = CM_SPILL_PAGE_BYTES / es, end = s == CM_SPILL_IDX ? m->win_index : m->win_vert;
+    if (i - sp->page_first[s] >= sp->page_n[s] || i < sp->page_first[s]) {
+        uint32_t first = i - i % per, n = end - first < per ? end - first : per;
+        sp->page_n[s] = 0;
+        if (!spill_io(sp, 0, s, (uint64_t)first * es, sp->page[s], (size_t)n * es))
+            return zeros;
+        sp->page_first[s] = first;
+        sp->page_n[s] = n;
+    }
+    return sp->page[s] + (size_t)(i - sp->page_first[s]) * es;
+}
+
+void cm_mesh_spilled_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3])
+{
+    memcpy(out, spilled(m, s, i, 12u), 12u);
+}
+
+uint32_t cm_mesh_spilled_idx(const cm_mesh *m, uint32_t k)
+{
+    uint32_t v;
+    memcpy(&v, spilled(m, CM_SPILL_IDX, k, 4u), 4u);
+    return v;
 }
 
 cm_mesh_mark cm_mesh_save(const cm_mesh *m)
@@ -29,6 +108,16 @@ void cm_mesh_rollback(cm_mesh *m, const cm_mesh_mark *mark)
         m->nindex = mark->nindex;
     if (mark->nfaces < m->nfaces)
         m->nfaces = mark->nfaces;
+    if (m->win_vert > m->nverts || m->win_index > m->nindex) {
+        /* back past the window's start (placed copies that failed): the window restarts there, the
+           spill's bytes beyond it are rewritten by the next flush, its cached pages dropped */
+        if (m->win_vert > m->nverts)
+            m->win_vert = m->nverts;
+        if (m->win_index > m->nindex)
+            m->win_index = m->nindex;
+        if (m->spill)
+            memset(m->spill->page_n, 0, sizeof m->spill->page_n);
+    }
     if (m->nplace && (m->nfaces < m->nbase_faces || m->nverts < m->nbase_verts || m->nindex < m->nbase_index)) {
         m->nplace = 0; /* the copies went with the faces they place */
         m->place = NULL;
@@ -58,11 +147,14 @@ int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
     if (m == NULL || m->nverts == 0 || m->pos == NULL || lo == NULL || hi == NULL)
         return 0;
     float l[3], h[3];
+    float p[3];
+    cm_mesh_pos(m, 0, p);
     for (int k = 0; k < 3; k++)
-        l[k] = h[k] = m->pos[0][k];
+        l[k] = h[k] = p[k];
     for (uint32_t i = 1; i < m->nverts; i++) {
+        cm_mesh_pos(m, i, p);
         for (int k = 0; k < 3; k++) {
-            float v = m->pos[i][k];
+            float v = p[k];
             if (v < l[k])
                 l[k] = v;
             if (v > h[k])

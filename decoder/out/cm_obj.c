@@ -43,7 +43,7 @@ static void obj_header(const cm_out *w, cm_buf *b)
 }
 
 /* lines "<tag> x y z" for vertices from w->item on, while they fit */
-static void obj_vectors(cm_out *w, cm_buf *b, const char *tag, const float (*v)[3], uint32_t next)
+static void obj_vectors(cm_out *w, cm_buf *b, const char *tag, int normals, uint32_t next)
 {
     uint32_t nv = w->m->nverts;
     if (w->item >= nv) {
@@ -51,7 +51,11 @@ static void obj_vectors(cm_out *w, cm_buf *b, const char *tag, const float (*v)[
         return;
     }
     while (w->item < nv && cm_buf_room(b) >= OBJ_VLINE_MAX) { /* bounded by nverts */
-        const float *p = v[w->item];
+        float p[3];
+        if (normals)
+            cm_mesh_nrm(w->m, w->item, p);
+        else
+            cm_mesh_pos(w->m, w->item, p);
         cm_buf_str(b, tag);
         for (int k = 0; k < 3; k++) {
             cm_buf_str(b, " ");
@@ -79,10 +83,10 @@ static void obj_faces(cm_out *w, cm_buf *b)
         cm_buf_str(b, "\n");
     }
     while (w->sub < nt && cm_buf_room(b) >= OBJ_FLINE_MAX) { /* bounded by nt */
-        const uint32_t *tri = m->idx + fc->first_index + 3u * w->sub;
+        const uint32_t t0 = fc->first_index + 3u * w->sub;
         cm_buf_str(b, "f");
         for (int k = 0; k < 3; k++) {
-            uint64_t v = (uint64_t)tri[k] + 1u;
+            uint64_t v = (uint64_t)cm_mesh_idx(m, t0 + (uint32_t)k) + 1u;
             cm_buf_str(b, " ");
             cm_buf_u64(b, v);
             cm_buf_str(b, "//");
@@ -105,10 +109,10 @@ void cm_obj_fill(cm_out *w, cm_buf *b)
         set_stage(w, OBJ_V);
         break;
     case OBJ_V:
-        obj_vectors(w, b, "v", w->m->pos, OBJ_VN);
+        obj_vectors(w, b, "v", 0, OBJ_VN);
         break;
     case OBJ_VN:
-        obj_vectors(w, b, "vn", w->m->nrm, OBJ_FACES);
+        obj_vectors(w, b, "vn", 1, OBJ_FACES);
         break;
     case OBJ_FACES:
         obj_faces(w, b);

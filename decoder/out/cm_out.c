@@ -121,7 +121,7 @@ static cm_err check_faces(const cm_mesh *m, uint64_t *ntris, uint32_t *nprims, c
             return cm_fail_at(st, CM_E_RANGE, f,
                               "cm_out_begin: face index range outside the mesh or not whole triangles (offset = face)");
         for (uint32_t k = 0; k < fc->nindex; k++) {
-            uint32_t v = m->idx[fc->first_index + k];
+            uint32_t v = cm_mesh_idx(m, fc->first_index + k);
             if (v < fc->first_vert || v - fc->first_vert >= fc->nverts)
                 return cm_fail_at(st, CM_E_RANGE, f, "cm_out_begin: index outside its face's vertices (offset = face)");
         }
@@ -138,10 +138,14 @@ static cm_err check_faces(const cm_mesh *m, uint64_t *ntris, uint32_t *nprims, c
 static cm_err check_finite(const cm_mesh *m, int check_normals, cm_status *st)
 {
     for (uint32_t i = 0; i < m->nverts; i++) {
+        float p[3], n[3] = {0, 0, 0};
+        cm_mesh_pos(m, i, p);
+        if (check_normals)
+            cm_mesh_nrm(m, i, n);
         for (int k = 0; k < 3; k++) {
-            if (!f32_finite(m->pos[i][k]))
+            if (!f32_finite(p[k]))
                 return cm_fail_at(st, CM_E_NONFINITE, i, "cm_out_begin: position (offset = vertex)");
-            if (check_normals && !f32_finite(m->nrm[i][k]))
+            if (!f32_finite(n[k]))
                 return cm_fail_at(st, CM_E_NONFINITE, i, "cm_out_begin: normal (offset = vertex)");
         }
     }
@@ -192,6 +196,8 @@ cm_err cm_out_begin(cm_out *w, cm_out_format fmt, const cm_mesh *m, cm_status *s
         e = check_faces(m, &w->ntris, &w->nprims, st);
     if (e == CM_OK)
         e = check_finite(m, normals, st);
+    if (e == CM_OK && cm_mesh_spill_failed(m))
+        e = cm_fail(st, CM_E_IO, "cm_out_begin: reading the mesh back from its spill");
     if (e != CM_OK)
         return e;
     w->fmt = fmt;
@@ -244,6 +250,11 @@ static cm_err refill(cm_out *w, cm_status *st)
     }
     w->pending_pos = 0;
     w->npending = b.overflow ? 0 : b.n;
+    if (cm_mesh_spill_failed(w->m)) { /* the piece holds zeros for what could not be read back */
+        w->stage = CM_OUT_DONE;
+        w->npending = 0;
+        return cm_fail(st, CM_E_IO, "cm_out_next: reading the mesh back from its spill");
+    }
     if (b.overflow || (b.n == 0 && w->stage != CM_OUT_DONE)) {
         w->stage = CM_OUT_DONE;
         return cm_fail(st, CM_E_FORMAT, "cm_out_next: internal piece overflow");

@@ -60,12 +60,19 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                 cm_mesh_rollback(mesh, &mark);
                 return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, need, mesh->cap_index / 3u, "placed copies");
             }
+            cm_err room = cm_mesh_make_room(mesh, src.nverts, src.nindex, st); /* a streaming mesh */
+            if (room != CM_OK) {
+                cm_mesh_rollback(mesh, &mark);
+                return room;
+            }
             cm_mesh_face *dst = &mesh->faces[mesh->nfaces];
             *dst = src;
             dst->first_vert = mesh->nverts;
             dst->first_index = mesh->nindex;
             for (uint32_t v = 0; v < src.nverts; v++) {
-                const float *p = mesh->pos[src.first_vert + v], *q = mesh->nrm[src.first_vert + v];
+                float p[3], q[3];
+                cm_mesh_pos(mesh, src.first_vert + v, p);
+                cm_mesh_nrm(mesh, src.first_vert + v, q);
                 double x = (double)p[0], y = (double)p[1], z = (double)p[2];
                 double nx = (double)q[0], ny = (double)q[1], nz = (double)q[2];
                 double X = a[0] * x + a[1] * y + a[2] * z + a[3];
@@ -79,7 +86,7 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                     cm_mesh_rollback(mesh, &mark);
                     return cm_fail(st, CM_E_NONFINITE, "placed copies: a vertex beyond float range");
                 }
-                float *o = mesh->pos[mesh->nverts + v], *on = mesh->nrm[mesh->nverts + v];
+                float *o = cm_mesh_wpos(mesh, mesh->nverts + v), *on = cm_mesh_wnrm(mesh, mesh->nverts + v);
                 o[0] = (float)X;
                 o[1] = (float)Y;
                 o[2] = (float)Z;
@@ -99,7 +106,12 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                 uint32_t r = t % 3u, from = mirror && r ? t - r + (3u - r) : t;
                 if (from >= src.nindex)
                     from = t;
-                mesh->idx[mesh->nindex + t] = mesh->idx[src.first_index + from] - src.first_vert + dst->first_vert;
+                *cm_mesh_widx(mesh, mesh->nindex + t) = cm_mesh_idx(mesh, src.first_index + from) - src.first_vert +
+                                                         dst->first_vert;
+            }
+            if (cm_mesh_spill_failed(mesh)) {
+                cm_mesh_rollback(mesh, &mark);
+                return cm_fail(st, CM_E_IO, "placed copies: reading the part back from the mesh spill");
             }
             mesh->nverts += src.nverts;
             mesh->nindex += src.nindex;

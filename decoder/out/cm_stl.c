@@ -66,8 +66,11 @@ static void stl_tris(cm_out *w, cm_buf *b)
     uint32_t t = w->sub;
     uint32_t end = nt - t > STL_TRIS_PER_PIECE ? t + STL_TRIS_PER_PIECE : nt;
     for (; t < end; t++) {
-        const uint32_t *tri = m->idx + fc->first_index + 3u * t;
-        const float *p0 = m->pos[tri[0]], *p1 = m->pos[tri[1]], *p2 = m->pos[tri[2]];
+        const uint32_t t0 = fc->first_index + 3u * t;
+        float p0[3], p1[3], p2[3];
+        cm_mesh_pos(m, cm_mesh_idx(m, t0), p0);
+        cm_mesh_pos(m, cm_mesh_idx(m, t0 + 1u), p1);
+        cm_mesh_pos(m, cm_mesh_idx(m, t0 + 2u), p2);
         float n[3];
         facet_normal(p0, p1, p2, n);
         for (int k = 0; k < 3; k++)

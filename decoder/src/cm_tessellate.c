@@ -705,6 +705,9 @@ static cm_err emit_region(const chart *c, cm_tess_ws *ws, int npts, int nsurface
     if ((uint64_t)ntris * 3 > (uint64_t)(mesh->cap_index - mesh->nindex))
         return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, ((uint64_t)mesh->nindex + 3u * (uint64_t)ntris) / 3,
                              mesh->cap_index / 3, __func__);
+    cm_err room = cm_mesh_make_room(mesh, nv, 3u * (uint32_t)ntris, st); /* a streaming mesh's window */
+    if (room != CM_OK)
+        return room;
     uint32_t base = mesh->nverts;
     for (int i = 0; i < npts; i++) {
         if (ws->vmap[i] == UINT32_MAX)
@@ -712,15 +715,16 @@ static cm_err emit_region(const chart *c, cm_tess_ws *ws, int npts, int nsurface
         cm_vec3 P = ws->xyz[i];
         cm_vec3 N = chart_normal(c, ws->uv[i].x, ws->uv[i].y, centre);
         uint32_t k = base + ws->vmap[i];
-        mesh->pos[k][0] = (float)P.x;
-        mesh->pos[k][1] = (float)P.y;
-        mesh->pos[k][2] = (float)P.z;
-        mesh->nrm[k][0] = (float)N.x;
-        mesh->nrm[k][1] = (float)N.y;
-        mesh->nrm[k][2] = (float)N.z;
+        float *p = cm_mesh_wpos(mesh, k), *n = cm_mesh_wnrm(mesh, k);
+        p[0] = (float)P.x;
+        p[1] = (float)P.y;
+        p[2] = (float)P.z;
+        n[0] = (float)N.x;
+        n[1] = (float)N.y;
+        n[2] = (float)N.z;
     }
     for (int t = 0; t < ntris; t++) {
-        uint32_t *ix = mesh->idx + mesh->nindex + 3 * (uint32_t)t;
+        uint32_t *ix = cm_mesh_widx(mesh, mesh->nindex + 3 * (uint32_t)t);
         ix[0] = base + ws->vmap[ws->tris[t][0]];
         ix[1] = base + ws->vmap[ws->tris[t][turn ? 2 : 1]];
         ix[2] = base + ws->vmap[ws->tris[t][turn ? 1 : 2]];

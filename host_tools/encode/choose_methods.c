@@ -111,7 +111,7 @@ double enc_trial_mesh_dev(enc_work *w, const loaded_model *lm, int f, int method
     }
     m->faces[f].checksum = checksum;
     cm_mesh_face mf;
-    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_tess_info info;
     cm_status st;
     cm_status_init(&st);

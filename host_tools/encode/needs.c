@@ -50,7 +50,7 @@ cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const
     enc_work *w = t->w;
     const cm_model *m = &w->dec.model;
     cm_mesh_face mf;
-    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     uint64_t tris = 0;
     /* per face its triangles: the placed copies' (format 4.3) are the same again */
     uint32_t *face_tris = calloc((size_t)m->nfaces + 1, sizeof *face_tris);

@@ -83,7 +83,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
        file's own tolerance made one input cost up to 0.6 G instructions); one input in eight
        (its length) keeps the file's tolerance, so the dense paths and the point caps stay fuzzed */
     double tol = (size & 7u) == 0 ? state.dec.model.tess_tol : state.dec.model.tess_tol * FUZZ_COARSE;
-    cm_mesh mesh = cm_decode_state_mesh(&state);
+    cm_mesh mesh = cm_decode_state_mesh(&state, NULL, NULL);
     cm_mesh_clear(&mesh);
     uint32_t first = state.dec.model.nfaces ? (uint32_t)((size * 31u + data[size / 2]) % state.dec.model.nfaces) : 0;
     for (uint32_t f = first; f < state.dec.model.nfaces && f < first + FUZZ_FACES; f++) {

@@ -768,7 +768,7 @@ static void test_tessellation_error_names_face_and_offset(void **state)
     for (uint32_t f = 0; f < 3; f++)
         assert_true(m->faces[f].rec_off >= face->off && m->faces[f].rec_off < face->off + face->len);
     assert_true(m->faces[0].rec_off <= m->faces[1].rec_off && m->faces[1].rec_off <= m->faces[2].rec_off);
-    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     cm_status_init(&st);
     assert_ok(cm_tessellate_face(m, 0, m->tess_tol, &mesh, &tess, NULL, &st));
@@ -790,7 +790,7 @@ static void test_bad_face_left_out(void **state)
     cm_status st;
     assert_ok(decode(b, n, &st));
     free(b);
-    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_decode_summary sum;
     cm_status_init(&st);
     assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
@@ -853,7 +853,7 @@ static void test_face_work_bounded_by_declared_needs(void **state)
     assert_int_equal(cm_tess_point_cap(m, m->tess_tol / 2), CM_MAX_TESS_POINTS < 16 * 1256 ? CM_MAX_TESS_POINTS : 16 * 1256);
     assert_int_equal(cm_tess_point_cap(m, m->tess_tol * 2), 1256); /* coarser: the declared bound */
     assert_int_equal(cm_tess_edge_sample_cap(m, m->tess_tol), 2 * 2 + 16);
-    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_decode_summary sum;
     cm_status_init(&st);
     assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st));
@@ -913,7 +913,7 @@ static void test_model_work_bounded_by_declared_triangles(void **state)
     sp.need[CM_LIMIT_MAX_EDGE_SAMPLES] = 2;
     decode_spec(&sp);
     cm_status st;
-    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {mesh_pos, mesh_nrm, mesh_idx, mesh_faces, 0, MESH_VERTS, 0, 3 * MESH_VERTS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_decode_summary sum;
     cm_status_init(&st);
     assert_ok(cm_decode_mesh(dec, 0, &mesh, &tess, &sum, &st)); /* MAX_TRIS the build's: no bound */

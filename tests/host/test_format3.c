@@ -693,7 +693,7 @@ static void test_face_folds(void **state)
     (void)state;
     float pos[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}};
     uint32_t quad[6] = {0, 1, 2, 0, 2, 3}, fold[6] = {0, 1, 2, 0, 1, 3}, welded[6] = {0, 1, 2, 4, 1, 3};
-    cm_mesh m = {pos, NULL, quad, NULL, 5, 5, 6, 6, 0, 0, 0, 0, 0, 0, NULL};
+    cm_mesh m = {pos, NULL, quad, NULL, 5, 5, 6, 6, 0, 0, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     assert_int_equal(enc_face_folds(&m), 0);
     m.idx = fold;
     assert_int_equal(enc_face_folds(&m), 1);

@@ -187,7 +187,7 @@ static void test_half_cylinder_end_to_end(void **state)
     decode(&r);
     cm_model *m = &dec.model;
     assert_int_equal(m->faces[0].method, CM_METHOD_G1FIT);
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     cm_status st;
     cm_status_init(&st);
@@ -255,7 +255,7 @@ static void test_five_edges_by_the_mesh(void **state)
     }
     assert_true(five >= 0);
     decode(&r);
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     cm_status_init(&st);
     assert_ok(cm_tessellate_face(&dec.model, (uint32_t)five, dec.model.tess_tol, &mesh, &tess, NULL, &st));

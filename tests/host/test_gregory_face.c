@@ -158,7 +158,7 @@ static void test_split_cylinder_gregory(void **state)
         assert_near(fe.max, r.faces[f].rebuild_max, 1e-12 + 1e-9 * fe.max);
     }
     /* the mesh: every vertex on the cylinder within the rebuild error, closed along the shared edge */
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     for (uint32_t f = 0; f < m->nfaces; f++)
         assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));
@@ -343,7 +343,7 @@ static void test_gregory_exact_cylinder(void **state)
             fail_msg("face %d: %.3g mm from the ruled surface between its arcs", f, fmin(off[0], off[1]));
     }
     /* the mesh: closed along the shared line, every vertex on the cylinder */
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     for (uint32_t f = 0; f < m->nfaces; f++)
         assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));
@@ -554,7 +554,7 @@ static void check_joined_cylinder(int pieces, int both, const int chains[2], con
                 assert_ok(cm_greg_surface_eval(rb[f].greg, 0, i / 8.0, j / 8.0, &S, NULL, NULL));
                 assert_near(hypot(S.x, S.y), CR, 4 * max_ratio * CR);
             }
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     for (uint32_t f = 0; f < m->nfaces; f++)
         assert_ok(cm_tessellate_face(m, f, m->tess_tol, &mesh, &tess, NULL, &st));

@@ -68,7 +68,7 @@ static void decode_mesh(const encode_result *r, cm_mesh *mesh)
     cm_dec_init(&dec);
     assert_ok(cm_dec_feed(&dec, r->bytes, r->len, &st));
     assert_ok(cm_dec_finish(&dec, &st));
-    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, 3 * MAX_TRIS, 0, 3 * MAX_TRIS, 0, 256, 0, 0, 0, 0, NULL};
+    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, 3 * MAX_TRIS, 0, 3 * MAX_TRIS, 0, 256, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     for (uint32_t f = 0; f < dec.model.nfaces; f++) {
         cm_tess_info info;
         assert_ok(cm_tessellate_face(&dec.model, f, dec.model.tess_tol, mesh, &tess, &info, &st));

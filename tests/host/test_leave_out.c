@@ -120,7 +120,7 @@ static void test_untessellatable_face_is_left_out_and_named(void **state)
     assert_ok(cm_dec_feed(&dec, r.bytes, r.len, &st));
     assert_ok(cm_dec_finish(&dec, &st));
     assert_int_equal(dec.model.nfaces, 7);
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 64, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     for (uint32_t f = 0; f < dec.model.nfaces; f++) {
         cm_tess_info info;

@@ -74,7 +74,7 @@ static void decode(const encode_result *r)
 static uint32_t face_triangles(const encode_result *r)
 {
     decode(r);
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     cm_status st;
     cm_status_init(&st);
@@ -135,7 +135,7 @@ static void test_l_shape_nfill(void **state)
     assert_true(fe.ratio < 0.005);
     assert_near(fe.max, r.faces[0].rebuild_max, 1e-12 + 1e-9 * fe.max);
     /* the mesh against the true surface: vertical distance, a bound of the normal one */
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     assert_ok(cm_tessellate_face(m, 0, m->tess_tol, &mesh, &tess, NULL, &st));
     assert_true(mesh.nverts > 20);
@@ -242,7 +242,7 @@ static void test_square_with_hole(void **state)
     decode(&r);
     cm_model *m = &dec.model;
     assert_int_equal(m->faces[0].nloops, 2);
-    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL};
+    cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 8, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(&mesh);
     cm_status_init(&st);
     assert_ok(cm_tessellate_face(m, 0, m->tess_tol, &mesh, &tess, NULL, &st));

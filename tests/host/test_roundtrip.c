@@ -81,7 +81,7 @@ static cm_err decode_bytes(const uint8_t *p, size_t n, size_t chunk, cm_status *
 
 static void tessellate_all(cm_mesh *mesh)
 {
-    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL};
+    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(mesh);
     for (uint32_t f = 0; f < dec.model.nfaces; f++) {
         cm_tess_info info;
@@ -340,7 +340,7 @@ static void test_mesh_deviation_measured(void **state)
             fail_msg("face %d (method %d): mesh %g mm off its source, bound %g (rebuild %g, chord %g)", f,
                      r.faces[f].method, dev, bound, r.faces[f].rebuild_max, r.tess_used);
         curved += dev > 0.1 * r.tess_used;
-        cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL};
+        cm_mesh mesh = {pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
         cm_mesh_clear(&mesh);
         cm_tess_info info;
         cm_status_init(&st);
@@ -490,7 +490,7 @@ static void test_half_cylinder(void **state)
    and indices to the bit, and the cache spared tests (else this would compare a path with itself) */
 static uint32_t tessellate_counting(cm_mesh *mesh, long *tested, long *skipped)
 {
-    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL};
+    *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(mesh);
     *tested = *skipped = 0;
     for (uint32_t f = 0; f < dec.model.nfaces; f++) {

@@ -12,7 +12,9 @@
  *     `caller: callee callee ...` (function names; a static one matches in
  *     any file, so the bound stays conservative).  A caller that makes no
  *     indirect call, or a callee in no call graph, fails too, so the table
- *     stays true as the code changes,
+ *     stays true as the code changes; the callee `(platform)` says that the
+ *     call leaves the decoder for a program's callback, whose frames the
+ *     program gate (check-stack-programs, the callee named) counts,
  *   - the deepest call path, summed, exceeds --budget.
  * Calls out of the graph (libm, mem*) count as 0 bytes: check-noheap
  * restricts them to a short allowlist of leaf functions.
@@ -184,7 +186,9 @@ static void resolve_indirect(const char *path, int indirect)
             callers++;
             nodes[m].resolved = 1;
             for (int e = 0; e < ncallee; e++) {
-                int found = 0;
+                /* "(platform)": the decoder calls back into a program (its mesh spill); the frames
+                   there are check-stack-programs', whose table names the callee */
+                int found = strcmp(callee[e], "(platform)") == 0;
                 for (int c = 0; c < nnodes; c++) {
                     base_name(nodes[c].title, nm, sizeof nm);
                     if (strcmp(nm, callee[e]) == 0 && nodes[c].bytes >= 0) {

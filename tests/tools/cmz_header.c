@@ -89,8 +89,11 @@ int main(int argc, char **argv)
         uint32_t at = CM_FMT_COMPACT_AT_H, unknown, need[256] = {0};
         uint64_t h;
         cm_fmt_header hd;
-        if (!cm_fmt_get_varint(b, (uint32_t)n, &at, &h) || h > n || cm_fmt_stream_unpack(b, (uint32_t)h, &hd, need, 256, &unknown))
+        const char *why = "header length";
+        if (!cm_fmt_get_varint(b, (uint32_t)n, &at, &h) || h > n || (why = cm_fmt_stream_unpack(b, (uint32_t)h, &hd, need, 256, &unknown))) {
+            fprintf(stderr, "cmz_header: %s: %s\n", argv[2], why);
             return 1;
+        }
         H = (uint32_t)h;
         if (id >= hd.nlimits)
             return 1;

@@ -45,11 +45,11 @@ int main(int argc, char **argv)
     size_t cap_t = 1u << 24, cap_v = cap_t + 2u * CM_MAX_FACES;
     cm_mesh mesh = {malloc(cap_v * sizeof *mesh.pos), malloc(cap_v * sizeof *mesh.nrm),
                     malloc(3 * cap_t * sizeof *mesh.idx), malloc(CM_MAX_FACES * sizeof *mesh.faces), 0,
-                    (uint32_t)cap_v, 0, (uint32_t)(3 * cap_t), 0, CM_MAX_FACES, 0, 0, 0, 0, NULL};
+                    (uint32_t)cap_v, 0, (uint32_t)(3 * cap_t), 0, CM_MAX_FACES, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     unsigned *uses = malloc(CM_MAX_EDGES * sizeof *uses);
     uint32_t *parent = malloc(CM_MAX_FACES * sizeof *parent), *owner = malloc(CM_MAX_EDGES * sizeof *owner);
     cm_mesh part_mesh = {malloc(cap_v * sizeof *mesh.pos), NULL, malloc(3 * cap_t * sizeof *mesh.idx), NULL, 0,
-                         (uint32_t)cap_v, 0, (uint32_t)(3 * cap_t), 0, 0, 0, 0, 0, 0, NULL};
+                         (uint32_t)cap_v, 0, (uint32_t)(3 * cap_t), 0, 0, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     if (!mesh.pos || !mesh.nrm || !mesh.idx || !mesh.faces || !uses || !parent || !owner || !part_mesh.pos ||
         !part_mesh.idx) {
         fprintf(stderr, "mesh_check: out of memory\n");

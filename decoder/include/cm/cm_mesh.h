@@ -14,9 +14,11 @@
 #ifndef CM_MESH_H
 #define CM_MESH_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "cm/cm_error.h"
+#include "cm_limits.h" /* CM_SPILL_PAGE_BYTES */
 
 typedef struct cm_mesh_face {
     uint32_t first_vert, nverts;   /* vertices [first_vert, first_vert + nverts) */
@@ -26,12 +28,32 @@ typedef struct cm_mesh_face {
     uint32_t source_face;          /* face number in the model (the .cmz face order) */
 } cm_mesh_face;
 
+/*
+ * Streaming (issue 15): a terminal does not hold the whole output mesh.  A mesh with a spill keeps
+ * only its latest vertices and indices in its arrays (the resident window); when a face would not
+ * fit there, cm_mesh_make_room writes the window out through the spill's io (the platform's: files
+ * beside the output) and starts it again empty.  Everything reads vertices and indices through
+ * cm_mesh_pos, cm_mesh_nrm and cm_mesh_idx, which take a flushed one back through one cached page
+ * per array.  Without a spill (the workstation, tests) the arrays are the whole mesh, as before.
+ */
+enum { CM_SPILL_POS = 0, CM_SPILL_NRM = 1, CM_SPILL_IDX = 2, CM_SPILL_STREAMS = 3 };
+
+typedef struct cm_mesh_spill {
+    /* read (write = 0) or write n bytes at byte offset off of stream s; 0 on success.  Writes only
+       ever append or rewrite what a rolled-back face left; reads only what was written */
+    int (*io)(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n);
+    void *ctx;
+    int failed;                    /* an io call failed: cm_mesh_spill_failed; the writers stop with CM_E_IO */
+    uint32_t page_first[CM_SPILL_STREAMS], page_n[CM_SPILL_STREAMS]; /* elements cached, per stream */
+    uint8_t page[CM_SPILL_STREAMS][CM_SPILL_PAGE_BYTES];
+} cm_mesh_spill;
+
 typedef struct cm_mesh {
-    float (*pos)[3];               /* cap_verts positions (mm) */
-    float (*nrm)[3];               /* cap_verts unit normals */
-    uint32_t *idx;                 /* cap_index vertex indices */
+    float (*pos)[3];               /* cap_verts positions (mm); with a spill the window's win_cap_verts */
+    float (*nrm)[3];               /* cap_verts unit normals (idem) */
+    uint32_t *idx;                 /* cap_index vertex indices (idem, win_cap_index) */
     cm_mesh_face *faces;           /* cap_faces faces */
-    uint32_t nverts, cap_verts;
+    uint32_t nverts, cap_verts;    /* with a spill, cap_* bound the whole mesh, win_cap_* the arrays */
     uint32_t nindex, cap_index;
     uint32_t nfaces, cap_faces;
     /* format 4.3 (cm_mesh_place, cm_place.h): faces [0, nbase_faces), vertices [0, nbase_verts) and
@@ -39,10 +61,59 @@ typedef struct cm_mesh {
        by place[k] (the GLB writer writes the model's own and shares them between nodes instead) */
     uint32_t nbase_faces, nbase_verts, nbase_index, nplace;
     const struct cm_placement *place;
+    cm_mesh_spill *spill;          /* NULL: the arrays hold the whole mesh (win_* stay 0) */
+    uint32_t win_vert, win_index;  /* vertices [0, win_vert) and indices [0, win_index) are spilled */
+    uint32_t win_cap_verts, win_cap_index;
 } cm_mesh;
 
-/** Set the mesh empty (keeps the caller's arrays and capacities). */
+/** Set the mesh empty (keeps the caller's arrays, capacities and spill). */
 void cm_mesh_clear(cm_mesh *m);
+
+/** Give m a spill (s zeroed but for io and ctx): its arrays, of win_verts vertices and win_index
+    indices, become a window; the whole mesh may then hold cap_verts and cap_index. */
+void cm_mesh_set_spill(cm_mesh *m, cm_mesh_spill *s, uint32_t win_verts, uint32_t win_index, uint32_t cap_verts,
+                       uint32_t cap_index);
+
+/** Make the window hold nv more vertices and ni more indices, spilling it first when needed.
+    @return CM_OK; CM_E_IO when the spill's io failed; CM_E_LIMIT (MAX_TESS_POINTS) when even an
+    empty window is too small (the build's window below its one-face limits: cm_decode_state.h) */
+CM_NODISCARD cm_err cm_mesh_make_room(cm_mesh *m, uint32_t nv, uint32_t ni, cm_status *st);
+
+/* where in the arrays vertex i and index k are (valid for the resident ones only) */
+static inline float *cm_mesh_wpos(cm_mesh *m, uint32_t i) { return m->pos[i - m->win_vert]; }
+static inline float *cm_mesh_wnrm(cm_mesh *m, uint32_t i) { return m->nrm[i - m->win_vert]; }
+static inline uint32_t *cm_mesh_widx(cm_mesh *m, uint32_t k) { return &m->idx[k - m->win_index]; }
+
+void cm_mesh_spilled_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3]);
+uint32_t cm_mesh_spilled_idx(const cm_mesh *m, uint32_t k);
+
+/** Vertex i's position and normal (copied out), index k: from the window, or read back from the
+    spill (a failed read gives zeros and sets spill->failed). */
+static inline void cm_mesh_pos(const cm_mesh *m, uint32_t i, float out[3])
+{
+    if (i >= m->win_vert) {
+        const float *p = m->pos[i - m->win_vert];
+        out[0] = p[0], out[1] = p[1], out[2] = p[2];
+    } else {
+        cm_mesh_spilled_vec(m, CM_SPILL_POS, i, out);
+    }
+}
+static inline void cm_mesh_nrm(const cm_mesh *m, uint32_t i, float out[3])
+{
+    if (i >= m->win_vert) {
+        const float *p = m->nrm[i - m->win_vert];
+        out[0] = p[0], out[1] = p[1], out[2] = p[2];
+    } else {
+        cm_mesh_spilled_vec(m, CM_SPILL_NRM, i, out);
+    }
+}
+static inline uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k)
+{
+    return k >= m->win_index ? m->idx[k - m->win_index] : cm_mesh_spilled_idx(m, k);
+}
+
+/** 1 when a spill's io failed (the mesh, or what was written of it, is not to be trusted). */
+static inline int cm_mesh_spill_failed(const cm_mesh *m) { return m->spill != NULL && m->spill->failed; }
 
 /** How far a mesh is filled: taken before a face is added, it lets a failed face be removed. */
 typedef struct cm_mesh_mark {
