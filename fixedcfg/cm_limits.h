@@ -171,6 +171,16 @@
 #  define CM_MAX_FILE_BYTES 8388608
 #endif
 
+/* Bytes of the .cmz file the decoder holds (issue 15: stream, don't hold): the header is read in
+ * them as it arrives, the body only checked (its CRC) as it passes; the sections are then read
+ * again through them from where the file is stored (cm_dec_set_source), a window at a time.  A file
+ * no longer than this is simply held.  Unit: bytes, at least CM_FMT_MAX_HEADER (4096: a header is
+ * held whole).  Not a limit of the format (cm-limits does not list it): a smaller window reads
+ * more often.  Terminal: 8 KiB, so that most corpus files are read through it (tested). */
+#ifndef CM_FILE_WINDOW_BYTES
+#  define CM_FILE_WINDOW_BYTES 8192
+#endif
+
 /* Control points of all curves and kept surfaces of one model (one pool).
  * Unit: control points.  Hard bound 2^24-1.  32 bytes each (point and weight). */
 #ifndef CM_MAX_MODEL_CTRL

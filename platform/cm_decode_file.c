@@ -57,12 +57,31 @@ size_t cm_decode_file_static_bytes(void)
     return sizeof read_chunk + sizeof write_chunk;
 }
 
+/* cm_dec_read_fn over a file descriptor (ctx points at it): a long file's sections read again */
+int cm_decode_pread(void *ctx, uint32_t off, uint8_t *buf, size_t n)
+{
+    const int fd = *(const int *)ctx;
+    while (n > 0) {
+        ssize_t k = pread(fd, buf, n, (off_t)off);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return -1;
+        buf += k;
+        off += (uint32_t)k;
+        n -= (size_t)k;
+    }
+    return 0;
+}
+
 cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
 {
     cm_dec_init(dec);
-    int fd = open(in_path, O_RDONLY | O_CLOEXEC);
+    static int fd; /* the source's context: the decoder reads the file again through it */
+    fd = open(in_path, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         return io_fail(st, "open");
+    cm_dec_set_source(dec, cm_decode_pread, &fd);
     cm_err e = CM_OK;
     for (;;) {
         ssize_t n = read(fd, read_chunk, sizeof read_chunk);
@@ -77,9 +96,9 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
         if ((e = cm_dec_feed(dec, read_chunk, (size_t)n, st)) != CM_OK)
             break;
     }
-    close(fd);
     if (e == CM_OK)
         e = cm_dec_finish(dec, st);
+    close(fd);
     return e;
 }
 

@@ -44,6 +44,9 @@ cm_mesh cm_decode_stream_mesh(cm_decode_state *s, const char *out_path, int is_d
 /** Close the spill files (the mesh they held is gone). */
 void cm_decode_spill_close(void);
 
+/** cm_dec_read_fn over the file descriptor *(int *)ctx (pread). */
+int cm_decode_pread(void *ctx, uint32_t off, uint8_t *buf, size_t n);
+
 /**
  * Read and decode `in_path` into dec (fed in chunks), check it.
  * @return the decoder's errors; CM_E_IO (with errno) for the file

@@ -30,7 +30,7 @@ void cm_report_limits(FILE *f)
         const char *name, *doc;
         unsigned long long bytes;
     } part[] = {
-        {"  file", "the received .cmz, held whole (MAX_FILE_BYTES)", sizeof s->dec.buf},
+        {"  file", "the .cmz's window: its header, then its sections read again", sizeof s->dec.buf},
         {"  model", "the decoded model: curves, pools, faces, copies", sizeof s->dec.model},
         {"  predictors", "vertices and one kept net on the integer grid", sizeof s->dec.vq + sizeof s->dec.sq + sizeof s->dec.sw},
         {"  triangulator", "one face's tessellation workspace", sizeof s->tess},

@@ -22,6 +22,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -324,7 +325,21 @@ static int decode_into_place(const config *c, int fed, char *text, size_t cap)
     char bad[CM_TERM_PATH + 16];
     snprintf(bad, sizeof bad, "%s/rejected.cmz", c->out);
     int64_t t0 = cm_clock_ms();
-    cm_err e = fed ? cm_dec_finish(&state.dec, &st) : cm_decode_read(term.in_path, &state.dec, &st);
+    cm_err e;
+    if (fed) { /* its bytes were checked as they came; its sections are read again from the file */
+        static int fd;
+        fd = open(term.in_path, O_RDONLY | O_CLOEXEC);
+        if (fd < 0) {
+            e = cm_fail(&st, CM_E_IO, "open the received file");
+            st.sys_errno = errno;
+        } else {
+            cm_dec_set_source(&state.dec, cm_decode_pread, &fd);
+            e = cm_dec_finish(&state.dec, &st);
+            close(fd);
+        }
+    } else {
+        e = cm_decode_read(term.in_path, &state.dec, &st);
+    }
     if (e == CM_OK)
         e = cm_decode_mesh(&state.dec, c->tess, &mesh, &state.tess, &sum, &st);
     if (e == CM_OK)

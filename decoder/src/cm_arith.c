@@ -156,38 +156,53 @@ size_t cm_ac_enc_finish_trimmed(cm_ac_enc *e)
 
 static uint8_t get_byte(cm_ac_dec *d)
 {
-    if (d->pos < d->len)
-        return d->buf[d->pos++];
+    if (d->pos < d->len) {
+        if (d->pos >= d->win_end) { /* only with a fill: without one the window is the stream */
+            size_t avail = 0;
+            const uint8_t *p = d->io_failed || d->fill == NULL ? NULL : d->fill(d->fill_ctx, d->pos, &avail);
+            if (p == NULL || avail == 0) {
+                d->io_failed = 1;
+                d->overrun = 1;
+                d->pos++;
+                return 0;
+            }
+            d->buf = p;
+            d->win_start = d->pos;
+            d->win_end = d->pos + avail;
+        }
+        return d->buf[d->pos++ - d->win_start];
+    }
     if (d->pos - d->len >= d->pad)
         d->overrun = 1;
     d->pos++;
     return 0;
 }
 
-void cm_ac_dec_init(cm_ac_dec *d, const uint8_t *buf, size_t len)
+static void dec_start(cm_ac_dec *d, const uint8_t *buf, size_t len, int trimmed, cm_ac_fill *fill, void *ctx)
 {
     d->buf = buf;
+    d->win_start = 0;
+    d->win_end = fill ? 0 : len;
+    d->fill = fill;
+    d->fill_ctx = ctx;
+    d->io_failed = 0;
     d->len = len;
     d->pos = 0;
-    d->pad = 0;
+    d->pad = trimmed ? CM_AC_TRIM_PAD : 0;
     d->overrun = 0;
     d->range = 0xFFFFFFFFu;
     d->code = 0;
-    for (int i = 0; i < 5; i++)
+    for (int i = trimmed ? 1 : 0; i < 5; i++) /* trimmed: the leading 0 is not in the stream */
         d->code = (d->code << 8) | get_byte(d);
 }
 
-void cm_ac_dec_init_trimmed(cm_ac_dec *d, const uint8_t *buf, size_t len)
+void cm_ac_dec_init(cm_ac_dec *d, const uint8_t *buf, size_t len) { dec_start(d, buf, len, 0, NULL, NULL); }
+
+void cm_ac_dec_init_trimmed(cm_ac_dec *d, const uint8_t *buf, size_t len) { dec_start(d, buf, len, 1, NULL, NULL); }
+
+void cm_ac_dec_init_fill(cm_ac_dec *d, size_t len, int trimmed, cm_ac_fill *fill, void *ctx)
 {
-    d->buf = buf;
-    d->len = len;
-    d->pos = 0;
-    d->pad = CM_AC_TRIM_PAD;
-    d->overrun = 0;
-    d->range = 0xFFFFFFFFu;
-    d->code = 0;
-    for (int i = 0; i < 4; i++) /* the leading 0 is not in the stream */
-        d->code = (d->code << 8) | get_byte(d);
+    dec_start(d, NULL, len, trimmed, fill, ctx);
 }
 
 unsigned cm_ac_dec_bit(cm_ac_dec *d, cm_ac_prob *p)

@@ -45,6 +45,31 @@ void cm_dec_init(cm_decoder *d)
     d->nlimits = 0;
     d->model.nverts = d->model.nedges = d->model.nfaces = 0;
     d->model.nplacements = 0;
+    d->crc = 0;
+    memset(d->file_crc, 0, sizeof d->file_crc);
+    d->src_read = NULL;
+    d->src_ctx = NULL;
+}
+
+void cm_dec_set_source(cm_decoder *d, cm_dec_read_fn *read, void *ctx)
+{
+    d->src_read = read;
+    d->src_ctx = ctx;
+}
+
+/* bytes [off, off + n) of the body as they are fed (off = d->len): the part within the window kept,
+   the part before the file's CRC into the running CRC, the CRC's own bytes aside */
+static void take_bytes(cm_decoder *d, uint32_t off, const uint8_t *p, size_t n, int copy)
+{
+    const uint32_t crc_end = d->file_len - 4u;
+    if (copy && off < (uint32_t)CM_FILE_WINDOW_BYTES) {
+        size_t k = (uint32_t)CM_FILE_WINDOW_BYTES - off < n ? (uint32_t)CM_FILE_WINDOW_BYTES - off : n;
+        memcpy(d->buf + off, p, k);
+    }
+    if (off < crc_end)
+        d->crc = cm_crc32_update(d->crc, p, crc_end - off < n ? crc_end - off : n);
+    for (size_t i = off < crc_end ? crc_end - off : 0; i < n; i++)
+        d->file_crc[off + i - crc_end] = p[i];
 }
 
 int cm_dec_header_ok(const cm_decoder *d)
@@ -436,12 +461,14 @@ cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
             return e;
         p += step;
         n -= step;
+        if (d->state == CM_DEC_BODY) /* the header's bytes (held: header_len < the file's CRC) */
+            take_bytes(d, 0, d->buf, d->len, 0);
     }
     if (n == 0)
         return CM_OK;
     if (n > (size_t)(d->file_len - d->len))
         return fail(d, st, CM_E_RANGE, d->file_len, "more bytes than the file");
-    memcpy(d->buf + d->len, p, n);
+    take_bytes(d, d->len, p, n, 1);
     d->len += (uint32_t)n;
     return CM_OK;
 }
@@ -450,6 +477,7 @@ cm_err cm_dec_feed(cm_decoder *d, const uint8_t *p, size_t n, cm_status *st)
 
 typedef struct reader {
     cm_ac_dec ac;
+    uint32_t stream_off; /* file offset of the coder's stream (a longer file is read through the window) */
     uint32_t base; /* file offset of the section */
     uint32_t face; /* the face whose record (FACE) or colour (COLR) is being read, or CM_NO_FACE_INDEX */
     cm_decoder *d;
@@ -1249,6 +1277,36 @@ static cm_err sec_colr(reader *r)
     return CM_OK;
 }
 
+/* cm_ac_fill for a file longer than the window: the stream's bytes from pos on, read again */
+static const uint8_t *refill_window(void *ctx, size_t pos, size_t *avail)
+{
+    reader *r = ctx;
+    cm_decoder *d = r->d;
+    uint32_t off = r->stream_off + (uint32_t)pos, n = d->file_len - off;
+    if (n > (uint32_t)CM_FILE_WINDOW_BYTES)
+        n = (uint32_t)CM_FILE_WINDOW_BYTES;
+    if (off >= d->file_len || d->src_read == NULL || d->src_read(d->src_ctx, off, d->buf, n) != 0)
+        return NULL;
+    *avail = n;
+    return d->buf;
+}
+
+/* formats 1-3: the CRC of bytes [off, off + len) of a file longer than the window, read again */
+static int window_crc(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
+{
+    uint32_t c = 0;
+    while (len > 0) {
+        uint32_t n = len < (uint32_t)CM_FILE_WINDOW_BYTES ? len : (uint32_t)CM_FILE_WINDOW_BYTES;
+        if (d->src_read(d->src_ctx, off, d->buf, n) != 0)
+            return 0;
+        c = cm_crc32_update(c, d->buf, n);
+        off += n;
+        len -= n;
+    }
+    *crc = c;
+    return 1;
+}
+
 cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
 {
     if (d->state != CM_DEC_BODY) {
@@ -1258,8 +1316,13 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
     }
     if (d->len < d->file_len)
         return fail(d, st, CM_E_TRUNCATED, d->len, "file shorter than its header says");
-    if (crc_differs(cm_crc32(d->buf, d->file_len - 4), cm_get_u32(d->buf + d->file_len - 4)))
+    if (crc_differs(d->crc, cm_get_u32(d->file_crc)))
         return fail(d, st, CM_E_CRC, d->file_len - 4, "file CRC");
+    /* a file longer than the window is read again from where it is stored */
+    const int windowed = d->file_len > (uint32_t)CM_FILE_WINDOW_BYTES;
+    if (windowed && d->src_read == NULL)
+        return fail(d, st, CM_E_ARG, CM_FILE_WINDOW_BYTES,
+                    "a file longer than the decoder's window, and no source to read it again (cm_dec_set_source)");
     cm_model *m = &d->model;
     m->nverts = m->nedges = m->nfaces = m->nloops = m->nuses = m->nsurfs = m->nctrl = m->nknots = 0;
     m->npalette = 0;
@@ -1271,18 +1334,27 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
     reader r;
     for (uint32_t s = 0; s < CM_SEC_COUNT; s++) {
         const cm_dec_section *sec = &d->sec[s];
-        if (sec->has_crc && crc_differs(cm_crc32(d->buf + sec->off, sec->len), sec->crc))
-            return fail(d, st, CM_E_CRC, sec->off, "section CRC");
+        if (sec->has_crc) {
+            uint32_t crc = 0;
+            if (windowed && !window_crc(d, sec->off, sec->len, &crc))
+                return fail(d, st, CM_E_IO, sec->off, "reading the file again (section CRC)");
+            if (crc_differs(windowed ? crc : cm_crc32(d->buf + sec->off, sec->len), sec->crc))
+                return fail(d, st, CM_E_CRC, sec->off, "section CRC");
+        }
+        r.face = CM_NO_FACE_INDEX;
+        r.d = d;
+        r.st = st;
         if (s == 0 || !one_stream) {
-            if (d->version_major >= CM_FMT_COMPACT_MAJOR)
+            int trimmed = d->version_major >= CM_FMT_COMPACT_MAJOR;
+            r.stream_off = sec->off;
+            if (windowed)
+                cm_ac_dec_init_fill(&r.ac, sec->len, trimmed, refill_window, &r);
+            else if (trimmed)
                 cm_ac_dec_init_trimmed(&r.ac, d->buf + sec->off, sec->len);
             else
                 cm_ac_dec_init(&r.ac, d->buf + sec->off, sec->len);
             r.base = sec->off;
         }
-        r.face = CM_NO_FACE_INDEX;
-        r.d = d;
-        r.st = st;
         cm_err e;
         switch (sec->tag) {
         case CM_SEC_VERT: e = sec_vert(&r); break;
@@ -1292,6 +1364,8 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         case CM_SEC_COLR: e = sec_colr(&r); break;
         default: e = fail(d, st, CM_E_FORMAT, sec->off, "section tag"); break;
         }
+        if (r.ac.io_failed) /* what the section said about its bytes is moot: they were not read */
+            return fail(d, st, CM_E_IO, r.base + (uint32_t)r.ac.pos, "reading the file again");
         if (e != CM_OK)
             return e;
     }

@@ -26,6 +26,7 @@
 #define CM_TESS_PASS_SLOTS 131072
 #define CM_MAX_TESS_POINTS 65536
 #define CM_MAX_FILE_BYTES 268435456
+#define CM_FILE_WINDOW_BYTES CM_MAX_FILE_BYTES /* the workstation holds the file: its decoders are fed from memory */
 #define CM_MAX_MODEL_CTRL 4194304
 #define CM_MAX_MODEL_KNOTS 4194304
 #define CM_MAX_MODEL_LOOPS 4194304

@@ -25,6 +25,7 @@
 #define CM_PARAM_GRID_CACHE 0 /* the global searches' grids (47 KiB) do not fit the budget: searched as before */
 #define CM_MAX_TESS_POINTS 64
 #define CM_MAX_FILE_BYTES 4096
+#define CM_FILE_WINDOW_BYTES CM_MAX_FILE_BYTES
 #define CM_SPILL_PAGE_BYTES 192u
 #define CM_MAX_MODEL_CTRL 64
 #define CM_MAX_MODEL_KNOTS 64

@@ -50,6 +50,8 @@ typedef enum cm_dec_state {
     CM_DEC_FAILED = 3  /* an error was reported; feed/finish refuse further work */
 } cm_dec_state;
 
+typedef int cm_dec_read_fn(void *ctx, uint32_t off, uint8_t *buf, size_t n);
+
 typedef struct cm_decoder {
     cm_dec_state state;
     uint32_t len;                      /* bytes received */
@@ -69,11 +71,27 @@ typedef struct cm_decoder {
     };
     int64_t sq[CM_MAX_SURF_CTRL][3];   /* one kept surface's net on the grid (predictor) */
     int64_t sw[CM_MAX_SURF_CTRL];      /* ... and its quantised weights */
-    uint8_t buf[CM_MAX_FILE_BYTES];    /* the compressed file */
+    /* the file's first CM_FILE_WINDOW_BYTES (the header is read there); a longer file's sections are
+       read again through it from the source, a window at a time */
+    uint8_t buf[CM_FILE_WINDOW_BYTES];
+    uint32_t crc;                      /* CRC-32 of the bytes fed so far, up to the file's CRC */
+    uint8_t file_crc[4];               /* the file's last 4 bytes, as they are fed */
+    cm_dec_read_fn *src_read;          /* cm_dec_set_source */
+    void *src_ctx;
     cm_model model;
 } cm_decoder;
 
 void cm_dec_init(cm_decoder *d);
+
+/**
+ * Where the decoder reads the file's bytes again when the file is longer than its window
+ * (CM_FILE_WINDOW_BYTES): read(ctx, off, buf, n) puts bytes [off, off + n) of the same file in buf
+ * and returns 0, or returns non-zero (CM_E_IO).  Set after cm_dec_init (which forgets it), before
+ * cm_dec_finish.  The file must not change in between: its CRC, taken as it was fed, is checked
+ * against what is read again only in what the sections decode (a changed file fails there or
+ * decodes another model), so the caller keeps it (the terminal's received file, a file it opened).
+ */
+void cm_dec_set_source(cm_decoder *d, cm_dec_read_fn *read, void *ctx);
 
 /**
  * Append n bytes (n may be 0).  As soon as the header is complete it is

@@ -70,8 +70,17 @@ size_t cm_ac_enc_finish(cm_ac_enc *e);
 size_t cm_ac_enc_finish_trimmed(cm_ac_enc *e);
 
 /* ---- decoder (terminal) ---- */
+/* A stream read through a window (issue 15: the terminal does not hold the whole file): called when
+   the reader leaves the window, with the stream position; returns bytes from pos on (*avail > 0), or
+   NULL when they cannot be read (the stream ends there: overrun and io_failed are set). */
+typedef const uint8_t *cm_ac_fill(void *ctx, size_t pos, size_t *avail);
+
 typedef struct cm_ac_dec {
-    const uint8_t *buf;
+    const uint8_t *buf;          /* bytes [win_start, win_end) of the stream (all of it without fill) */
+    size_t win_start, win_end;
+    cm_ac_fill *fill;            /* NULL: buf is the whole stream */
+    void *fill_ctx;
+    int io_failed;
     size_t len, pos;
     uint32_t range, code;
     size_t pad;  /* zeros read past the end that are still the stream's (format 4: CM_AC_TRIM_PAD) */
@@ -83,6 +92,8 @@ typedef struct cm_ac_dec {
 void cm_ac_dec_init(cm_ac_dec *d, const uint8_t *buf, size_t len);
 /** The reader of a trimmed stream (format 4). */
 void cm_ac_dec_init_trimmed(cm_ac_dec *d, const uint8_t *buf, size_t len);
+/** A stream of len bytes read through fill (trimmed: format 4's streams, else formats 1-3's). */
+void cm_ac_dec_init_fill(cm_ac_dec *d, size_t len, int trimmed, cm_ac_fill *fill, void *ctx);
 unsigned cm_ac_dec_bit(cm_ac_dec *d, cm_ac_prob *p);
 uint32_t cm_ac_dec_direct(cm_ac_dec *d, unsigned nbits);
 uint64_t cm_ac_dec_uint(cm_ac_dec *d, cm_ac_int *m);
