@@ -198,7 +198,9 @@ LIMIT_TOOLS := $(foreach p,$(PROFILES),$(call bdir,$(p))/cm-limits)
 
 # every profile's limits table, for `cmz encode --profile NAME`
 PROFILE_TABLES := $(foreach p,$(PROFILES),$(call bdir,host)/host_tools/profile_table_$(p).o)
-$(call bdir,host)/host_tools/profile_table_%.o: host_tools/profile_table.c
+# (the limits' headers named: a changed default must reach `cmz encode --profile`)
+$(call bdir,host)/host_tools/profile_table_%.o: host_tools/profile_table.c fixedcfg/cm_limits.h \
+		fixedcfg/cm_limits_list.h fixedcfg/profiles/%.h
 	@mkdir -p $(@D)
 	$(call say,CC      ,$@)
 	$(Q)$(CC) $(CM_INC_ALL) -DCM_PROFILE='"profiles/$*.h"' -DPROFILE_TABLE=cm_profile_table_$* $(CPPFLAGS) \

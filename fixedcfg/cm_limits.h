@@ -63,7 +63,7 @@
 /* Control points of one surface in total (nu*nv).  Unit: control points.
  * Hard bound 2^24-1.  Sizes the control net buffer of a kept surface. */
 #ifndef CM_MAX_SURF_CTRL
-#  define CM_MAX_SURF_CTRL 8192
+#  define CM_MAX_SURF_CTRL 4096
 #endif
 
 /* Control points per direction of a surface fitted by NFILL/G1FIT (spec 8.9
@@ -87,9 +87,11 @@
 #endif
 
 /* Edge uses in one face, all loops together.  Unit: edges.  Hard bound
- * 65535.  Sizes boundary sampling (CM_MAX_FACE_EDGES*CM_SEG_PER_EDGE points). */
+ * 65535.  Sizes boundary sampling (CM_MAX_FACE_EDGES*CM_SEG_PER_EDGE points):
+ * a face's and a partner's samples, 720 bytes an edge.  Terminal 256 (512
+ * before issue 15's 4 MiB); the corpus needs at most 150. */
 #ifndef CM_MAX_FACE_EDGES
-#  define CM_MAX_FACE_EDGES 512
+#  define CM_MAX_FACE_EDGES 256
 #endif
 
 /* Sides of a face rebuilt by Gregory N-split (spec 6.4).  Unit: sides.
@@ -122,18 +124,18 @@
 
 /* Faces of one model.  Unit: faces.  Hard bound 2^24-1. */
 #ifndef CM_MAX_FACES
-#  define CM_MAX_FACES 16384
+#  define CM_MAX_FACES 4096
 #endif
 
 /* Edges of one model's curve mesh (a shared edge counts once).
  * Unit: edges.  Hard bound 2^24-1. */
 #ifndef CM_MAX_EDGES
-#  define CM_MAX_EDGES 32768
+#  define CM_MAX_EDGES 4096
 #endif
 
 /* Vertices of one model's curve mesh.  Unit: vertices.  Hard bound 2^24-1. */
 #ifndef CM_MAX_VERTICES
-#  define CM_MAX_VERTICES 32768
+#  define CM_MAX_VERTICES 4096
 #endif
 
 /* Triangles of the decoded mesh.  Unit: triangles.  Hard bound
@@ -146,7 +148,7 @@
  * interior points).  Unit: points.  Hard bound 2^24-1.  Sizes the
  * tessellation workspace (about 2 triangles per point). */
 #ifndef CM_MAX_TESS_POINTS
-#  define CM_MAX_TESS_POINTS 8192
+#  define CM_MAX_TESS_POINTS 3072
 #endif
 
 /* Slots of each of the two tables in which the tessellation's refinement remembers the triangles
@@ -155,18 +157,19 @@
  * rest are tested again, so a smaller size costs speed, never output.  Unit: slots of 8 bytes, two
  * tables.  A power of two.  Not a limit of the format (cm-limits does not list it). */
 #ifndef CM_TESS_PASS_SLOTS
-#  define CM_TESS_PASS_SLOTS 16384
+#  define CM_TESS_PASS_SLOTS 8192
 #endif
 
 /* Bytes of each of the three pages (positions, normals, indices) through which a streaming
  * terminal reads its spilled output mesh back (cm_mesh.h): sequential reads, so a page is a read
  * call.  Unit: bytes, at least 12.  Not a limit of the format (cm-limits does not list it). */
 #ifndef CM_SPILL_PAGE_BYTES
-#  define CM_SPILL_PAGE_BYTES 24576u
+#  define CM_SPILL_PAGE_BYTES 8192u
 #endif
 
 /* Size of one .cmz file.  Unit: bytes.  Hard bound 2^31-1.  The decoder
- * holds the whole compressed file while decoding it. */
+ * holds only CM_FILE_WINDOW_BYTES of it (below); what stays is the link's
+ * and the store's room for a file (the corpus's largest: 28 KB). */
 #ifndef CM_MAX_FILE_BYTES
 #  define CM_MAX_FILE_BYTES 8388608
 #endif
@@ -184,24 +187,24 @@
 /* Control points of all curves and kept surfaces of one model (one pool).
  * Unit: control points.  Hard bound 2^24-1.  32 bytes each (point and weight). */
 #ifndef CM_MAX_MODEL_CTRL
-#  define CM_MAX_MODEL_CTRL 262144
+#  define CM_MAX_MODEL_CTRL 16384
 #endif
 
 /* Knots of all curves and kept surfaces of one model (one pool).
  * Unit: knots.  Hard bound 2^24-1. */
 #ifndef CM_MAX_MODEL_KNOTS
-#  define CM_MAX_MODEL_KNOTS 262144
+#  define CM_MAX_MODEL_KNOTS 16384
 #endif
 
 /* Loops of all faces of one model.  Unit: loops.  Hard bound 2^24-1. */
 #ifndef CM_MAX_MODEL_LOOPS
-#  define CM_MAX_MODEL_LOOPS 32768
+#  define CM_MAX_MODEL_LOOPS 4096
 #endif
 
 /* Edge uses of all loops of one model (about twice the edges).
  * Unit: uses.  Hard bound 2^24-1. */
 #ifndef CM_MAX_MODEL_USES
-#  define CM_MAX_MODEL_USES 131072
+#  define CM_MAX_MODEL_USES 8192
 #endif
 
 /* Points sampled on one edge for tessellation.  Unit: points.  Hard bound
@@ -215,7 +218,7 @@
  * decoder's model; the corpus's assemblies place 3 to 14 copies, a large vault assembly (fasteners
  * placed one by one) a few hundred. */
 #ifndef CM_MAX_PLACEMENTS
-#  define CM_MAX_PLACEMENTS 1024
+#  define CM_MAX_PLACEMENTS 512
 #endif
 
 /* ---- stack (checked from -fstack-usage / -fcallgraph-info=su) ---- */
@@ -245,15 +248,19 @@
 /* ---- memory of one decode ---- */
 
 /* Static storage of one decode, sizeof(cm_decode_state) (cm_decode_state.h):
- * the decoder (which holds the whole .cmz file and the model's pools), the
- * triangulator's workspace and the output mesh at this profile's limits.
+ * the decoder (the file's window and the model's pools), the triangulator's
+ * workspace and the output mesh's window at this profile's limits.
  * Unit: bytes.  A budget, not a limit of a model: it is not in
  * cm_limits_list.h (whose order is the limit id on the wire) and no file
  * needs it.  A _Static_assert fails the build when the state outgrows it, so
  * the board's RAM changes only on purpose; `--limits` prints both.  Terminal:
- * 48 MiB for 44.6 MiB on x86-64 and aarch64. */
+ * 3.5 MiB for 3.27 MiB on x86-64 and aarch64 (issue 15: 4 MiB in all with the
+ * program's own below; 44.6 MiB before the file and the output mesh were
+ * streamed and the model's pools sized to the corpus: its largest model needs
+ * 3358 faces, 1580 edges, 6133 control points, 9859 knots, 3160 edge uses,
+ * 5898 points on one face at the workstation's tolerance). */
 #ifndef CM_DECODE_STATE_BUDGET
-#  define CM_DECODE_STATE_BUDGET 50331648
+#  define CM_DECODE_STATE_BUDGET 3670016
 #endif
 
 /* Static storage of a terminal program besides its decode state (cmz-decode,
@@ -261,9 +268,10 @@
  * reader's chunks, the store).  Unit: bytes.  A budget like the one above:
  * `make check-ram` fails when a program's data + bss exceeds
  * CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET (x86-64 and aarch64), so
- * the board's RAM grows only on purpose.  Terminal: 1 MiB for about 290 KiB. */
+ * the board's RAM grows only on purpose.  Terminal: 512 KiB for about 290 KiB
+ * (the two budgets: issue 15's 4 MiB). */
 #ifndef CM_PROGRAM_STATIC_BUDGET
-#  define CM_PROGRAM_STATIC_BUDGET 1048576
+#  define CM_PROGRAM_STATIC_BUDGET 524288
 #endif
 
 /* Code and read-only data of a terminal program (text: what `size` counts

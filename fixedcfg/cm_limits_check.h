@@ -85,8 +85,9 @@ _Static_assert(CM_STACK_FN_MAX >= 1024 && CM_STACK_FN_MAX <= CM_STACK_BUDGET,
                "CM_STACK_FN_MAX must be in [1024, CM_STACK_BUDGET]");
 _Static_assert(CM_STACK_BUDGET <= CM_HARD_MAX_STACK,
                "CM_STACK_BUDGET must be <= 1048576");
-_Static_assert(CM_DECODE_STATE_BUDGET >= CM_MAX_FILE_BYTES,
-               "CM_DECODE_STATE_BUDGET must be >= CM_MAX_FILE_BYTES (the decoder holds the whole file)");
+_Static_assert(CM_FILE_WINDOW_BYTES >= 4096 && CM_FILE_WINDOW_BYTES <= CM_MAX_FILE_BYTES,
+               "CM_FILE_WINDOW_BYTES must be in [4096 (a header, held whole), CM_MAX_FILE_BYTES]");
+_Static_assert(CM_SPILL_PAGE_BYTES >= 12, "CM_SPILL_PAGE_BYTES must hold a vertex (12 bytes)");
 
 /* storage products must not overflow size_t on a 32-bit board */
 _Static_assert((unsigned long long)CM_MAX_LSQ_UNKNOWNS * (CM_MAX_LSQ_BAND + 1) * sizeof(double) <= SIZE_MAX / 4,

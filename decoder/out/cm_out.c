@@ -196,8 +196,11 @@ cm_err cm_out_begin(cm_out *w, cm_out_format fmt, const cm_mesh *m, cm_status *s
         e = check_faces(m, &w->ntris, &w->nprims, st);
     if (e == CM_OK)
         e = check_finite(m, normals, st);
-    if (e == CM_OK && cm_mesh_spill_failed(m))
+    if (cm_mesh_spill_failed(m)) { /* what the checks read is moot: zeros stood for it */
+        if (st)
+            cm_status_init(st);
         e = cm_fail(st, CM_E_IO, "cm_out_begin: reading the mesh back from its spill");
+    }
     if (e != CM_OK)
         return e;
     w->fmt = fmt;

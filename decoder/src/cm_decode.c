@@ -1287,6 +1287,11 @@ static const uint8_t *refill_window(void *ctx, size_t pos, size_t *avail)
         n = (uint32_t)CM_FILE_WINDOW_BYTES;
     if (off >= d->file_len || d->src_read == NULL || d->src_read(d->src_ctx, off, d->buf, n) != 0)
         return NULL;
+    if (off == d->recrc_next && d->recrc_next < d->file_len - 4u) { /* the body again, in order */
+        uint32_t k = d->file_len - 4u - off < n ? d->file_len - 4u - off : n;
+        d->recrc = cm_crc32_update(d->recrc, d->buf, k);
+        d->recrc_next += k;
+    }
     *avail = n;
     return d->buf;
 }
@@ -1307,6 +1312,22 @@ static int window_crc(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
     return 1;
 }
 
+/* a section of a file read again failed: 1 when the rest of the file, read again in order, makes a
+   CRC other than the one taken as it was fed (the file changed: that is the error to report) */
+static int changed_since_fed(cm_decoder *d)
+{
+    const uint32_t end = d->file_len - 4u;
+    while (d->recrc_next < end) {
+        uint32_t n = end - d->recrc_next < (uint32_t)CM_FILE_WINDOW_BYTES ? end - d->recrc_next
+                                                                         : (uint32_t)CM_FILE_WINDOW_BYTES;
+        if (d->src_read(d->src_ctx, d->recrc_next, d->buf, n) != 0)
+            return 0; /* unknown: the section's own error stands */
+        d->recrc = cm_crc32_update(d->recrc, d->buf, n);
+        d->recrc_next += n;
+    }
+    return d->recrc_next == end && crc_differs(d->recrc, d->crc);
+}
+
 cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
 {
     if (d->state != CM_DEC_BODY) {
@@ -1323,6 +1344,8 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
     if (windowed && d->src_read == NULL)
         return fail(d, st, CM_E_ARG, CM_FILE_WINDOW_BYTES,
                     "a file longer than the decoder's window, and no source to read it again (cm_dec_set_source)");
+    d->recrc = cm_crc32(d->buf, d->header_len); /* the header is still in the window */
+    d->recrc_next = d->header_len;
     cm_model *m = &d->model;
     m->nverts = m->nedges = m->nfaces = m->nloops = m->nuses = m->nsurfs = m->nctrl = m->nknots = 0;
     m->npalette = 0;
@@ -1366,6 +1389,10 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         }
         if (r.ac.io_failed) /* what the section said about its bytes is moot: they were not read */
             return fail(d, st, CM_E_IO, r.base + (uint32_t)r.ac.pos, "reading the file again");
+        if (e != CM_OK && windowed && changed_since_fed(d)) { /* the cause, not what it did to a section */
+            cm_status_init(st);
+            return fail(d, st, CM_E_CRC, d->file_len - 4u, "file CRC (the file changed after it was received)");
+        }
         if (e != CM_OK)
             return e;
     }
@@ -1373,6 +1400,9 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
        not the writer's (an honest stream's reader ends at or past its last byte) */
     if (one_stream && r.ac.pos < r.ac.len)
         return fail(d, st, CM_E_FORMAT, r.base + (uint32_t)r.ac.pos, "bytes after the sections");
+    /* a file read again whole: the same bytes as were checked (the sections read in order cover it) */
+    if (windowed && d->recrc_next == d->file_len - 4u && crc_differs(d->recrc, d->crc))
+        return fail(d, st, CM_E_CRC, d->file_len - 4u, "file CRC (the file changed after it was received)");
     d->state = CM_DEC_DONE;
     return CM_OK;
 }

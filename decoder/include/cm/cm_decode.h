@@ -78,6 +78,7 @@ typedef struct cm_decoder {
     uint8_t file_crc[4];               /* the file's last 4 bytes, as they are fed */
     cm_dec_read_fn *src_read;          /* cm_dec_set_source */
     void *src_ctx;
+    uint32_t recrc, recrc_next;        /* the CRC of what was read again, in order, and where it is */
     cm_model model;
 } cm_decoder;
 
@@ -87,9 +88,8 @@ void cm_dec_init(cm_decoder *d);
  * Where the decoder reads the file's bytes again when the file is longer than its window
  * (CM_FILE_WINDOW_BYTES): read(ctx, off, buf, n) puts bytes [off, off + n) of the same file in buf
  * and returns 0, or returns non-zero (CM_E_IO).  Set after cm_dec_init (which forgets it), before
- * cm_dec_finish.  The file must not change in between: its CRC, taken as it was fed, is checked
- * against what is read again only in what the sections decode (a changed file fails there or
- * decodes another model), so the caller keeps it (the terminal's received file, a file it opened).
+ * cm_dec_finish.  The file must not change in between: what is read again is checked against the
+ * CRC taken as it was fed, and a file that changed is refused (CM_E_CRC) once its sections are read.
  */
 void cm_dec_set_source(cm_decoder *d, cm_dec_read_fn *read, void *ctx);
 
