@@ -52,11 +52,6 @@ static cm_err io_fail(cm_status *st, const char *where)
 static uint8_t read_chunk[16384];
 static uint8_t write_chunk[65536];
 
-size_t cm_decode_file_static_bytes(void)
-{
-    return sizeof read_chunk + sizeof write_chunk;
-}
-
 /* cm_dec_read_fn over a file descriptor (ctx points at it): a long file's sections read again */
 int cm_decode_pread(void *ctx, uint32_t off, uint8_t *buf, size_t n)
 {
@@ -171,6 +166,11 @@ cm_mesh cm_decode_stream_mesh(cm_decode_state *s, const char *out_path, int is_d
     else
         snprintf(spill_fs.dir, sizeof spill_fs.dir, "%.*s", (int)n, out_path);
     return cm_decode_state_mesh(s, spill_file_io, &spill_fs);
+}
+
+size_t cm_decode_file_static_bytes(void)
+{
+    return sizeof read_chunk + sizeof write_chunk + sizeof spill_fs;
 }
 
 void cm_decode_spill_close(void)

@@ -60,7 +60,7 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--limits") == 0) {
             cm_report_limits(stdout);
             const cm_ram_part own[] = {
-                {"  I/O chunks", "the reader's and the writer's chunks", cm_decode_file_static_bytes()}};
+                {"  I/O chunks", "the reader's and the writer's chunks, the mesh spill's files", cm_decode_file_static_bytes()}};
             cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
             return 0;
         } else if (strcmp(argv[i], "--version") == 0) {

@@ -387,7 +387,7 @@ int main(int argc, char **argv)
                 {"  usb", "the USB transport", sizeof usb},
 #endif
                 {"  gpio", "the GPIO lines", sizeof gpio},
-                {"  I/O chunks", "the reader's and the writer's chunks", cm_decode_file_static_bytes()}};
+                {"  I/O chunks", "the reader's and the writer's chunks, the mesh spill's files", cm_decode_file_static_bytes()}};
             cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
             return 0;
         }

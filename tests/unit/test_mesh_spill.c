@@ -8,6 +8,7 @@
  * memory here (the terminal's is files: cm_decode_file.c, exercised by the corpus and the
  * bundled-model gates).
  */
+#include <limits.h>
 #include <stdio.h>
 
 #include "test_util.h"
@@ -233,7 +234,7 @@ static void test_read_fails(void **state)
     static cm_out w;
     cm_status st;
     cm_status_init(&st);
-    fail_read_at = 1L << 40; /* counts, never fails */
+    fail_read_at = LONG_MAX; /* counts, never fails */
     assert_ok(cm_out_begin(&w, CM_OUT_STL, &b, &st));
     long in_begin = reads;
     cm_err e;
