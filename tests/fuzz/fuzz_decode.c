@@ -48,6 +48,20 @@ static void check_face_reason(cm_err e, const cm_status *st, uint32_t f, uint32_
         __builtin_trap();
 }
 
+/* the input as the decoder's source: a file longer than its window (8 KiB on the terminal) has its
+   sections read again from it, as the terminal reads its stored file */
+static const uint8_t *src_data;
+static size_t src_size;
+
+static int read_again(void *ctx, uint32_t off, uint8_t *buf, size_t n)
+{
+    (void)ctx;
+    if (off > src_size || n > src_size - off)
+        return -1;
+    memcpy(buf, src_data + off, n);
+    return 0;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1)
@@ -64,6 +78,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         size_t n = size - off < chunk ? size - off : chunk;
         e = cm_dec_feed(&state.dec, data + off, n, &st);
     }
+    src_data = data;
+    src_size = size;
+    cm_dec_set_source(&state.dec, read_again, NULL);
     if (e == CM_OK)
         e = cm_dec_finish(&state.dec, &st);
     check_reason(e, &st);
