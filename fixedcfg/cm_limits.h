@@ -160,11 +160,18 @@
 #  define CM_TESS_PASS_SLOTS 8192
 #endif
 
-/* Bytes of each of the three pages (positions, normals, indices) through which a streaming
- * terminal reads its spilled output mesh back (cm_mesh.h): sequential reads, so a page is a read
+/* Bytes of each cached page (CM_SPILL_PAGES for each of positions, normals, indices) through
+ * which a streaming terminal reads its spilled output mesh back (cm_mesh.h): a page is a read
  * call.  Unit: bytes, at least 12.  Not a limit of the format (cm-limits does not list it). */
 #ifndef CM_SPILL_PAGE_BYTES
 #  define CM_SPILL_PAGE_BYTES 8192u
+#endif
+
+/* Cached pages per stream of the spilled mesh (above): STL reads a face's positions by its
+ * indices, which jump within the face; with one page it re-read a page nearly every triangle.
+ * Unit: pages.  Not a limit of the format. */
+#ifndef CM_SPILL_PAGES
+#  define CM_SPILL_PAGES 4
 #endif
 
 /* Size of one .cmz file.  Unit: bytes.  Hard bound 2^31-1.  The decoder
@@ -254,7 +261,7 @@
  * cm_limits_list.h (whose order is the limit id on the wire) and no file
  * needs it.  A _Static_assert fails the build when the state outgrows it, so
  * the board's RAM changes only on purpose; `--limits` prints both.  Terminal:
- * 3.5 MiB for 3.27 MiB on x86-64 and aarch64 (issue 15: 4 MiB in all with the
+ * 3.5 MiB for 3.35 MiB on x86-64 and aarch64 (issue 15: 4 MiB in all with the
  * program's own below; 44.6 MiB before the file and the output mesh were
  * streamed and the model's pools sized to the corpus: its largest model needs
  * 3358 faces, 1580 edges, 6133 control points, 9859 knots, 3160 edge uses,

@@ -88,6 +88,7 @@ _Static_assert(CM_STACK_BUDGET <= CM_HARD_MAX_STACK,
 _Static_assert(CM_FILE_WINDOW_BYTES >= 4096 && CM_FILE_WINDOW_BYTES <= CM_MAX_FILE_BYTES,
                "CM_FILE_WINDOW_BYTES must be in [4096 (a header, held whole), CM_MAX_FILE_BYTES]");
 _Static_assert(CM_SPILL_PAGE_BYTES >= 12, "CM_SPILL_PAGE_BYTES must hold a vertex (12 bytes)");
+_Static_assert(CM_SPILL_PAGES >= 1 && CM_SPILL_PAGES <= 64, "CM_SPILL_PAGES must be in [1, 64]");
 
 /* storage products must not overflow size_t on a 32-bit board */
 _Static_assert((unsigned long long)CM_MAX_LSQ_UNKNOWNS * (CM_MAX_LSQ_BAND + 1) * sizeof(double) <= SIZE_MAX / 4,

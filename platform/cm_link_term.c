@@ -169,13 +169,16 @@ static void remember_shown(cm_link_term *t);
 /*
  * Disk space a new model takes until it is shown: the part file (renamed, then hard-linked into
  * the new generation: it is never copied), the GLB and STL written beside the model on screen
+ * (and the decoded mesh spilled beside them while they are written)
  * (the old generation is removed only after the swap), and 64 KiB for the meta file, directories
  * and symlinks.  The GLB and STL are not known before the file is decoded: cm_out_bytes_bound
  * estimates them from the size (cm_decode_file.h says how, and when it falls short).
  */
 static uint64_t store_need(const cm_link_term *t, uint32_t size)
 {
-    uint64_t need = (uint64_t)size + cm_out_bytes_bound(CM_OUT_GLB, size) + 65536u;
+    /* the mesh's spill (cm_decode_file.c) is on disk while the outputs are written: its positions,
+       normals and indices are what a GLB's binary chunk holds, so the GLB's bound bounds it too */
+    uint64_t need = (uint64_t)size + 2u * cm_out_bytes_bound(CM_OUT_GLB, size) + 65536u;
     if (t->writes_stl)
         need += cm_out_bytes_bound(CM_OUT_STL, size);
     return need;

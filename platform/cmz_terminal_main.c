@@ -326,7 +326,9 @@ static int decode_into_place(const config *c, int fed, char *text, size_t cap)
     snprintf(bad, sizeof bad, "%s/rejected.cmz", c->out);
     int64_t t0 = cm_clock_ms();
     cm_err e;
-    if (fed) { /* its bytes were checked as they came; its sections are read again from the file */
+    if (fed && state.dec.file_len <= (uint32_t)CM_FILE_WINDOW_BYTES) { /* held whole as it came */
+        e = cm_dec_finish(&state.dec, &st);
+    } else if (fed) { /* its bytes were checked as they came; its sections are read again from the file */
         static int fd;
         fd = open(term.in_path, O_RDONLY | O_CLOEXEC);
         if (fd < 0) {

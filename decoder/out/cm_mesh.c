@@ -34,7 +34,9 @@ void cm_mesh_set_spill(cm_mesh *m, cm_mesh_spill *s, uint32_t win_verts, uint32_
     m->cap_index = cap_index;
 }
 
-static int spill_io(cm_mesh_spill *s, int write, unsigned stream, uint64_t off, void *buf, size_t n)
+/* the one call through the spill's io (noinline: the stack gates' tables name this function) */
+__attribute__((noinline)) static int spill_io(cm_mesh_spill *s, int write, unsigned stream, uint64_t off, void *buf,
+                                              size_t n)
 {
     if (n > 0 && !s->failed && s->io(s->ctx, write, stream, off, buf, n) != 0)
         s->failed = 1;
@@ -57,8 +59,13 @@ cm_err cm_mesh_make_room(cm_mesh *m, uint32_t nv, uint32_t ni, cm_status *st)
         return cm_fail(st, CM_E_IO, "mesh spill");
     m->win_vert = m->nverts;
     m->win_index = m->nindex;
-    if (nv > m->win_cap_verts || ni > m->win_cap_index)
+    /* the window holds one call of the tessellation's output: MAX_TESS_POINTS points and fewer
+       than two triangles a point (cm_decode_state.h); said in points */
+    if (nv > m->win_cap_verts)
         return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, nv, m->win_cap_verts, "mesh window (one face)");
+    if (ni > m->win_cap_index)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, ni / 6u + 1u, m->win_cap_index / 6u,
+                             "mesh window (one face's triangles)");
     return CM_OK;
 }
 
@@ -69,16 +76,18 @@ static const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, uint32_t
     cm_mesh_spill *sp = m->spill;
     if (sp == NULL)
         return zeros;
-    uint32_t per = CM_SPILL_PAGE_BYTES / es, end = s == CM_SPILL_IDX ? m->win_index : m->win_vert;
-    if (i - sp->page_first[s] >= sp->page_n[s] || i < sp->page_first[s]) {
-        uint32_t first = i - i % per, n = end - first < per ? end - first : per;
-        sp->page_n[s] = 0;
-        if (!spill_io(sp, 0, s, (uint64_t)first * es, sp->page[s], (size_t)n * es))
+    const uint32_t per = CM_SPILL_PAGE_BYTES / es, end = s == CM_SPILL_IDX ? m->win_index : m->win_vert;
+    const uint32_t first = i - i % per, k = (first / per) % CM_SPILL_PAGES;
+    /* (a page loaded when fewer elements were spilled holds fewer than `per`: loaded again) */
+    if (sp->page_first[s][k] != first || i - first >= sp->page_n[s][k]) {
+        uint32_t n = end - first < per ? end - first : per;
+        sp->page_n[s][k] = 0;
+        if (!spill_io(sp, 0, s, (uint64_t)first * es, sp->page[s][k], (size_t)n * es))
             return zeros;
-        sp->page_first[s] = first;
-        sp->page_n[s] = n;
+        sp->page_first[s][k] = first;
+        sp->page_n[s][k] = n;
     }
-    return sp->page[s] + (size_t)(i - sp->page_first[s]) * es;
+    return sp->page[s][k] + (size_t)(i - first) * es;
 }
 
 void cm_mesh_spilled_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3])

@@ -60,61 +60,81 @@ cm_err cm_mesh_place(const cm_model *m, cm_mesh *mesh, cm_status *st)
                 cm_mesh_rollback(mesh, &mark);
                 return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, need, mesh->cap_index / 3u, "placed copies");
             }
-            cm_err room = cm_mesh_make_room(mesh, src.nverts, src.nindex, st); /* a streaming mesh */
-            if (room != CM_OK) {
-                cm_mesh_rollback(mesh, &mark);
-                return room;
-            }
             cm_mesh_face *dst = &mesh->faces[mesh->nfaces];
             *dst = src;
             dst->first_vert = mesh->nverts;
             dst->first_index = mesh->nindex;
-            for (uint32_t v = 0; v < src.nverts; v++) {
-                float p[3], q[3];
-                cm_mesh_pos(mesh, src.first_vert + v, p);
-                cm_mesh_nrm(mesh, src.first_vert + v, q);
-                double x = (double)p[0], y = (double)p[1], z = (double)p[2];
-                double nx = (double)q[0], ny = (double)q[1], nz = (double)q[2];
-                double X = a[0] * x + a[1] * y + a[2] * z + a[3];
-                double Y = a[4] * x + a[5] * y + a[6] * z + a[7];
-                double Z = a[8] * x + a[9] * y + a[10] * z + a[11];
-                double NX = c[0] * nx + c[1] * ny + c[2] * nz;
-                double NY = c[3] * nx + c[4] * ny + c[5] * nz;
-                double NZ = c[6] * nx + c[7] * ny + c[8] * nz;
-                double len = sqrt(NX * NX + NY * NY + NZ * NZ);
-                if (!(fabs(X) <= 3.0e38 && fabs(Y) <= 3.0e38 && fabs(Z) <= 3.0e38)) {
+            /* a streaming mesh takes the copy in runs that fit its window (a face of several
+               patches can be larger than one: cm_mesh_make_room flushed between them) */
+            for (uint32_t v0 = 0; v0 < src.nverts;) {
+                uint32_t run = src.nverts - v0;
+                if (mesh->spill && run > mesh->win_cap_verts)
+                    run = mesh->win_cap_verts;
+                cm_err room = cm_mesh_make_room(mesh, run, 0, st);
+                if (room != CM_OK) {
                     cm_mesh_rollback(mesh, &mark);
-                    return cm_fail(st, CM_E_NONFINITE, "placed copies: a vertex beyond float range");
+                    return room;
                 }
-                float *o = cm_mesh_wpos(mesh, mesh->nverts + v), *on = cm_mesh_wnrm(mesh, mesh->nverts + v);
-                o[0] = (float)X;
-                o[1] = (float)Y;
-                o[2] = (float)Z;
-                if (len > 0.0) {
-                    on[0] = (float)(NX / len);
-                    on[1] = (float)(NY / len);
-                    on[2] = (float)(NZ / len);
-                } else {
-                    on[0] = q[0];
-                    on[1] = q[1];
-                    on[2] = q[2];
+                for (uint32_t v = v0; v < v0 + run; v++) {
+                    float p[3], q[3];
+                    cm_mesh_pos(mesh, src.first_vert + v, p);
+                    cm_mesh_nrm(mesh, src.first_vert + v, q);
+                    double x = (double)p[0], y = (double)p[1], z = (double)p[2];
+                    double nx = (double)q[0], ny = (double)q[1], nz = (double)q[2];
+                    double X = a[0] * x + a[1] * y + a[2] * z + a[3];
+                    double Y = a[4] * x + a[5] * y + a[6] * z + a[7];
+                    double Z = a[8] * x + a[9] * y + a[10] * z + a[11];
+                    double NX = c[0] * nx + c[1] * ny + c[2] * nz;
+                    double NY = c[3] * nx + c[4] * ny + c[5] * nz;
+                    double NZ = c[6] * nx + c[7] * ny + c[8] * nz;
+                    double len = sqrt(NX * NX + NY * NY + NZ * NZ);
+                    if (!(fabs(X) <= 3.0e38 && fabs(Y) <= 3.0e38 && fabs(Z) <= 3.0e38)) {
+                        cm_mesh_rollback(mesh, &mark);
+                        return cm_fail(st, CM_E_NONFINITE, "placed copies: a vertex beyond float range");
+                    }
+                    uint32_t at = dst->first_vert + v;
+                    float *o = cm_mesh_wpos(mesh, at), *on = cm_mesh_wnrm(mesh, at);
+                    o[0] = (float)X;
+                    o[1] = (float)Y;
+                    o[2] = (float)Z;
+                    if (len > 0.0) {
+                        on[0] = (float)(NX / len);
+                        on[1] = (float)(NY / len);
+                        on[2] = (float)(NZ / len);
+                    } else {
+                        on[0] = q[0];
+                        on[1] = q[1];
+                        on[2] = q[2];
+                    }
                 }
+                mesh->nverts += run;
+                v0 += run;
             }
-            for (uint32_t t = 0; t < src.nindex; t++) {
-                /* a mirrored copy's triangles reversed: each one's second and third vertices swapped
-                   (corner r of 1, 2 takes corner 3 - r; a trailing part triangle stays as it is) */
-                uint32_t r = t % 3u, from = mirror && r ? t - r + (3u - r) : t;
-                if (from >= src.nindex)
-                    from = t;
-                *cm_mesh_widx(mesh, mesh->nindex + t) = cm_mesh_idx(mesh, src.first_index + from) - src.first_vert +
-                                                         dst->first_vert;
+            for (uint32_t t0 = 0; t0 < src.nindex;) {
+                uint32_t run = src.nindex - t0;
+                if (mesh->spill && run > mesh->win_cap_index)
+                    run = mesh->win_cap_index;
+                cm_err room = cm_mesh_make_room(mesh, 0, run, st);
+                if (room != CM_OK) {
+                    cm_mesh_rollback(mesh, &mark);
+                    return room;
+                }
+                for (uint32_t t = t0; t < t0 + run; t++) {
+                    /* a mirrored copy's triangles reversed: each one's second and third vertices
+                       swapped (corner r of 1, 2 takes corner 3 - r; a trailing part triangle stays) */
+                    uint32_t r = t % 3u, from = mirror && r ? t - r + (3u - r) : t;
+                    if (from >= src.nindex)
+                        from = t;
+                    *cm_mesh_widx(mesh, dst->first_index + t) =
+                        cm_mesh_idx(mesh, src.first_index + from) - src.first_vert + dst->first_vert;
+                }
+                mesh->nindex += run;
+                t0 += run;
             }
             if (cm_mesh_spill_failed(mesh)) {
                 cm_mesh_rollback(mesh, &mark);
                 return cm_fail(st, CM_E_IO, "placed copies: reading the part back from the mesh spill");
             }
-            mesh->nverts += src.nverts;
-            mesh->nindex += src.nindex;
             mesh->nfaces++;
         }
     }

@@ -154,21 +154,30 @@ size_t cm_ac_enc_finish_trimmed(cm_ac_enc *e)
 
 /* ---- decoder ---- */
 
+/* the next window, from d->pos on; 0 when it cannot be read (the one call through the fill:
+   noinline, the stack gates' tables name this function) */
+__attribute__((noinline)) static int next_window(cm_ac_dec *d)
+{
+    size_t avail = 0;
+    const uint8_t *p = d->io_failed || d->fill == NULL ? NULL : d->fill(d->fill_ctx, d->pos, &avail);
+    if (p == NULL || avail == 0) {
+        d->io_failed = 1;
+        return 0;
+    }
+    d->buf = p;
+    d->win_start = d->pos;
+    d->win_end = d->pos + avail;
+    return 1;
+}
+
 static uint8_t get_byte(cm_ac_dec *d)
 {
     if (d->pos < d->len) {
-        if (d->pos >= d->win_end) { /* only with a fill: without one the window is the stream */
-            size_t avail = 0;
-            const uint8_t *p = d->io_failed || d->fill == NULL ? NULL : d->fill(d->fill_ctx, d->pos, &avail);
-            if (p == NULL || avail == 0) {
-                d->io_failed = 1;
-                d->overrun = 1;
-                d->pos++;
-                return 0;
-            }
-            d->buf = p;
-            d->win_start = d->pos;
-            d->win_end = d->pos + avail;
+        /* only with a fill: without one the window is the stream */
+        if (d->pos >= d->win_end && !next_window(d)) {
+            d->overrun = 1;
+            d->pos++;
+            return 0;
         }
         return d->buf[d->pos++ - d->win_start];
     }

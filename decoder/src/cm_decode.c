@@ -1278,7 +1278,7 @@ static cm_err sec_colr(reader *r)
 }
 
 /* cm_ac_fill for a file longer than the window: the stream's bytes from pos on, read again */
-static const uint8_t *refill_window(void *ctx, size_t pos, size_t *avail)
+__attribute__((noinline)) static const uint8_t *refill_window(void *ctx, size_t pos, size_t *avail)
 {
     reader *r = ctx;
     cm_decoder *d = r->d;
@@ -1287,17 +1287,19 @@ static const uint8_t *refill_window(void *ctx, size_t pos, size_t *avail)
         n = (uint32_t)CM_FILE_WINDOW_BYTES;
     if (off >= d->file_len || d->src_read == NULL || d->src_read(d->src_ctx, off, d->buf, n) != 0)
         return NULL;
-    if (off == d->recrc_next && d->recrc_next < d->file_len - 4u) { /* the body again, in order */
-        uint32_t k = d->file_len - 4u - off < n ? d->file_len - 4u - off : n;
-        d->recrc = cm_crc32_update(d->recrc, d->buf, k);
-        d->recrc_next += k;
+    /* the body again, in order: a window reaches past its section's end, and the next section's
+       first starts inside it, so what is new of each window goes on the CRC */
+    const uint32_t end = d->file_len - 4u, stop = off + n < end ? off + n : end;
+    if (off <= d->recrc_next && d->recrc_next < stop) {
+        d->recrc = cm_crc32_update(d->recrc, d->buf + (d->recrc_next - off), stop - d->recrc_next);
+        d->recrc_next = stop;
     }
     *avail = n;
     return d->buf;
 }
 
 /* formats 1-3: the CRC of bytes [off, off + len) of a file longer than the window, read again */
-static int window_crc(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
+__attribute__((noinline)) static int window_crc(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
 {
     uint32_t c = 0;
     while (len > 0) {
@@ -1312,21 +1314,24 @@ static int window_crc(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
     return 1;
 }
 
-/* a section of a file read again failed: 1 when the rest of the file, read again in order, makes a
-   CRC other than the one taken as it was fed (the file changed: that is the error to report) */
-static int changed_since_fed(cm_decoder *d)
+/* a file read again: the CRC of what was read, in order, completed by reading what the sections
+   left (a trimmed stream's last bytes, a window's tail); 1 = the same bytes as were fed, 0 = the
+   file changed, -1 = it could not be read */
+__attribute__((noinline)) static int same_as_fed(cm_decoder *d)
 {
     const uint32_t end = d->file_len - 4u;
     while (d->recrc_next < end) {
         uint32_t n = end - d->recrc_next < (uint32_t)CM_FILE_WINDOW_BYTES ? end - d->recrc_next
                                                                          : (uint32_t)CM_FILE_WINDOW_BYTES;
         if (d->src_read(d->src_ctx, d->recrc_next, d->buf, n) != 0)
-            return 0; /* unknown: the section's own error stands */
+            return -1;
         d->recrc = cm_crc32_update(d->recrc, d->buf, n);
         d->recrc_next += n;
     }
-    return d->recrc_next == end && crc_differs(d->recrc, d->crc);
+    return !crc_differs(d->recrc, d->crc);
 }
+
+#define CHANGED_FILE "file CRC (the file changed after it was received)"
 
 cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
 {
@@ -1387,11 +1392,13 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         case CM_SEC_COLR: e = sec_colr(&r); break;
         default: e = fail(d, st, CM_E_FORMAT, sec->off, "section tag"); break;
         }
-        if (r.ac.io_failed) /* what the section said about its bytes is moot: they were not read */
-            return fail(d, st, CM_E_IO, r.base + (uint32_t)r.ac.pos, "reading the file again");
-        if (e != CM_OK && windowed && changed_since_fed(d)) { /* the cause, not what it did to a section */
+        if (r.ac.io_failed) { /* what the section said about its bytes is moot: they were not read */
             cm_status_init(st);
-            return fail(d, st, CM_E_CRC, d->file_len - 4u, "file CRC (the file changed after it was received)");
+            return fail(d, st, CM_E_IO, r.base + (uint32_t)r.ac.pos, "reading the file again");
+        }
+        if (e != CM_OK && windowed && same_as_fed(d) == 0) { /* the cause, not what it did to a section */
+            cm_status_init(st);
+            return fail(d, st, CM_E_CRC, d->file_len - 4u, CHANGED_FILE);
         }
         if (e != CM_OK)
             return e;
@@ -1400,9 +1407,14 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
        not the writer's (an honest stream's reader ends at or past its last byte) */
     if (one_stream && r.ac.pos < r.ac.len)
         return fail(d, st, CM_E_FORMAT, r.base + (uint32_t)r.ac.pos, "bytes after the sections");
-    /* a file read again whole: the same bytes as were checked (the sections read in order cover it) */
-    if (windowed && d->recrc_next == d->file_len - 4u && crc_differs(d->recrc, d->crc))
-        return fail(d, st, CM_E_CRC, d->file_len - 4u, "file CRC (the file changed after it was received)");
+    /* a file read again: the same bytes as were checked, or no model */
+    if (windowed) {
+        int same = same_as_fed(d);
+        if (same < 0)
+            return fail(d, st, CM_E_IO, d->recrc_next, "reading the file again");
+        if (same == 0)
+            return fail(d, st, CM_E_CRC, d->file_len - 4u, CHANGED_FILE);
+    }
     d->state = CM_DEC_DONE;
     return CM_OK;
 }

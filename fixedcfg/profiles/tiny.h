@@ -27,6 +27,7 @@
 #define CM_MAX_FILE_BYTES 4096
 #define CM_FILE_WINDOW_BYTES CM_MAX_FILE_BYTES
 #define CM_SPILL_PAGE_BYTES 192u
+#define CM_SPILL_PAGES 2
 #define CM_MAX_MODEL_CTRL 64
 #define CM_MAX_MODEL_KNOTS 64
 #define CM_MAX_MODEL_LOOPS 16
@@ -35,7 +36,8 @@
 #define CM_MAX_PLACEMENTS 4
 #define CM_STACK_FN_MAX 8192
 #define CM_STACK_BUDGET 65536
-/* 72 KiB for 65 KiB on x86-64 (GREGORY-FIT's corrections added 2 x 2.4 KiB: MAX_GREG patches of
-   25 coefficients in the rebuild's and the tessellation's patch sets) */
+/* 72 KiB for 57.7 KiB on x86-64 (65 KiB before issue 15's mesh window; GREGORY-FIT's corrections
+   had added 2 x 2.4 KiB: MAX_GREG patches of 25 coefficients in the rebuild's and the
+   tessellation's patch sets) */
 #define CM_DECODE_STATE_BUDGET 73728
 #endif

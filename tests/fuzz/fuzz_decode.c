@@ -48,6 +48,29 @@ static void check_face_reason(cm_err e, const cm_status *st, uint32_t f, uint32_
         __builtin_trap();
 }
 
+/* the mesh's spill in memory (the terminal's is files beside the output): the window's flushes,
+   the pages read back and the spilled writers are fuzzed too; past its room a write fails, as a
+   full disk would (CM_E_IO) */
+static uint8_t spill_mem[CM_SPILL_STREAMS][1u << 21];
+static uint64_t spill_len[CM_SPILL_STREAMS];
+
+static int spill_mem_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n)
+{
+    (void)ctx;
+    if (s >= CM_SPILL_STREAMS || off > sizeof spill_mem[0] || n > sizeof spill_mem[0] - off)
+        return -1;
+    if (write) {
+        memcpy(spill_mem[s] + off, buf, n);
+        if (off + n > spill_len[s])
+            spill_len[s] = off + n;
+        return 0;
+    }
+    if (off + n > spill_len[s])
+        __builtin_trap(); /* the mesh reads only what it wrote */
+    memcpy(buf, spill_mem[s] + off, n);
+    return 0;
+}
+
 /* the input as the decoder's source: a file longer than its window (8 KiB on the terminal) has its
    sections read again from it, as the terminal reads its stored file */
 static const uint8_t *src_data;
@@ -100,7 +123,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
        file's own tolerance made one input cost up to 0.6 G instructions); one input in eight
        (its length) keeps the file's tolerance, so the dense paths and the point caps stay fuzzed */
     double tol = (size & 7u) == 0 ? state.dec.model.tess_tol : state.dec.model.tess_tol * FUZZ_COARSE;
-    cm_mesh mesh = cm_decode_state_mesh(&state, NULL, NULL);
+    memset(spill_len, 0, sizeof spill_len);
+    cm_mesh mesh = cm_decode_state_mesh(&state, spill_mem_io, NULL);
     cm_mesh_clear(&mesh);
     uint32_t first = state.dec.model.nfaces ? (uint32_t)((size * 31u + data[size / 2]) % state.dec.model.nfaces) : 0;
     for (uint32_t f = first; f < state.dec.model.nfaces && f < first + FUZZ_FACES; f++) {
@@ -114,8 +138,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (state.tess.tri.ear_tests > 17L * CM_TESS_MAX_NODES + 256 ||
             state.tess.tri.cdt_work > 259L * CM_MAX_TESS_POINTS + 4096)
             __builtin_trap();
-        if (e == CM_E_LIMIT)
-            break; /* the mesh is full: the terminal stops here too */
+        if (e == CM_E_LIMIT || e == CM_E_IO) /* the mesh is full, or its spill: the terminal stops too */
+            break;
         if (e != CM_OK) {
             cm_mesh_rollback(&mesh, &mark);
             if (mesh.nverts != mark.nverts || mesh.nindex != mark.nindex || mesh.nfaces != mark.nfaces)
@@ -135,7 +159,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         __builtin_trap();
     /* every index the tessellator wrote points at a vertex it wrote */
     for (uint32_t i = 0; i < mesh.nindex; i++)
-        if (mesh.idx[i] >= mesh.nverts)
+        if (cm_mesh_idx(&mesh, i) >= mesh.nverts && !cm_mesh_spill_failed(&mesh))
             __builtin_trap();
 
     /* serialise what there is, in small pieces */

@@ -6,6 +6,9 @@
  * file (and tiny refuses them by their needs), and each test checks that side instead.
  *
  *  - tests/data/window/geo_example_tol2e-4.cmz: format 4.6, one stream, 13 241 bytes;
+ *  - tests/data/window/geo_example_tol2e-4_v45.cmz, _v40.cmz: formats 4.5 and 4.0, five streams
+ *    (a window reaches past a section's end into the next: the CRC of what is read again must
+ *    follow, or a change in a later section went unnoticed);
  *  - tests/data/old_formats/geo_example_v26.cmz: format 2.6, a CRC per section, 13 041 bytes.
  *
  * Run from the repository's root (as make runs the unit tests).
@@ -21,8 +24,10 @@
 #include "cm/cm_decode.h"
 #include "cm/cm_limits_info.h"
 
-static const char *const files[2] = {"tests/data/window/geo_example_tol2e-4.cmz",
-                                     "tests/data/old_formats/geo_example_v26.cmz"};
+#define NFILES 4
+static const char *const files[NFILES] = {
+    "tests/data/window/geo_example_tol2e-4.cmz", "tests/data/window/geo_example_tol2e-4_v45.cmz",
+    "tests/data/window/geo_example_tol2e-4_v40.cmz", "tests/data/old_formats/geo_example_v26.cmz"};
 
 static uint8_t file[1 << 16];
 static size_t nfile;
@@ -91,95 +96,107 @@ static uint64_t fnv(const void *p, size_t n)
     return h;
 }
 
+/* fn on each of the two files, where this profile can hold its model */
+static void each_file(void (*fn)(void))
+{
+    for (int k = 0; k < NFILES; k++) {
+        load(files[k]);
+        if (fits())
+            fn();
+    }
+}
+
+static void test_read_through_window_of(void)
+{
+    cm_status st;
+    fail_at = flip_at = -1;
+    assert_int_equal(decode(&dec, nfile, 1, &st), CM_OK);
+    assert_int_equal(dec.model.nfaces, 8);
+    assert_int_equal(dec.model.nedges, 30);
+    uint32_t nctrl = dec.model.nctrl;
+    uint64_t hc = fnv(dec.model.ctrl, nctrl * sizeof dec.model.ctrl[0]);
+    uint64_t hf = fnv(dec.model.faces, 8 * sizeof dec.model.faces[0]);
+    /* windowed, it reads the body again, in windows; else never */
+    if (windowed())
+        assert_true(src_calls >= (long)(nfile / CM_FILE_WINDOW_BYTES));
+    else
+        assert_int_equal(src_calls, 0);
+    /* the same model however the bytes arrive */
+    assert_int_equal(decode(&dec, 1000, 1, &st), CM_OK);
+    assert_int_equal(dec.model.nctrl, nctrl);
+    assert_true(fnv(dec.model.ctrl, nctrl * sizeof dec.model.ctrl[0]) == hc);
+    assert_true(fnv(dec.model.faces, 8 * sizeof dec.model.faces[0]) == hf);
+}
+
 static void test_read_through_window(void **state)
 {
     (void)state;
-    for (int k = 0; k < 2; k++) {
-        load(files[k]);
-        if (!fits())
-            continue;
-        cm_status st;
-        fail_at = flip_at = -1;
-        assert_int_equal(decode(&dec, nfile, 1, &st), CM_OK);
-        assert_int_equal(dec.model.nfaces, 8);
-        assert_int_equal(dec.model.nedges, 30);
-        uint32_t nctrl = dec.model.nctrl;
-        uint64_t hc = fnv(dec.model.ctrl, nctrl * sizeof dec.model.ctrl[0]);
-        uint64_t hf = fnv(dec.model.faces, 8 * sizeof dec.model.faces[0]);
-        /* windowed, it reads the body again, in windows; else never */
-        if (windowed())
-            assert_true(src_calls >= (long)(nfile / CM_FILE_WINDOW_BYTES));
-        else
-            assert_int_equal(src_calls, 0);
-        /* the same model however the bytes arrive */
-        assert_int_equal(decode(&dec, 1000, 1, &st), CM_OK);
-        assert_int_equal(dec.model.nctrl, nctrl);
-        assert_true(fnv(dec.model.ctrl, nctrl * sizeof dec.model.ctrl[0]) == hc);
-        assert_true(fnv(dec.model.faces, 8 * sizeof dec.model.faces[0]) == hf);
+    each_file(test_read_through_window_of);
+}
+
+static void test_no_source_of(void)
+{
+    cm_status st;
+    cm_err e = decode(&dec, 4096, 0, &st);
+    if (windowed()) {
+        assert_int_equal(e, CM_E_ARG);
+        assert_non_null(strstr(st.where, "no source"));
+    } else {
+        assert_int_equal(e, CM_OK);
     }
 }
 
 static void test_no_source(void **state)
 {
     (void)state;
-    for (int k = 0; k < 2; k++) {
-        load(files[k]);
-        if (!fits())
-            continue;
+    each_file(test_no_source_of);
+}
+
+static void test_source_fails_of(void)
+{
+    for (long at = (long)CM_FILE_WINDOW_BYTES; at < (long)nfile; at += 1500) {
+        fail_at = at;
         cm_status st;
-        cm_err e = decode(&dec, 4096, 0, &st);
-        if (windowed()) {
-            assert_int_equal(e, CM_E_ARG);
-            assert_non_null(strstr(st.where, "no source"));
-        } else {
-            assert_int_equal(e, CM_OK);
-        }
+        cm_err e = decode(&dec, nfile, 1, &st);
+        assert_int_equal(e, windowed() ? CM_E_IO : CM_OK);
+        assert_int_equal(st.code, e); /* the status says so too (the terminal reports st.code) */
     }
+    fail_at = -1;
 }
 
 static void test_source_fails(void **state)
 {
     (void)state;
-    for (int k = 0; k < 2; k++) {
-        load(files[k]);
-        if (!fits())
-            continue;
-        for (long at = (long)CM_FILE_WINDOW_BYTES; at < (long)nfile; at += 1500) {
-            fail_at = at;
-            cm_status st;
-            cm_err e = decode(&dec, nfile, 1, &st);
-            assert_int_equal(e, windowed() ? CM_E_IO : CM_OK);
-        }
-        fail_at = -1;
-    }
+    each_file(test_source_fails_of);
 }
 
 /* a file that changes between its receipt and its decoding: refused, never a model of other bytes
    passed off as the checked one (the CRC of what is read again, or a section's own CRC) */
+static void test_file_changed_of(void)
+{
+    long crc_refusals = 0, tried = 0;
+    for (long at = (long)CM_FILE_WINDOW_BYTES; at < (long)nfile - 4; at += 37) {
+        flip_at = at;
+        cm_status st;
+        cm_err e = decode(&dec, nfile, 1, &st);
+        tried++;
+        if (!windowed()) { /* the source is never read: the bytes fed are the file */
+            assert_int_equal(e, CM_OK);
+            continue;
+        }
+        assert_int_not_equal(e, CM_OK); /* every change refused, in every format */
+        assert_int_equal(st.code, e);
+        crc_refusals += e == CM_E_CRC;
+    }
+    flip_at = -1;
+    if (windowed() && tried > 0) /* most changes decode as some model: the CRC refuses them */
+        assert_true(crc_refusals * 2 > tried);
+}
+
 static void test_file_changed(void **state)
 {
     (void)state;
-    for (int k = 0; k < 2; k++) {
-        load(files[k]);
-        if (!fits())
-            continue;
-        long crc_refusals = 0, tried = 0;
-        for (long at = (long)CM_FILE_WINDOW_BYTES; at < (long)nfile - 4; at += 37) {
-            flip_at = at;
-            cm_status st;
-            cm_err e = decode(&dec, nfile, 1, &st);
-            tried++;
-            if (!windowed()) { /* the source is never read: the bytes fed are the file */
-                assert_int_equal(e, CM_OK);
-                continue;
-            }
-            assert_int_not_equal(e, CM_OK);
-            crc_refusals += e == CM_E_CRC;
-        }
-        flip_at = -1;
-        if (windowed() && tried > 0) /* most changes decode as some model: the CRC refuses them */
-            assert_true(crc_refusals * 2 > tried);
-    }
+    each_file(test_file_changed_of);
 }
 
 int main(void)

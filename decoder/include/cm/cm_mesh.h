@@ -33,7 +33,7 @@ typedef struct cm_mesh_face {
  * only its latest vertices and indices in its arrays (the resident window); when a face would not
  * fit there, cm_mesh_make_room writes the window out through the spill's io (the platform's: files
  * beside the output) and starts it again empty.  Everything reads vertices and indices through
- * cm_mesh_pos, cm_mesh_nrm and cm_mesh_idx, which take a flushed one back through one cached page
+ * cm_mesh_pos, cm_mesh_nrm and cm_mesh_idx, which take a flushed one back through a few cached pages
  * per array.  Without a spill (the workstation, tests) the arrays are the whole mesh, as before.
  */
 enum { CM_SPILL_POS = 0, CM_SPILL_NRM = 1, CM_SPILL_IDX = 2, CM_SPILL_STREAMS = 3 };
@@ -44,8 +44,11 @@ typedef struct cm_mesh_spill {
     int (*io)(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n);
     void *ctx;
     int failed;                    /* an io call failed: cm_mesh_spill_failed; the writers stop with CM_E_IO */
-    uint32_t page_first[CM_SPILL_STREAMS], page_n[CM_SPILL_STREAMS]; /* elements cached, per stream */
-    uint8_t page[CM_SPILL_STREAMS][CM_SPILL_PAGE_BYTES];
+    /* CM_SPILL_PAGES cached pages per stream, page k of a stream in slot k % CM_SPILL_PAGES: the
+       writers read in order, but STL takes a face's positions by its indices, which jump within
+       the face (one page per stream re-read a page nearly every triangle) */
+    uint32_t page_first[CM_SPILL_STREAMS][CM_SPILL_PAGES], page_n[CM_SPILL_STREAMS][CM_SPILL_PAGES];
+    uint8_t page[CM_SPILL_STREAMS][CM_SPILL_PAGES][CM_SPILL_PAGE_BYTES];
 } cm_mesh_spill;
 
 typedef struct cm_mesh {
