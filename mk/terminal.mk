@@ -150,7 +150,8 @@ $(B)/stackgate/%.ci: %.c
 	@mkdir -p $(@D)
 	$(call say,CC-STACK,$@)
 	$(Q)$(CC) $(CM_INC_ALL) -DCM_PROFILE='"profiles/$(PROFILE).h"' $(LINK_USB_CFLAGS) $(GPIO_CFLAGS) $(CM_STD) \
-		$(CM_WARN) $(call stack_flags,$(PROFILE)) $(CFLAGS) -c $< -o $(@:.ci=.o)
+		$(CM_WARN) $(call stack_flags,$(PROFILE)) $(CFLAGS) $(if $(filter platform/%,$<),$(CM_PLATFORM_OPT)) \
+		-c $< -o $(@:.ci=.o)
 
 .PHONY: check-stack-programs
 check-stack-programs: $(B)/libcmdecoder.a $(BUILD_ROOT)/tools/check_stack $(STACK_PROGRAM_CI)

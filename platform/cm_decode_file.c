@@ -52,21 +52,28 @@ static cm_err io_fail(cm_status *st, const char *where)
 static uint8_t read_chunk[16384];
 static uint8_t write_chunk[65536];
 
-/* cm_dec_read_fn over a file descriptor (ctx points at it): a long file's sections read again */
-int cm_decode_pread(void *ctx, uint32_t off, uint8_t *buf, size_t n)
+/* all n bytes at off, read (or written); 0, or -1 on an error or an early end */
+static int full_io(int fd, int write, uint64_t off, uint8_t *p, size_t n)
 {
-    const int fd = *(const int *)ctx;
+    if (off > (uint64_t)INT64_MAX - n)
+        return -1;
     while (n > 0) {
-        ssize_t k = pread(fd, buf, n, (off_t)off);
+        ssize_t k = write ? pwrite(fd, p, n, (off_t)off) : pread(fd, p, n, (off_t)off);
         if (k < 0 && errno == EINTR)
             continue;
         if (k <= 0)
             return -1;
-        buf += k;
-        off += (uint32_t)k;
+        p += k;
+        off += (uint64_t)k;
         n -= (size_t)k;
     }
     return 0;
+}
+
+/* cm_dec_read_fn over a file descriptor (ctx points at it): a long file's sections read again */
+int cm_decode_pread(void *ctx, uint32_t off, uint8_t *buf, size_t n)
+{
+    return full_io(*(const int *)ctx, 0, off, buf, n);
 }
 
 cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
@@ -133,22 +140,11 @@ static int open_spill_file(void)
 static int spill_file_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n)
 {
     spill_files *sf = ctx;
-    if (s >= CM_SPILL_STREAMS || off > (uint64_t)INT64_MAX - n)
+    if (s >= CM_SPILL_STREAMS)
         return -1;
     if (sf->fd[s] < 0 && (!write || (sf->fd[s] = open_spill_file()) < 0))
         return -1;
-    uint8_t *p = buf;
-    while (n > 0) {
-        ssize_t k = write ? pwrite(sf->fd[s], p, n, (off_t)off) : pread(sf->fd[s], p, n, (off_t)off);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k <= 0)
-            return -1;
-        p += k;
-        off += (uint64_t)k;
-        n -= (size_t)k;
-    }
-    return 0;
+    return full_io(sf->fd[s], write, off, buf, n);
 }
 
 cm_mesh cm_decode_stream_mesh(cm_decode_state *s, const char *out_path, int is_dir)

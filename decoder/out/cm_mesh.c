@@ -90,14 +90,23 @@ static const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, uint32_t
     return sp->page[s][k] + (size_t)(i - first) * es;
 }
 
-void cm_mesh_spilled_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3])
+void cm_mesh_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3])
 {
-    memcpy(out, spilled(m, s, i, 12u), 12u);
+    if (i >= m->win_vert)
+        memcpy(out, (s == CM_SPILL_NRM ? m->nrm : m->pos)[i - m->win_vert], 12u);
+    else
+        memcpy(out, spilled(m, s, i, 12u), 12u);
 }
 
-uint32_t cm_mesh_spilled_idx(const cm_mesh *m, uint32_t k)
+void cm_mesh_pos(const cm_mesh *m, uint32_t i, float out[3]) { cm_mesh_vec(m, CM_SPILL_POS, i, out); }
+
+void cm_mesh_nrm(const cm_mesh *m, uint32_t i, float out[3]) { cm_mesh_vec(m, CM_SPILL_NRM, i, out); }
+
+uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k)
 {
     uint32_t v;
+    if (k >= m->win_index)
+        return m->idx[k - m->win_index];
     memcpy(&v, spilled(m, CM_SPILL_IDX, k, 4u), 4u);
     return v;
 }

@@ -58,29 +58,28 @@ static int mem_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, siz
     return 0;
 }
 
-static cm_mesh whole_mesh(void)
+/* an empty mesh over these arrays */
+static cm_mesh mesh_over(float (*pos)[3], float (*nrm)[3], uint32_t *idx, cm_mesh_face *faces, uint32_t cap_v,
+                         uint32_t cap_i)
 {
     cm_mesh m;
     memset(&m, 0, sizeof m);
-    m.pos = w_pos;
-    m.nrm = w_nrm;
-    m.idx = w_idx;
-    m.faces = w_faces;
-    m.cap_verts = WHOLE_V;
-    m.cap_index = WHOLE_I;
+    m.pos = pos;
+    m.nrm = nrm;
+    m.idx = idx;
+    m.faces = faces;
+    m.cap_verts = cap_v;
+    m.cap_index = cap_i;
     m.cap_faces = MANY_FACES;
     return m;
 }
 
+static cm_mesh whole_mesh(void) { return mesh_over(w_pos, w_nrm, w_idx, w_faces, WHOLE_V, WHOLE_I); }
+
+/* a window of WIN_V vertices and WIN_I indices over the memory store, up to WHOLE_V / WHOLE_I in all */
 static cm_mesh spilled_mesh(void)
 {
-    cm_mesh m;
-    memset(&m, 0, sizeof m);
-    m.pos = s_pos;
-    m.nrm = s_nrm;
-    m.idx = s_idx;
-    m.faces = s_faces;
-    m.cap_faces = MANY_FACES;
+    cm_mesh m = mesh_over(s_pos, s_nrm, s_idx, s_faces, 0, 0);
     memset(&spill, 0, sizeof spill);
     spill.io = mem_io;
     memset(store_len, 0, sizeof store_len);
@@ -154,6 +153,22 @@ static size_t write_file(const cm_mesh *m, cm_out_format fmt, uint8_t *out, size
 
 static uint8_t out_whole[1 << 22], out_spilled[1 << 22];
 
+/* a and b write the same GLB, STL and OBJ bytes */
+static void assert_same_files(const cm_mesh *a, const cm_mesh *b)
+{
+    const cm_out_format fmts[3] = {CM_OUT_GLB, CM_OUT_STL, CM_OUT_OBJ};
+    for (int k = 0; k < 3; k++) {
+        cm_err ea, eb;
+        size_t na = write_file(a, fmts[k], out_whole, sizeof out_whole, &ea);
+        size_t nb = write_file(b, fmts[k], out_spilled, sizeof out_spilled, &eb);
+        assert_int_equal(ea, CM_OK);
+        assert_int_equal(eb, CM_OK);
+        assert_true(na > 0);
+        assert_int_equal(na, nb);
+        assert_memory_equal(out_whole, out_spilled, na);
+    }
+}
+
 static void test_same_bytes_as_whole(void **state)
 {
     (void)state;
@@ -164,17 +179,7 @@ static void test_same_bytes_as_whole(void **state)
     }
     assert_true(b.win_vert > 0 && b.win_index > 0); /* it did spill */
     assert_true(b.nverts > 10u * WIN_V);
-    const cm_out_format fmts[3] = {CM_OUT_GLB, CM_OUT_STL, CM_OUT_OBJ};
-    for (int k = 0; k < 3; k++) {
-        cm_err ea, eb;
-        size_t na = write_file(&a, fmts[k], out_whole, sizeof out_whole, &ea);
-        size_t nb = write_file(&b, fmts[k], out_spilled, sizeof out_spilled, &eb);
-        assert_int_equal(ea, CM_OK);
-        assert_int_equal(eb, CM_OK);
-        assert_true(na > 0);
-        assert_int_equal(na, nb);
-        assert_memory_equal(out_whole, out_spilled, na);
-    }
+    assert_same_files(&a, &b);
     float lo[3], hi[3], lo2[3], hi2[3];
     assert_true(cm_mesh_bounds(&a, lo, hi) && cm_mesh_bounds(&b, lo2, hi2));
     assert_memory_equal(lo, lo2, sizeof lo);
@@ -202,15 +207,7 @@ static void test_rollback_past_window(void **state)
         assert_ok(add_face(&a, f));
         assert_ok(add_face(&b, f));
     }
-    const cm_out_format fmts[3] = {CM_OUT_GLB, CM_OUT_STL, CM_OUT_OBJ};
-    for (int k = 0; k < 3; k++) {
-        cm_err ea, eb;
-        size_t na = write_file(&a, fmts[k], out_whole, sizeof out_whole, &ea);
-        size_t nb = write_file(&b, fmts[k], out_spilled, sizeof out_spilled, &eb);
-        assert_int_equal(eb, CM_OK);
-        assert_int_equal(na, nb);
-        assert_memory_equal(out_whole, out_spilled, na);
-    }
+    assert_same_files(&a, &b);
 }
 
 /* face 0 of 70 vertices, more than the window holds: written in two runs, as the tessellation
@@ -278,16 +275,7 @@ static void test_place_face_over_window(void **state)
     assert_ok(cm_mesh_place(&model, &a, &st));
     assert_ok(cm_mesh_place(&model, &b, &st));
     assert_int_equal(a.nverts, b.nverts);
-    const cm_out_format fmts[3] = {CM_OUT_GLB, CM_OUT_STL, CM_OUT_OBJ};
-    for (int k = 0; k < 3; k++) {
-        cm_err ea, eb;
-        size_t na = write_file(&a, fmts[k], out_whole, sizeof out_whole, &ea);
-        size_t nb = write_file(&b, fmts[k], out_spilled, sizeof out_spilled, &eb);
-        assert_int_equal(ea, CM_OK);
-        assert_int_equal(eb, CM_OK);
-        assert_int_equal(na, nb);
-        assert_memory_equal(out_whole, out_spilled, na);
-    }
+    assert_same_files(&a, &b);
 }
 
 static void test_write_fails(void **state)

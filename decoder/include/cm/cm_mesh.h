@@ -87,33 +87,14 @@ static inline float *cm_mesh_wpos(cm_mesh *m, uint32_t i) { return m->pos[i - m-
 static inline float *cm_mesh_wnrm(cm_mesh *m, uint32_t i) { return m->nrm[i - m->win_vert]; }
 static inline uint32_t *cm_mesh_widx(cm_mesh *m, uint32_t k) { return &m->idx[k - m->win_index]; }
 
-void cm_mesh_spilled_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3]);
-uint32_t cm_mesh_spilled_idx(const cm_mesh *m, uint32_t k);
-
-/** Vertex i's position and normal (copied out), index k: from the window, or read back from the
-    spill (a failed read gives zeros and sets spill->failed). */
-static inline void cm_mesh_pos(const cm_mesh *m, uint32_t i, float out[3])
-{
-    if (i >= m->win_vert) {
-        const float *p = m->pos[i - m->win_vert];
-        out[0] = p[0], out[1] = p[1], out[2] = p[2];
-    } else {
-        cm_mesh_spilled_vec(m, CM_SPILL_POS, i, out);
-    }
-}
-static inline void cm_mesh_nrm(const cm_mesh *m, uint32_t i, float out[3])
-{
-    if (i >= m->win_vert) {
-        const float *p = m->nrm[i - m->win_vert];
-        out[0] = p[0], out[1] = p[1], out[2] = p[2];
-    } else {
-        cm_mesh_spilled_vec(m, CM_SPILL_NRM, i, out);
-    }
-}
-static inline uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k)
-{
-    return k >= m->win_index ? m->idx[k - m->win_index] : cm_mesh_spilled_idx(m, k);
-}
+/** Vertex i's position (s = CM_SPILL_POS) or normal (CM_SPILL_NRM), copied out, and index k: from
+    the window, or read back from the spill (a failed read gives zeros and sets spill->failed).
+    Functions, not inline: the board's code size is budgeted (CM_PROGRAM_TEXT_BUDGET) and the
+    writers call them from many places. */
+void cm_mesh_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3]);
+void cm_mesh_pos(const cm_mesh *m, uint32_t i, float out[3]);
+void cm_mesh_nrm(const cm_mesh *m, uint32_t i, float out[3]);
+uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k);
 
 /** 1 when a spill's io failed (the mesh, or what was written of it, is not to be trusted). */
 static inline int cm_mesh_spill_failed(const cm_mesh *m) { return m->spill != NULL && m->spill->failed; }
