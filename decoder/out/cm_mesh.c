@@ -5,6 +5,16 @@
 #include <stddef.h>
 #include <string.h>
 
+/* the window at the mesh's start, the spill's pages dropped and its failure forgotten */
+static void restart_window(cm_mesh *m)
+{
+    m->win_vert = m->win_index = 0;
+    if (m->spill) {
+        m->spill->failed = 0;
+        memset(m->spill->page_n, 0, sizeof m->spill->page_n);
+    }
+}
+
 void cm_mesh_clear(cm_mesh *m)
 {
     if (m == NULL)
@@ -14,20 +24,14 @@ void cm_mesh_clear(cm_mesh *m)
     m->nfaces = 0;
     m->nplace = 0;
     m->place = NULL;
-    m->win_vert = m->win_index = 0;
-    if (m->spill) {
-        m->spill->failed = 0;
-        memset(m->spill->page_n, 0, sizeof m->spill->page_n);
-    }
+    restart_window(m);
 }
 
 void cm_mesh_set_spill(cm_mesh *m, cm_mesh_spill *s, uint32_t win_verts, uint32_t win_index, uint32_t cap_verts,
                        uint32_t cap_index)
 {
     m->spill = s;
-    s->failed = 0;
-    memset(s->page_n, 0, sizeof s->page_n);
-    m->win_vert = m->win_index = 0;
+    restart_window(m);
     m->win_cap_verts = win_verts;
     m->win_cap_index = win_index;
     m->cap_verts = cap_verts;

@@ -1298,36 +1298,31 @@ __attribute__((noinline)) static const uint8_t *refill_window(void *ctx, size_t 
     return d->buf;
 }
 
-/* formats 1-3: the CRC of bytes [off, off + len) of a file longer than the window, read again */
-__attribute__((noinline)) static int window_crc(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
+/* the CRC *crc continued over bytes [off, off + len) of a file longer than the window, read again a
+   window at a time; 0 when they cannot be read (the one loop of the section CRCs and same_as_fed;
+   noinline: the stack gates' tables name this function) */
+__attribute__((noinline)) static int crc_read_again(cm_decoder *d, uint32_t off, uint32_t len, uint32_t *crc)
 {
-    uint32_t c = 0;
     while (len > 0) {
         uint32_t n = len < (uint32_t)CM_FILE_WINDOW_BYTES ? len : (uint32_t)CM_FILE_WINDOW_BYTES;
         if (d->src_read(d->src_ctx, off, d->buf, n) != 0)
             return 0;
-        c = cm_crc32_update(c, d->buf, n);
+        *crc = cm_crc32_update(*crc, d->buf, n);
         off += n;
         len -= n;
     }
-    *crc = c;
     return 1;
 }
 
 /* a file read again: the CRC of what was read, in order, completed by reading what the sections
    left (a trimmed stream's last bytes, a window's tail); 1 = the same bytes as were fed, 0 = the
    file changed, -1 = it could not be read */
-__attribute__((noinline)) static int same_as_fed(cm_decoder *d)
+static int same_as_fed(cm_decoder *d)
 {
     const uint32_t end = d->file_len - 4u;
-    while (d->recrc_next < end) {
-        uint32_t n = end - d->recrc_next < (uint32_t)CM_FILE_WINDOW_BYTES ? end - d->recrc_next
-                                                                         : (uint32_t)CM_FILE_WINDOW_BYTES;
-        if (d->src_read(d->src_ctx, d->recrc_next, d->buf, n) != 0)
-            return -1;
-        d->recrc = cm_crc32_update(d->recrc, d->buf, n);
-        d->recrc_next += n;
-    }
+    if (d->recrc_next < end && !crc_read_again(d, d->recrc_next, end - d->recrc_next, &d->recrc))
+        return -1;
+    d->recrc_next = end;
     return !crc_differs(d->recrc, d->crc);
 }
 
@@ -1364,7 +1359,7 @@ cm_err cm_dec_finish(cm_decoder *d, cm_status *st)
         const cm_dec_section *sec = &d->sec[s];
         if (sec->has_crc) {
             uint32_t crc = 0;
-            if (windowed && !window_crc(d, sec->off, sec->len, &crc))
+            if (windowed && !crc_read_again(d, sec->off, sec->len, &crc))
                 return fail(d, st, CM_E_IO, sec->off, "reading the file again (section CRC)");
             if (crc_differs(windowed ? crc : cm_crc32(d->buf + sec->off, sec->len), sec->crc))
                 return fail(d, st, CM_E_CRC, sec->off, "section CRC");

@@ -62,10 +62,7 @@ _Static_assert(sizeof(cm_decode_state) <= CM_DECODE_STATE_BUDGET,
 /** An empty mesh over s's arrays.  With io (the platform's, cm_decode_file.h) the arrays are a
     window and the mesh may hold CM_MAX_TRIS triangles, spilled through io; with io NULL, only what
     the window holds (a decode fuzz target, whose inputs are small). */
-static inline cm_mesh cm_decode_state_mesh(cm_decode_state *s,
-                                           int (*io)(void *ctx, int write, unsigned s, uint64_t off, void *buf,
-                                                     size_t n),
-                                           void *ctx)
+static inline cm_mesh cm_decode_state_mesh(cm_decode_state *s, cm_mesh_spill_io *io, void *ctx)
 {
     cm_mesh m = {.pos = s->pos,
                  .nrm = s->nrm,

@@ -38,10 +38,12 @@ typedef struct cm_mesh_face {
  */
 enum { CM_SPILL_POS = 0, CM_SPILL_NRM = 1, CM_SPILL_IDX = 2, CM_SPILL_STREAMS = 3 };
 
+/* read (write = 0) or write n bytes at byte offset off of stream s; 0 on success.  Writes only ever
+   append or rewrite what a rolled-back face left; reads only what was written */
+typedef int cm_mesh_spill_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n);
+
 typedef struct cm_mesh_spill {
-    /* read (write = 0) or write n bytes at byte offset off of stream s; 0 on success.  Writes only
-       ever append or rewrite what a rolled-back face left; reads only what was written */
-    int (*io)(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n);
+    cm_mesh_spill_io *io;
     void *ctx;
     int failed;                    /* an io call failed: cm_mesh_spill_failed; the writers stop with CM_E_IO */
     /* CM_SPILL_PAGES cached pages per stream, page k of a stream in slot k % CM_SPILL_PAGES: the
