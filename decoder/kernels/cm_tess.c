@@ -121,6 +121,7 @@ typedef struct tess_ctx {
     double box[4];   /* the boundary's box: xmin, ymin, xmax, ymax */
     double zinv;     /* z-order: cells per unit (32767 over the box's extent) */
     int grid;        /* cells per side of the location grid over the box, 0 if none */
+    int grid_ntri;   /* the triangles there were when it was built */
     double ghx, ghy; /* its cell size */
     double fold;     /* a fallback ear turning the wrong way is still cut when no higher than this */
     long cdt_budget; /* the fallback's steps allowed (ws->cdt_work) */
@@ -1214,6 +1215,7 @@ static void build_grid(tess_ctx *c)
     int g = (int)sqrt(0.5 * (double)c->ntri); /* ntri < 2 CM_MAX_TESS_POINTS: g^2 fits the cells */
     g = g < 1 ? 1 : g;
     c->grid = g;
+    c->grid_ntri = c->ntri;
     c->ghx = (c->box[2] - c->box[0]) / g;
     c->ghy = (c->box[3] - c->box[1]) / g;
     if (!(c->ghx > 0.0 && c->ghy > 0.0)) {
@@ -2033,6 +2035,9 @@ static double normalise(const cm_vec2 *pts, int npts, int nb, cm_tri_ws *ws, dou
     }
     for (int i = 0; i < npts; i++)
         ws->p[i] = cm_v2((pts[i].x - ox) * k, (pts[i].y - oy) * k);
+    ws->done.scale = k;
+    ws->done.ox = ox;
+    ws->done.oy = oy;
     box[0] = (xmin - ox) * k;
     box[1] = (ymin - oy) * k;
     box[2] = (xmax - ox) * k;
@@ -2150,6 +2155,51 @@ static cm_err build_ring(tess_ctx *c, const int *loop_start, int nloops, int *st
     return CM_OK;
 }
 
+/*
+ * Step 7 and 8: the interior points [from, npts) in order, the final Lawson pass (`final_pass`:
+ * after the flips around each point it changes nothing but what rounding left; a continuation
+ * skips it, as it costs a test of every side, round after round), the triangles copied out; what cm_triangulate_more continues from is recorded in ws->done.  Stamps of the
+ * near-point search are q - nb + 1: they grow with q, so marks left by earlier insertions (and
+ * earlier calls continued) never equal one.
+ */
+static cm_err insert_and_copy(tess_ctx *c, int from, int npts, double min_dist, int final_pass, int (*tris)[3],
+                              int cap, int *ntris, int *nused, cm_status *st)
+{
+    cm_tri_ws *ws = c->ws;
+    int nb = ws->done.nb;
+    double md = min_dist * ws->done.scale, r = md > EPS_SNAP ? md : EPS_SNAP, r2 = r * r;
+    int last = ws->done.last < c->ntri ? ws->done.last : 0, used = 0;
+    for (int q = from; q < npts; q++) {
+        int t = insert_point(c, q, last, r2, q - nb + 1);
+        if (t == -1 || c->overflow)
+            return cm_fail(st, CM_E_RANGE, __func__);
+        if (t >= 0) {
+            last = t;
+            used++;
+        }
+    }
+    if (final_pass)
+        flip_all(c);
+
+    if (c->ntri > cap)
+        return cm_fail_nospace(st, (uint64_t)c->ntri, (uint64_t)cap, __func__);
+    for (int t = 0; t < c->ntri; t++)
+        for (int i = 0; i < 3; i++)
+            tris[t][i] = ws->tri[t][i];
+    *ntris = c->ntri;
+    if (nused)
+        *nused = used;
+    ws->done.npts = npts;
+    ws->done.ntri = c->ntri;
+    ws->done.last = last;
+    ws->done.valid = 1;
+    ws->done.grid = c->grid;
+    ws->done.grid_ntri = c->grid_ntri;
+    ws->done.ghx = c->ghx;
+    ws->done.ghy = c->ghy;
+    return CM_OK;
+}
+
 cm_err cm_triangulate(const cm_vec2 *pts, int npts, const int *loop_start, int nloops, double min_dist,
                       int (*tris)[3], int cap, int *ntris, int *nused, cm_tri_ws *ws, cm_status *st)
 {
@@ -2164,6 +2214,8 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
         *ntris = 0;
     if (nused)
         *nused = 0;
+    if (ws)
+        ws->done.valid = 0;
     cm_err err = check_args(pts, npts, loop_start, nloops, min_dist, tris, cap, ntris, ws, st);
     if (err != CM_OK)
         return err;
@@ -2227,26 +2279,48 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
 
     if (npts > nb)
         build_grid(&c);
-    double md = min_dist * scale, r = md > EPS_SNAP ? md : EPS_SNAP, r2 = r * r;
-    int last = 0, used = 0;
-    for (int q = nb; q < npts; q++) {
-        int t = insert_point(&c, q, last, r2, q - nb + 1);
-        if (t == -1 || c.overflow)
-            return cm_fail(st, CM_E_RANGE, __func__);
-        if (t >= 0) {
-            last = t;
-            used++;
-        }
-    }
-    flip_all(&c);
+    ws->done.nb = nb;
+    ws->done.last = 0;
+    for (int i = 0; i < 4; i++)
+        ws->done.box[i] = c.box[i];
+    return insert_and_copy(&c, nb, npts, min_dist, 1, tris, cap, ntris, nused, st);
+}
 
-    if (c.ntri > cap)
-        return cm_fail_nospace(st, (uint64_t)c.ntri, (uint64_t)cap, __func__);
-    for (int t = 0; t < c.ntri; t++)
-        for (int i = 0; i < 3; i++)
-            tris[t][i] = ws->tri[t][i];
-    *ntris = c.ntri;
-    if (nused)
-        *nused = used;
-    return CM_OK;
+cm_err cm_triangulate_more(const cm_vec2 *pts, int npts, double min_dist, int (*tris)[3], int cap, int *ntris,
+                           cm_tri_ws *ws, cm_status *st)
+{
+    if (ntris)
+        *ntris = 0;
+    if (!pts || !ntris || !ws || cap < 0 || (cap > 0 && !tris) || !(min_dist >= 0.0) || !ws->done.valid ||
+        npts < ws->done.npts) {
+        if (ws)
+            ws->done.valid = 0;
+        return cm_fail(st, CM_E_ARG, __func__);
+    }
+    ws->done.valid = 0;
+    if (npts > CM_MAX_TESS_POINTS)
+        return cm_fail_limit(st, CM_LIMIT_MAX_TESS_POINTS, (uint64_t)npts, CM_MAX_TESS_POINTS, __func__);
+    double k = ws->done.scale;
+    for (int i = ws->done.npts; i < npts; i++) {
+        if (!(fabs(pts[i].x) <= DBL_MAX && fabs(pts[i].y) <= DBL_MAX))
+            return cm_fail(st, CM_E_NONFINITE, __func__);
+        ws->p[i] = cm_v2((pts[i].x - ws->done.ox) * k, (pts[i].y - ws->done.oy) * k);
+    }
+    tess_ctx c;
+    memset(&c, 0, sizeof c);
+    c.ws = ws;
+    c.ntri = ws->done.ntri;
+    for (int i = 0; i < 4; i++)
+        c.box[i] = ws->done.box[i];
+    ws->flips = 0;
+    /* the location grid stays right as points go in (the region does not change, and a cell's
+       triangle is still a triangle, near it); it is built again, to the triangles there are now,
+       when they have doubled, so that walks stay short (a build each call cost 7 % of a decode) */
+    c.grid = ws->done.grid;
+    c.grid_ntri = ws->done.grid_ntri;
+    c.ghx = ws->done.ghx;
+    c.ghy = ws->done.ghy;
+    if (npts > ws->done.npts && (c.grid == 0 || c.ntri >= 2 * c.grid_ntri))
+        build_grid(&c);
+    return insert_and_copy(&c, ws->done.npts, npts, min_dist, 0, tris, cap, ntris, NULL, st);
 }

@@ -606,6 +606,91 @@ static void test_min_dist(void **state)
     validate((const int(*)[3])T, nt, 0, nu);
 }
 
+/*
+ * cm_triangulate_more (issue 15: the decoder's refinement adds points a round): points added to the
+ * last triangulation in three calls give a valid, constrained Delaunay triangulation using the
+ * points a single call uses (general position: the same triangles, as sets); the triangles of the
+ * first call that no new point touches are still in their places; nothing to continue, fewer
+ * points, a bad point or a failed call before are refused, and a failure leaves nothing to continue.
+ */
+static uint64_t tri_set_key(const int *t)
+{
+    int a = t[0], b = t[1], c = t[2], r; /* rotate the smallest index first (orientation kept) */
+    if (b < a && b < c) { r = a; a = b; b = c; c = r; }
+    else if (c < a && c < b) { r = c; c = b; b = a; a = r; }
+    return ((uint64_t)a << 42) | ((uint64_t)b << 21) | (uint64_t)c;
+}
+
+static void test_continue(void **state)
+{
+    (void)state;
+    int nt, nu, nt1, nt_all;
+    uint32_t seed = 77;
+    shape_begin();
+    circle_loop(0, 0, 1, 48, 1);
+    circle_loop(0.35, -0.1, 0.25, 12, 0);
+    loops_end();
+    for (int i = 0; i < 120; i++)
+        rand_pt(&seed, -1, 2, -1, 2);
+    REQUIRE_POINTS(NP);
+    int n_all = NP, nb = LS[NL];
+    /* one call on every point: the reference */
+    assert_ok(run(0.0, &nt_all, &nu));
+    static uint64_t ref[TBUF], got[TBUF];
+    for (int k = 0; k < nt_all; k++)
+        ref[k] = tri_set_key(T[k]);
+    qsort(ref, (size_t)nt_all, sizeof *ref, cmp_u64);
+    /* the same points in three calls */
+    NP = nb + 40;
+    assert_ok(run(0.0, &nt1, &nu));
+    memcpy(T2, T, sizeof(int[3]) * (size_t)nt1);
+    cm_status_init(&ST);
+    assert_ok(cm_triangulate_more(P, nb + 80, 0.0, T, TBUF, &nt, &WS, &ST));
+    NP = nb + 80;
+    validate((const int(*)[3])T, nt, 0, -1);
+    cm_status_init(&ST);
+    assert_ok(cm_triangulate_more(P, n_all, 0.0, T, TBUF, &nt, &WS, &ST));
+    NP = n_all;
+    validate((const int(*)[3])T, nt, 0, -1);
+    check_local_delaunay((const int(*)[3])T, nt);
+    assert_int_equal(nt, nt_all);
+    for (int k = 0; k < nt; k++)
+        got[k] = tri_set_key(T[k]);
+    qsort(got, (size_t)nt, sizeof *got, cmp_u64);
+    assert_memory_equal(got, ref, sizeof *ref * (size_t)nt);
+    /* a call adding nothing changes nothing */
+    memcpy(T2, T, sizeof(int[3]) * (size_t)nt);
+    cm_status_init(&ST);
+    assert_ok(cm_triangulate_more(P, n_all, 0.0, T, TBUF, &nt1, &WS, &ST));
+    assert_int_equal(nt1, nt);
+    assert_memory_equal(T, T2, sizeof(int[3]) * (size_t)nt);
+    /* min_dist holds for the points added: a point next to a used one is skipped */
+    P[NP] = cm_v2(P[n_all - 1].x + 1e-4, P[n_all - 1].y);
+    cm_status_init(&ST);
+    assert_ok(cm_triangulate_more(P, n_all + 1, 0.01, T, TBUF, &nt1, &WS, &ST));
+    assert_int_equal(nt1, nt);
+    /* fewer points than triangulated, a NaN point, then anything: refused */
+    cm_status_init(&ST);
+    assert_int_equal(cm_triangulate_more(P, n_all - 1, 0.0, T, TBUF, &nt1, &WS, &ST), CM_E_ARG);
+    assert_int_equal(cm_triangulate_more(P, n_all + 1, 0.0, T, TBUF, &nt1, &WS, NULL), CM_E_ARG);
+    assert_ok(run(0.0, &nt1, &nu));
+    P[NP] = cm_v2(NAN, 0.0);
+    cm_status_init(&ST);
+    assert_int_equal(cm_triangulate_more(P, n_all + 1, 0.0, T, TBUF, &nt1, &WS, &ST), CM_E_NONFINITE);
+    assert_int_equal(nt1, 0);
+    P[NP] = cm_v2(0.1, 0.1);
+    assert_int_equal(cm_triangulate_more(P, n_all + 1, 0.0, T, TBUF, &nt1, &WS, NULL), CM_E_ARG);
+    /* a workspace a failed first call left has nothing to continue */
+    assert_ok(run(0.0, &nt1, &nu));
+    assert_int_equal(cm_triangulate(P, n_all, LS, NL, -1.0, T, TBUF, &nt1, NULL, &WS, NULL), CM_E_ARG);
+    assert_int_equal(cm_triangulate_more(P, n_all, 0.0, T, TBUF, &nt1, &WS, NULL), CM_E_ARG);
+    /* a negative min_dist and a short output are refused too */
+    assert_ok(run(0.0, &nt1, &nu));
+    assert_int_equal(cm_triangulate_more(P, n_all, -1.0, T, TBUF, &nt1, &WS, NULL), CM_E_ARG);
+    assert_ok(run(0.0, &nt1, &nu));
+    assert_int_equal(cm_triangulate_more(P, n_all, 0.0, T, 3, &nt1, &WS, NULL), CM_E_NOSPACE);
+}
+
 /* a hole touching the outer loop at a vertex (the same position, two point indices) */
 static void test_hole_touches_outer(void **state)
 {
@@ -2271,6 +2356,7 @@ int main(void)
         cmocka_unit_test(test_collinear_runs),
         cmocka_unit_test(test_skipped_points),
         cmocka_unit_test(test_min_dist),
+        cmocka_unit_test(test_continue),
         cmocka_unit_test(test_hole_touches_outer),
         cmocka_unit_test(test_holes_touch_each_other),
         cmocka_unit_test(test_almost_touching_hole),

@@ -33,6 +33,9 @@ typedef struct cm_tess_ws {
     int src2[CM_MAX_TESS_POINTS];          /* polygon joins: sources of the joined points */
     int ssrc[CM_MAX_TESS_POINTS];          /* polygon joins: sources of the winding loops' copies */
     cm_vec3 xyz[CM_MAX_TESS_POINTS];       /* refinement: 3D position of each triangulation point */
+    cm_vec3 nrm[CM_MAX_TESS_POINTS];       /* ... and its unit normal, where has_nrm (the evaluation
+                                              that gave xyz gave it: not evaluated again) */
+    unsigned char has_nrm[CM_MAX_TESS_POINTS];
     int use_first[CM_MAX_LOOP_EDGES];      /* outer loop: each use's first bpts index and sample count */
     int use_n[CM_MAX_LOOP_EDGES];
     int tris[CM_MAX_TESS_TRIS][3];
@@ -45,6 +48,8 @@ typedef struct cm_tess_ws {
                                               because the piece passed the round before */
     int point_cap;                         /* the face's budget of points (cm_tess_point_cap), set by
                                               cm_tessellate_face */
+    int refine_47;                         /* the refinement of format 4.7 (cm_model.refine_47), set
+                                              likewise */
 } cm_tess_ws;
 
 /** Statistics of one face's tessellation (for the encoder's needs and for tests). */

@@ -102,6 +102,15 @@ typedef struct cm_tri_ws {
                                                walks; bounded likewise) */
     long flips;                             /* Delaunay flips the last call made (tests read it: a
                                                long boundary must not cost a quadratic number) */
+    /* what cm_triangulate_more continues from: the last successful call's triangulation */
+    struct {
+        int valid;                          /* 1 after a successful call, 0 after a failed one */
+        int npts, nb, ntri, last;           /* points taken, boundary points, triangles, walk start */
+        double scale, ox, oy, box[4];       /* normalise()'s map and the boundary's box */
+        int grid, grid_ntri;                /* the location grid's cells per side, and the triangles
+                                               it was built for (0: none built) */
+        double ghx, ghy;                    /* its cell size */
+    } done;
 } cm_tri_ws;
 
 /**
@@ -144,5 +153,26 @@ CM_NODISCARD cm_err cm_triangulate(const cm_vec2 *pts, int npts, const int *loop
 CM_NODISCARD cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start, int nloops,
                                          double min_dist, double fold_tol, int (*tris)[3], int cap, int *ntris,
                                          int *nused, cm_tri_ws *ws, cm_status *st);
+
+/**
+ * Insert the interior points pts[ws->done.npts, npts) into the triangulation
+ * the last successful call on `ws` left (cm_triangulate, cm_triangulate_folds
+ * or this), whose points pts[0, ws->done.npts) must be unchanged: the
+ * decoder's refinement adds a few points a round, and rebuilding the region
+ * from its boundary each round cost a quarter of a decode (issue 15).  The
+ * points are inserted in order as cm_triangulate inserts interior points
+ * (skipped when outside the region or within `min_dist` of a used point or
+ * a boundary segment; points skipped before are not tried again), then the
+ * Lawson pass; the triangles come out as from cm_triangulate, the unchanged
+ * ones in their places.  The result is the constrained Delaunay
+ * triangulation of the same points, up to the ties of cocircular points and
+ * the points min_dist skipped, which may differ from one call on all points.
+ * @return CM_E_ARG (no triangulation to continue, fewer points than it has,
+ *         min_dist negative or NaN), CM_E_LIMIT, CM_E_NONFINITE, CM_E_NOSPACE
+ *         and CM_E_RANGE as cm_triangulate; after a failure nothing is left
+ *         to continue.
+ */
+CM_NODISCARD cm_err cm_triangulate_more(const cm_vec2 *pts, int npts, double min_dist, int (*tris)[3], int cap,
+                                        int *ntris, cm_tri_ws *ws, cm_status *st);
 
 #endif /* CM_TESS_H */
