@@ -1,4 +1,4 @@
-/* cm_lines.c - closest points of two lines, ray/plane intersection (spec K10). */
+/* cm_lines.c - closest points of two lines, ray/plane intersection (spec K10), a chord's S part. */
 #include "cm/cm_geom.h"
 
 int cm_lines_closest(cm_vec3 p, cm_vec3 d, cm_vec3 q, cm_vec3 e, double *lam, double *mu)
@@ -22,4 +22,15 @@ int cm_ray_plane(cm_vec3 p, cm_vec3 d, cm_vec3 m, double c, double *lam)
         return 0;
     *lam = (c - cm_dot(p, m)) / dm;
     return 1;
+}
+
+/* the cubic with the ends' slopes m0 = -c.n0, m1 = -c.n1 (c the chord's unit direction) lies
+   L s (1-s) [(m0 - m1)/2 + (m0 + m1)/2 (1 - 2s)] off the chord; the S part's peak, at
+   s = 1/2 - 1/sqrt(12), is L |m0 + m1| / 2 * 0.0962 */
+#define S_PART_PEAK 0.0481125224324688 /* (1/2) max s (1-s) (1-2s) = 1 / (12 sqrt 3) */
+
+double cm_chord_s_part(cm_vec3 p0, cm_vec3 n0, cm_vec3 p1, cm_vec3 n1)
+{
+    cm_vec3 ch = cm_sub(p1, p0); /* L c: the slopes times L */
+    return S_PART_PEAK * fabs(cm_dot(ch, n0) + cm_dot(ch, n1));
 }

@@ -530,24 +530,18 @@ static cm_err test_triangle(const chart *c, cm_tess_ws *ws, const int *tc, doubl
 }
 
 /*
- * Is the surface along the side i -> j shaped like an S, by the normals at its ends?  Over a side
- * of length L whose surface curve leaves the chord with slopes m0 = -c.n0 and arrives with
- * m1 = -c.n1 (c the chord's direction), the cubic through the ends with those slopes lies
- * L s (1-s) [(m0 - m1)/2 + (m0 + m1)/2 (1 - 2s)] off the chord: the first part peaks in the middle,
- * where the side is tested anyway; the second (an S) is zero there and peaks at s = 0.21 and 0.79,
- * at 0.0481 L |m0 + m1|.  Where that is at most a quarter of the tolerance, the quarter points
- * cannot fail when the midpoint passes (3/4 of its error plus that quarter), and are not tested:
- * two of a side's three surface evaluations, most of the refinement's (issue 15).  Without both
- * normals (a boundary point: the curve's own point, never evaluated) they are tested.
+ * Is the surface along the side i -> j shaped like an S, by the normals at its ends
+ * (cm_chord_s_part)?  Where the S part of the cubic with the ends' slopes is at most a quarter of
+ * the tolerance, the quarter points cannot fail when the midpoint passes (3/4 of its error plus
+ * that quarter), and are not tested: two of a side's three surface evaluations, most of the
+ * refinement's (issue 15).  Without both normals (a boundary point whose evaluation failed, a
+ * pole) they are tested.
  */
-#define S_SHAPE_PEAK 0.0481
 static int s_shaped(const cm_tess_ws *ws, int i, int j, double tol)
 {
     if (!ws->has_nrm[i] || !ws->has_nrm[j])
         return 1;
-    cm_vec3 ch = cm_sub(ws->xyz[j], ws->xyz[i]);
-    double m0 = -cm_dot(ch, ws->nrm[i]), m1 = -cm_dot(ch, ws->nrm[j]); /* times L */
-    return !(S_SHAPE_PEAK * fabs(m0 + m1) <= 0.25 * tol);
+    return !(cm_chord_s_part(ws->xyz[i], ws->nrm[i], ws->xyz[j], ws->nrm[j]) <= 0.25 * tol);
 }
 
 /* an inner side i -> j tested at its midpoint and quarter points (the surface's error along a long

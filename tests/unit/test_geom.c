@@ -1,4 +1,4 @@
-/* test_geom.c - K10 lines and planes, K11 face frame, K12 point in polygon. */
+/* test_geom.c - K10 lines and planes, K11 face frame, K12 point in polygon, a chord's S part. */
 #include "test_util.h"
 
 #include "cm/cm_geom.h"
@@ -26,6 +26,51 @@ static void test_ray_plane(void **state)
     assert_int_equal(cm_ray_plane(cm_v3(0, 0, 0), cm_v3(cos(a4), 0, sin(a4)), m, 1.0, &lam), 0);
     assert_int_equal(cm_ray_plane(cm_v3(0, 0, 0), cm_v3(cos(a6), 0, sin(a6)), m, 1.0, &lam), 1);
     assert_near(lam, 1.0 / sin(a6), 1e-12);
+}
+
+/*
+ * cm_chord_s_part (format 4.7's refinement tests a side's quarter points where this exceeds a
+ * quarter of the tolerance): curves in a tilted plane, normals in that plane.  An arc gives 0 at
+ * any angle; y = A sin(2 pi x / L), which is 0 at the middle and A at the quarter points, about
+ * 0.6 A for small A and never below a quarter of A; a cubic S with small slopes its own peak;
+ * a half-sine (an arc-like bump) 0 again.
+ */
+static cm_vec3 in_plane(double x, double y)
+{
+    cm_vec3 ex = cm_unit(cm_v3(2, 1, -1)), ey = cm_unit(cm_cross(cm_v3(0.3, -1, 2), ex));
+    return cm_add(cm_v3(7, -3, 11), cm_add(cm_scale(ex, x), cm_scale(ey, y)));
+}
+
+static cm_vec3 plane_normal(double slope) /* unit normal of a curve rising at `slope` */
+{
+    cm_vec3 o = in_plane(0, 0);
+    return cm_unit(cm_sub(in_plane(-slope, 1), o));
+}
+
+static void test_chord_s_part(void **state)
+{
+    (void)state;
+    const double L = 10;
+    for (double a = 0.05; a < 3.0; a += 0.3) { /* an arc of radius 5 over the angle a */
+        double R = 5, x0 = -R * sin(a / 2), x1 = R * sin(a / 2);
+        double s = cm_chord_s_part(in_plane(x0, 0), plane_normal(tan(a / 2)), in_plane(x1, 0),
+                                   plane_normal(-tan(a / 2)));
+        assert_near(s, 0.0, 1e-12);
+    }
+    for (double A = 1e-3; A < 2.0; A *= 3) {
+        double m = 2 * M_PI * A / L; /* y' at both ends */
+        double s = cm_chord_s_part(in_plane(0, 0), plane_normal(m), in_plane(L, 0), plane_normal(m));
+        if (!(s >= 0.25 * A && s <= A))
+            fail_msg("sine of amplitude %g over %g: S part %g, not within [A/4, A]", A, L, s);
+        if (A < 0.01)
+            assert_near(s, 4 * M_PI * 0.0481125224324688 * A, 1e-3 * A);
+    }
+    /* y = B L s (1-s) (1-2s): slopes B at both ends, peak B L / (6 sqrt 3) */
+    double B = 1e-3, s = cm_chord_s_part(in_plane(0, 0), plane_normal(B), in_plane(L, 0), plane_normal(B));
+    assert_near(s, B * L / (6 * sqrt(3.0)), 1e-6 * B * L);
+    /* y = A sin(pi x / L): slopes +m and -m */
+    double m = M_PI * 0.5 / L;
+    assert_near(cm_chord_s_part(in_plane(0, 0), plane_normal(m), in_plane(L, 0), plane_normal(-m)), 0.0, 1e-12);
 }
 
 /* K11 on a 4 x 1 rectangle in a tilted plane: normal, origin, long axis, sign rule, right-handedness. */
@@ -98,6 +143,7 @@ int main(void)
         cmocka_unit_test(test_face_frame_rectangle),
         cmocka_unit_test(test_face_frame_square_and_degenerate),
         cmocka_unit_test(test_point_in_polygon),
+        cmocka_unit_test(test_chord_s_part),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -23,6 +23,15 @@ int cm_lines_closest(cm_vec3 p, cm_vec3 d, cm_vec3 q, cm_vec3 e, double *lam, do
  */
 int cm_ray_plane(cm_vec3 p, cm_vec3 d, cm_vec3 m, double c, double *lam);
 
+/**
+ * How far a smooth curve between p0 and p1, whose unit normals there are n0 and n1 (the surface's,
+ * the curve in its tangent planes), strays from its chord where the middle cannot tell: the peak
+ * of the S-shaped part of the cubic through the ends with the ends' slopes, which is zero at the
+ * middle and largest at 0.21 and 0.79 of the chord.  An arc (symmetric) gives 0; y = A sin(2 pi x
+ * / L) about 0.6 A.  Only + - * and fabs: the same bits everywhere.
+ */
+double cm_chord_s_part(cm_vec3 p0, cm_vec3 n0, cm_vec3 p1, cm_vec3 n1);
+
 /** A right-handed orthonormal face frame: origin and axes, ez = face normal. */
 typedef struct cm_frame {
     cm_vec3 o, ex, ey, ez;
