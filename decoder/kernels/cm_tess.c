@@ -2283,7 +2283,8 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
     ws->done.last = 0;
     for (int i = 0; i < 4; i++)
         ws->done.box[i] = c.box[i];
-    return insert_and_copy(&c, nb, npts, min_dist, 1, tris, cap, ntris, nused, st);
+    /* the final pass only after interior points: the region was flipped after its boundary */
+    return insert_and_copy(&c, nb, npts, min_dist, npts > nb, tris, cap, ntris, nused, st);
 }
 
 cm_err cm_triangulate_more(const cm_vec2 *pts, int npts, double min_dist, int (*tris)[3], int cap, int *ntris,

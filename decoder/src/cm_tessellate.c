@@ -315,6 +315,11 @@ static cm_err keep_domain(const cm_psurf *ps, const cm_face *F, double accept, c
 static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist, double tol, int *ntris,
                           cm_status *st)
 {
+    /* format 4.7 on, the boundary alone, then the interior points as the refinement adds its own
+       (cm_triangulate_more: no Lawson pass over the whole region after them) */
+    int all = npts;
+    if (ws->refine_47)
+        npts = ws->loop_start[nloops];
     cm_status first;
     cm_status_init(&first);
     cm_err e = cm_triangulate(ws->tmp, npts, ws->loop_start, nloops, min_dist, ws->tris, CM_MAX_TESS_TRIS, ntris,
@@ -336,6 +341,8 @@ static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist,
         *st = first;
         return first.code != CM_OK ? first.code : e;
     }
+    if (e == CM_OK && all > npts)
+        e = cm_triangulate_more(ws->tmp, all, min_dist, ws->tris, CM_MAX_TESS_TRIS, ntris, &ws->tri, st);
     return e;
 }
 
@@ -873,7 +880,8 @@ static cm_err tess_patch(const cm_greg_surface *gs, int patch, cm_tess_ws *ws, i
     ws->loop_start[0] = 0;
     ws->loop_start[1] = npts;
     /* scale (u,v) by the patch's mean speeds, so triangles are well shaped in 3D */
-    double su = 0, sv = 0;
+    double su = 0, sv = 0, kuu = 0, kvv = 0;
+    cm_vec3 Su[5][5], Sv[5][5];
     for (int i = 0; i < 5; i++)
         for (int j = 0; j < 5; j++) {
             cm_vec3 d[3];
@@ -881,11 +889,32 @@ static cm_err tess_patch(const cm_greg_surface *gs, int patch, cm_tess_ws *ws, i
                 return e;
             su += cm_norm(d[1]) / 25.0;
             sv += cm_norm(d[2]) / 25.0;
+            Su[i][j] = d[1];
+            Sv[i][j] = d[2];
+            /* second derivatives along u and v, by the first derivatives' differences */
+            if (i > 0) {
+                double k = cm_norm(cm_sub(d[1], Su[i - 1][j])) * 5.0;
+                kuu = k > kuu ? k : kuu;
+            }
+            if (j > 0) {
+                double k = cm_norm(cm_sub(d[2], Sv[i][j - 1])) * 5.0;
+                kvv = k > kvv ? k : kvv;
+            }
         }
     if (!(su > 0) || !(sv > 0))
         su = sv = 1.0;
-    /* interior grid as fine as the boundary's sampling (refinement adds where the surface curves) */
+    /* interior grid as fine as the boundary's sampling (refinement adds where the surface curves);
+       format 4.7 on, no finer than the patch's curvature asks (a span h with second derivative k
+       is k h^2 / 8 off its chord), as a kept face's grid: the edges are sampled to twice what their
+       own curvature asks, and a patch's interior mostly curves less than its sides */
     int nu = side_n[0] > side_n[2] ? side_n[0] : side_n[2], nv = side_n[1] > side_n[3] ? side_n[1] : side_n[3];
+    if (ws->refine_47 && tol > 0) {
+        double cu = kuu > 0 ? ceil(1.0 / sqrt(8.0 * tol / kuu)) : 1.0, cv = kvv > 0 ? ceil(1.0 / sqrt(8.0 * tol / kvv)) : 1.0;
+        if (cu >= 1 && cu < (double)nu) /* NaN (a hostile patch) leaves the boundary's */
+            nu = (int)cu;
+        if (cv >= 1 && cv < (double)nv)
+            nv = (int)cv;
+    }
     double room = (double)(CM_MAX_TESS_POINTS - npts) * 0.5;
     if ((double)nu * (double)nv > room && room >= 1) {
         double shrink = sqrt(room / ((double)nu * (double)nv));
