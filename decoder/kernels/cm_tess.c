@@ -2210,6 +2210,14 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
                             double fold_tol, int (*tris)[3], int cap, int *ntris, int *nused, cm_tri_ws *ws,
                             cm_status *st)
 {
+    return cm_triangulate_cdt(pts, npts, loop_start, nloops, min_dist, fold_tol, CDT_FIRST_POINTS, tris, cap, ntris,
+                              nused, ws, st);
+}
+
+cm_err cm_triangulate_cdt(const cm_vec2 *pts, int npts, const int *loop_start, int nloops, double min_dist,
+                          double fold_tol, int cdt_first, int (*tris)[3], int cap, int *ntris, int *nused,
+                          cm_tri_ws *ws, cm_status *st)
+{
     if (ntris)
         *ntris = 0;
     if (nused)
@@ -2241,7 +2249,7 @@ cm_err cm_triangulate_folds(const cm_vec2 *pts, int npts, const int *loop_start,
     cm_status first;
     cm_status_init(&first);
     err = CM_E_DEGENERATE;
-    if (nb >= CDT_FIRST_POINTS) {
+    if (nb >= (cdt_first > 0 ? cdt_first : CDT_FIRST_POINTS)) {
         snap_touching(ws, loop_start, nloops, nb); /* as build_ring does (it is idempotent) */
         if (cdt_region(&c, loop_start, nloops, nb, 1, &first) == CM_OK && cdt_plain(&c, loop_start, nloops, nb)) {
             flip_all(&c);

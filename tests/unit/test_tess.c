@@ -691,6 +691,50 @@ static void test_continue(void **state)
     assert_int_equal(cm_triangulate_more(P, n_all, 0.0, T, 3, &nt1, &WS, NULL), CM_E_NOSPACE);
 }
 
+/*
+ * cm_triangulate_cdt (format 4.7's refinement takes the Delaunay path first for rings of 64 points
+ * or more, where the ear clipping's fans cost many flips): on random polygons with holes and
+ * interior points in general position, every threshold gives a valid constrained Delaunay
+ * triangulation with the same triangles as the ear clipping; the Delaunay path takes fewer flips.
+ */
+static void test_cdt_first(void **state)
+{
+    (void)state;
+    static uint64_t ref[TBUF], got[TBUF];
+    uint32_t seed = 31;
+    long flips_ear = 0, flips_cdt = 0;
+    for (int shape = 0; shape < 6; shape++) {
+        shape_begin();
+        circle_loop(0, 0, 1, 60 + 40 * shape, 1);
+        if (shape % 2)
+            circle_loop(0.3, 0.2, 0.2 + 0.02 * shape, 16, 0);
+        loops_end();
+        for (int i = 0; i < 30; i++)
+            rand_pt(&seed, -0.7, 1.4, -0.7, 1.4);
+        REQUIRE_POINTS(NP);
+        int nt0, nt, nu;
+        cm_status_init(&ST);
+        assert_ok(cm_triangulate_cdt(P, NP, LS, NL, 0.0, 0.0, 0, T, TBUF, &nt0, &nu, &WS, &ST));
+        flips_ear += WS.flips;
+        validate((const int(*)[3])T, nt0, 0, nu);
+        for (int k = 0; k < nt0; k++)
+            ref[k] = tri_set_key(T[k]);
+        qsort(ref, (size_t)nt0, sizeof *ref, cmp_u64);
+        cm_status_init(&ST);
+        assert_ok(cm_triangulate_cdt(P, NP, LS, NL, 0.0, 0.0, 4, T, TBUF, &nt, &nu, &WS, &ST));
+        flips_cdt += WS.flips;
+        validate((const int(*)[3])T, nt, 0, nu);
+        check_local_delaunay((const int(*)[3])T, nt);
+        assert_int_equal(nt, nt0);
+        for (int k = 0; k < nt; k++)
+            got[k] = tri_set_key(T[k]);
+        qsort(got, (size_t)nt, sizeof *got, cmp_u64);
+        assert_memory_equal(got, ref, sizeof *ref * (size_t)nt);
+    }
+    if (!(flips_cdt < flips_ear))
+        fail_msg("the Delaunay path took %ld flips, the ear clipping %ld", flips_cdt, flips_ear);
+}
+
 /* a hole touching the outer loop at a vertex (the same position, two point indices) */
 static void test_hole_touches_outer(void **state)
 {
@@ -2357,6 +2401,7 @@ int main(void)
         cmocka_unit_test(test_skipped_points),
         cmocka_unit_test(test_min_dist),
         cmocka_unit_test(test_continue),
+        cmocka_unit_test(test_cdt_first),
         cmocka_unit_test(test_hole_touches_outer),
         cmocka_unit_test(test_holes_touch_each_other),
         cmocka_unit_test(test_almost_touching_hole),
