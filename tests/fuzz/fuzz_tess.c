@@ -1,6 +1,6 @@
 /*
  * fuzz_tess - libFuzzer target for the triangulator (cm_triangulate,
- * cm_triangulate_folds): bytes -> 1 to 4 loops of points on a coarse
+ * cm_triangulate_folds, cm_triangulate_cdt, cm_triangulate_more): bytes -> 1 to 4 loops of points on a coarse
  * integer grid (so repeated points, collinear runs, spikes, loops touching
  * at a vertex or along a run, zero-length segments and tiny loops are
  * frequent), plus interior points -> the triangulation, checked.
@@ -34,7 +34,10 @@
  *           bits 4-5 fold tolerance (0, 0, 1/2, 3 cells); bits 6-7 placement
  *           (as is; scaled by 2^-7 and moved to (1000, -250): exact; scaled
  *           by 0.1: not on a binary grid; x and y swapped)
- *   byte 1: interior points (0..63); bit 6 of byte 1 doubles min_dist
+ *   byte 1: interior points (0..63); bit 6 of byte 1 doubles min_dist; bit 7 inserts the second
+ *           half of them by cm_triangulate_more into the first call's triangulation, which
+ *           takes the Delaunay path first for rings of 4 points or more (cm_triangulate_cdt;
+ *           the decoder's refinement, format 4.7)
  *   per loop: a mode byte (bits 0-1: raw points, star around a centre,
  *           random walk, a run shared with loop 0 closed by a few points;
  *           bit 2: reversed), a count byte (outer loop: two), then its data.
@@ -494,8 +497,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     cm_status st;
     cm_status_init(&st);
-    int nt = -1, nu = -1;
-    cm_err e = cm_triangulate_folds(P, np_, LS, nl_, md, fold_cells * unit, T, FZ_TRIS, &nt, &nu, &ws, &st);
+    int nt = -1, nu = -1, split = (h1 & 128u) ? nb_ + (np_ - nb_) / 2 : np_;
+    /* with the continuation, as format 4.7's refinement: rings of 4 points or more by the Delaunay
+       path first (cm_triangulate_cdt) */
+    cm_err e = cm_triangulate_cdt(P, split, LS, nl_, md, fold_cells * unit, split < np_ ? 4 : 0, T, FZ_TRIS, &nt,
+                                  &nu, &ws, &st);
+    if (e == CM_OK && split < np_) {
+        /* the rest into that triangulation: its used points are not counted, so nu stays the first's */
+        e = cm_triangulate_more(P, np_, md, T, FZ_TRIS, &nt, &ws, &st);
+        if (e != CM_OK && nt != 0)
+            __builtin_trap();
+    }
     if (getenv("FUZZ_TESS_DUMP")) { /* the input and the result on the grid, for a look (not in fuzzing) */
         printf("# place %u fold %g md %g: %s %s\n", place, fold_cells, md, cm_err_name(e), st.where ? st.where : "");
         for (int l = 0; l < nl_; l++) {
