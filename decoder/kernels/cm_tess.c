@@ -2324,12 +2324,13 @@ cm_err cm_triangulate_more(const cm_vec2 *pts, int npts, double min_dist, int (*
     ws->flips = 0;
     /* the location grid stays right as points go in (the region does not change, and a cell's
        triangle is still a triangle, near it); it is built again, to the triangles there are now,
-       when they have doubled, so that walks stay short (a build each call cost 7 % of a decode) */
+       when they have grown fourfold, so that walks stay short (a build each call cost 7 % of a
+       decode, one each doubling 4 %) */
     c.grid = ws->done.grid;
     c.grid_ntri = ws->done.grid_ntri;
     c.ghx = ws->done.ghx;
     c.ghy = ws->done.ghy;
-    if (npts > ws->done.npts && (c.grid == 0 || c.ntri >= 2 * c.grid_ntri))
+    if (npts > ws->done.npts && (c.grid == 0 || c.ntri >= 4 * c.grid_ntri))
         build_grid(&c);
     return insert_and_copy(&c, ws->done.npts, npts, min_dist, 0, tris, cap, ntris, NULL, st);
 }
