@@ -329,6 +329,7 @@ static cm_err triangulate(cm_tess_ws *ws, int npts, int nloops, double min_dist,
     int cdt_first = ws->refine_47 ? TESS_CDT_FIRST_47 : 0;
     cm_err e = cm_triangulate_cdt(ws->tmp, npts, ws->loop_start, nloops, min_dist, 0.0, cdt_first, ws->tris,
                                   CM_MAX_TESS_TRIS, ntris, NULL, &ws->tri, &first);
+    ws->folded = e == CM_E_DEGENERATE;
     for (int k = 0; e == CM_E_DEGENERATE && k < 3 && tol > 0; k++) {
         if (k > 0) {
             double grid = k == 1 ? 0.25 * tol : tol;
@@ -710,8 +711,12 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
             break;
         last = now;
         min_dist *= 0.5;
-        /* format 4.7 on: the points just added go into the last round's triangulation */
-        e = ws->refine_47 ? cm_triangulate_more(ws->tmp, npts, min_dist, ws->tris, CM_MAX_TESS_TRIS, &ntris,
+        /* format 4.7 on: the points just added go into the last round's triangulation, except in a
+           region whose boundary crosses itself by rounding (the fold fallback, ws->folded): that is
+           triangulated afresh each round as before 4.7, since its folded triangles are what the
+           encoder looks for in a re-approximated net (needs.c: occt__bug22869_Spring's coil, whose
+           net a quarter off the surface then stays 0.12 mm off the model without a fold) */
+        e = ws->refine_47 && !ws->folded ? cm_triangulate_more(ws->tmp, npts, min_dist, ws->tris, CM_MAX_TESS_TRIS, &ntris,
                                                   &ws->tri, st)
                             : triangulate(ws, npts, nloops, min_dist, tol, &ntris, st);
         if (e != CM_OK)

@@ -674,7 +674,7 @@ static void test_continue(void **state)
     assert_int_equal(cm_triangulate_more(P, n_all - 1, 0.0, T, TBUF, &nt1, &WS, &ST), CM_E_ARG);
     assert_int_equal(cm_triangulate_more(P, n_all + 1, 0.0, T, TBUF, &nt1, &WS, NULL), CM_E_ARG);
     assert_ok(run(0.0, &nt1, &nu));
-    P[NP] = cm_v2(NAN, 0.0);
+    P[NP] = cm_v2((double)NAN, 0.0);
     cm_status_init(&ST);
     assert_int_equal(cm_triangulate_more(P, n_all + 1, 0.0, T, TBUF, &nt1, &WS, &ST), CM_E_NONFINITE);
     assert_int_equal(nt1, 0);

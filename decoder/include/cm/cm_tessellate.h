@@ -48,6 +48,8 @@ typedef struct cm_tess_ws {
                                               because the piece passed the round before */
     int point_cap;                         /* the face's budget of points (cm_tess_point_cap), set by
                                               cm_tessellate_face */
+    int folded;                            /* the region's last triangulation needed the fold
+                                              fallback (its boundary crosses itself by rounding) */
     int refine_47;                         /* the refinement of format 4.7 (cm_model.refine_47), set
                                               likewise */
 } cm_tess_ws;
