@@ -2158,9 +2158,10 @@ static cm_err build_ring(tess_ctx *c, const int *loop_start, int nloops, int *st
 /*
  * Step 7 and 8: the interior points [from, npts) in order, the final Lawson pass (`final_pass`:
  * after the flips around each point it changes nothing but what rounding left; a continuation
- * skips it, as it costs a test of every side, round after round), the triangles copied out; what cm_triangulate_more continues from is recorded in ws->done.  Stamps of the
- * near-point search are q - nb + 1: they grow with q, so marks left by earlier insertions (and
- * earlier calls continued) never equal one.
+ * skips it, as it costs a test of every side, round after round), the triangles copied out; what
+ * cm_triangulate_more continues from is recorded in ws->done.  Stamps of the near-point search
+ * are q - nb + 1: they grow with q, so marks left by earlier insertions (and earlier calls
+ * continued) never equal one.
  */
 static cm_err insert_and_copy(tess_ctx *c, int from, int npts, double min_dist, int final_pass, int (*tris)[3],
                               int cap, int *ntris, int *nused, cm_status *st)

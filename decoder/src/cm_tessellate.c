@@ -391,6 +391,18 @@ static cm_err chart_eval(const chart *c, double u, double v, cm_vec3 d[3], cm_st
     return CM_OK;
 }
 
+/* the unit normal sign * (Su x Sv) / |Su x Sv| of an evaluation d, turned to the face; 0 where it
+   degenerates (a pole, a collapsed Gregory side) */
+static int unit_normal(const chart *c, const cm_vec3 d[3], cm_vec3 *N)
+{
+    cm_vec3 n = cm_cross(d[1], d[2]);
+    double l = cm_norm(n);
+    if (!(l > CM_EPS_CROSS_REL * cm_norm(d[1]) * cm_norm(d[2]) && l > 0))
+        return 0;
+    *N = cm_scale(n, c->sign / l);
+    return 1;
+}
+
 /*
  * The unit normal of point i from its evaluation d (the refinement's), as emit_region writes it:
  * chart_normal at the same (u,v) evaluates the same bits again, one surface evaluation per vertex.
@@ -398,11 +410,7 @@ static cm_err chart_eval(const chart *c, double u, double v, cm_vec3 d[3], cm_st
  */
 static void keep_normal(const chart *c, cm_tess_ws *ws, int i, const cm_vec3 d[3])
 {
-    cm_vec3 n = cm_cross(d[1], d[2]);
-    double l = cm_norm(n);
-    ws->has_nrm[i] = l > CM_EPS_CROSS_REL * cm_norm(d[1]) * cm_norm(d[2]) && l > 0;
-    if (ws->has_nrm[i])
-        ws->nrm[i] = cm_scale(n, c->sign / l);
+    ws->has_nrm[i] = (unsigned char)unit_normal(c, d, &ws->nrm[i]);
 }
 
 /*
@@ -416,17 +424,14 @@ static cm_err point_xyz(const chart *c, cm_tess_ws *ws, int i, int test, cm_stat
 {
     if (ws->src[i] >= 0 && !(test && c->off_surface)) {
         ws->xyz[i] = ws->bpts[ws->src[i]];
-        if (!test || !ws->refine_47) {
-            if (test)
-                ws->has_nrm[i] = 0;
-            return CM_OK;
+        if (test) {
+            /* format 4.7 on, its normal (s_shaped needs it; emit_region would evaluate it anyway,
+               and where that fails borrow one: so none is kept then, and the face goes on) */
+            cm_vec3 d[3];
+            ws->has_nrm[i] = 0;
+            if (ws->refine_47 && chart_eval(c, ws->uv[i].x, ws->uv[i].y, d, NULL) == CM_OK)
+                keep_normal(c, ws, i, d);
         }
-        /* format 4.7 on, its normal (s_shaped needs it; emit_region would evaluate it anyway, and
-           where that fails borrow one: so none is kept then, and the face goes on) */
-        cm_vec3 d[3];
-        ws->has_nrm[i] = 0;
-        if (chart_eval(c, ws->uv[i].x, ws->uv[i].y, d, NULL) == CM_OK)
-            keep_normal(c, ws, i, d);
         return CM_OK;
     }
     cm_vec3 d[3];
@@ -508,13 +513,11 @@ static cm_vec3 chart_normal(const chart *c, double u, double v, cm_vec2 toward)
         return c->frame->ez;
     for (int k = 0; k < 4; k++) {
         double s = k == 0 ? 0.0 : (k == 1 ? 1e-6 : (k == 2 ? 1e-4 : 1e-2));
-        cm_vec3 d[3];
+        cm_vec3 d[3], N;
         if (chart_eval(c, u + s * (toward.x - u), v + s * (toward.y - v), d, NULL) != CM_OK)
             break;
-        cm_vec3 n = cm_cross(d[1], d[2]);
-        double l = cm_norm(n);
-        if (l > CM_EPS_CROSS_REL * cm_norm(d[1]) * cm_norm(d[2]) && l > 0)
-            return cm_scale(n, c->sign / l);
+        if (unit_normal(c, d, &N))
+            return N;
     }
     return cm_v3(0, 0, c->sign);
 }
@@ -716,9 +719,10 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
            triangulated afresh each round as before 4.7, since its folded triangles are what the
            encoder looks for in a re-approximated net (needs.c: occt__bug22869_Spring's coil, whose
            net a quarter off the surface then stays 0.12 mm off the model without a fold) */
-        e = ws->refine_47 && !ws->folded ? cm_triangulate_more(ws->tmp, npts, min_dist, ws->tris, CM_MAX_TESS_TRIS, &ntris,
-                                                  &ws->tri, st)
-                            : triangulate(ws, npts, nloops, min_dist, tol, &ntris, st);
+        if (ws->refine_47 && !ws->folded)
+            e = cm_triangulate_more(ws->tmp, npts, min_dist, ws->tris, CM_MAX_TESS_TRIS, &ntris, &ws->tri, st);
+        else
+            e = triangulate(ws, npts, nloops, min_dist, tol, &ntris, st);
         if (e != CM_OK)
             return e;
     }

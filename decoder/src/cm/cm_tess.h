@@ -173,9 +173,9 @@ CM_NODISCARD cm_err cm_triangulate_cdt(const cm_vec2 *pts, int npts, const int *
  * from its boundary each round cost a quarter of a decode (issue 15).  The
  * points are inserted in order as cm_triangulate inserts interior points
  * (skipped when outside the region or within `min_dist` of a used point or
- * a boundary segment; points skipped before are not tried again), then the
- * Lawson pass; the triangles come out as from cm_triangulate, the unchanged
- * ones in their places.  The result is the constrained Delaunay
+ * a boundary segment; points skipped before are not tried again), with the
+ * Lawson flips about each point but no final pass over the region; the
+ * triangles come out as from cm_triangulate, the unchanged ones in their places.  The result is the constrained Delaunay
  * triangulation of the same points, up to the ties of cocircular points and
  * the points min_dist skipped, which may differ from one call on all points.
  * @return CM_E_ARG (no triangulation to continue, fewer points than it has,
