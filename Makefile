@@ -308,6 +308,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
 		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
 		"gate:vault:$(MAKE) --no-print-directory -s check-vault" \
+		"gate:encode-jobs:$(MAKE) --no-print-directory -s check-encode-jobs" \
 		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header" \
 		"gate:old-files:$(MAKE) --no-print-directory -s check-old-files" \
 		"gate:hostile-input:$(MAKE) --no-print-directory -s hostile HOSTILE_TRIES=2 HOSTILE_TAP=--tap" \
@@ -653,6 +654,11 @@ check-leave-out: $(CMZ) $(call bdir,host)/tests/host/test_leave_out
 
 # `cmz encode FOLDER -o OUT` over a vault of the bundled models (issue 15.5): a bad model named while
 # the rest encode, up-to-date outputs skipped, --timeout, shards, lists, interrupts
+# cmz encode -j 3 writes the bytes of -j 1 on every corpus model (the faces' work on worker processes)
+.PHONY: check-encode-jobs
+check-encode-jobs: $(CMZ)
+	$(Q)tests/tools/check_encode_jobs.sh $(CMZ) $(SHARED_MODELS)
+
 .PHONY: check-vault
 check-vault: $(CMZ) $(call bdir,host)/tests/host/test_leave_out
 	$(Q)tests/tools/check_vault.sh $(CMZ) $(call bdir,host)/tests/host/test_leave_out tests/data/geo_example.igs \

@@ -170,7 +170,7 @@ int cmd_encode(int argc, char **argv)
             goto usage;
         }
         if (taken > 0) {
-            vault_opt = 1;
+            vault_opt |= strcmp(a, "-j") != 0; /* -j: a vault's models, or one model's faces */
             i += taken - 1;
             continue;
         }
@@ -242,7 +242,7 @@ int cmd_encode(int argc, char **argv)
     }
     free(pass);
     if (vault_opt) {
-        fprintf(stderr, "%s encode: -j, --list, --summary, --force, --timeout and --shard are for a folder or a list "
+        fprintf(stderr, "%s encode: --list, --summary, --force, --timeout and --shard are for a folder or a list "
                         "of models (see cmz --help)\n", cmd_prog);
         return EXIT_USAGE;
     }
@@ -250,6 +250,7 @@ int cmd_encode(int argc, char **argv)
         fprintf(stderr, "%s encode: usage: cmz encode MODEL.igs -o MODEL.cmz [options] (see cmz --help)\n", cmd_prog);
         return EXIT_USAGE;
     }
+    o.jobs = vo.jobs; /* one model: its faces' methods chosen on N processes */
     if (profile) {
         o.target = cm_profile_limits(profile);
         o.target_name = profile;

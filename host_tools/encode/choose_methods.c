@@ -2,9 +2,12 @@
    verification against the source surface, then the G1 fix-point (see encode_internal.h). */
 #include "encode_internal.h"
 #include "enc_method.h"
+#include "enc_workers.h"
+#include "fit_correction.h"
 #include "verify.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -161,10 +164,26 @@ static int first_passing(tx *t, const loaded_model *lm, int f, const encode_opts
            GREGORY-FIT by the G1 fix-point must not carry its correction on) */
         free(t->fit[f]);
         t->fit[f] = NULL;
-        if (E && E->trial && E->trial(t, lm, f, o, rep, fs))
+        face_report before = *rep;
+        int noted = t->asked.n + t->asked.all;
+        int passed = E && E->trial && E->trial(t, lm, f, o, rep, fs);
+        if (t->asked.row < 0 && t->asked.n + t->asked.all > noted) {
+            t->asked.row = i;
+            t->asked.rep = before;
+        }
+        if (passed)
             return cm_method_table[i]->id;
     }
     return CM_METHOD_FALLBACK;
+}
+
+void tx_note_check(tx *t, const tx_check *c)
+{
+    tx_asked *a = &t->asked;
+    if (a->n < TX_MAX_CHECKS)
+        a->check[a->n++] = *c;
+    else
+        a->all = 1;
 }
 
 static int table_row(int method)
@@ -173,6 +192,223 @@ static int table_row(int method)
         if (cm_method_table[i]->id == method)
             return i;
     return CM_METHOD_COUNT;
+}
+
+/*
+ * Face f's method: the first row of the table that passes (the first pass of choose_methods), with
+ * faces 0..chosen-1 counted as chosen (t->method) where a trial asks (t->asked says what it asked).
+ */
+static void choose_face(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, face_surface *fs, int f,
+                        int chosen)
+{
+    face_report *rep = &r->faces[f];
+    memset(rep, 0, sizeof *rep);
+    rep->g1_cos = 1.0;
+    rep->layout = -1;
+    t->method[f] = CM_METHOD_FALLBACK;
+    t->layout[f] = t->corner[f] = 0;
+    t->checksum[f] = 0;
+    t->turning[f] = 0;
+    free(t->fit[f]);
+    t->fit[f] = NULL;
+    face_surface_free(&fs[f]);
+    memset(&t->asked, 0, sizeof t->asked);
+    t->asked.row = -1;
+    if (t->keep_only[lm->mesh.faces[f].brep_face]) {
+        rep->why = "rebuilt surface did not tessellate";
+        return;
+    }
+    t->nchosen = chosen;
+    t->method[f] = first_passing(t, lm, f, o, rep, fs, 0);
+    if (enc_kept(t->method[f]))
+        face_surface_free(&fs[f]);
+}
+
+/* ---- the first pass in worker processes (cmz encode -j N) ---- */
+
+/* what a worker found for one face, in memory it shares with the encoder */
+typedef struct face_found {
+    atomic_int done; /* 0: not yet; 1: by a worker, the rest filled in; 2: by the encoder itself */
+    int method, layout, corner, has_fit;
+    unsigned char turning;
+    uint32_t checksum;
+    face_report rep; /* its `why` points at a string of the program, the same in every process */
+    tx_asked asked;  /* what its trials asked of the faces before it */
+    fit_record fit;
+} face_found;
+
+typedef struct found_board {
+    atomic_int next;  /* the next face a worker takes */
+    atomic_int ndone; /* faces done, for the progress line */
+    face_found face[];
+} found_board;
+
+typedef struct choose_job {
+    const loaded_model *lm;
+    tx *t;
+    const encode_opts *o;
+    encode_result *r;
+    face_surface *fs;
+    found_board *b;
+} choose_job;
+
+/* as much of a record as it holds: a face's entry on the board is written only where it has
+   something (most faces make no check, and the pages of the others are never touched) */
+static void copy_asked(tx_asked *to, const tx_asked *from)
+{
+    to->row = from->row;
+    to->rep = from->rep;
+    to->n = from->n;
+    to->all = from->all;
+    memcpy(to->check, from->check, (size_t)from->n * sizeof *from->check);
+}
+
+/* face f chosen by a worker (its answer on the board) or by the encoder itself (`self`: it stays in
+   t, r and fs) */
+static void choose_item(void *ctx, int f, int self)
+{
+    const choose_job *J = ctx;
+    tx *t = J->t;
+    choose_face(J->lm, t, J->o, J->r, J->fs, f, 0); /* no face counts as chosen: see choose_in_workers */
+    face_found *F = &J->b->face[f];
+    if (!self) {
+        F->method = t->method[f];
+        F->layout = t->layout[f];
+        F->corner = t->corner[f];
+        F->turning = t->turning[f];
+        F->checksum = t->checksum[f];
+        F->rep = J->r->faces[f];
+        F->has_fit = t->fit[f] != NULL;
+        if (t->fit[f])
+            F->fit = *t->fit[f];
+    }
+    copy_asked(&F->asked, &t->asked);
+    atomic_store(&F->done, self ? 2 : 1);
+    int n = atomic_fetch_add(&J->b->ndone, 1) + 1;
+    if (self && J->o->progress)
+        J->o->progress("choosing methods", n, t->nfaces, J->o->progress_ctx);
+}
+
+/* a worker's answer for face f taken into t, r and fs: its surface rebuilt from the record (one
+   rebuild, where the worker made many trials); 0 when that does not give the worker's surface (its
+   checksum; a method without one, PLANE, leaves 0) */
+static int take_found(tx *t, encode_result *r, face_surface *fs, int f, const face_found *F)
+{
+    t->method[f] = F->method;
+    t->layout[f] = F->layout;
+    t->corner[f] = F->corner;
+    t->turning[f] = F->turning;
+    t->checksum[f] = F->checksum;
+    r->faces[f] = F->rep;
+    free(t->fit[f]);
+    t->fit[f] = NULL;
+    face_surface_free(&fs[f]);
+    if (F->has_fit) {
+        if (!(t->fit[f] = malloc(sizeof *t->fit[f])))
+            return 0;
+        *t->fit[f] = F->fit;
+    }
+    if (enc_kept(F->method))
+        return 1;
+    cm_fit_q view;
+    if (t->fit[f])
+        view = fit_record_view(t->fit[f]);
+    cm_rebuilt rb;
+    return enc_trial_rebuild(t->w, f, F->method, F->layout, F->corner, t->fit[f] ? &view : NULL, &rb) == CM_OK &&
+           (rb.checksum == F->checksum || F->checksum == 0) && face_surface_set(&fs[f], &rb);
+}
+
+/* 1 where a face before f across one of its edges keeps its surface */
+static int kept_before(const cm_model *m, const tx *t, int f)
+{
+    const cm_face *F = &m->faces[f];
+    for (uint32_t l = 0; l < F->nloops; l++) {
+        const cm_loop *L = &m->loops[F->loop0 + l];
+        for (uint32_t u = 0; u < L->nuse; u++) {
+            uint32_t e = m->uses[L->use0 + u].edge;
+            int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
+            int32_t g = a == f ? b : a;
+            if (a >= 0 && b >= 0 && a != b && g < f && enc_kept(t->method[g]))
+                return 1;
+        }
+    }
+    return 0;
+}
+
+/* 1 where a check of face f's trials (as) answers otherwise with the faces before it as chosen */
+static int answer_changes(const cm_model *m, const tx *t, int f, const tx_asked *as)
+{
+    if (as->all)
+        return kept_before(m, t, f);
+    for (int k = 0; k < as->n; k++) {
+        const tx_check *c = &as->check[k];
+        double rebuilt = c->other, kept = 1.0;
+        for (int i = 0; i < c->n; i++) {
+            double *w = enc_kept(t->method[c->face[i]]) ? &kept : &rebuilt;
+            *w = c->worst[i] < *w ? c->worst[i] : *w;
+        }
+        if ((rebuilt >= c->need_rebuilt && kept >= c->need_kept) != c->ok)
+            return 1;
+    }
+    return 0;
+}
+
+/* face f chosen again from the row whose trial made its first check, with every face before it
+   chosen: the rows above answered as they would have in order (they asked nothing) */
+static void choose_again(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, face_surface *fs,
+                         int f, const tx_asked *as)
+{
+    r->faces[f] = as->rep;
+    t->method[f] = CM_METHOD_FALLBACK;
+    t->layout[f] = t->corner[f] = 0;
+    t->checksum[f] = 0;
+    t->turning[f] = 0;
+    face_surface_free(&fs[f]);
+    memset(&t->asked, 0, sizeof t->asked);
+    t->asked.row = -1;
+    t->nchosen = f;
+    t->method[f] = first_passing(t, lm, f, o, &r->faces[f], fs, as->row);
+    if (enc_kept(t->method[f]))
+        face_surface_free(&fs[f]);
+}
+
+/*
+ * The first pass on `jobs` processes (the encoder and jobs - 1 forked workers, sharing the decoded
+ * model copy-on-write), with the same answer as in order.  Face f's trials read nothing of the other
+ * faces' choices but G1FIT's question which faces before f keep their surfaces (t->nchosen): a
+ * worker answers "none" and records each such check with what it measured toward each of those
+ * faces (t->asked); then, in order, the checks are answered again with the faces before it final,
+ * and a face whose answer changes is chosen again from that trial on.  A worker that cannot start or
+ * dies leaves its faces to the encoder.
+ */
+static void choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r,
+                              face_surface *fs, int jobs)
+{
+    int nf = t->nfaces;
+    size_t size = sizeof(found_board) + (size_t)nf * sizeof(face_found);
+    found_board *b = enc_shared_alloc(size);
+    if (!b) {
+        for (int f = 0; f < nf; f++)
+            choose_face(lm, t, o, r, fs, f, f);
+        return;
+    }
+    choose_job J = {lm, t, o, r, fs, b};
+    enc_workers_run(jobs, nf, &b->next, choose_item, &J, o->jobs_die_after);
+    for (int f = 0; f < nf; f++) {
+        face_found *F = &b->face[f];
+        int done = atomic_load(&F->done);
+        if (done == 1 && !take_found(t, r, fs, f, F))
+            done = 0;
+        if (done == 0) { /* its worker died, or its answer does not rebuild: the encoder's own */
+            choose_face(lm, t, o, r, fs, f, 0);
+            copy_asked(&F->asked, &t->asked);
+        }
+    }
+    const cm_model *m = &t->w->dec.model;
+    for (int f = 0; f < nf; f++)
+        if (b->face[f].asked.row >= 0 && answer_changes(m, t, f, &b->face[f].asked))
+            choose_again(lm, t, o, r, fs, f, &b->face[f].asked);
+    enc_shared_free(b, size);
 }
 
 /*
@@ -191,28 +427,14 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
     face_surface *fs = calloc((size_t)nf + 1, sizeof *fs);
     if (!fs)
         return cm_fail(st, CM_E_NOMEM, "out of memory");
-    for (int f = 0; f < nf; f++) {
-        if (o->progress)
-            o->progress("choosing methods", f + 1, nf, o->progress_ctx);
-        face_report *rep = &r->faces[f];
-        memset(rep, 0, sizeof *rep);
-        rep->g1_cos = 1.0;
-        rep->layout = -1;
-        t->method[f] = CM_METHOD_FALLBACK;
-        t->layout[f] = t->corner[f] = 0;
-        t->checksum[f] = 0;
-        t->turning[f] = 0;
-        free(t->fit[f]);
-        t->fit[f] = NULL;
-        if (t->keep_only[lm->mesh.faces[f].brep_face]) {
-            rep->why = "rebuilt surface did not tessellate";
-            continue;
+    if (o->jobs > 1 && nf > 1)
+        choose_in_workers(lm, t, o, r, fs, o->jobs);
+    else
+        for (int f = 0; f < nf; f++) {
+            if (o->progress)
+                o->progress("choosing methods", f + 1, nf, o->progress_ctx);
+            choose_face(lm, t, o, r, fs, f, f);
         }
-        t->nchosen = f;
-        t->method[f] = first_passing(t, lm, f, o, rep, fs, 0);
-        if (enc_kept(t->method[f]))
-            face_surface_free(&fs[f]);
-    }
     t->nchosen = nf;
     /* each G1 edge is measured once, and again only when one of its faces went back to KEEP */
     double *ecos = malloc(((size_t)m->nedges + 1) * sizeof *ecos);

@@ -38,16 +38,72 @@ static unsigned char *g1fit_kept_neighbours(const tx *t)
 }
 
 /*
+ * A G1 check of face f made with no face counted as kept (t->nchosen = 0: a worker's first choice,
+ * choose_methods.c), recorded to be answered again once the faces before f are chosen: its answer
+ * `ok`, and per face before f across a G1 edge the worst |cos| toward it (use_worst per use, `worst`
+ * what verify_g1_self returned).  Where it cannot be recorded the face is chosen again whenever a
+ * face before it keeps its surface.
+ */
+static void g1fit_record_check(tx *t, const cm_model *m, int f, int ok, double worst, const double *use_worst)
+{
+    const cm_face *F = &m->faces[f];
+    tx_check c = {(unsigned char)ok, G1FIT_COS_HALF, G1FIT_COS_KEPT, 1.0, 0, {0}, {0}};
+    double all = 1.0;
+    uint32_t nth = 0;
+    for (uint32_t l = 0; use_worst && l < F->nloops; l++) {
+        const cm_loop *L = &m->loops[F->loop0 + l];
+        for (uint32_t k = 0; k < L->nuse; k++, nth++) {
+            double w = use_worst[nth];
+            uint32_t e = m->uses[L->use0 + k].edge;
+            int32_t a = m->edge_face[e][0], b = m->edge_face[e][1], g = a == f ? b : a;
+            all = w < all ? w : all;
+            if (!(a >= 0 && b >= 0 && a != b && g < f)) {
+                c.other = w < c.other ? w : c.other; /* never kept before f is chosen */
+                continue;
+            }
+            int i = 0;
+            while (i < c.n && c.face[i] != g)
+                i++;
+            if (i == TX_MAX_MATTER) {
+                t->asked.all = 1;
+                return;
+            }
+            if (i == c.n) {
+                c.face[c.n] = g;
+                c.worst[c.n++] = 1.0;
+            }
+            c.worst[i] = w < c.worst[i] ? w : c.worst[i];
+        }
+    }
+    if (!use_worst) {
+        t->asked.all = 1;
+        return;
+    }
+    if (worst < all) /* a curve that did not evaluate: the check fails whatever the neighbours */
+        c.other = worst;
+    tx_note_check(t, &c);
+}
+
+/*
  * Face f's final surface (fs[f]) along its G1 edges: within half the G1 limit of its source's
  * normal where the neighbour may be rebuilt too (the angles add), within G1FIT_COS_KEPT where the
  * neighbour keeps its surface.  Before, every edge had half the limit, and on asitus__Pieza1 the
  * nets next to its kept caps missed it by 0.5 to 1 degree while the fix-point would have passed them.
  */
-static int g1fit_g1_ok(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs,
+static int g1fit_g1_ok(tx *t, const loaded_model *lm, const cm_model *m, int f, const face_surface *fs,
                        const unsigned char *kept)
 {
-    double worst_kept = 1.0;
-    return verify_g1_self(lm, m, f, fs, kept, &worst_kept) >= G1FIT_COS_HALF && worst_kept >= G1FIT_COS_KEPT;
+    const cm_face *F = &m->faces[f];
+    uint32_t nuse = 0;
+    for (uint32_t l = 0; l < F->nloops; l++)
+        nuse += m->loops[F->loop0 + l].nuse;
+    double worst_kept = 1.0, *use_worst = malloc(((size_t)nuse + 1) * sizeof *use_worst);
+    double worst = verify_g1_self(lm, m, f, fs, kept, &worst_kept, use_worst);
+    int ok = worst >= G1FIT_COS_HALF && worst_kept >= G1FIT_COS_KEPT;
+    if (t->nchosen == 0)
+        g1fit_record_check(t, m, f, ok, worst, use_worst);
+    free(use_worst);
+    return ok;
 }
 
 /*
@@ -67,7 +123,7 @@ static int g1fit_keeps(tx *t, const loaded_model *lm, int f, int corner, uint32_
     const cm_model *m = &w->dec.model;
     if (!face_surface_set(&fs[f], rb))
         return 0;
-    if (!g1fit_g1_ok(lm, m, f, fs, kept)) {
+    if (!g1fit_g1_ok(t, lm, m, f, fs, kept)) {
         face_surface_free(&fs[f]);
         *why = "G1FIT off its neighbours' tangent planes at every net";
         return 0;
@@ -198,7 +254,7 @@ static int g1fit_nets(tx *t, const loaded_model *lm, int f, const encode_opts *o
                 /* a candidate for a correction, when the border keeps its promise (the correction
                    leaves the border rows: a net whose G1 fails here fails corrected) */
                 if (enc_net_fit(o) && fe.max < ENC_NET_REACH * tol && c > 4 && face_surface_set(&fs[f], &rb)) {
-                    if (g1fit_g1_ok(lm, m, f, fs, kept))
+                    if (g1fit_g1_ok(t, lm, m, f, fs, kept))
                         near[nnear++] = (enc_net_near){c, mode, fe.max};
                     face_surface_free(&fs[f]);
                 }

@@ -68,6 +68,8 @@ void encode_opts_default(encode_opts *o)
     o->model_tol_rel = 1e-3;
     o->progress = NULL;
     o->progress_ctx = NULL;
+    o->jobs = 1;
+    o->jobs_die_after = 0;
 }
 
 int encode_places(const encode_opts *o)
@@ -178,18 +180,11 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
         tx_free(&t);
         return e;
     }
-    for (int f = 0; f < t.nfaces && e == CM_OK; f++) {
+    for (int f = 0; f < t.nfaces; f++)
         t.method[f] = CM_METHOD_FALLBACK;
+    e = tx_build_surfaces(&t, lm, st); /* a face whose surface cannot be built is a fault, below */
+    for (int f = 0; f < t.nfaces && e == CM_OK; f++) {
         const brep_face *bf = &lm->brep.faces[lm->mesh.faces[f].brep_face];
-        cm_status fst;
-        cm_status_init(&fst);
-        e = tx_build_surface(&t, &lm->brep.surfs[bf->surf], &t.surfs[f], &lm->mesh, f, &fst);
-        if (e == CM_E_NOMEM)
-            *st = fst;
-        else if (e != CM_OK) {
-            tx_face_fault(&t, f, fst.where ? fst.where : cm_strerror(e));
-            e = CM_OK;
-        }
         if (bf->has_color) {
             int k = 1;
             while (k <= t.npalette && t.palette[k] != bf->rgb)

@@ -67,6 +67,10 @@ typedef struct encode_opts {
                                     default 0: it costs a second tessellation and many projections) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;
+    int jobs;                    /* worker processes choosing the methods (choose_methods.c; 1: none);
+                                    the same bytes whatever the count */
+    int jobs_die_after;          /* tests only: each worker dies after taking this many faces, its last
+                                    unanswered (0: never), to show that the encoder takes them over */
 } encode_opts;
 
 void encode_opts_default(encode_opts *o);

@@ -70,6 +70,35 @@ typedef struct tx_surf {
     int64_t rp[2][3][3]; /* ... each row's first point, end (a circle's far point) and middle point */
 } tx_surf;
 
+/* a check a trial made that reads which faces before it keep their surfaces (G1FIT's normals
+   along its edges: verify_g1_self), as it can be answered again once those are known */
+#define TX_MAX_MATTER 16 /* faces before it one check depends on */
+#define TX_MAX_CHECKS 48 /* checks of one face's trials */
+typedef struct tx_check {
+    unsigned char ok;   /* its answer with no face before counted as kept */
+    double need_rebuilt, need_kept; /* passed: the worst |cos| toward faces that are rebuilt at least
+                                       the first, toward kept faces the second */
+    double other;       /* the worst |cos| toward faces that are not before it (never kept yet) */
+    int n;              /* faces before it across a G1 edge: the worst |cos| toward each */
+    int face[TX_MAX_MATTER];
+    double worst[TX_MAX_MATTER];
+} tx_check;
+
+/*
+ * What the trials of the face being chosen asked of the faces before it (t->nchosen): with several
+ * workers each face is chosen as if none before it kept its surface, and then, in order, its checks
+ * are answered again with the faces before it final; where an answer changes, the face is chosen
+ * again from `row` (choose_methods.c).
+ */
+typedef struct tx_asked {
+    int row;            /* the table row whose trial made the first check (-1: none) */
+    face_report rep;    /* the face's report before that trial */
+    int n;              /* checks made */
+    int all;            /* more checks, or faces in one, than the record holds: chosen again whenever
+                           a face before it across an edge keeps its surface */
+    tx_check check[TX_MAX_CHECKS];
+} tx_asked;
+
 typedef struct tx {
     double origin[3], q;
     int q_exp;
@@ -87,6 +116,7 @@ typedef struct tx {
     tx_surf *surfs;     /* one per face (used for KEEP faces) */
     int *method;        /* per face */
     int nchosen;        /* faces 0..nchosen-1 have their method (choose_methods: in order, then all) */
+    tx_asked asked;     /* of the face being chosen (choose_methods.c) */
     int *layout, *corner; /* per GREGORY or NFILL face: its record (spec 15.2; enc_record_fields) */
     uint32_t *checksum;
     unsigned char *turning; /* per face: its exact patches turn a basis (the file is then format 2.6) */
@@ -104,6 +134,11 @@ typedef struct tx {
     int surfs_refit;    /* kept surfaces likewise */
     int surfs_reapproximated; /* kept surfaces sent as fewer cubic points within their budget */
 } tx;
+
+/* a check of the face being chosen that reads the kept faces before it (choose_methods.c): c->face
+   and c->worst, its answer and thresholds; only where no face counted as kept (the record is then
+   exact) */
+void tx_note_check(tx *t, const tx_check *c);
 
 /*
  * Replace curve c by a clamped B-spline of degree min(3, max_degree) with max_ctrl control points,
@@ -186,6 +221,11 @@ cm_err tx_build_edges(loaded_model *lm, tx *t, cm_status *st);
    (tx_reapproximate_surface; not when t->net_whole says the face's net goes whole), its predictor
    chosen (tx_net_predictor) */
 cm_err tx_build_surface(tx *t, const hsurf *orig, tx_surf *S, const cmesh *cm, int f, cm_status *st);
+/* every face's tx_build_surface, on t->o->jobs processes (the same surfaces, faults and counters as
+   in order); a face whose surface cannot be built gets its fault (tx_face_fault): only the end of
+   memory fails */
+cm_err tx_build_surfaces(tx *t, const loaded_model *lm, cm_status *st);
+void tx_surf_free(tx_surf *S);
 /* the fault a kept face whose re-approximated net folds its triangles gets (needs.c): encode_model
    sends that face's net whole and makes the file again */
 extern const char enc_net_folds[];

@@ -1,6 +1,7 @@
 /* tx_build.c - the transmitted model: the curve mesh quantised, in transmission order (see
    encode_internal.h; orient.c turns the parts before). */
 #include "encode_internal.h"
+#include "enc_workers.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -48,7 +49,7 @@ void tx_free_edges(tx *t)
     t->nedges = t->nverts = 0;
 }
 
-static void tx_surf_free(tx_surf *S)
+void tx_surf_free(tx_surf *S)
 {
     free(S->ku);
     free(S->kv);
@@ -515,5 +516,150 @@ static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st)
                 S->rational = 1;
         }
     }
+    return e;
+}
+
+/* ---- every face's surface, on -j N processes ---- */
+
+/* face f's surface built, its fault noted (CM_OK) unless it is the end of memory */
+static cm_err build_one(tx *t, const loaded_model *lm, int f, cm_status *st)
+{
+    const brep_face *bf = &lm->brep.faces[lm->mesh.faces[f].brep_face];
+    cm_status fst;
+    cm_status_init(&fst);
+    cm_err e = tx_build_surface(t, &lm->brep.surfs[bf->surf], &t->surfs[f], &lm->mesh, f, &fst);
+    if (e == CM_E_NOMEM) {
+        *st = fst;
+        return e;
+    }
+    if (e != CM_OK)
+        tx_face_fault(t, f, fst.where ? fst.where : cm_strerror(e));
+    return CM_OK;
+}
+
+/* a worker's surface: the tx_surf with its arrays (ku, kv, cq, wq, in that order) in the arena */
+typedef struct surf_found {
+    atomic_int done;  /* 0: not yet (or no room: the encoder builds it); 1: a worker's, the rest filled
+                         in; 2: the encoder's own, in t */
+    cm_err e;
+    cm_status st;
+    tx_surf S;        /* its array pointers are the worker's: the arrays are in the arena at `at` */
+    size_t at, nku, nkv, total;
+    int refit, reapproximated; /* what it added to t's counters */
+} surf_found;
+
+/* in memory shared with the workers: the faces, then the arena */
+typedef struct surf_board {
+    atomic_int next;
+    atomic_size_t used; /* bytes of the arena taken */
+    size_t cap;
+    cm_err self_e;      /* the encoder's own faces: the end of memory */
+    cm_status self_st;
+    surf_found face[];
+} surf_board;
+
+typedef struct surf_job {
+    tx *t;
+    const loaded_model *lm;
+    surf_board *b;
+    unsigned char *arena;
+} surf_job;
+
+static void surf_item(void *ctx, int f, int self)
+{
+    const surf_job *J = ctx;
+    tx *t = J->t;
+    surf_found *F = &J->b->face[f];
+    if (self) {
+        if (J->b->self_e == CM_OK)
+            J->b->self_e = build_one(t, J->lm, f, &J->b->self_st);
+        atomic_store(&F->done, 2);
+        return;
+    }
+    int refit = t->surfs_refit, reapproximated = t->surfs_reapproximated;
+    const brep_face *bf = &J->lm->brep.faces[J->lm->mesh.faces[f].brep_face];
+    cm_status_init(&F->st);
+    tx_surf *S = &t->surfs[f];
+    F->e = tx_build_surface(t, &J->lm->brep.surfs[bf->surf], S, &J->lm->mesh, f, &F->st);
+    F->refit = t->surfs_refit - refit;
+    F->reapproximated = t->surfs_reapproximated - reapproximated;
+    F->S = *S;
+    if (F->e == CM_OK) {
+        int nku = S->nu - S->p - 1, nkv = S->nv - S->q - 1;
+        F->nku = (size_t)(nku > 0 ? nku : 1);
+        F->nkv = (size_t)(nkv > 0 ? nkv : 1);
+        F->total = (size_t)S->nu * (size_t)S->nv;
+        size_t bytes = (F->nku + F->nkv + 4 * F->total) * sizeof(int64_t);
+        F->at = atomic_fetch_add(&J->b->used, bytes);
+        if (F->at + bytes > J->b->cap)
+            return; /* no room: the encoder builds it */
+        int64_t *a = (int64_t *)(void *)(J->arena + F->at);
+        memcpy(a, S->ku, F->nku * sizeof *a);
+        memcpy(a + F->nku, S->kv, F->nkv * sizeof *a);
+        memcpy(a + F->nku + F->nkv, S->cq, 3 * F->total * sizeof *a);
+        memcpy(a + F->nku + F->nkv + 3 * F->total, S->wq, F->total * sizeof *a);
+    }
+    atomic_store(&F->done, 1);
+}
+
+/* a worker's surface for face f taken into t (0: out of memory) */
+static int take_surf(tx *t, int f, const surf_found *F, const unsigned char *arena)
+{
+    t->surfs_refit += F->refit;
+    t->surfs_reapproximated += F->reapproximated;
+    if (F->e != CM_OK) {
+        tx_face_fault(t, f, F->st.where ? F->st.where : cm_strerror(F->e));
+        return 1;
+    }
+    tx_surf *S = &t->surfs[f];
+    *S = F->S;
+    S->ku = malloc(F->nku * sizeof(int64_t));
+    S->kv = malloc(F->nkv * sizeof(int64_t));
+    S->cq = malloc(F->total * sizeof *S->cq);
+    S->wq = malloc(F->total * sizeof(int64_t));
+    if (!S->ku || !S->kv || !S->cq || !S->wq)
+        return 0;
+    const int64_t *a = (const int64_t *)(const void *)(arena + F->at);
+    memcpy(S->ku, a, F->nku * sizeof *a);
+    memcpy(S->kv, a + F->nku, F->nkv * sizeof *a);
+    memcpy(S->cq, a + F->nku + F->nkv, 3 * F->total * sizeof *a);
+    memcpy(S->wq, a + F->nku + F->nkv + 3 * F->total, F->total * sizeof *a);
+    return 1;
+}
+
+cm_err tx_build_surfaces(tx *t, const loaded_model *lm, cm_status *st)
+{
+    int nf = t->nfaces;
+    surf_board *b = NULL;
+    size_t size = 0;
+    unsigned char *arena = NULL;
+    if (t->o->jobs > 1 && nf > 1) {
+        /* room for every surface as the source has it, clamped on its domain (a degree's more knots
+           at each end), twice over; a surface that does not fit is built by the encoder */
+        size_t cap = (size_t)1 << 20;
+        for (int f = 0; f < nf; f++) {
+            const hsurf *h = &lm->brep.surfs[lm->brep.faces[lm->mesh.faces[f].brep_face].surf];
+            size_t nu = (size_t)h->nu + 2 * (size_t)h->p + 2, nv = (size_t)h->nv + 2 * (size_t)h->q + 2;
+            cap += 2 * (nu + nv + 4 * nu * nv) * sizeof(int64_t);
+        }
+        size = sizeof(surf_board) + (size_t)nf * sizeof(surf_found) + cap;
+        if ((b = enc_shared_alloc(size)) != NULL) {
+            b->cap = cap;
+            arena = (unsigned char *)(b->face + nf); /* surf_found's size keeps 8-byte alignment */
+            surf_job J = {t, lm, b, arena};
+            enc_workers_run(t->o->jobs, nf, &b->next, surf_item, &J, t->o->jobs_die_after);
+        }
+    }
+    cm_err e = b ? b->self_e : CM_OK;
+    if (b && e != CM_OK)
+        *st = b->self_st;
+    for (int f = 0; f < nf && e == CM_OK; f++) {
+        int done = b ? atomic_load(&b->face[f].done) : 0;
+        if (done == 1 && !take_surf(t, f, &b->face[f], arena))
+            e = cm_fail(st, CM_E_NOMEM, "out of memory");
+        else if (done == 0)
+            e = build_one(t, lm, f, st); /* in order, with one process; else a worker's that died */
+    }
+    enc_shared_free(b, size);
     return e;
 }

@@ -738,14 +738,19 @@ int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm
 }
 
 double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs,
-                      const unsigned char *kept, double *worst_kept)
+                      const unsigned char *kept, double *worst_kept, double *use_worst)
 {
     double worst = 1.0, worst_k = 1.0;
     const cm_face *F = &m->faces[f];
     const face_surface *S = &fs[f];
+    uint32_t nth = 0; /* the use's place in use_worst */
+    for (uint32_t l = 0; use_worst && l < F->nloops; l++)
+        for (uint32_t k = 0; k < m->loops[F->loop0 + l].nuse; k++)
+            use_worst[nth++] = 1.0;
+    nth = 0;
     for (uint32_t l = 0; l < F->nloops; l++) {
         const cm_loop *L = &m->loops[F->loop0 + l];
-        for (uint32_t k = 0; k < L->nuse; k++) {
+        for (uint32_t k = 0; k < L->nuse; k++, nth++) {
             uint32_t e = m->uses[L->use0 + k].edge;
             int32_t a = m->edge_face[e][0], b = m->edge_face[e][1];
             if (!m->edges[e].g1 || a < 0 || b < 0 || a == b)
@@ -769,6 +774,8 @@ double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const fa
                 if (!normal_at(lm, f, fs, &walk, &swalk, d3[0], &n) || !source_normal_at(lm, f, d3[0], &ns))
                     continue; /* a pole or collapsed corner: verify_g1_edge decides */
                 double cs = fabs(cm_dot(n, ns));
+                if (use_worst && cs < use_worst[nth])
+                    use_worst[nth] = cs;
                 if (to_kept)
                     worst_k = cs < worst_k ? cs : worst_k;
                 else

@@ -96,9 +96,11 @@ int verify_face_normal(const loaded_model *lm, int f, const face_surface *fs, cm
  * kept: NULL, or per face 1 where that face keeps its surface for good; the G1 edges to those faces
  * are then left out and their worst |cos| goes to *worst_kept (1 without): there the source's normal
  * is the neighbour's own, and the whole G1 limit is the face's to use.
+ * use_worst: NULL, or per use of the face (its loops' uses in order) the worst |cos| along it (1
+ * where it is not a G1 edge to another face, or nothing was measured).
  */
 double verify_g1_self(const loaded_model *lm, const cm_model *m, int f, const face_surface *fs,
-                      const unsigned char *kept, double *worst_kept);
+                      const unsigned char *kept, double *worst_kept, double *use_worst);
 
 /**
  * Spec §13 for edge e of m: at t = k/10, k = 1..9, the unit normals of the

@@ -330,14 +330,30 @@ static void test_g1_self_by_neighbour(void **state)
     memset(fs, 0, sizeof fs);
     assert_true(face_surface_set(&fs[0], &rb));
     double kept_worst = -1.0;
-    double all = verify_g1_self(&lm, &dec.model, 0, fs, NULL, &kept_worst);
+    double all = verify_g1_self(&lm, &dec.model, 0, fs, NULL, &kept_worst, NULL);
     assert_true(all < 1.0 && all >= CM_COS_G1); /* the tangent edge was measured, within the limit */
     assert_true(kept_worst == 1.0);
     const unsigned char rebuilt[2] = {0, 0}, kept[2] = {0, 1};
-    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, rebuilt, &kept_worst) == all);
+    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, rebuilt, &kept_worst, NULL) == all);
     assert_true(kept_worst == 1.0);
-    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, kept, &kept_worst) == 1.0);
+    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, kept, &kept_worst, NULL) == 1.0);
     assert_true(kept_worst == all);
+    /* per use (what cmz encode -j's workers record to answer again): the tangent edge's use has the
+       worst, the others 1 (not tangent, or to no other face) */
+    const cm_face *F = &dec.model.faces[0];
+    assert_int_equal(F->nloops, 1);
+    uint32_t nuse = dec.model.loops[F->loop0].nuse, tangent = 0;
+    double use_worst[16];
+    assert_true(nuse <= 16);
+    assert_true(verify_g1_self(&lm, &dec.model, 0, fs, NULL, &kept_worst, use_worst) == all);
+    for (uint32_t u = 0; u < nuse; u++) {
+        uint32_t e = dec.model.uses[dec.model.loops[F->loop0].use0 + u].edge;
+        int g1 = dec.model.edges[e].g1 && dec.model.edge_face[e][0] >= 0 && dec.model.edge_face[e][1] >= 0 &&
+                 dec.model.edge_face[e][0] != dec.model.edge_face[e][1];
+        tangent += (uint32_t)g1;
+        assert_true(g1 ? use_worst[u] == all : use_worst[u] == 1.0);
+    }
+    assert_int_equal(tangent, 1);
     face_surface_free(&fs[0]);
     encode_result_free(&r);
     model_free(&lm);

@@ -177,10 +177,15 @@ check '[ ! -e "$W/qo/part.iges.cmz" ] && grep -q "failed: $W/quick_link/part.ige
     "a model that fails now leaves no earlier output" "$(ls "$W/qo") $out"
 
 # usage
-"$CMZ" encode "$SMALL" -o "$W/x.cmz" -j 2 > /dev/null 2>&1
+"$CMZ" encode "$SMALL" -o "$W/x.cmz" --force > /dev/null 2>&1
 rc1=$?
 "$CMZ" encode "$V" -o "$W/single.cmz" > /dev/null 2>&1
 rc2=$?
-check '[ $rc1 -eq 2 ] && [ $rc2 -eq 2 ]' "-j on one model and a file for the output folder are usage errors" "$rc1 $rc2"
+check '[ $rc1 -eq 2 ] && [ $rc2 -eq 2 ]' "--force on one model and a file for the output folder are usage errors" "$rc1 $rc2"
+# -j on one model: its faces on N processes (cmz encode -j), the vault's file
+"$CMZ" encode "$SMALL" -o "$W/x.cmz" -j 2 > /dev/null 2>&1
+rc1=$?
+check '[ $rc1 -eq 0 ] && cmp -s "$W/x.cmz" "$W/single.cmz"' \
+    "-j 2 on one model writes the file of -j 1 (a vault's, above)" "$rc1"
 echo "$((n - bad)) passed, $bad failed"
 [ $bad -eq 0 ]
