@@ -99,3 +99,27 @@ awk -F'\t' 'NR == 1 {
           med = n % 2 ? d[(n + 1) / 2] : (d[n / 2] + d[n / 2 + 1]) / 2
           if (sc > 0) printf "| **all** | %d | %d | %d | %d | %.1f | %.1f | %.1f | | median %.0f %% | | | | | | | |\n", si, sg, sx, sc, si / sc, sg / sc, sx / sc, med }' "$tsv"
 echo "(written to $tsv)"
+
+# one model on two cores (cmz encode -j 2, issue 15.4): each model encoded with one process and with
+# two, paired, without --report (the table above times the encode with its per-face mesh measure);
+# the files must be the same bytes
+echo
+echo "| model | encode -j 1 s | encode -j 2 s | -j 1 / -j 2 | same bytes |"
+echo "|---|---:|---:|---:|---|"
+s1=0 s2=0
+for m in "$@"; do
+    name=$(basename "${m%.*}")
+    case "${m##*.}" in stp|STP|step|STEP) name=${name}.stp ;; esac
+    t0=$(now)
+    "$cmz" encode -q "$m" -o "$out/$name.j1.cmz" -j 1 > /dev/null 2>&1 || continue
+    t1=$(now)
+    "$cmz" encode -q "$m" -o "$out/$name.j2.cmz" -j 2 > /dev/null 2>&1 || continue
+    t2=$(now)
+    same=yes
+    cmp -s "$out/$name.j1.cmz" "$out/$name.j2.cmz" || same="**no**"
+    a=$(echo "$t1 - $t0" | bc) b=$(echo "$t2 - $t1" | bc)
+    s1=$(echo "$s1 + $a" | bc) s2=$(echo "$s2 + $b" | bc)
+    awk -v n="$name" -v a="$a" -v b="$b" -v s="$same" 'BEGIN { printf "| %s | %.2f | %.2f | %.2f | %s |\n", n, a, b, a / b, s }'
+done
+awk -v a="$s1" -v b="$s2" 'BEGIN { if (b > 0) printf "| **all** | %.1f | %.1f | %.2f | |\n", a, b, a / b }'
+
