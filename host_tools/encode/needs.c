@@ -1,9 +1,11 @@
 /* needs.c - what the terminal will need, measured with its own tessellation (see encode_internal.h). */
 #include "encode_internal.h"
+#include "enc_workers.h"
 #include "verify.h"
 #include "mesh/mesh_topo.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,60 +43,126 @@ int enc_face_folds(const cm_mesh *m)
     return topo.duplicate > 0;
 }
 
-/* a face that does not tessellate is a fault of that face (see encode_model), not of the model */
-/* the terminal's tessellation of every face, one face at a time: triangles, points, edge samples;
-   with `measure`, each face's triangles against its source too (issue 14.6: r->faces[f].mesh_dev) */
-cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const loaded_model *measure,
-                              encode_result *r, cm_status *st)
+/* what the terminal's tessellation of one face needs, and what is wrong with it */
+typedef struct face_need {
+    atomic_int done;    /* 1: filled in by a worker (cmz encode -j) */
+    cm_err e;           /* CM_E_NOMEM: the end of memory (the model fails); else the face's own */
+    const char *fault;  /* why it cannot be sent as it is (a static string), or NULL */
+    double mesh_dev;    /* with `measure`: its triangles against its source (-1: not measured) */
+    int measured;
+    uint32_t triangles, points, edge_samples;
+} face_need;
+
+/* face f tessellated as the terminal will (issue 14.6: measured against its source with `measure`) */
+static void need_of_face(const tx *t, const loaded_model *measure, const encode_result *r, uint32_t f, face_need *out)
 {
     enc_work *w = t->w;
     const cm_model *m = &w->dec.model;
     cm_mesh_face mf;
     cm_mesh mesh = {w->face_pos, w->face_nrm, w->face_idx, &mf, 0, CM_MAX_TESS_POINTS, 0, 3 * CM_MAX_TESS_TRIS, 0, 1, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
+    cm_tess_info info;
+    cm_status fst;
+    cm_status_init(&fst);
+    cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &w->tess_ws, &info, &fst);
+    out->e = e == CM_E_NOMEM ? e : CM_OK;
+    out->fault = NULL;
+    out->measured = measure && (int)f < t->nfaces;
+    out->mesh_dev = -1.0;
+    out->triangles = out->points = out->edge_samples = 0;
+    if (e == CM_E_NOMEM)
+        return;
+    if (out->measured && e == CM_OK)
+        out->mesh_dev = verify_mesh_face(measure, (int)f, (const float(*)[3])mesh.pos, mesh.nverts, mesh.idx,
+                                         mesh.nindex, r->faces[f].rebuild_max + m->tess_tol);
+    if (e != CM_OK) {
+        out->fault = tess_fault(e); /* a fault of that face (see encode_model), not of the model */
+        return;
+    }
+    if ((int)f < t->nfaces && t->surfs[f].reapproximated && enc_kept(t->method[f])) {
+        int folds = enc_face_folds(&mesh);
+        if (folds < 0) {
+            out->e = CM_E_NOMEM;
+            return;
+        }
+        if (folds) {
+            out->fault = enc_net_folds;
+            return;
+        }
+    }
+    out->triangles = (uint32_t)info.triangles;
+    out->points = (uint32_t)info.points;
+    out->edge_samples = (uint32_t)info.max_edge_samples;
+}
+
+/* on -j N processes: the faces in shared memory */
+typedef struct need_board {
+    atomic_int next;
+    face_need face[];
+} need_board;
+
+typedef struct need_job {
+    tx *t;
+    const loaded_model *measure;
+    const encode_result *r;
+    need_board *b;
+} need_job;
+
+static void need_item(void *ctx, int f, int self)
+{
+    const need_job *J = ctx;
+    face_need *F = &J->b->face[f];
+    need_of_face(J->t, J->measure, J->r, (uint32_t)f, F);
+    atomic_store(&F->done, self ? 2 : 1);
+}
+
+/* the terminal's tessellation of every face: triangles, points, edge samples (on t->o->jobs
+   processes, the same answer); with `measure`, each face's triangles against its source too
+   (issue 14.6: r->faces[f].mesh_dev) */
+cm_err enc_tessellation_needs(tx *t, uint32_t *need, const encode_opts *o, const loaded_model *measure,
+                              encode_result *r, cm_status *st)
+{
+    const cm_model *m = &t->w->dec.model;
+    uint32_t nf = m->nfaces;
     uint64_t tris = 0;
     /* per face its triangles: the placed copies' (format 4.3) are the same again */
-    uint32_t *face_tris = calloc((size_t)m->nfaces + 1, sizeof *face_tris);
+    uint32_t *face_tris = calloc((size_t)nf + 1, sizeof *face_tris);
     if (!face_tris)
         return cm_fail(st, CM_E_NOMEM, "out of memory");
-    for (uint32_t f = 0; f < m->nfaces; f++) {
-        if (o->progress)
-            o->progress("tessellating", (int)f + 1, (int)m->nfaces, o->progress_ctx);
-        cm_tess_info info;
-        cm_mesh_clear(&mesh);
-        cm_status fst;
-        cm_status_init(&fst);
-        cm_err e = cm_tessellate_face(m, f, m->tess_tol, &mesh, &w->tess_ws, &info, &fst);
-        if (e == CM_E_NOMEM) {
-            *st = fst;
-            free(face_tris);
-            return e;
+    size_t size = sizeof(need_board) + (size_t)nf * sizeof(face_need);
+    need_board *b = o->jobs > 1 && nf > 1 ? enc_shared_alloc(size) : NULL;
+    if (b) {
+        need_job J = {t, measure, r, b};
+        enc_workers_run(o->jobs, (int)nf, &b->next, need_item, &J, o->jobs_die_after);
+    }
+    cm_err err = CM_OK;
+    for (uint32_t f = 0; f < nf && err == CM_OK; f++) {
+        face_need one, *F = b && atomic_load(&b->face[f].done) ? &b->face[f] : &one;
+        if (F == &one) { /* in order, with one process; else a worker's that died */
+            if (o->progress)
+                o->progress("tessellating", (int)f + 1, (int)nf, o->progress_ctx);
+            need_of_face(t, measure, r, f, &one);
         }
-        if (measure && (int)f < t->nfaces)
-            r->faces[f].mesh_dev = e != CM_OK ? -1.0
-                                              : verify_mesh_face(measure, (int)f, (const float(*)[3])mesh.pos,
-                                                                 mesh.nverts, mesh.idx, mesh.nindex,
-                                                                 r->faces[f].rebuild_max + m->tess_tol);
-        if (e != CM_OK) {
-            tx_face_fault(t, (int)f, tess_fault(e));
+        if (F->e == CM_E_NOMEM) {
+            err = cm_fail(st, CM_E_NOMEM, "out of memory");
+            break;
+        }
+        if (F->measured)
+            r->faces[f].mesh_dev = F->mesh_dev;
+        if (F->fault) {
+            tx_face_fault(t, (int)f, F->fault);
             continue;
         }
-        if ((int)f < t->nfaces && t->surfs[f].reapproximated && enc_kept(t->method[f])) {
-            int folds = enc_face_folds(&mesh);
-            if (folds < 0) {
-                free(face_tris);
-                return cm_fail(st, CM_E_NOMEM, "out of memory");
-            }
-            if (folds) {
-                tx_face_fault(t, (int)f, enc_net_folds);
-                continue;
-            }
-        }
-        tris += (uint64_t)info.triangles;
-        face_tris[f] = (uint32_t)info.triangles;
-        if ((uint32_t)info.points > need[CM_LIMIT_MAX_TESS_POINTS])
-            need[CM_LIMIT_MAX_TESS_POINTS] = (uint32_t)info.points;
-        if ((uint32_t)info.max_edge_samples > need[CM_LIMIT_MAX_EDGE_SAMPLES])
-            need[CM_LIMIT_MAX_EDGE_SAMPLES] = (uint32_t)info.max_edge_samples;
+        tris += F->triangles;
+        face_tris[f] = F->triangles;
+        if (F->points > need[CM_LIMIT_MAX_TESS_POINTS])
+            need[CM_LIMIT_MAX_TESS_POINTS] = F->points;
+        if (F->edge_samples > need[CM_LIMIT_MAX_EDGE_SAMPLES])
+            need[CM_LIMIT_MAX_EDGE_SAMPLES] = F->edge_samples;
+    }
+    enc_shared_free(b, size);
+    if (err != CM_OK) {
+        free(face_tris);
+        return err;
     }
     uint64_t copy_tris = 0, copy_faces = 0;
     cm_place_counts(m, face_tris, &copy_tris, &copy_faces);

@@ -1,7 +1,8 @@
 /*
- * test_encode_jobs.c - `cmz encode -j N` (encode_opts.jobs): the surfaces built and the methods
- * chosen on N processes give the bytes of one process, and when workers die holding a face the
- * encoder takes their faces over and still gives them.  The bundled models: as1_pe_203 has faces whose
+ * test_encode_jobs.c - `cmz encode -j N` (encode_opts.jobs): the surfaces built, the methods chosen
+ * and the tessellation's needs measured on N processes give the bytes and the per-face report of
+ * one process, and when workers die holding a face the encoder takes their faces over and still
+ * gives them.  The bundled models: as1_pe_203 has faces whose
  * G1FIT trial asks which faces before them keep their surfaces (choose_methods.c chooses them
  * again in order), geo_example has G1FIT faces.
  */
@@ -29,6 +30,7 @@ static encode_result encode_with(const char *path, int jobs, int die_after)
     encode_opts_default(&o);
     o.jobs = jobs;
     o.jobs_die_after = die_after;
+    o.measure_mesh = 1; /* the --report's per-face mesh measure, made by the workers too */
     encode_result r;
     cm_status_init(&st);
     e = encode_model(&lm, &o, &r, &st);
@@ -44,6 +46,21 @@ static void assert_same_file(const encode_result *ref, const encode_result *r, c
         fail_msg("%s %s: %zu bytes, other than the %zu of one process", path, how, r->len, ref->len);
     for (int m = 0; m < CM_METHOD_COUNT; m++)
         assert_int_equal(r->faces_by_method[m], ref->faces_by_method[m]);
+    /* the report too (cmz encode --report), face by face: a worker's numbers are the encoder's */
+    int nf = 0;
+    for (int m = 0; m < CM_METHOD_COUNT; m++)
+        nf += (int)ref->faces_by_method[m];
+    for (int f = 0; f < nf; f++) {
+        const face_report *a = &ref->faces[f], *b = &r->faces[f];
+        if (a->method != b->method || a->layout != b->layout || a->corner != b->corner || a->why != b->why ||
+            memcmp(&a->rebuild_max, &b->rebuild_max, sizeof a->rebuild_max) != 0 ||
+            memcmp(&a->rebuild_avg, &b->rebuild_avg, sizeof a->rebuild_avg) != 0 ||
+            memcmp(&a->g1_cos, &b->g1_cos, sizeof a->g1_cos) != 0 ||
+            memcmp(&a->mesh_dev, &b->mesh_dev, sizeof a->mesh_dev) != 0 || a->fit_m != b->fit_m)
+            fail_msg("%s %s: face %d's report differs (mesh %.9g / %.9g mm, error %.9g / %.9g mm)", path, how, f,
+                     a->mesh_dev, b->mesh_dev, a->rebuild_max, b->rebuild_max);
+    }
+    assert_true(nf > 0 && ref->faces[0].mesh_dev >= 0.0); /* measured */
 }
 
 static void test_any_job_count_gives_the_same_file(void **state)
