@@ -226,21 +226,25 @@ static void choose_face(const loaded_model *lm, tx *t, const encode_opts *o, enc
 
 /* ---- the first pass in worker processes (cmz encode -j N) ---- */
 
-/* what a worker found for one face, in memory it shares with the encoder */
+/* what a worker found for one face, in memory it shares with the encoder: what every face has (the
+   larger parts, a correction and the checks, are in the board's arrays and touched only where a
+   face has them: a model of 100 000 faces touches a few pages per thousand faces here) */
 typedef struct face_found {
     atomic_int done; /* 0: not yet; 1: by a worker, the rest filled in; 2: by the encoder itself */
     int method, layout, corner, has_fit;
     unsigned char turning;
     uint32_t checksum;
     face_report rep; /* its `why` points at a string of the program, the same in every process */
-    tx_asked asked;  /* what its trials asked of the faces before it */
-    fit_record fit;
+    int row, n, all; /* what its trials asked of the faces before it (tx_asked; checks in board->check) */
+    face_report rep_asked;
 } face_found;
 
 typedef struct found_board {
     atomic_int next;  /* the next face a worker takes */
     atomic_int ndone; /* faces done, for the progress line */
-    face_found face[];
+    face_found *face; /* per face (the arrays follow the board in the same shared memory) */
+    fit_record *fit;  /* per face: its correction, where has_fit */
+    tx_check (*check)[TX_MAX_CHECKS]; /* per face: its checks, n of them */
 } found_board;
 
 typedef struct choose_job {
@@ -252,15 +256,15 @@ typedef struct choose_job {
     found_board *b;
 } choose_job;
 
-/* as much of a record as it holds: a face's entry on the board is written only where it has
-   something (most faces make no check, and the pages of the others are never touched) */
-static void copy_asked(tx_asked *to, const tx_asked *from)
+/* face f's record of what its trials asked (t->asked) onto the board, only as much as it holds */
+static void copy_asked(found_board *b, int f, const tx_asked *from)
 {
-    to->row = from->row;
-    to->rep = from->rep;
-    to->n = from->n;
-    to->all = from->all;
-    memcpy(to->check, from->check, (size_t)from->n * sizeof *from->check);
+    face_found *F = &b->face[f];
+    F->row = from->row;
+    F->rep_asked = from->rep;
+    F->n = from->n;
+    F->all = from->all;
+    memcpy(b->check[f], from->check, (size_t)from->n * sizeof *from->check);
 }
 
 /* face f chosen by a worker (its answer on the board) or by the encoder itself (`self`: it stays in
@@ -280,9 +284,9 @@ static void choose_item(void *ctx, int f, int self)
         F->rep = J->r->faces[f];
         F->has_fit = t->fit[f] != NULL;
         if (t->fit[f])
-            F->fit = *t->fit[f];
+            J->b->fit[f] = *t->fit[f];
     }
-    copy_asked(&F->asked, &t->asked);
+    copy_asked(J->b, f, &t->asked);
     atomic_store(&F->done, self ? 2 : 1);
     int n = atomic_fetch_add(&J->b->ndone, 1) + 1;
     if (self && J->o->progress)
@@ -292,8 +296,9 @@ static void choose_item(void *ctx, int f, int self)
 /* a worker's answer for face f taken into t, r and fs: its surface rebuilt from the record (one
    rebuild, where the worker made many trials); 0 when that does not give the worker's surface (its
    checksum; a method without one, PLANE, leaves 0) */
-static int take_found(tx *t, encode_result *r, face_surface *fs, int f, const face_found *F)
+static int take_found(tx *t, encode_result *r, face_surface *fs, int f, const found_board *b)
 {
+    const face_found *F = &b->face[f];
     t->method[f] = F->method;
     t->layout[f] = F->layout;
     t->corner[f] = F->corner;
@@ -306,7 +311,7 @@ static int take_found(tx *t, encode_result *r, face_surface *fs, int f, const fa
     if (F->has_fit) {
         if (!(t->fit[f] = malloc(sizeof *t->fit[f])))
             return 0;
-        *t->fit[f] = F->fit;
+        *t->fit[f] = b->fit[f];
     }
     if (enc_kept(F->method))
         return 1;
@@ -335,13 +340,15 @@ static int kept_before(const cm_model *m, const tx *t, int f)
     return 0;
 }
 
-/* 1 where a check of face f's trials (as) answers otherwise with the faces before it as chosen */
-static int answer_changes(const cm_model *m, const tx *t, int f, const tx_asked *as)
+/* 1 where a check of face f's trials (its record on the board) answers otherwise with the faces
+   before it as chosen */
+static int answer_changes(const cm_model *m, const tx *t, int f, const found_board *b)
 {
-    if (as->all)
+    const face_found *F = &b->face[f];
+    if (F->all)
         return kept_before(m, t, f);
-    for (int k = 0; k < as->n; k++) {
-        const tx_check *c = &as->check[k];
+    for (int k = 0; k < F->n; k++) {
+        const tx_check *c = &b->check[f][k];
         double rebuilt = c->other, kept = 1.0;
         for (int i = 0; i < c->n; i++) {
             double *w = enc_kept(t->method[c->face[i]]) ? &kept : &rebuilt;
@@ -356,9 +363,9 @@ static int answer_changes(const cm_model *m, const tx *t, int f, const tx_asked 
 /* face f chosen again from the row whose trial made its first check, with every face before it
    chosen: the rows above answered as they would have in order (they asked nothing) */
 static void choose_again(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r, face_surface *fs,
-                         int f, const tx_asked *as)
+                         int f, const face_found *F)
 {
-    r->faces[f] = as->rep;
+    r->faces[f] = F->rep_asked;
     t->method[f] = CM_METHOD_FALLBACK;
     t->layout[f] = t->corner[f] = 0;
     t->checksum[f] = 0;
@@ -367,7 +374,7 @@ static void choose_again(const loaded_model *lm, tx *t, const encode_opts *o, en
     memset(&t->asked, 0, sizeof t->asked);
     t->asked.row = -1;
     t->nchosen = f;
-    t->method[f] = first_passing(t, lm, f, o, &r->faces[f], fs, as->row);
+    t->method[f] = first_passing(t, lm, f, o, &r->faces[f], fs, F->row);
     if (enc_kept(t->method[f]))
         face_surface_free(&fs[f]);
 }
@@ -385,8 +392,17 @@ static void choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *
                               face_surface *fs, int jobs)
 {
     int nf = t->nfaces;
-    size_t size = sizeof(found_board) + (size_t)nf * sizeof(face_found);
+    size_t at_fit = sizeof(found_board) + (size_t)nf * sizeof(face_found);
+    at_fit = (at_fit + 63) / 64 * 64;
+    size_t at_check = at_fit + (size_t)nf * sizeof(fit_record);
+    at_check = (at_check + 63) / 64 * 64;
+    size_t size = at_check + (size_t)nf * sizeof(tx_check[TX_MAX_CHECKS]);
     found_board *b = enc_shared_alloc(size);
+    if (b) {
+        b->face = (face_found *)(void *)(b + 1);
+        b->fit = (fit_record *)(void *)((unsigned char *)b + at_fit);
+        b->check = (tx_check(*)[TX_MAX_CHECKS])(void *)((unsigned char *)b + at_check);
+    }
     if (!b) {
         for (int f = 0; f < nf; f++)
             choose_face(lm, t, o, r, fs, f, f);
@@ -397,17 +413,17 @@ static void choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *
     for (int f = 0; f < nf; f++) {
         face_found *F = &b->face[f];
         int done = atomic_load(&F->done);
-        if (done == 1 && !take_found(t, r, fs, f, F))
+        if (done == 1 && !take_found(t, r, fs, f, b))
             done = 0;
         if (done == 0) { /* its worker died, or its answer does not rebuild: the encoder's own */
             choose_face(lm, t, o, r, fs, f, 0);
-            copy_asked(&F->asked, &t->asked);
+            copy_asked(b, f, &t->asked);
         }
     }
     const cm_model *m = &t->w->dec.model;
     for (int f = 0; f < nf; f++)
-        if (b->face[f].asked.row >= 0 && answer_changes(m, t, f, &b->face[f].asked))
-            choose_again(lm, t, o, r, fs, f, &b->face[f].asked);
+        if (b->face[f].row >= 0 && answer_changes(m, t, f, b))
+            choose_again(lm, t, o, r, fs, f, &b->face[f]);
     enc_shared_free(b, size);
 }
 

@@ -67,8 +67,9 @@ typedef struct encode_opts {
                                     default 0: it costs a second tessellation and many projections) */
     model_progress progress;     /* called per face in the long stages (NULL: none) */
     void *progress_ctx;
-    int jobs;                    /* worker processes choosing the methods (choose_methods.c; 1: none);
-                                    the same bytes whatever the count */
+    int jobs;                    /* processes for the per-face work (enc_workers.c; 1: this one alone):
+                                    the same bytes whatever the count; more than 1 forks the caller,
+                                    so a threaded caller keeps it at 1 */
     int jobs_die_after;          /* tests only: each worker dies after taking this many faces, its last
                                     unanswered (0: never), to show that the encoder takes them over */
 } encode_opts;
