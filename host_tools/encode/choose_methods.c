@@ -386,9 +386,10 @@ static void choose_again(const loaded_model *lm, tx *t, const encode_opts *o, en
  * worker answers "none" and records each such check with what it measured toward each of those
  * faces (t->asked); then, in order, the checks are answered again with the faces before it final,
  * and a face whose answer changes is chosen again from that trial on.  A worker that cannot start or
- * dies leaves its faces to the encoder.
+ * dies leaves its faces to the encoder.  0 when no memory can be shared (nothing done: choose in
+ * order).
  */
-static void choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r,
+static int choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *o, encode_result *r,
                               face_surface *fs, int jobs)
 {
     int nf = t->nfaces;
@@ -403,11 +404,8 @@ static void choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *
         b->fit = (fit_record *)(void *)((unsigned char *)b + at_fit);
         b->check = (tx_check(*)[TX_MAX_CHECKS])(void *)((unsigned char *)b + at_check);
     }
-    if (!b) {
-        for (int f = 0; f < nf; f++)
-            choose_face(lm, t, o, r, fs, f, f);
-        return;
-    }
+    if (!b)
+        return 0;
     choose_job J = {lm, t, o, r, fs, b};
     enc_workers_run(jobs, nf, &b->next, choose_item, &J, o->jobs_die_after);
     for (int f = 0; f < nf; f++) {
@@ -425,6 +423,7 @@ static void choose_in_workers(const loaded_model *lm, tx *t, const encode_opts *
         if (b->face[f].row >= 0 && answer_changes(m, t, f, b))
             choose_again(lm, t, o, r, fs, f, &b->face[f]);
     enc_shared_free(b, size);
+    return 1;
 }
 
 /*
@@ -443,9 +442,7 @@ static cm_err choose_methods(const loaded_model *lm, tx *t, const encode_opts *o
     face_surface *fs = calloc((size_t)nf + 1, sizeof *fs);
     if (!fs)
         return cm_fail(st, CM_E_NOMEM, "out of memory");
-    if (o->jobs > 1 && nf > 1)
-        choose_in_workers(lm, t, o, r, fs, o->jobs);
-    else
+    if (!(o->jobs > 1 && nf > 1 && choose_in_workers(lm, t, o, r, fs, o->jobs)))
         for (int f = 0; f < nf; f++) {
             if (o->progress)
                 o->progress("choosing methods", f + 1, nf, o->progress_ctx);

@@ -46,11 +46,15 @@ static unsigned char *g1fit_kept_neighbours(const tx *t)
  */
 static void g1fit_record_check(tx *t, const cm_model *m, int f, int ok, double worst, const double *use_worst)
 {
+    if (!use_worst) {
+        t->asked.all = 1;
+        return;
+    }
     const cm_face *F = &m->faces[f];
     tx_check c = {(unsigned char)ok, G1FIT_COS_HALF, G1FIT_COS_KEPT, 1.0, 0, {0}, {0}};
     double all = 1.0;
     uint32_t nth = 0;
-    for (uint32_t l = 0; use_worst && l < F->nloops; l++) {
+    for (uint32_t l = 0; l < F->nloops; l++) {
         const cm_loop *L = &m->loops[F->loop0 + l];
         for (uint32_t k = 0; k < L->nuse; k++, nth++) {
             double w = use_worst[nth];
@@ -74,10 +78,6 @@ static void g1fit_record_check(tx *t, const cm_model *m, int f, int ok, double w
             }
             c.worst[i] = w < c.worst[i] ? w : c.worst[i];
         }
-    }
-    if (!use_worst) {
-        t->asked.all = 1;
-        return;
     }
     if (worst < all) /* a curve that did not evaluate: the check fails whatever the neighbours */
         c.other = worst;

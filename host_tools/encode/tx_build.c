@@ -521,13 +521,18 @@ static cm_err fill_surf(tx *t, const hsurf *s_in, tx_surf *S, cm_status *st)
 
 /* ---- every face's surface, on -j N processes ---- */
 
+/* curve mesh face f's source surface */
+static const hsurf *source_surface(const loaded_model *lm, int f)
+{
+    return &lm->brep.surfs[lm->brep.faces[lm->mesh.faces[f].brep_face].surf];
+}
+
 /* face f's surface built, its fault noted (CM_OK) unless it is the end of memory */
 static cm_err build_one(tx *t, const loaded_model *lm, int f, cm_status *st)
 {
-    const brep_face *bf = &lm->brep.faces[lm->mesh.faces[f].brep_face];
     cm_status fst;
     cm_status_init(&fst);
-    cm_err e = tx_build_surface(t, &lm->brep.surfs[bf->surf], &t->surfs[f], &lm->mesh, f, &fst);
+    cm_err e = tx_build_surface(t, source_surface(lm, f), &t->surfs[f], &lm->mesh, f, &fst);
     if (e == CM_E_NOMEM) {
         *st = fst;
         return e;
@@ -577,10 +582,9 @@ static void surf_item(void *ctx, int f, int self)
         return;
     }
     int refit = t->surfs_refit, reapproximated = t->surfs_reapproximated;
-    const brep_face *bf = &J->lm->brep.faces[J->lm->mesh.faces[f].brep_face];
     cm_status_init(&F->st);
     tx_surf *S = &t->surfs[f];
-    F->e = tx_build_surface(t, &J->lm->brep.surfs[bf->surf], S, &J->lm->mesh, f, &F->st);
+    F->e = tx_build_surface(t, source_surface(J->lm, f), S, &J->lm->mesh, f, &F->st);
     F->refit = t->surfs_refit - refit;
     F->reapproximated = t->surfs_reapproximated - reapproximated;
     F->S = *S;
@@ -638,7 +642,7 @@ cm_err tx_build_surfaces(tx *t, const loaded_model *lm, cm_status *st)
            at each end), twice over; a surface that does not fit is built by the encoder */
         size_t cap = (size_t)1 << 20;
         for (int f = 0; f < nf; f++) {
-            const hsurf *h = &lm->brep.surfs[lm->brep.faces[lm->mesh.faces[f].brep_face].surf];
+            const hsurf *h = source_surface(lm, f);
             size_t nu = (size_t)h->nu + 2 * (size_t)h->p + 2, nv = (size_t)h->nv + 2 * (size_t)h->q + 2;
             cap += 2 * (nu + nv + 4 * nu * nv) * sizeof(int64_t);
         }
