@@ -34,3 +34,9 @@ double cm_chord_s_part(cm_vec3 p0, cm_vec3 n0, cm_vec3 p1, cm_vec3 n1)
     cm_vec3 ch = cm_sub(p1, p0); /* L c: the slopes times L */
     return S_PART_PEAK * fabs(cm_dot(ch, n0) + cm_dot(ch, n1));
 }
+
+double cm_chord_c_part(cm_vec3 p0, cm_vec3 n0, cm_vec3 p1, cm_vec3 n1)
+{
+    /* L s (1-s) (m0 - m1) / 2 at s = 1/2, with L m = -(p1 - p0).n */
+    return 0.125 * fabs(cm_dot(cm_sub(p1, p0), cm_sub(n0, n1)));
+}

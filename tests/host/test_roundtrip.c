@@ -484,15 +484,18 @@ static void test_half_cylinder(void **state)
     model_free(&lm);
 }
 
-/* ---- the refinement spares tests of pieces that passed the round before, and gives the same mesh ----
+/* ---- the refinement spares tests of pieces that passed the round before, and (format 4.8) of
+   pieces its corners' normals predict flat, and gives the same mesh ----
    Each model (a KEEP B-spline net, an exact Gregory face over two half circles, a GREGORY-FIT bump)
-   is tessellated with the pass cache and with none (ws.pass_slots = 1): the same positions, normals
-   and indices to the bit, and the cache spared tests (else this would compare a path with itself) */
-static uint32_t tessellate_counting(cm_mesh *mesh, long *tested, long *skipped)
+   is tessellated testing every piece every round (ws.pass_slots = 1, ws.test_every_piece = 1),
+   then with the pass cache, then with the cache and the predictions: the same positions, normals
+   and indices to the bit, every piece of every round tested, passed again or predicted, and each
+   of the two spared tests (else this would compare a path with itself) */
+static uint32_t tessellate_counting(cm_mesh *mesh, long *tested, long *skipped, long *predicted)
 {
     *mesh = (cm_mesh){pos, nrm, idx, mfaces, 0, MESH_TRIS + 1024, 0, 3 * MESH_TRIS, 0, 1024, 0, 0, 0, 0, NULL, NULL, 0, 0, 0, 0};
     cm_mesh_clear(mesh);
-    *tested = *skipped = 0;
+    *tested = *skipped = *predicted = 0;
     for (uint32_t f = 0; f < dec.model.nfaces; f++) {
         cm_tess_info info;
         cm_status st;
@@ -500,6 +503,7 @@ static uint32_t tessellate_counting(cm_mesh *mesh, long *tested, long *skipped)
         assert_ok(cm_tessellate_face(&dec.model, f, dec.model.tess_tol, mesh, &tess, &info, &st));
         *tested += info.tested;
         *skipped += info.skipped;
+        *predicted += info.predicted;
     }
     return mesh->nverts;
 }
@@ -509,7 +513,7 @@ static void test_refine_skips_passed_pieces(void **state)
     (void)state;
     static float pos0[MESH_TRIS + 1024][3], nrm0[MESH_TRIS + 1024][3];
     static uint32_t idx0[3 * MESH_TRIS];
-    long spared = 0;
+    long spared = 0, flat = 0;
     for (int model = 0; model < 3; model++) {
         igw w;
         igw_init(&w);
@@ -525,24 +529,34 @@ static void test_refine_skips_passed_pieces(void **state)
         igw_free(&w);
         cm_status st;
         assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+        assert_true(dec.model.refine_48); /* the default writer's format */
         cm_mesh mesh;
-        long tested, skipped, tested0, skipped0;
+        long tested, skipped, predicted, tested0, skipped0, predicted0;
         tess.pass_slots = 1;
-        uint32_t nv0 = tessellate_counting(&mesh, &tested0, &skipped0);
+        tess.test_every_piece = 1;
+        uint32_t nv0 = tessellate_counting(&mesh, &tested0, &skipped0, &predicted0);
         uint32_t ni0 = mesh.nindex;
         memcpy(pos0, pos, sizeof pos0);
         memcpy(nrm0, nrm, sizeof nrm0);
         memcpy(idx0, idx, sizeof idx0);
-        tess.pass_slots = 0;
-        uint32_t nv = tessellate_counting(&mesh, &tested, &skipped);
         assert_int_equal(skipped0, 0);
-        spared += skipped;
-        assert_int_equal(tested + skipped, tested0);
-        assert_int_equal(nv, nv0);
-        assert_int_equal(mesh.nindex, ni0);
-        assert_memory_equal(pos, pos0, (size_t)nv * sizeof pos[0]);
-        assert_memory_equal(nrm, nrm0, (size_t)nv * sizeof nrm[0]);
-        assert_memory_equal(idx, idx0, (size_t)ni0 * sizeof idx[0]);
+        assert_int_equal(predicted0, 0);
+        for (int predict = 0; predict < 2; predict++) {
+            tess.pass_slots = 0;
+            tess.test_every_piece = !predict;
+            uint32_t nv = tessellate_counting(&mesh, &tested, &skipped, &predicted);
+            if (predict)
+                flat += predicted;
+            else
+                spared += skipped;
+            assert_int_equal(tested + skipped + predicted, tested0);
+            assert_int_equal(nv, nv0);
+            assert_int_equal(mesh.nindex, ni0);
+            assert_memory_equal(pos, pos0, (size_t)nv * sizeof pos[0]);
+            assert_memory_equal(nrm, nrm0, (size_t)nv * sizeof nrm[0]);
+            assert_memory_equal(idx, idx0, (size_t)ni0 * sizeof idx[0]);
+        }
+        tess.test_every_piece = 0;
         encode_result_free(&r);
         model_free(&lm);
     }
@@ -550,6 +564,8 @@ static void test_refine_skips_passed_pieces(void **state)
        exact patch passes in the first round, so it has nothing to spare */
     if (!(spared > 0))
         fail_msg("the refinement spared no test");
+    if (!(flat > 0))
+        fail_msg("the refinement predicted no piece flat");
 }
 
 /* ---- a free-form patch: the kept net comes back within the grid (GREGORY-FIT, which would send a

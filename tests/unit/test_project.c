@@ -132,6 +132,49 @@ static void test_loop_grid_cache_per_loop(void **state)
 #endif
 }
 
+/* ---- format 4.8: a loop's first point from the control net ----
+   A loop lying on the washboard is walked from the grids (net_start 0) and from the net: the same
+   polygon (within the walks' precision: 4.8's searches stop at a step of 1e-10 of the domain), and
+   from the net no grid is evaluated.  A loop 40 mm above the board cannot land from the net: the
+   grids are searched as before, and the polygon is the same again. */
+static void test_loop_net_start(void **state)
+{
+    (void)state;
+    static const double U[WASH_NU + 4] = {0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 7, 7, 7};
+    static const double V[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+    cm_vec3 P[WASH_NU * 4];
+    washboard(P, 0.3);
+    cm_surf board = {3, 3, WASH_NU, 4, U, V, P, NULL};
+    cm_psurf ps;
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_psurf_init(&ps, &board, 1e-9, &st));
+    enum { N = 24 };
+    cm_vec3 pts[N];
+    for (int above = 0; above < 2; above++) {
+        for (int k = 0; k < N; k++) { /* a circle in (u,v) round (4.6, 0.55), on the board or above it */
+            cm_vec3 d[3];
+            assert_ok(cm_psurf_eval(&ps, 4.6 + 1.5 * cos(2 * M_PI * k / N), 0.55 + 0.3 * sin(2 * M_PI * k / N), d, &st));
+            pts[k] = above ? cm_v3(5.0 + 0.5 * cos(2 * M_PI * k / N), 5.0 + 0.5 * sin(2 * M_PI * k / N), 40.0) : d[0];
+        }
+        int n[2];
+        for (int net = 0; net < 2; net++) {
+            memset(&LOOP_WS, 0, sizeof LOOP_WS);
+            LOOP_WS.net_start = net;
+            n[net] = walk_loop(&ps, pts, N, LOOP_UV[net]);
+#if CM_PARAM_GRID_CACHE
+            /* the coarse grid: searched from the grids, and from the net only where it cannot land */
+            assert_int_equal(LOOP_WS.grid_have[0], !net || above);
+#endif
+        }
+        assert_int_equal(n[1], n[0]);
+        for (int k = 0; k < n[0]; k++) {
+            assert_near(LOOP_UV[1][k].x, LOOP_UV[0][k].x, 1e-7);
+            assert_near(LOOP_UV[1][k].y, LOOP_UV[0][k].y, 1e-7);
+        }
+    }
+}
+
 static cm_gregory test_patch(uint32_t *seed, int collapse)
 {
     cm_gregory g;
@@ -183,6 +226,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_curve_projection),
         cmocka_unit_test(test_loop_grid_cache_per_loop),
+        cmocka_unit_test(test_loop_net_start),
         cmocka_unit_test(test_nurbs_surface_projection),
         cmocka_unit_test(test_gregory_projection),
     };

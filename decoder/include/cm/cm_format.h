@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 7     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 8     /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -97,6 +97,9 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_ONE_STREAM_MINOR 6u     /* 4.6: the header's fields range-coded, the five sections one stream */
 #define CM_FMT_REFINE_MINOR 7u         /* 4.7: the bytes of 4.6; the tessellation's refinement continues its
                                           triangulation and tests less (cm_model.refine_47) */
+#define CM_FMT_PREDICT_FLAT_MINOR 8u   /* 4.8: the bytes of 4.7; the refinement passes untested a piece its
+                                          corners' normals predict flat, a kept face's loop starts from its
+                                          control net (cm_model.refine_48) */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -288,6 +291,10 @@ typedef struct cm_model {
                              into the last round's triangulation, tests a triangle at its centre only
                              and a side's quarter points only where it may be S-shaped
                              (cm_tessellate.c); the encoder measured the needs that way */
+    int refine_48;        /* format 4.8 on: a piece whose corners' normals predict it within a quarter
+                             of the tolerance passes untested, and a kept face's loop finds its first
+                             (u,v) from the surface's control net before any grid (cm_tessellate.c,
+                             cm_param.c); the encoder measured the needs that way */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
        face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
        model (MAX_TRIS).  The tessellation's work on a face, and on the model, is bounded by these

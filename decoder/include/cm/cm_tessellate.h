@@ -46,12 +46,17 @@ typedef struct cm_tess_ws {
                                               compare the output with and without) */
     long tested, skipped;                  /* refinement's deviation tests this face: run, and spared
                                               because the piece passed the round before */
+    long predicted;                        /* ... and spared because its corners' normals predict it
+                                              flat (format 4.8) */
     int point_cap;                         /* the face's budget of points (cm_tess_point_cap), set by
                                               cm_tessellate_face */
     int folded;                            /* the region's last triangulation needed the fold
                                               fallback (its boundary crosses itself by rounding) */
     int refine_47;                         /* the refinement of format 4.7 (cm_model.refine_47), set
                                               likewise */
+    int refine_48;                         /* ... and of format 4.8 (cm_model.refine_48) */
+    int test_every_piece;                  /* tests: 1 turns format 4.8's predicted passes off (on
+                                              smooth models the mesh must not change) */
 } cm_tess_ws;
 
 /** Statistics of one face's tessellation (for the encoder's needs and for tests). */
@@ -62,6 +67,7 @@ typedef struct cm_tess_info {
     double max_gap;   /* largest distance of a boundary point to a kept surface */
     long tested;      /* refinement: pieces (triangles, inner sides) tested against the surface */
     long skipped;     /* ... and passed again untested: they passed in the round before */
+    long predicted;   /* ... and passed untested: their corners' normals predict them flat (4.8) */
 } cm_tess_info;
 
 /**

@@ -32,6 +32,14 @@ int cm_ray_plane(cm_vec3 p, cm_vec3 d, cm_vec3 m, double c, double *lam);
  */
 double cm_chord_s_part(cm_vec3 p0, cm_vec3 n0, cm_vec3 p1, cm_vec3 n1);
 
+/**
+ * The same cubic's C-shaped (symmetric) part at the middle of the chord: |(p1 - p0).(n0 - n1)| / 8,
+ * the sagitta the ends' normals imply.  An arc of radius R and angle a: R a^2 / 8 to leading order
+ * (its true sagitta R (1 - cos a/2)); a line of a cylinder or of any ruled surface: 0.  Only + - *
+ * and fabs: the same bits everywhere.
+ */
+double cm_chord_c_part(cm_vec3 p0, cm_vec3 n0, cm_vec3 p1, cm_vec3 n1);
+
 /** A right-handed orthonormal face frame: origin and axes, ez = face normal. */
 typedef struct cm_frame {
     cm_vec3 o, ex, ey, ez;

@@ -77,6 +77,10 @@ typedef struct cm_param_ws {
     unsigned char pole[CM_MAX_TESS_POINTS + 1];
     cm_vec3 grid[CM_PARAM_GRID_POINTS];  /* the coarse grid's points, then the fine grid's */
     unsigned char grid_have[2];          /* which of the two hold this loop's surface */
+    int net_start;                       /* format 4.8 (set by the caller): a loop's first point starts
+                                            from the surface's control net, the grids only where that
+                                            lands badly, and the continuation's searches stop at a step
+                                            of 1e-10 of the domain instead of 1e-14 */
 } cm_param_ws;
 
 /**
