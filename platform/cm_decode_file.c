@@ -286,7 +286,8 @@ static cm_err write_all(cm_out *w, int fd, uint64_t *total, cm_write_step *step,
     }
 }
 
-cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_path, uint64_t *bytes, cm_status *st)
+cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_path, int sync, uint64_t *bytes,
+                     cm_status *st)
 {
     char tmp[4096];
     if (strlen(out_path) + 16 > sizeof tmp)
@@ -301,7 +302,7 @@ cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_pat
         return io_fail(st, "create");
     uint64_t total = 0;
     e = write_all(&w, fd, &total, NULL, NULL, st);
-    if (e == CM_OK && fsync(fd) != 0)
+    if (e == CM_OK && sync && fsync(fd) != 0)
         e = io_fail(st, "fsync");
     if (close(fd) != 0 && e == CM_OK)
         e = io_fail(st, "close");

@@ -1,13 +1,14 @@
 /*
  * cmz-decode - the terminal's decoder: .cmz in, .glb/.stl/.obj out.
  *
- *   cmz-decode MODEL.cmz -o MODEL.glb [--tess MM]
+ *   cmz-decode MODEL.cmz -o MODEL.glb [--tess MM] [--sync]
  *   cmz-decode --limits | --version | --help
  *
  * Built with the board's profile (PROFILE=terminal by default): every
  * buffer is static and sized by fixedcfg; the decode path never touches
  * the heap.  A model larger than this build's limits is refused before
- * its body is read, naming the limit.  The output appears atomically.
+ * its body is read, naming the limit.  The output appears atomically
+ * (a temporary file renamed into place; --sync: fsynced first).
  * Errors name the place in the input: the byte offset and, for a face's
  * error, the face.  A face that cannot be tessellated is left out, with a
  * warning naming it; the summary line then ends ", N faces left out".
@@ -38,12 +39,15 @@ static void report(FILE *f, const char *level, const char *in, const cm_status *
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: cmz-decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n"
+            "usage: cmz-decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM] [--sync]\n"
             "       cmz-decode --limits | --version | --help\n"
             "\n"
             "Rebuild a curvemesh model and write it as binary glTF (metres, +Y up), binary STL\n"
             "or OBJ (millimetres), chosen by the extension.  --tess: chordal tolerance in mm\n"
-            "(default: the file's recommendation).  Built with profile %s (--limits shows them).\n"
+            "(default: the file's recommendation).  The output appears whole or not at all (a\n"
+            "temporary file renamed into place); --sync also flushes it to the disk first, so\n"
+            "that a power cut cannot undo it (slower on an SD card).  Built with profile %s\n"
+            "(--limits shows its limits).\n"
             "\n"
             "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error.\n",
             cm_profile_name);
@@ -53,6 +57,7 @@ int main(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL;
     double tol = 0;
+    int sync = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             usage(stdout);
@@ -66,6 +71,8 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--version") == 0) {
             printf("cmz-decode 0.1.0 (format 1, profile %s)\n", cm_profile_name);
             return 0;
+        } else if (strcmp(argv[i], "--sync") == 0) {
+            sync = 1;
         } else if (strcmp(argv[i], "-o") == 0 && i + 1 < argc) {
             out = argv[++i];
         } else if (strcmp(argv[i], "--tess") == 0 && i + 1 < argc) {
@@ -107,7 +114,7 @@ int main(int argc, char **argv)
     if (sum.faces_left_out > CM_DECODE_LEFT_OUT_LIST)
         fprintf(stderr, "cmz-decode: warning: %s: %lu more faces left out\n", in,
                 (unsigned long)(sum.faces_left_out - CM_DECODE_LEFT_OUT_LIST));
-    if (cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
+    if (cm_write_mesh(&mesh, (cm_out_format)fmt, out, sync, &bytes, &st) != CM_OK) {
         report(stderr, "", in, &st);
         return st.code == CM_E_IO ? 3 : 1;
     }

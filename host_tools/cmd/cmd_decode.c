@@ -41,11 +41,14 @@ int cmd_decode(int argc, char **argv)
 {
     const char *path = NULL, *out = NULL, *face_map = NULL;
     double tol = 0;
+    int sync = 0;
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "-o") == 0 && v) {
             out = v;
             i++;
+        } else if (strcmp(a, "--sync") == 0) {
+            sync = 1;
         } else if (strcmp(a, "--face-map") == 0 && v) {
             face_map = v;
             i++;
@@ -59,7 +62,8 @@ int cmd_decode(int argc, char **argv)
     }
     int fmt = out ? cm_out_format_of(out) : -1;
     if (!path || !out || fmt < 0) {
-        fprintf(stderr, "%s decode: usage: cmz decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM]\n", cmd_prog);
+        fprintf(stderr, "%s decode: usage: cmz decode MODEL.cmz -o OUT.glb|OUT.stl|OUT.obj [--tess MM] [--sync]\n",
+                cmd_prog);
         return EXIT_USAGE;
     }
     cm_decoder *decoder = cmd_decoder();
@@ -115,7 +119,7 @@ int cmd_decode(int argc, char **argv)
     if (e == CM_E_NOMEM && st.code == CM_OK) {
         fprintf(stderr, "%s: out of memory for %llu triangles\n", cmd_prog, (unsigned long long)tris);
         rc = EXIT_NOMEM;
-    } else if (e != CM_OK || cm_write_mesh(&mesh, (cm_out_format)fmt, out, &bytes, &st) != CM_OK) {
+    } else if (e != CM_OK || cm_write_mesh(&mesh, (cm_out_format)fmt, out, sync, &bytes, &st) != CM_OK) {
         cm_report_status(stderr, cmd_prog, path, &st);
         rc = cmd_exit_for(st.code);
     } else {

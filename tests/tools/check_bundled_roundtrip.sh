@@ -4,8 +4,9 @@
 # cmz encode -> the terminal build's cmz-decode -> GLB and STL, the mesh welded and closed where
 # the model is (mesh_check), every rebuilt face within its tolerance (cmz eval), and the triangles
 # the terminal made exactly those the header declares (the MAX_TRIS need the encoder measured with
-# the same code: a decoder bounds a model's work by it).  One TAP line per model; stands alone
-# without ../shared.
+# the same code: a decoder bounds a model's work by it); and the output written as a whole, fsynced
+# before its rename only with --sync (strace, from make deps, watches), the same bytes either way.
+# One TAP line per model; stands alone without ../shared.
 set -u
 cmz=$1 decode=$2 mesh_check=$3 cmz_header=$4
 shift 4
@@ -35,6 +36,15 @@ for f in "$@"; do
         why="mesh_check: $(tail -n 1 <<<"$topo")"
     elif ! ev=$("$cmz" eval -q "$f" "$tmp/m.cmz" 2>&1); then
         why="cmz eval: $(grep -m 2 'eval\|FAILED' <<<"$ev" | tr '\n' ' ')"
+    elif ! command -v strace > /dev/null; then
+        why="no strace to watch the output's fsync (make deps installs it)"
+    elif ! strace -f -e trace=fsync,fdatasync -o "$tmp/sync.0" "$decode" "$tmp/m.cmz" -o "$tmp/n.glb" > /dev/null 2>&1 ||
+         ! strace -f -e trace=fsync,fdatasync -o "$tmp/sync.1" "$decode" "$tmp/m.cmz" -o "$tmp/s.glb" --sync > /dev/null 2>&1; then
+        why="cmz-decode under strace failed"
+    elif grep -q sync "$tmp/sync.0" || ! grep -q '^[0-9]* *fsync(' "$tmp/sync.1"; then
+        why="fsync calls: $(grep -c sync "$tmp/sync.0") without --sync, $(grep -c sync "$tmp/sync.1") with (want 0 and 1)"
+    elif ! cmp -s "$tmp/m.glb" "$tmp/n.glb" || ! cmp -s "$tmp/m.glb" "$tmp/s.glb"; then
+        why="--sync changed the output's bytes"
     fi
     if [ -z "$why" ]; then
         echo "ok $n - $b: encoded $(size "$tmp/m.cmz") bytes, decoded by the terminal build, mesh and rebuild checked"
