@@ -1005,15 +1005,21 @@ static int try_flip(tess_ctx *c, int t, int s)
     if (u == t || cc == d || ws->tri[u][j] != b || ws->tri[u][j1] != a)
         return 0;
     cm_vec2 A = ws->p[a], B = ws->p[b], C = ws->p[cc], D = ws->p[d];
-    if (orient_sign(A, D, C) <= 0 || orient_sign(D, B, C) <= 0)
-        return 0; /* the quadrilateral is not strictly convex */
+    /* (the tests are pure, so their order changes only the cost: most sides a Lawson pass pops are
+       Delaunay already and end at the circle test, so it comes before the convexity test, which
+       only a flip needs; the second circle only where the first is not certain) */
     if (orient_sign(A, B, C) > 0 && orient_sign(B, A, D) > 0) {
         /* d in the circle of abc, or equivalently c in the circle of bad: the two evaluations
            round differently (a sliver's own circle is ill-conditioned); either one certain is enough */
-        double e1, e2, ic1 = incircle(A, B, C, D, &e1), ic2 = incircle(B, A, D, C, &e2);
-        if (!(ic1 > e1) && !(ic2 > e2))
-            return 0;
+        double e1, ic1 = incircle(A, B, C, D, &e1);
+        if (!(ic1 > e1)) {
+            double e2, ic2 = incircle(B, A, D, C, &e2);
+            if (!(ic2 > e2))
+                return 0;
+        }
     }
+    if (orient_sign(A, D, C) <= 0 || orient_sign(D, B, C) <= 0)
+        return 0; /* the quadrilateral is not strictly convex */
     force_flip(ws, t, s); /* t = (c, a, d), u = (d, b, c) */
     ws->flips++;
     push_side(c, t, 0);
