@@ -64,7 +64,8 @@ static cm_err over_budget(int cap, uint64_t need, cm_status *st, const char *whe
                                    "(MAX_TESS_POINTS)");
 }
 
-cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int cap, int *n_out, cm_status *st)
+cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, cm_vec3 *pts, int cap, int *n_out,
+                      cm_status *st)
 {
     const cm_edge *E = &m->edges[e];
     int maxn = cap - 1 < CM_MAX_EDGE_SAMPLES - 1 ? cap - 1 : CM_MAX_EDGE_SAMPLES - 1;
@@ -76,15 +77,19 @@ cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int
     /* an edge of an N-split GREGORY face needs its midpoint (t = 1/2) as a sample: both faces of the
        edge then sample it at an even count (spec 6.4: the sub-patches meet the edge there) */
     int even = m->edge_split[e] != 0 && maxn >= 2;
+    cm_curve c;
+    cm_model_edge_curve(m, e, &c);
     if (E->kind == CM_EDGE_LINE) {
         int nl = even ? 2 : 1;
-        for (int i = 0; i <= nl; i++)
+        for (int i = 0; i <= nl; i++) {
             ts[i] = (double)i / (double)nl;
+            cm_err err;
+            if (pts && (err = cm_curve_eval(&c, ts[i], 0, &pts[i], st)) != CM_OK)
+                return err;
+        }
         *n_out = nl;
         return CM_OK;
     }
-    cm_curve c;
-    cm_model_edge_curve(m, e, &c);
     /* start from one segment per knot span (at least 2), double until every chord fits */
     int spans = 1;
     for (int i = c.p + 1; i < c.n_ctrl; i++)
@@ -93,6 +98,7 @@ cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int
     int n = spans < 2 ? 2 : spans;
     if (n > maxn)
         n = maxn;
+    int have = -1; /* the count whose points pts holds */
     for (int round = 0; round < MAX_DOUBLINGS; round++) {
         double worst = 0.0;
         cm_vec3 prev = cm_v3(0, 0, 0);
@@ -101,6 +107,8 @@ cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int
             cm_err err = cm_curve_eval(&c, (double)i / (double)n, 0, d, st);
             if (err != CM_OK)
                 return err;
+            if (pts)
+                pts[i] = d[0];
             if (i > 0) {
                 cm_vec3 mid[1];
                 if ((err = cm_curve_eval(&c, ((double)i - 0.5) / (double)n, 0, mid, st)) != CM_OK)
@@ -111,6 +119,7 @@ cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int
             }
             prev = d[0];
         }
+        have = n;
         if (worst <= tol || n >= maxn)
             break;
         n = 2 * n > maxn ? maxn : 2 * n;
@@ -120,6 +129,11 @@ cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int
     for (int i = 0; i <= n; i++)
         ts[i] = (double)i / (double)n;
     ts[n] = 1.0;
+    for (int i = 0; pts && have != n && i <= n; i++) {
+        cm_err err = cm_curve_eval(&c, ts[i], 0, &pts[i], st);
+        if (err != CM_OK)
+            return err;
+    }
     *n_out = n;
     return CM_OK;
 }
@@ -157,7 +171,7 @@ __attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const
         for (uint32_t u = 0; u < L->nuse; u++) {
             const cm_use *U = &m->uses[L->use0 + u];
             int n;
-            cm_err e = cm_edge_params(m, U->edge, tol, ws->ts, CM_MAX_EDGE_SAMPLES, &n, st);
+            cm_err e = cm_edge_params(m, U->edge, tol, ws->ts, ws->epts, CM_MAX_EDGE_SAMPLES, &n, st);
             if (e != CM_OK)
                 return e;
             if (n + 1 > info->max_edge_samples)
@@ -171,15 +185,9 @@ __attribute__((noinline)) static cm_err sample_boundary(const cm_model *m, const
                 ws->use_first[u] = k;
                 ws->use_n[u] = n;
             }
-            cm_curve c;
-            cm_model_edge_curve(m, U->edge, &c);
             /* the use's start up to (not including) its end: the next use supplies that point */
-            for (int i = 0; i < n; i++) {
-                cm_vec3 d[1];
-                if ((e = cm_curve_eval(&c, U->rev ? ws->ts[n - i] : ws->ts[i], 0, d, st)) != CM_OK)
-                    return e;
-                ws->bpts[k++] = d[0];
-            }
+            for (int i = 0; i < n; i++)
+                ws->bpts[k++] = ws->epts[U->rev ? n - i : i];
         }
     }
     ws->loop_bstart[F->nloops] = k;

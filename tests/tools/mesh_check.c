@@ -118,7 +118,7 @@ int main(int argc, char **argv)
                     continue;
                 int n = 0;
                 cm_status_init(&st);
-                if (cm_edge_params(m, ed, sum.tess_tol, ts, CM_MAX_EDGE_SAMPLES + 1, &n, &st) == CM_OK)
+                if (cm_edge_params(m, ed, sum.tess_tol, ts, NULL, CM_MAX_EDGE_SAMPLES + 1, &n, &st) == CM_OK)
                     expect_free += (size_t)n;
             }
             mesh_topo t;

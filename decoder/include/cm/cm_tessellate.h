@@ -41,6 +41,7 @@ typedef struct cm_tess_ws {
     int tris[CM_MAX_TESS_TRIS][3];
     uint32_t vmap[CM_MAX_TESS_POINTS];     /* triangulation point -> mesh vertex (or UINT32_MAX) */
     double ts[CM_MAX_EDGE_SAMPLES];
+    cm_vec3 epts[CM_MAX_EDGE_SAMPLES];     /* an edge's points at ts (cm_edge_params) */
     uint64_t passed[2][CM_TESS_PASS_SLOTS]; /* refinement: pieces that passed, last round and this */
     uint32_t pass_slots;                   /* slots of each used at most: 0 = all; 1 = none (tests
                                               compare the output with and without) */
@@ -92,13 +93,16 @@ int cm_tess_triangle_cap(const cm_model *m, double tol);
  * Parameters t in [0,1] sampling edge e so that every chord is within
  * `tol` of the curve (uniform in t, doubled until it holds).
  * @param[out] ts  n + 1 values, ts[0] = 0, ts[n] = 1 (cap entries available)
+ * @param[out] pts NULL, or the curve's n + 1 points at ts, in the curve's direction: the bits
+ *                 cm_curve_eval gives there (the last round's own evaluations, where it tested
+ *                 its chords: a caller that wants the points need not evaluate them again)
  * At most min(cap, CM_MAX_EDGE_SAMPLES, cm_tess_edge_sample_cap(m, tol))
  * values: where the chords would need more, the densest allowed sampling is
  * returned (the same for every face that uses the edge).
  * @return CM_OK, or the curve's evaluation errors
  */
-CM_NODISCARD cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, int cap, int *n,
-                                   cm_status *st);
+CM_NODISCARD cm_err cm_edge_params(const cm_model *m, uint32_t e, double tol, double *ts, cm_vec3 *pts, int cap,
+                                   int *n, cm_status *st);
 
 /**
  * Rebuild face f and append its triangles to `mesh` (one cm_mesh_face).
