@@ -165,10 +165,24 @@ static double orient(cm_vec2 a, cm_vec2 b, cm_vec2 c, double *err)
     return l - r;
 }
 
-/* orientation beyond its tolerance: +1 counter-clockwise, -1 clockwise, 0 collinear */
+/* orientation beyond its tolerance: +1 counter-clockwise, -1 clockwise, 0 collinear.
+ * First the determinant at corner a, without choosing the pivot: where it is far beyond both
+ * tolerances its sign is the pivot's, and the answer is the same.  (Each determinant is within
+ * about 5 ulp of (|l| + |r|) of the exact one of the three points, and the pivot's |l| + |r|, of
+ * the two shortest sides, is at most |b - a|^2 + |c - a|^2 = q: past 2e-14 (|l| + |r| + q) at a,
+ * the pivot's determinant has that sign and exceeds its EPS_REL (|l| + |r|).  Most of a Lawson
+ * pass's orientations are of well-shaped triangles, far from 0; a sliver takes the pivot.) */
 static int orient_sign(cm_vec2 a, cm_vec2 b, cm_vec2 c)
 {
-    double e, o = orient(a, b, c, &e);
+    double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+    double l = bx * cy, r = by * cx, o = l - r;
+    double far = 2e-14 * (fabs(l) + fabs(r) + (bx * bx + by * by + cx * cx + cy * cy));
+    if (o > far)
+        return 1;
+    if (o < -far)
+        return -1;
+    double e;
+    o = orient(a, b, c, &e);
     return o > e ? 1 : (o < -e ? -1 : 0);
 }
 
