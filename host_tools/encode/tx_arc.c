@@ -104,8 +104,10 @@ static double span_sample(const cm_curve *c, int k, int m)
 
 /* the largest distance from the samples of a (SAMPLES_PER_SPAN in each of its knot spans, at least
    CHECK_SAMPLES) to curve b, found about b's nearest chord (of POLY_PER_SPAN a span, at least
-   POLY_SEGMENTS) by golden-section search; HUGE_VAL when either does not evaluate.  It stops at the
-   first sample farther than `limit`: past that the value only says so */
+   POLY_SEGMENTS) by golden-section search; HUGE_VAL when either does not evaluate.  The caller asks
+   only whether it is within `limit`, so it stops at the first sample farther than that, and a
+   sample's search as soon as the sample is within it: the value is within `limit` exactly when the
+   full searches' would be (a search's best only falls), and says no more */
 static double one_way(const cm_curve *a, const cm_curve *b, double limit)
 {
     int na = spans(a) * SAMPLES_PER_SPAN, nb = spans(b) * POLY_PER_SPAN;
@@ -142,9 +144,11 @@ static double one_way(const cm_curve *a, const cm_curve *b, double limit)
            (chords cut corners, so a chord's distance may be less than the curve's) */
         double lo = up[near > 0 ? near - 1 : 0], hi = up[near + 2 < nb ? near + 2 : nb];
         double best = fmin(cm_dist(x, poly[near]), cm_dist(x, poly[near + 1]));
-        /* best only falls: once it is within the worst so far it cannot raise it, and the search
-           stops (the same worst, a fifth of Shelt_channel_5's encode spent without these stops) */
-        for (int it = 0; it < PROJECT_ITERATIONS && !(best <= worst); it++) {
+        /* best only falls: once it is within the limit this sample passes, and the search stops
+           (where an arc fits its curve, the nearest chord's ends are within it already: the
+           searches took a sixth of Shelt_channel_5's encode when they stopped only within the
+           worst so far, a fifth before that) */
+        for (int it = 0; it < PROJECT_ITERATIONS && !(best <= limit); it++) {
             double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
             cm_vec3 y1, y2;
             if (!eval_at(b, m1, &y1) || !eval_at(b, m2, &y2)) {
