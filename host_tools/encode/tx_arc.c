@@ -43,6 +43,7 @@
 #define POLY_PER_SPAN 32       /* ... and in each knot span */
 #define PROJECT_ITERATIONS 40  /* golden-section steps onto the curve about its nearest chord */
 #define FINE_STEPS 2.0         /* grid steps: how far an edge that stays on the grid may move as an arc */
+#define CHORD_BLOCK 16         /* chords boxed together, so that the nearest-chord scan skips far blocks */
 
 static cm_vec3 grid_mm(const tx *t, const int64_t k[3])
 {
@@ -108,19 +109,40 @@ static double span_sample(const cm_curve *c, int k, int m)
    only whether it is within `limit`, so it stops at the first sample farther than that, and a
    sample's search as soon as the sample is within it: the value is within `limit` exactly when the
    full searches' would be (a search's best only falls), and says no more */
+/* the distance from x to chord i, poly[i] -> poly[i + 1] */
+static double chord_dist(const cm_vec3 *poly, int i, cm_vec3 x)
+{
+    cm_vec3 s = cm_sub(poly[i + 1], poly[i]);
+    double L = cm_norm2(s), f = L > 0 ? cm_dot(cm_sub(x, poly[i]), s) / L : 0.0;
+    f = f < 0 ? 0 : (f > 1 ? 1 : f);
+    return cm_dist(x, cm_add(poly[i], cm_scale(s, f)));
+}
+
 static double one_way(const cm_curve *a, const cm_curve *b, double limit)
 {
     int na = spans(a) * SAMPLES_PER_SPAN, nb = spans(b) * POLY_PER_SPAN;
     na = na < CHECK_SAMPLES ? CHECK_SAMPLES : na;
     nb = nb < POLY_SEGMENTS ? POLY_SEGMENTS : nb;
-    cm_vec3 *poly = malloc((size_t)(nb + 1) * sizeof *poly);
+    int nblk = (nb + CHORD_BLOCK - 1) / CHORD_BLOCK;
+    cm_vec3 *poly = malloc((size_t)(nb + 1) * sizeof *poly), *box = malloc((size_t)nblk * 2 * sizeof *box);
     double *up = malloc((size_t)(nb + 1) * sizeof *up), worst = 0;
-    if (!poly || !up)
+    int prev_near = 0;
+    if (!poly || !up || !box)
         worst = HUGE_VAL;
     for (int i = 0; i <= nb && worst == 0; i++) {
         up[i] = i == nb ? 1.0 : span_sample(b, i, nb);
         if (!eval_at(b, up[i], &poly[i]))
             worst = HUGE_VAL;
+    }
+    /* each block's box: its chords' ends */
+    for (int g = 0; g < nblk && worst == 0; g++) {
+        cm_vec3 lo = poly[g * CHORD_BLOCK], hi = lo;
+        for (int i = g * CHORD_BLOCK + 1; i <= (g + 1) * CHORD_BLOCK && i <= nb; i++) {
+            lo = cm_v3(fmin(lo.x, poly[i].x), fmin(lo.y, poly[i].y), fmin(lo.z, poly[i].z));
+            hi = cm_v3(fmax(hi.x, poly[i].x), fmax(hi.y, poly[i].y), fmax(hi.z, poly[i].z));
+        }
+        box[2 * g] = lo;
+        box[2 * g + 1] = hi;
     }
     for (int k = 0; k <= na && worst < HUGE_VAL; k++) {
         cm_vec3 x;
@@ -128,18 +150,33 @@ static double one_way(const cm_curve *a, const cm_curve *b, double limit)
             worst = HUGE_VAL;
             break;
         }
-        double nearest = HUGE_VAL;
-        int near = 0;
+        /* the chord nearest the last sample first (the samples run along the curve), so that far
+           blocks are skipped from the start; the first of equals still wins, as in a plain scan */
+        double nearest = chord_dist(poly, prev_near, x);
+        int near = prev_near;
+        if (!(nearest <= HUGE_VAL)) { /* (a NaN: as a plain scan starts) */
+            nearest = HUGE_VAL;
+            near = 0;
+        }
         for (int i = 0; i < nb; i++) {
-            cm_vec3 s = cm_sub(poly[i + 1], poly[i]);
-            double L = cm_norm2(s), f = L > 0 ? cm_dot(cm_sub(x, poly[i]), s) / L : 0.0;
-            f = f < 0 ? 0 : (f > 1 ? 1 : f);
-            double d = cm_dist(x, cm_add(poly[i], cm_scale(s, f)));
-            if (d < nearest) {
+            if (i % CHORD_BLOCK == 0) {
+                /* a block whose box is farther than the nearest chord so far (with room for the
+                   roundings) holds no chord nearer: skipped, the same chord found */
+                cm_vec3 lo = box[2 * (i / CHORD_BLOCK)], hi = box[2 * (i / CHORD_BLOCK) + 1];
+                double dx = fmax(0.0, fmax(lo.x - x.x, x.x - hi.x)), dy = fmax(0.0, fmax(lo.y - x.y, x.y - hi.y)),
+                       dz = fmax(0.0, fmax(lo.z - x.z, x.z - hi.z));
+                if (dx * dx + dy * dy + dz * dz > nearest * nearest * (1.0 + 1e-9)) {
+                    i += CHORD_BLOCK - 1;
+                    continue;
+                }
+            }
+            double d = chord_dist(poly, i, x);
+            if (d < nearest || (d == nearest && i < near)) {
                 nearest = d;
                 near = i;
             }
         }
+        prev_near = near;
         /* the chords only say where: the distance is to the curve itself, about the nearest chord
            (chords cut corners, so a chord's distance may be less than the curve's) */
         double lo = up[near > 0 ? near - 1 : 0], hi = up[near + 2 < nb ? near + 2 : nb];
@@ -167,6 +204,7 @@ static double one_way(const cm_curve *a, const cm_curve *b, double limit)
             break; /* the caller asks only whether it is within limit */
     }
     free(poly);
+    free(box);
     free(up);
     return worst;
 }
