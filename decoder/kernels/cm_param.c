@@ -76,19 +76,11 @@ cm_err cm_psurf_init(cm_psurf *ps, const cm_surf *s, double tol, cm_status *st)
     return CM_OK;
 }
 
-/* format 4.8's schedule for the loops' walks: the same but for the end.  A loop point lies up to a
-   quarter of its face's tolerance off a kept surface (format 4.1), where the search converges only
-   linearly: its last steps, down to 1e-14 of the domain, took about half of a walk's 13 evaluations
-   a point (occt__hammer), for digits far below any tolerance */
-static const cm_lm2_opts project_lm_48 = {
-    .max_steps = 60,
-    .mu0 = 1e-3,
-    .mu_factor = 10.0,
-    .mu_min = 1e-12,
-    .mu_max = 1e8,
-    .step_min = 1e-10,
-    .accept_equal = 1,
-};
+/* format 4.8's loop walks end at a step of this much of the domain, not project_lm's 1e-14.  A loop
+   point lies up to a quarter of its face's tolerance off a kept surface (format 4.1), where the
+   search converges only linearly: its last steps took about half of a walk's 13 evaluations a point
+   (occt__hammer), for digits far below any tolerance */
+#define WALK_STEP_MIN_48 1e-10
 
 static cm_err project_with(const cm_psurf *ps, cm_vec3 P, const cm_lm2_opts *opts, double *u, double *v,
                            double *dist, cm_status *st)
@@ -237,7 +229,10 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
         return cm_fail(st, CM_E_ARG, __func__);
     double pu = ps->u1 - ps->u0, pv = ps->v1 - ps->v0;
     ws->grid_have[0] = ws->grid_have[1] = 0; /* a new loop: perhaps a new surface at the same address */
-    const cm_lm2_opts *walk = ws->net_start ? &project_lm_48 : &project_lm;
+    cm_lm2_opts walk_opts = project_lm;
+    if (ws->net_start)
+        walk_opts.step_min = WALK_STEP_MIN_48;
+    const cm_lm2_opts *walk = &walk_opts;
     cm_vec2 *uv = ws->uv;
     unsigned char *pole = ws->pole;
     double u = 0, v = 0;

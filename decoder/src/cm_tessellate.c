@@ -575,10 +575,10 @@ static int s_shaped(const cm_tess_ws *ws, int i, int j, double tol)
  * its centre by the quadratic triangle whose sides sag that much: 4/9 of the sum of its sides'
  * (the centre's weight of a side's middle control point is 2/9, and that point lies twice the
  * side's sag off).  Such a piece passes without a test.  Over the 36 corpus models at the bench's
- * deflections, the pieces it passes measured at most 0.86 of the tolerance when tested anyway (the
- * rest below a half), so none would have failed and each mesh is the one testing them makes; half
- * the sides and a third of the triangles are spared (a cylinder's or a fillet's sides along its
- * lines predict 0).  What it cannot see is a bump that leaves no trace in its corners' normals (a
+ * deflections, the pieces it passes measured at most 0.86 of the tolerance when tested anyway (19
+ * above a half), so none would have failed and each mesh is the one testing them makes; half to
+ * 86 % of the sides' tests and a fifth to four fifths of the triangles' are spared (a cylinder's or
+ * a fillet's sides along its lines predict 0).  What it cannot see is a bump that leaves no trace in its corners' normals (a
  * side rising and falling back between equal normals); the pieces it judges are those the interior
  * grid and the rounds before made, whose corners sample the surface as densely as the boundary's
  * sampling (GREGORY) or its curvature (a kept surface) asks, so such a bump is narrower than a cell,
