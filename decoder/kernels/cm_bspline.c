@@ -139,14 +139,16 @@ cm_err cm_bspl_basis(int span, double u, int p, const double *knots, double *N, 
 
 _Static_assert(CM_MAX_DERS <= 2, "cm_bspl_ders_basis unrolls A2.3's derivative loop for k <= 2: extend it first");
 
-cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots,
-                          double ders[CM_MAX_DERS + 1][CM_MAX_ORDER], cm_status *st)
+/*
+ * A2.2 and A2.3 for degree p, once for each of the common degrees with p a constant (the dispatch
+ * below): the compiler then unrolls the loops and keeps the triangle in registers, doing the same
+ * operations in the same order, so the same bits (the unit tests hold every degree and order to
+ * the textbook A2.3).  The degrees 2 and 3 of arcs and cubic nets were most of a decode's calls.
+ */
+static inline __attribute__((always_inline)) void ders_basis_p(int span, double u, const int p, int nd,
+                                                               const double *knots,
+                                                               double ders[CM_MAX_DERS + 1][CM_MAX_ORDER])
 {
-    cm_err e = check_degree(p, st, __func__);
-    if (e != CM_OK)
-        return e;
-    if (nd < 0 || nd > CM_MAX_DERS)
-        return cm_fail(st, CM_E_ARG, __func__);
     double ndu[CM_MAX_ORDER][CM_MAX_ORDER];
     double left[CM_MAX_ORDER], right[CM_MAX_ORDER];
 
@@ -200,6 +202,30 @@ cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots
     for (int k = n + 1; k <= nd; k++)
         for (int j = 0; j <= p; j++)
             ders[k][j] = 0.0;
+}
+
+cm_err cm_bspl_ders_basis(int span, double u, int p, int nd, const double *knots,
+                          double ders[CM_MAX_DERS + 1][CM_MAX_ORDER], cm_status *st)
+{
+    cm_err e = check_degree(p, st, __func__);
+    if (e != CM_OK)
+        return e;
+    if (nd < 0 || nd > CM_MAX_DERS)
+        return cm_fail(st, CM_E_ARG, __func__);
+    switch (p) {
+    case 1:
+        ders_basis_p(span, u, 1, nd, knots, ders);
+        break;
+    case 2:
+        ders_basis_p(span, u, 2, nd, knots, ders);
+        break;
+    case 3:
+        ders_basis_p(span, u, 3, nd, knots, ders);
+        break;
+    default:
+        ders_basis_p(span, u, p, nd, knots, ders);
+        break;
+    }
     return CM_OK;
 }
 
