@@ -727,12 +727,13 @@ static cm_err refine_region(const chart *c, cm_tess_ws *ws, int *npts_io, int *n
         for (int t = 0; t < ntris && npts < ws->point_cap; t++) {
             const int *tc = ws->tris[t];
             uint64_t key = tri_key(tc);
-            if (pass_again(&last, &now, ws, key)) {
-                /* passed last round */
-            } else if (ws->refine_48 && !ws->test_every_piece && triangle_flat(ws, tc, tol)) {
+            int passed = pass_again(&last, &now, ws, key);
+            if (!passed && ws->refine_48 && !ws->test_every_piece && triangle_flat(ws, tc, tol)) {
                 pass_add(&now, key);
                 ws->predicted++;
-            } else {
+                passed = 1;
+            }
+            if (!passed) {
                 int tested = npts;
                 ws->tested++;
                 if ((e = test_triangle(c, ws, tc, tol, su, sv, &npts, st)) != CM_OK)

@@ -103,12 +103,6 @@ static double span_sample(const cm_curve *c, int k, int m)
     return 1.0;
 }
 
-/* the largest distance from the samples of a (SAMPLES_PER_SPAN in each of its knot spans, at least
-   CHECK_SAMPLES) to curve b, found about b's nearest chord (of POLY_PER_SPAN a span, at least
-   POLY_SEGMENTS) by golden-section search; HUGE_VAL when either does not evaluate.  The caller asks
-   only whether it is within `limit`, so it stops at the first sample farther than that, and a
-   sample's search as soon as the sample is within it: the value is within `limit` exactly when the
-   full searches' would be (a search's best only falls), and says no more */
 /* the distance from x to chord i, poly[i] -> poly[i + 1] */
 static double chord_dist(const cm_vec3 *poly, int i, cm_vec3 x)
 {
@@ -118,6 +112,12 @@ static double chord_dist(const cm_vec3 *poly, int i, cm_vec3 x)
     return cm_dist(x, cm_add(poly[i], cm_scale(s, f)));
 }
 
+/* the largest distance from the samples of a (SAMPLES_PER_SPAN in each of its knot spans, at least
+   CHECK_SAMPLES) to curve b, found about b's nearest chord (of POLY_PER_SPAN a span, at least
+   POLY_SEGMENTS) by golden-section search; HUGE_VAL when either does not evaluate.  The caller asks
+   only whether it is within `limit`, so it stops at the first sample farther than that, and a
+   sample's search as soon as the sample is within it: the value is within `limit` exactly when the
+   full searches' would be (a search's best only falls), and says no more */
 static double one_way(const cm_curve *a, const cm_curve *b, double limit)
 {
     int na = spans(a) * SAMPLES_PER_SPAN, nb = spans(b) * POLY_PER_SPAN;
