@@ -396,6 +396,57 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
     return CM_OK;
 }
 
+cm_err cm_surf_eval_grid(const cm_surf *s, const double *u, int nu, const double *v, int nv, cm_vec3 *g,
+                        cm_status *st)
+{
+    double Nu[CM_MAX_DERS + 1][CM_MAX_ORDER], Nv[CM_MAX_DERS + 1][CM_MAX_ORDER];
+    cm_hpt temp[CM_MAX_ORDER];
+    int p = s->p, q = s->q;
+    cm_err e;
+    if ((e = check_degree(p, st, __func__)) != CM_OK || (e = check_degree(q, st, __func__)) != CM_OK)
+        return e;
+    double u0 = s->U[p], u1 = s->U[s->nu], v0 = s->V[q], v1 = s->V[s->nv];
+    for (int i = 0; i < nu; i++) {
+        double ui = u[i];
+        if (!(ui > u0))
+            ui = u0;
+        if (ui > u1)
+            ui = u1;
+        int us = cm_bspl_find_span(s->nu, p, s->U, ui);
+        if ((e = cm_bspl_ders_basis(us, ui, p, 0, s->U, Nu, st)) != CM_OK)
+            return e;
+        int temp_vs = -1; /* the v span temp[] was contracted for: grid points in one span share it */
+        for (int j = 0; j < nv; j++) {
+            double vj = v[j];
+            if (!(vj > v0))
+                vj = v0;
+            if (vj > v1)
+                vj = v1;
+            int vs = cm_bspl_find_span(s->nv, q, s->V, vj);
+            if ((e = cm_bspl_ders_basis(vs, vj, q, 0, s->V, Nv, st)) != CM_OK)
+                return e;
+            if (vs != temp_vs) {
+                for (int sidx = 0; sidx <= q; sidx++) {
+                    cm_hpt t = {0, 0, 0, 0};
+                    for (int r = 0; r <= p; r++) {
+                        long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
+                        double wi = s->w ? s->w[idx] : 1.0;
+                        hpt_add_point(&t, Nu[0][r] * wi, s->ctrl[idx]);
+                    }
+                    temp[sidx] = t;
+                }
+                temp_vs = vs;
+            }
+            cm_hpt a = {0, 0, 0, 0};
+            for (int sidx = 0; sidx <= q; sidx++)
+                hpt_add_scaled(&a, Nv[0][sidx], temp[sidx]);
+            cm_vec3 P = cm_v3(a.x, a.y, a.z);
+            g[(long)i * nv + j] = s->w ? cm_scale(P, 1.0 / a.w) : P;
+        }
+    }
+    return CM_OK;
+}
+
 void cm_knot_insert_steps(const double *knots, int p, int k, int s, int r, double u, cm_hpt *R, cm_hpt *out)
 {
     const double *U = knots;

@@ -180,15 +180,15 @@ cm_err cm_psurf_grid_points(const cm_psurf *ps, int n, cm_vec3 *g, cm_status *st
 {
     if (n < 2 || n > 64)
         return cm_fail(st, CM_E_ARG, __func__);
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            cm_vec3 d[3];
-            cm_err e = cm_psurf_eval(ps, grid_at(ps->u0, ps->u1, i, n), grid_at(ps->v0, ps->v1, j, n), d, st);
-            if (e != CM_OK)
-                return e;
-            g[i * n + j] = d[0];
-        }
-    return CM_OK;
+    /* the parameters cm_psurf_eval would pass on; the points are its d[0], bit for bit, at a tenth
+       of the cost (a loop whose points lie off its surface builds the fine grid: 14 % of cgma's
+       decode when every grid point was a full evaluation with derivatives) */
+    double gu[64], gv[64];
+    for (int i = 0; i < n; i++) {
+        gu[i] = wrap(grid_at(ps->u0, ps->u1, i, n), ps->u0, ps->u1, ps->closed_u);
+        gv[i] = wrap(grid_at(ps->v0, ps->v1, i, n), ps->v0, ps->v1, ps->closed_v);
+    }
+    return cm_surf_eval_grid(&ps->s, gu, n, gv, n, g, st);
 }
 
 cm_err cm_psurf_project_grid_pts(const cm_psurf *ps, cm_vec3 P, int n, const cm_vec3 *g, double *u, double *v,

@@ -502,12 +502,56 @@ static void test_surface_first_derivative_path_same_bits(void **state)
         }
 }
 
+/* the grid evaluator's points are cm_surf_eval's S[0][0] bit for bit (nd = 1, the path the grid
+   searches used), rational and polynomial, several degrees, grid points inside spans, on knots and
+   outside the domain (clamped), several grid points per span and spans skipped */
+static void test_surface_grid_same_bits(void **state)
+{
+    (void)state;
+    enum { NU = 7, NV = 6, GU = 13, GV = 17 };
+    static const int degs[][2] = {{3, 3}, {1, 2}, {2, 5}, {5, 1}, {3, 2}};
+    uint32_t seed = 4242u;
+    cm_vec3 ctrl[NU * NV];
+    double w[NU * NV];
+    for (int i = 0; i < NU * NV; i++) {
+        seed = seed * 1103515245u + 12345u;
+        ctrl[i] = cm_v3((double)(seed % 1000) / 7.0, (double)((seed >> 10) % 1000) / 3.0, (double)((seed >> 20) % 1000) / 11.0);
+        w[i] = 0.5 + (double)((seed >> 5) % 100) / 50.0;
+    }
+    double gu[GU], gv[GV];
+    for (int i = 0; i < GU; i++)
+        gu[i] = -0.1 + 1.2 * i / (GU - 1); /* from below the domain to above it */
+    for (int j = 0; j < GV; j++)
+        gv[j] = -2.0 + 5.0 * j / (GV - 1) + (j % 3 == 1 ? 1e-3 : 0.0);
+    for (size_t d = 0; d < sizeof degs / sizeof degs[0]; d++)
+        for (int rational = 0; rational <= 1; rational++) {
+            int p = degs[d][0], q = degs[d][1];
+            if (p > CM_MAX_DEGREE || q > CM_MAX_DEGREE)
+                continue; /* the tiny profile's degree limit */
+            double U[NU + CM_MAX_ORDER], V[NV + CM_MAX_ORDER];
+            for (int i = 0; i < NU + p + 1; i++)
+                U[i] = i <= p ? 0.0 : i >= NU ? 1.0 : (double)(i - p) / (NU - p) + 0.01 * (i & 1);
+            for (int i = 0; i < NV + q + 1; i++)
+                V[i] = i <= q ? -2.0 : i >= NV ? 3.0 : -2.0 + 5.0 * (i - q) / (NV - q);
+            cm_surf s = {.p = p, .q = q, .nu = NU, .nv = NV, .U = U, .V = V, .ctrl = ctrl, .w = rational ? w : NULL};
+            cm_vec3 g[GU * GV];
+            assert_ok(cm_surf_eval_grid(&s, gu, GU, gv, GV, g, NULL));
+            for (int i = 0; i < GU; i++)
+                for (int j = 0; j < GV; j++) {
+                    cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
+                    assert_ok(cm_surf_eval(&s, gu[i], gv[j], 1, S, NULL));
+                    assert_memory_equal(&S[0][0], &g[i * GV + j], sizeof(cm_vec3));
+                }
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ex23_basis_exact),
         cmocka_unit_test(test_derivative_paths_same_bits),
         cmocka_unit_test(test_surface_first_derivative_path_same_bits),
+        cmocka_unit_test(test_surface_grid_same_bits),
         cmocka_unit_test(test_ex24_derivatives_exact),
         cmocka_unit_test(test_find_span_edges),
         cmocka_unit_test(test_partition_of_unity),

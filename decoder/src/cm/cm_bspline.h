@@ -100,6 +100,14 @@ CM_NODISCARD cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd,
                                  cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1], cm_status *st);
 
 /**
+ * K2 surface points on a grid: g[i * nv + j] = S(u[i], v[j]), the bits of cm_surf_eval's S[0][0]
+ * (the same sums in the same order: each row's basis computed once, the u sums shared by the grid
+ * points of one v span).  For grid searches, which need points only.
+ */
+CM_NODISCARD cm_err cm_surf_eval_grid(const cm_surf *s, const double *u, int nu, const double *v, int nv,
+                                      cm_vec3 *g, cm_status *st);
+
+/**
  * K3 knot insertion (A5.1, Boehm), in homogeneous space for rational
  * curves: insert u `r` times.  The result describes the same curve.
  * @param[out] knots_out  n_ctrl + r + p + 1 values
