@@ -407,7 +407,18 @@ int cm_greg_joined_ok(unsigned bits, int n)
 
 void cm_greg_surface_reset(cm_greg_surface *out, int layout, int n, int j, int exact)
 {
-    memset(out, 0, sizeof *out);
+    /* zero what the layout can use: the header, its patches and their corrections (every reader,
+       evaluation and checksum alike, stops at npatch: n for layout 1, else 1).  The whole struct is
+       45.8 KB on the terminal, most of it patches a 4-sided face never has: 3 % of a GREGORY model's
+       decode went to clearing them */
+    int np = layout == CM_GREG_LAYOUT_SPLIT ? n : 1;
+    np = np < 1 ? 1 : (np > CM_MAX_GREG ? CM_MAX_GREG : np);
+    memset(out, 0, offsetof(cm_greg_surface, e));
+    memset(out->e, 0, (size_t)np * (sizeof out->e[0] > sizeof out->g[0] ? sizeof out->e[0] : sizeof out->g[0]));
+    memset(out->inner, 0, sizeof out->inner);
+    out->centre = out->centre_normal = cm_v3(0, 0, 0);
+    out->fit = 0;
+    memset(out->corr, 0, (size_t)np * sizeof out->corr[0]);
     out->layout = layout;
     out->n = n;
     out->j = layout == CM_GREG_LAYOUT_DEGEN || layout == CM_GREG_LAYOUT_JOINED ? j : 0;
