@@ -194,6 +194,9 @@ static cm_err check_face_finite(const cm_mesh *mesh, const cm_mesh_mark *from, c
     return CM_OK;
 }
 
+static cm_err decode_faces(const cm_model *m, uint32_t tri_cap, cm_mesh *mesh, cm_tess_ws *ws, cm_decode_summary *sum,
+                           cm_status *st);
+
 cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_ws *ws, cm_decode_summary *sum,
                       cm_status *st)
 {
@@ -202,6 +205,16 @@ cm_err cm_decode_mesh(const cm_decoder *dec, double tol, cm_mesh *mesh, cm_tess_
     memset(sum, 0, sizeof *sum);
     sum->tess_tol = tol > 0 ? tol : m->tess_tol;
     const uint32_t tri_cap = (uint32_t)cm_tess_triangle_cap(m, sum->tess_tol);
+    cm_corner_cache_begin(&ws->rb.corner, m); /* the model stays as it is until the last face */
+    cm_err e = decode_faces(m, tri_cap, mesh, ws, sum, st);
+    cm_corner_cache_end(&ws->rb.corner);
+    return e;
+}
+
+/* cm_decode_mesh's loop over the faces */
+static cm_err decode_faces(const cm_model *m, uint32_t tri_cap, cm_mesh *mesh, cm_tess_ws *ws, cm_decode_summary *sum,
+                           cm_status *st)
+{
     for (uint32_t f = 0; f < m->nfaces; f++) {
         cm_tess_info info;
         cm_status fst;

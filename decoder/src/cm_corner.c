@@ -54,6 +54,55 @@ cm_err cm_face_normal(const cm_model *m, uint32_t f, cm_vec3 *samples, double *b
     return CM_OK;
 }
 
+void cm_corner_cache_begin(cm_corner_ws *ws, const cm_model *m)
+{
+    for (int i = 0; i < CM_CORNER_CACHE; i++) {
+        ws->normal_cache[i].face = -1;
+        ws->cubic_cache[i].edge = -1;
+    }
+    ws->cache_model = m;
+}
+
+void cm_corner_cache_end(cm_corner_ws *ws) { cm_corner_cache_begin(ws, NULL); }
+
+/* cm_face_normal, from the cache where on (samples is scratch here: a cached answer leaves it alone) */
+static cm_err face_normal_cached(cm_corner_ws *ws, const cm_model *m, uint32_t f, cm_vec3 *samples, double *bbox,
+                                 cm_vec3 *n, cm_status *st)
+{
+    if (ws->cache_model != m)
+        return cm_face_normal(m, f, samples, bbox, n, st);
+    int slot = (int)(f & (CM_CORNER_CACHE - 1));
+    if (ws->normal_cache[slot].face == (int32_t)f) {
+        *bbox = ws->normal_cache[slot].bbox;
+        *n = ws->normal_cache[slot].n;
+        return CM_OK;
+    }
+    cm_err e = cm_face_normal(m, f, samples, bbox, n, st);
+    if (e == CM_OK) {
+        ws->normal_cache[slot].face = (int32_t)f;
+        ws->normal_cache[slot].bbox = *bbox;
+        ws->normal_cache[slot].n = *n;
+    }
+    return e;
+}
+
+/* the K7 cubic of edge e (curve cv) over its whole range, from the cache where on */
+static cm_err edge_cubic_cached(cm_corner_ws *ws, const cm_model *m, uint32_t e, const cm_curve *cv, cm_cubic *out,
+                                cm_status *st)
+{
+    int slot = (int)(e & (CM_CORNER_CACHE - 1));
+    if (ws->cache_model == m && ws->cubic_cache[slot].edge == (int32_t)e) {
+        *out = ws->cubic_cache[slot].c;
+        return CM_OK;
+    }
+    cm_err err = cm_cubic_convert(cv, 0.0, 1.0, out, NULL, NULL, st);
+    if (err == CM_OK && ws->cache_model == m) {
+        ws->cubic_cache[slot].edge = (int32_t)e;
+        ws->cubic_cache[slot].c = *out;
+    }
+    return err;
+}
+
 /*
  * N_geo at the corner between uses `in` and `out` (spec 5.3), turned to nF; 0 where undefined.
  * nF NULL: as the loop's direction makes it (GREGORY-EXACT: a loop runs counter-clockwise about
@@ -98,13 +147,13 @@ typedef struct corner_ctx {
     const cm_model *m;
     cm_vec3 nF;
     double eps;
-    cm_vec3 *scratch; /* samples for partner normals */
+    cm_corner_ws *ws; /* its scratch: samples for partner normals */
     int exact;        /* GREGORY-EXACT: normals as the loops orient them, never turned (geo_normal) */
 } corner_ctx;
 
 static cm_err partner_normal(const corner_ctx *c, uint32_t g, double *bbox_g, cm_vec3 *nG, cm_status *st)
 {
-    cm_err e = cm_face_normal(c->m, g, c->scratch, bbox_g, nG, st);
+    cm_err e = face_normal_cached(c->ws, c->m, g, c->ws->scratch, bbox_g, nG, st);
     if (e == CM_OK && !c->exact && cm_dot(*nG, c->nF) < 0)
         *nG = cm_neg(*nG); /* sign-matched to n_F (spec 5.3 (i), 5.4) */
     return e;
@@ -121,13 +170,13 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_inp
     if (n > CM_GREG_MAX_INPUT)
         return cm_fail_limit(st, CM_LIMIT_MAX_SIDES, (uint64_t)n, CM_MAX_SIDES, __func__);
     double bbox;
-    cm_err e = cm_face_normal(m, f, ws->samples, &bbox, &in->nF, st);
+    cm_err e = face_normal_cached(ws, m, f, ws->samples, &bbox, &in->nF, st);
     if (e != CM_OK)
         return e;
     in->n = n;
     in->eps_len = CM_EPS_LEN_REL * bbox;
     in->turning = m->turning_basis;
-    corner_ctx c = {m, in->nF, in->eps_len, ws->scratch, exact};
+    corner_ctx c = {m, in->nF, in->eps_len, ws, exact};
     const cm_vec3 *turn = exact ? NULL : &in->nF; /* what corner normals are turned to */
     /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */
     for (int k = 0; k < n; k++) {
@@ -162,7 +211,7 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_inp
         cm_curve cv;
         cm_model_edge_curve(m, U->edge, &cv);
         cm_cubic cub = {{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}};
-        if (!exact && (e = cm_cubic_convert(&cv, 0.0, 1.0, &cub, NULL, NULL, st)) != CM_OK)
+        if (!exact && (e = edge_cubic_cached(ws, m, U->edge, &cv, &cub, st)) != CM_OK)
             return e;
         cm_greg_side *S = &in->side[k];
         S->c = U->rev ? cm_cubic_reverse(&cub) : cub;

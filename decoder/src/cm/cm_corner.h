@@ -10,13 +10,37 @@
 #include "cm/cm_format.h"
 #include "cm/cm_gregface.h"
 
+/* entries of each of cm_corner_ws's two caches (a power of two): faces and edges are looked up by
+   their index modulo this, and a model's faces meet their neighbours a few faces apart */
+#define CM_CORNER_CACHE 64
+
 typedef struct cm_corner_ws {
     cm_vec3 samples[CM_MAX_FACE_SAMPLES];  /* the face's boundary samples */
     cm_vec3 scratch[CM_MAX_FACE_SAMPLES];  /* a partner face's */
     cm_vec3 geo[CM_GREG_MAX_INPUT];
     int has_geo[CM_GREG_MAX_INPUT];
     int32_t vert[CM_GREG_MAX_INPUT];
+    /* while cache_model is set (cm_corner_cache_begin), what a face's rebuild computes of the curve
+       mesh alone is kept for the next faces: a face's n_F and bbox (every GREGORY face asks for its
+       G1 partners' too) and an edge's K7 cubic (asked by both its faces).  The same numbers, not
+       computed again; the encoder, whose trials change the model between rebuilds, leaves it off */
+    const cm_model *cache_model;
+    struct {
+        int32_t face; /* -1: empty */
+        double bbox;
+        cm_vec3 n;
+    } normal_cache[CM_CORNER_CACHE];
+    struct {
+        int32_t edge; /* -1: empty */
+        cm_cubic c;
+    } cubic_cache[CM_CORNER_CACHE];
 } cm_corner_ws;
+
+/** Keep face normals and edge cubics of m in ws from now on (m must not change until
+ *  cm_corner_cache_end); NULL m is cm_corner_cache_end. */
+void cm_corner_cache_begin(cm_corner_ws *ws, const cm_model *m);
+/** Compute everything again (the model may change). */
+void cm_corner_cache_end(cm_corner_ws *ws);
 
 /**
  * Reference normal n_F of face f (Newell normal of its outer-loop samples, K11)

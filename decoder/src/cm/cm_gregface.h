@@ -128,8 +128,9 @@ typedef struct cm_greg_input {
 
 /*
  * The rebuilt surface (layouts: see the top of this file).  Patches
- * g[npatch..CM_MAX_GREG-1] and the unused P[1..2][1..2] of every patch are
- * zero.  inner/centre are set for layout 1 only (zero otherwise).
+ * g[npatch..CM_MAX_GREG-1] are never read (cm_greg_surface_reset clears
+ * only the patches a layout can use); the unused P[1..2][1..2] of every
+ * patch are zero.  inner/centre are set for layout 1 only (zero otherwise).
  */
 typedef struct cm_greg_surface {
     int layout;                  /* CM_GREG_LAYOUT_* */
