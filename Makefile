@@ -84,6 +84,10 @@ CM_GC_SECTIONS := -Wl,--gc-sections
 # compiled for size: 8.6 KB less aarch64 code, which made room for issue 15's streaming (cmz-terminal
 # 262 122 bytes at -O2, over the budget with the first review fix).  Appended after CFLAGS: it wins.
 CM_PLATFORM_OPT := -Os
+# and so is the decoder's file parser (cm_decode.c: sections read once per file, never per vertex;
+# with -ffp-contract=off its dequantising sums round alike at any -O): room in the text budget for
+# the evaluator's fast paths
+CM_COLD_SRC := decoder/src/cm_decode.c
 endif
 CM_WARN := -Wall -Wextra -Wundef -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wcast-align \
            -Wformat=2 -Wvla -Walloca -Wdouble-promotion -Werror
@@ -136,7 +140,8 @@ $(call bdir,$(1))/decoder/%.o: decoder/%.c
 	@mkdir -p $$(@D)
 	$$(call say,CC      ,$$@)
 	$$(Q)$$(CC) $$(CM_INC) -DCM_PROFILE='"profiles/$(1).h"' $$(CPPFLAGS) $$(CM_STD) $$(CM_WARN_DECODER) \
-		$$(STACK_FLAGS_$(1)) $$(MODEL_FLAGS_$(1)) $$(CFLAGS) $$(DEPFLAGS) -c $$< -o $$@
+		$$(STACK_FLAGS_$(1)) $$(MODEL_FLAGS_$(1)) $$(CFLAGS) $$(if $$(filter $$(CM_COLD_SRC),$$<),$$(CM_PLATFORM_OPT)) \
+		$$(DEPFLAGS) -c $$< -o $$@
 
 $(call bdir,$(1))/%.o: %.c
 	@mkdir -p $$(@D)
