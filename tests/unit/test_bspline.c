@@ -502,6 +502,64 @@ static void test_surface_first_derivative_path_same_bits(void **state)
         }
 }
 
+/* the curve evaluator (compiled per degree 1-3) gives the textbook A3.2 / A4.2 sums' bits over A2.3's
+   basis, every degree, derivative order and span, rational and polynomial, clamped at both ends */
+static void test_curve_eval_same_bits(void **state)
+{
+    (void)state;
+    static const double binom_ref[3][3] = {{1, 0, 0}, {1, 1, 0}, {1, 2, 1}};
+    uint32_t seed = 999u;
+    for (int p = 1; p <= CM_MAX_DEGREE; p++)
+        for (int rational = 0; rational <= 1; rational++) {
+            enum { EXTRA = 5 };
+            int n = p + 1 + EXTRA;
+            double U[2 * CM_MAX_ORDER + EXTRA + 1], w[CM_MAX_ORDER + EXTRA];
+            cm_vec3 P[CM_MAX_ORDER + EXTRA];
+            for (int i = 0; i < n + p + 1; i++)
+                U[i] = i <= p ? 0.0 : i >= n ? 3.0 : U[i - 1] + 0.2 + 0.1 * (i % 3);
+            for (int i = 0; i < n; i++) {
+                seed = seed * 1103515245u + 12345u;
+                P[i] = cm_v3((double)(seed % 1000) / 7.0, (double)((seed >> 10) % 1000) / 3.0, (double)((seed >> 20) % 1000) / 11.0);
+                w[i] = 0.5 + (double)((seed >> 5) % 100) / 50.0;
+            }
+            cm_curve c = {.p = p, .n_ctrl = n, .knots = U, .ctrl = P, .w = rational ? w : NULL};
+            for (int t = -2; t <= 62; t++) {
+                double u = 3.0 * t / 60.0;
+                for (int nd = 0; nd <= CM_MAX_DERS; nd++) {
+                    cm_vec3 got[CM_MAX_DERS + 1], want[CM_MAX_DERS + 1];
+                    assert_ok(cm_curve_eval(&c, u, nd, got, NULL));
+                    double uc = u < U[p] ? U[p] : (u > U[n] ? U[n] : u);
+                    int span = cm_bspl_find_span(n, p, U, uc);
+                    double N[CM_MAX_DERS + 1][CM_MAX_ORDER];
+                    reference_ders_basis(span, uc, p, nd, U, N);
+                    cm_vec3 A[CM_MAX_DERS + 1];
+                    double W[CM_MAX_DERS + 1];
+                    for (int k = 0; k <= nd; k++) {
+                        A[k] = cm_v3(0, 0, 0);
+                        W[k] = 0.0;
+                        for (int j = 0; j <= p; j++) {
+                            int i = span - p + j;
+                            double wi = rational ? w[i] : 1.0;
+                            A[k] = cm_axpy(A[k], N[k][j] * wi, P[i]);
+                            W[k] += N[k][j] * wi;
+                        }
+                    }
+                    for (int k = 0; k <= nd; k++) {
+                        if (!rational) {
+                            want[k] = A[k];
+                            continue;
+                        }
+                        cm_vec3 v = A[k];
+                        for (int i = 1; i <= k; i++)
+                            v = cm_sub(v, cm_scale(want[k - i], binom_ref[k][i] * W[i]));
+                        want[k] = cm_scale(v, 1.0 / W[0]);
+                    }
+                    assert_memory_equal(got, want, (size_t)(nd + 1) * sizeof(cm_vec3));
+                }
+            }
+        }
+}
+
 /* the grid evaluator's points are cm_surf_eval's S[0][0] bit for bit (nd = 1, the path the grid
    searches used), rational and polynomial, several degrees, grid points inside spans, on knots and
    outside the domain (clamped), several grid points per span and spans skipped */
@@ -552,6 +610,7 @@ int main(void)
         cmocka_unit_test(test_derivative_paths_same_bits),
         cmocka_unit_test(test_surface_first_derivative_path_same_bits),
         cmocka_unit_test(test_surface_grid_same_bits),
+        cmocka_unit_test(test_curve_eval_same_bits),
         cmocka_unit_test(test_ex24_derivatives_exact),
         cmocka_unit_test(test_find_span_edges),
         cmocka_unit_test(test_partition_of_unity),
