@@ -329,6 +329,44 @@ static void hpt_add_scaled(cm_hpt *a, double b, cm_hpt h)
     a->w += b * h.w;
 }
 
+/*
+ * cm_surf_eval's nd = 1 path for a polynomial bicubic (G1FIT and NFILL nets, most kept B-splines:
+ * nine in ten of the surface evaluations of the corpus's decodes that have any), with the degrees,
+ * the order and the absent weights constants: the basis and the sums unrolled, the same operations
+ * in the same order on x, y, z (a weight of 1.0 multiplies exactly; the weight sums are not needed),
+ * so the same bits (test_surface_first_derivative_path_same_bits holds it to nd = 2's general loop).
+ */
+static void surf_eval_poly33_nd1(const cm_surf *s, double u, double v, int us, int vs,
+                                 cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1])
+{
+    double Nu[CM_MAX_DERS + 1][CM_MAX_ORDER], Nv[CM_MAX_DERS + 1][CM_MAX_ORDER];
+    ders_basis_p(us, u, 3, 1, s->U, Nu);
+    ders_basis_p(vs, v, 3, 1, s->V, Nv);
+    cm_vec3 t0[4], t1[4];
+    for (int sidx = 0; sidx <= 3; sidx++) {
+        cm_vec3 a = {0, 0, 0}, b = {0, 0, 0};
+        for (int r = 0; r <= 3; r++) {
+            cm_vec3 P = s->ctrl[(long)(us - 3 + r) * s->nv + (vs - 3 + sidx)];
+            a = cm_axpy(a, Nu[0][r], P);
+            b = cm_axpy(b, Nu[1][r], P);
+        }
+        t0[sidx] = a;
+        t1[sidx] = b;
+    }
+    cm_vec3 a00 = {0, 0, 0}, a01 = {0, 0, 0}, a10 = {0, 0, 0};
+    for (int sidx = 0; sidx <= 3; sidx++) {
+        a00 = cm_axpy(a00, Nv[0][sidx], t0[sidx]);
+        a01 = cm_axpy(a01, Nv[1][sidx], t0[sidx]);
+        a10 = cm_axpy(a10, Nv[0][sidx], t1[sidx]);
+    }
+    for (int k = 0; k <= CM_MAX_DERS; k++)
+        for (int l = 0; l <= CM_MAX_DERS; l++)
+            S[k][l] = cm_v3(0, 0, 0);
+    S[0][0] = a00;
+    S[0][1] = a01;
+    S[1][0] = a10;
+}
+
 cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1],
                     cm_status *st)
 {
@@ -352,6 +390,10 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
         v = v1;
     int us = cm_bspl_find_span(s->nu, p, s->U, u);
     int vs = cm_bspl_find_span(s->nv, q, s->V, v);
+    if (nd == 1 && p == 3 && q == 3 && s->w == NULL) {
+        surf_eval_poly33_nd1(s, u, v, us, vs, S);
+        return CM_OK;
+    }
     if ((e = cm_bspl_ders_basis(us, u, p, nd, s->U, Nu, st)) != CM_OK ||
         (e = cm_bspl_ders_basis(vs, v, q, nd, s->V, Nv, st)) != CM_OK)
         return e;
