@@ -330,41 +330,71 @@ static void hpt_add_scaled(cm_hpt *a, double b, cm_hpt h)
 }
 
 /*
- * cm_surf_eval's nd = 1 path for a polynomial bicubic (G1FIT and NFILL nets, most kept B-splines:
- * nine in ten of the surface evaluations of the corpus's decodes that have any), with the degrees,
- * the order and the absent weights constants: the basis and the sums unrolled, the same operations
- * in the same order on x, y, z (a weight of 1.0 multiplies exactly; the weight sums are not needed),
- * so the same bits (test_surface_first_derivative_path_same_bits holds it to nd = 2's general loop).
+ * cm_surf_eval's nd = 1 contraction (the point and first derivatives: normals, Newton steps, nearly
+ * every call) at spans us, vs: A3.6 contracting u first, each control point loaded once for both
+ * u sums, into Aw[0][0], Aw[0][1], Aw[1][0].  Compiled once for each common pair of degrees with p
+ * and q constants (the dispatch in cm_surf_eval): the basis and the sums unrolled, the same
+ * operations in the same order, so the same bits (test_surface_first_derivative_path_same_bits
+ * holds them to nd = 2's general loop).  A polynomial net's terms are b P, not (b 1.0) P (equal),
+ * and it has no weight sums.  Bicubic polynomial nets (G1FIT, NFILL, most kept B-splines) and the
+ * rational linear-by-quadratic surfaces of cylinders and cones are nearly all of the corpus's
+ * surface evaluations.
  */
-static void surf_eval_poly33_nd1(const cm_surf *s, double u, double v, int us, int vs,
-                                 cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1])
+static inline __attribute__((always_inline)) void surf_nd1_pq(const cm_surf *s, double u, double v, int us, int vs,
+                                                              const int p, const int q,
+                                                              cm_hpt Aw[CM_MAX_DERS + 1][CM_MAX_DERS + 1])
 {
     double Nu[CM_MAX_DERS + 1][CM_MAX_ORDER], Nv[CM_MAX_DERS + 1][CM_MAX_ORDER];
-    ders_basis_p(us, u, 3, 1, s->U, Nu);
-    ders_basis_p(vs, v, 3, 1, s->V, Nv);
-    cm_vec3 t0[4], t1[4];
-    for (int sidx = 0; sidx <= 3; sidx++) {
-        cm_vec3 a = {0, 0, 0}, b = {0, 0, 0};
-        for (int r = 0; r <= 3; r++) {
-            cm_vec3 P = s->ctrl[(long)(us - 3 + r) * s->nv + (vs - 3 + sidx)];
-            a = cm_axpy(a, Nu[0][r], P);
-            b = cm_axpy(b, Nu[1][r], P);
+    if (__builtin_constant_p(p) && __builtin_constant_p(q)) {
+        ders_basis_p(us, u, p, 1, s->U, Nu);
+        ders_basis_p(vs, v, q, 1, s->V, Nv);
+    } else { /* the other degrees: the basis compiled per degree all the same */
+        ders_basis_any(us, u, p, 1, s->U, Nu);
+        ders_basis_any(vs, v, q, 1, s->V, Nv);
+    }
+    if (s->w == NULL) {
+        cm_vec3 t0[CM_MAX_ORDER], t1[CM_MAX_ORDER];
+        for (int sidx = 0; sidx <= q; sidx++) {
+            cm_vec3 a = {0, 0, 0}, b = {0, 0, 0};
+            for (int r = 0; r <= p; r++) {
+                cm_vec3 P = s->ctrl[(long)(us - p + r) * s->nv + (vs - q + sidx)];
+                a = cm_axpy(a, Nu[0][r], P);
+                b = cm_axpy(b, Nu[1][r], P);
+            }
+            t0[sidx] = a;
+            t1[sidx] = b;
         }
-        t0[sidx] = a;
-        t1[sidx] = b;
+        cm_vec3 a00 = {0, 0, 0}, a01 = {0, 0, 0}, a10 = {0, 0, 0};
+        for (int sidx = 0; sidx <= q; sidx++) {
+            a00 = cm_axpy(a00, Nv[0][sidx], t0[sidx]);
+            a01 = cm_axpy(a01, Nv[1][sidx], t0[sidx]);
+            a10 = cm_axpy(a10, Nv[0][sidx], t1[sidx]);
+        }
+        Aw[0][0] = (cm_hpt){a00.x, a00.y, a00.z, 0};
+        Aw[0][1] = (cm_hpt){a01.x, a01.y, a01.z, 0};
+        Aw[1][0] = (cm_hpt){a10.x, a10.y, a10.z, 0};
+        return;
     }
-    cm_vec3 a00 = {0, 0, 0}, a01 = {0, 0, 0}, a10 = {0, 0, 0};
-    for (int sidx = 0; sidx <= 3; sidx++) {
-        a00 = cm_axpy(a00, Nv[0][sidx], t0[sidx]);
-        a01 = cm_axpy(a01, Nv[1][sidx], t0[sidx]);
-        a10 = cm_axpy(a10, Nv[0][sidx], t1[sidx]);
+    cm_hpt temp[CM_MAX_ORDER], temp1[CM_MAX_ORDER];
+    for (int sidx = 0; sidx <= q; sidx++) {
+        cm_hpt t0 = {0, 0, 0, 0}, t1 = {0, 0, 0, 0};
+        for (int r = 0; r <= p; r++) {
+            long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
+            hpt_add_point(&t0, Nu[0][r] * s->w[idx], s->ctrl[idx]);
+            hpt_add_point(&t1, Nu[1][r] * s->w[idx], s->ctrl[idx]);
+        }
+        temp[sidx] = t0;
+        temp1[sidx] = t1;
     }
-    for (int k = 0; k <= CM_MAX_DERS; k++)
-        for (int l = 0; l <= CM_MAX_DERS; l++)
-            S[k][l] = cm_v3(0, 0, 0);
-    S[0][0] = a00;
-    S[0][1] = a01;
-    S[1][0] = a10;
+    cm_hpt a00 = {0, 0, 0, 0}, a01 = {0, 0, 0, 0}, a10 = {0, 0, 0, 0};
+    for (int sidx = 0; sidx <= q; sidx++) {
+        hpt_add_scaled(&a00, Nv[0][sidx], temp[sidx]);
+        hpt_add_scaled(&a01, Nv[1][sidx], temp[sidx]);
+        hpt_add_scaled(&a10, Nv[0][sidx], temp1[sidx]);
+    }
+    Aw[0][0] = a00;
+    Aw[0][1] = a01;
+    Aw[1][0] = a10;
 }
 
 cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_MAX_DERS + 1][CM_MAX_DERS + 1],
@@ -390,45 +420,20 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
         v = v1;
     int us = cm_bspl_find_span(s->nu, p, s->U, u);
     int vs = cm_bspl_find_span(s->nv, q, s->V, v);
-    if (nd == 1 && p == 3 && q == 3 && s->w == NULL) {
-        surf_eval_poly33_nd1(s, u, v, us, vs, S);
-        return CM_OK;
-    }
-    if ((e = cm_bspl_ders_basis(us, u, p, nd, s->U, Nu, st)) != CM_OK ||
-        (e = cm_bspl_ders_basis(vs, v, q, nd, s->V, Nv, st)) != CM_OK)
-        return e;
-
     for (int k = 0; k <= CM_MAX_DERS; k++)
         for (int l = 0; l <= CM_MAX_DERS; l++)
             S[k][l] = cm_v3(0, 0, 0);
     /* (Aw needs no clearing: the quotient below reads only entries k + l <= nd, all written) */
     if (nd == 1) {
-        /* the point and first derivatives (normals, Newton steps: nearly every call).  The loop
-           below contracts u twice, for k = 0 and 1, loading the net twice; here each control
-           point is loaded once for both.  Every sum still adds its terms in the same order, so
-           the bits are the general loop's. */
-        cm_hpt temp1[CM_MAX_ORDER];
-        for (int sidx = 0; sidx <= q; sidx++) {
-            cm_hpt t0 = {0, 0, 0, 0}, t1 = {0, 0, 0, 0};
-            for (int r = 0; r <= p; r++) {
-                long idx = (long)(us - p + r) * s->nv + (vs - q + sidx);
-                double wi = s->w ? s->w[idx] : 1.0;
-                hpt_add_point(&t0, Nu[0][r] * wi, s->ctrl[idx]);
-                hpt_add_point(&t1, Nu[1][r] * wi, s->ctrl[idx]);
-            }
-            temp[sidx] = t0;
-            temp1[sidx] = t1;
-        }
-        cm_hpt a00 = {0, 0, 0, 0}, a01 = {0, 0, 0, 0}, a10 = {0, 0, 0, 0};
-        for (int sidx = 0; sidx <= q; sidx++) {
-            hpt_add_scaled(&a00, Nv[0][sidx], temp[sidx]);
-            hpt_add_scaled(&a01, Nv[1][sidx], temp[sidx]);
-            hpt_add_scaled(&a10, Nv[0][sidx], temp1[sidx]);
-        }
-        Aw[0][0] = a00;
-        Aw[0][1] = a01;
-        Aw[1][0] = a10;
-    }
+        if (p == 3 && q == 3)
+            surf_nd1_pq(s, u, v, us, vs, 3, 3, Aw);
+        else if (p == 1 && q == 2)
+            surf_nd1_pq(s, u, v, us, vs, 1, 2, Aw);
+        else
+            surf_nd1_pq(s, u, v, us, vs, p, q, Aw);
+    } else if ((e = cm_bspl_ders_basis(us, u, p, nd, s->U, Nu, st)) != CM_OK ||
+               (e = cm_bspl_ders_basis(vs, v, q, nd, s->V, Nv, st)) != CM_OK)
+        return e;
     /* A3.6: contract u first into temp[s], then v; fixed summation order (nd = 1 done above) */
     for (int k = 0; k <= nd && nd != 1; k++) {
         for (int sidx = 0; sidx <= q; sidx++) {
