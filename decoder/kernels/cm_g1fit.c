@@ -62,15 +62,22 @@ cm_err cm_g1fit_edge_normals(const cm_greg_side *gs, cm_vec3 *N, cm_status *st)
 {
     enum { SEG = CM_FMT_SEG_PER_EDGE, K = CM_FMT_SEG_PER_EDGE * G1FIT_RMF_SUB };
     cm_vec3 carried[2][CM_FMT_SEG_PER_EDGE + 1];
+    /* the edge's points and tangents at the K + 1 steps, once for both directions */
+    cm_vec3 pt[K + 1][2];
+    for (int k = 0; k <= K; k++) {
+        double u = (double)k / (double)K;
+        cm_vec3 q[CM_MAX_DERS + 1];
+        cm_err e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, 1, q, st);
+        if (e != CM_OK)
+            return e;
+        pt[k][0] = q[0];
+        pt[k][1] = q[1];
+    }
     for (int dir = 0; dir < 2; dir++) {
         cm_vec3 r = dir ? gs->Ne : gs->Ns, x = cm_v3(0.0, 0.0, 0.0), T = x;
         for (int i = 0; i <= K; i++) {
             int k = dir ? K - i : i;
-            double u = (double)k / (double)K;
-            cm_vec3 q[CM_MAX_DERS + 1];
-            cm_err e = cm_curve_eval(&gs->curve, gs->rev ? 1.0 - u : u, 1, q, st);
-            if (e != CM_OK)
-                return e;
+            const cm_vec3 *q = pt[k];
             double tl = cm_norm(q[1]);
             cm_vec3 T1 = tl > 0.0 ? cm_scale(q[1], (gs->rev ? -1.0 : 1.0) / tl) : T;
             if (i == 0) {
