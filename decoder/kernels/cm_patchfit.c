@@ -3,20 +3,26 @@
 
 #include <stddef.h>
 
-/* Bernstein B^d_k(t) = C(d,k) t^k (1-t)^(d-k), by repeated products (no pow: spec §2 rule 3) */
-static double bernstein(int d, int k, double t)
+/* Bernstein B^d_k(t) = C(d,k) t^k (1-t)^(d-k) by repeated products (no pow: spec §2 rule 3), for
+   0 <= k <= d <= CM_FIT_MAX_M + 3: t^k from t's powers tp[] (tp[i] = tp[i-1] t from 1.0), then (1-t)
+   d-k times, then the binomial, an exact integer.  The bits of forming C(d,k) as c (d-k+i) / i and
+   t^k in the loop each call (every step of both is exact or the same product; test_patchfit holds it
+   to that), at a third of the cost: every GREGORY-FIT point's evaluation calls this 3 m times per
+   direction */
+static double bernstein_pow(int d, int k, const double *tp, double s)
 {
+    static const double binom[CM_FIT_MAX_M + 4][CM_FIT_MAX_M + 4] = {
+        {1}, {1, 1}, {1, 2, 1}, {1, 3, 3, 1}, {1, 4, 6, 4, 1}, {1, 5, 10, 10, 5, 1}, {1, 6, 15, 20, 15, 6, 1},
+        {1, 7, 21, 35, 35, 21, 7, 1}, {1, 8, 28, 56, 70, 56, 28, 8, 1}};
     if (k < 0 || k > d)
         return 0.0;
-    double c = 1.0, s = 1.0 - t, r = 1.0;
-    for (int i = 1; i <= k; i++)
-        c = c * (double)(d - k + i) / (double)i;
-    for (int i = 0; i < k; i++)
-        r *= t;
+    double r = tp[k];
     for (int i = 0; i < d - k; i++)
         r *= s;
-    return c * r;
+    return binom[d][k] * r;
 }
+
+_Static_assert(CM_FIT_MAX_M + 3 <= 8, "bernstein_pow's binomial table stops at degree 8");
 
 void cm_fit_basis(int m, double t, double b[CM_FIT_MAX_M], double db[CM_FIT_MAX_M])
 {
@@ -28,10 +34,14 @@ void cm_fit_basis(int m, double t, double b[CM_FIT_MAX_M], double db[CM_FIT_MAX_
     if (m < 1 || m > CM_FIT_MAX_M)
         return;
     int d = m + 3;
+    double tp[CM_FIT_MAX_M + 4], s = 1.0 - t;
+    tp[0] = 1.0;
+    for (int i = 1; i <= d; i++)
+        tp[i] = tp[i - 1] * t;
     for (int i = 0; i < m; i++) {
-        b[i] = bernstein(d, i + 2, t);
+        b[i] = bernstein_pow(d, i + 2, tp, s);
         if (db) /* (B^d_k)' = d (B^(d-1)_(k-1) - B^(d-1)_k) */
-            db[i] = (double)d * (bernstein(d - 1, i + 1, t) - bernstein(d - 1, i + 2, t));
+            db[i] = (double)d * (bernstein_pow(d - 1, i + 1, tp, s) - bernstein_pow(d - 1, i + 2, tp, s));
     }
 }
 

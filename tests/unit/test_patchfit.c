@@ -92,12 +92,48 @@ static void test_dequantise(void **state)
     assert_true(cm_fit_dequantise(0, 1.0, 0) == 0.0);
 }
 
+/* B^d_k(t) as the kernel formed it before its powers table (format 2.2's definition): the binomial
+   as c (d-k+i) / i, then t^k and (1-t)^(d-k) by repeated products */
+static double reference_bernstein(int d, int k, double t)
+{
+    if (k < 0 || k > d)
+        return 0.0;
+    double c = 1.0, s = 1.0 - t, r = 1.0;
+    for (int i = 1; i <= k; i++)
+        c = c * (double)(d - k + i) / (double)i;
+    for (int i = 0; i < k; i++)
+        r *= t;
+    for (int i = 0; i < d - k; i++)
+        r *= s;
+    return c * r;
+}
+
+/* the basis and its derivatives are the reference's bits for every m and many t, ends included */
+static void test_basis_same_bits(void **state)
+{
+    (void)state;
+    for (int m = 1; m <= CM_FIT_MAX_M; m++)
+        for (int k = 0; k <= 1000; k++) {
+            double t = (double)k / 1000.0 + (k % 7 == 3 ? 1e-9 : 0.0);
+            double b[CM_FIT_MAX_M], db[CM_FIT_MAX_M];
+            cm_fit_basis(m, t, b, db);
+            int d = m + 3;
+            for (int i = 0; i < m; i++) {
+                double wb = reference_bernstein(d, i + 2, t);
+                double wdb = (double)d * (reference_bernstein(d - 1, i + 1, t) - reference_bernstein(d - 1, i + 2, t));
+                assert_memory_equal(&b[i], &wb, sizeof(double));
+                assert_memory_equal(&db[i], &wdb, sizeof(double));
+            }
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_basis_vanishes_on_the_sides),
         cmocka_unit_test(test_derivatives),
         cmocka_unit_test(test_add),
+        cmocka_unit_test(test_basis_same_bits),
         cmocka_unit_test(test_dequantise),
     };
     return cmocka_run_group_tests_name("patchfit", tests, NULL, NULL);
