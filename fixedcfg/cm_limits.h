@@ -160,6 +160,23 @@
 #  define CM_TESS_PASS_SLOTS 8192
 #endif
 
+/* The viewer's frame (cm_view.h, cmz-view): at most this many pixels across and down.  Its
+ * static RAM is 7 bytes a pixel (RGB and a float depth): 800 x 480, a common 7-inch panel, is
+ * 2.6 MiB, within issue 17's 4 MiB for the viewer on top of the decoder's budget.  Unit: pixels.
+ * Not a limit of the format (cm-limits does not list it). */
+#ifndef CM_VIEW_MAX_W
+#  define CM_VIEW_MAX_W 800
+#endif
+#ifndef CM_VIEW_MAX_H
+#  define CM_VIEW_MAX_H 480
+#endif
+
+/* Straight pieces the viewer draws each edge curve with (its points are the curve's own, at even
+ * parameter steps).  Unit: segments per edge.  Not a limit of the format. */
+#ifndef CM_VIEW_EDGE_SEGMENTS
+#  define CM_VIEW_EDGE_SEGMENTS 32
+#endif
+
 /* Bytes of each cached page (CM_SPILL_PAGES for each of positions, normals, indices) through
  * which a streaming terminal reads its spilled output mesh back (cm_mesh.h): a page is a read
  * call.  Unit: bytes, at least 12.  Not a limit of the format (cm-limits does not list it). */
@@ -279,6 +296,14 @@
  * (the two budgets: issue 15's 4 MiB). */
 #ifndef CM_PROGRAM_STATIC_BUDGET
 #  define CM_PROGRAM_STATIC_BUDGET 524288
+#endif
+
+/* Static storage of the viewer on top of a program's other budgets (cmz-view; issue 17: at most
+ * 4 MiB at 800 x 480): its frame and depth buffer (CM_VIEW_MAX_W x CM_VIEW_MAX_H, 7 bytes a
+ * pixel).  Unit: bytes.  `make check-ram` holds cmz-view's data + bss within
+ * CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET + this.  Terminal: 4 MiB for 2.6 MiB. */
+#ifndef CM_VIEW_STATIC_BUDGET
+#  define CM_VIEW_STATIC_BUDGET 4194304
 #endif
 
 /* Code and read-only data of a terminal program (text: what `size` counts

@@ -21,6 +21,8 @@
 #define CM_MAX_EDGES 16
 #define CM_MAX_VERTICES 16
 #define CM_MAX_TRIS 512
+#define CM_VIEW_MAX_W 160
+#define CM_VIEW_MAX_H 120
 #define CM_TESS_PASS_SLOTS 128
 #define CM_PARAM_GRID_CACHE 0 /* the global searches' grids (47 KiB) do not fit the budget: searched as before */
 #define CM_MAX_TESS_POINTS 64

@@ -1,0 +1,95 @@
+/*
+ * cm_view.h - the terminal's software viewer (issue 17): a decoded mesh drawn
+ * into a z-buffered RGB frame, with the curve mesh's exact edges on top.
+ *
+ * The frame is the caller's (static on the terminal, sized by fixedcfg's
+ * CM_VIEW_MAX_W x CM_VIEW_MAX_H); nothing is allocated.  The camera looks
+ * at the mesh's box from a named direction (CAD axes, Z up), orthographic
+ * or perspective, and is fitted so that the whole box shows.  Triangles
+ * are filled with the decoder's own normals (Gouraud shading: a head light
+ * and a fill light, both sides lit), in the face's colour from the model or
+ * a default grey-blue; the edges are each edge curve of the model sampled
+ * and drawn as lines in front of the faces they bound (a small depth bias),
+ * so they stay crisp at any zoom.  Placed copies (format 4.3) get their
+ * placement's edges too.
+ *
+ * Deterministic: only + - * / sqrt in double, in a fixed order, with
+ * -ffp-contract=off: the same model and view give the same pixels on
+ * x86-64, aarch64 and armhf (check-view-cross compares).
+ *
+ * Contract: no heap, no recursion; work bounded by the mesh, the model and
+ * the frame's size.
+ */
+#ifndef CM_VIEW_H
+#define CM_VIEW_H
+
+#include <stdint.h>
+
+#include "cm/cm_error.h"
+#include "cm/cm_format.h"
+#include "cm/cm_mesh.h"
+#include "cm_limits.h"
+
+/** Where the camera looks from (CAD axes: Z up; front looks along +Y). */
+typedef enum cm_view_dir {
+    CM_VIEW_ISO = 0, /* from the front, right and top: along (-1, 1, -1) */
+    CM_VIEW_FRONT,   /* from -Y */
+    CM_VIEW_BACK,    /* from +Y */
+    CM_VIEW_LEFT,    /* from -X */
+    CM_VIEW_RIGHT,   /* from +X */
+    CM_VIEW_TOP,     /* from +Z, +Y up on the screen */
+    CM_VIEW_BOTTOM,  /* from -Z, -Y up on the screen */
+    CM_VIEW_DIR_COUNT
+} cm_view_dir;
+
+/** The name of a direction ("iso", "front", ...), and back (-1: no such name). */
+const char *cm_view_dir_name(cm_view_dir d);
+int cm_view_dir_parse(const char *name);
+
+typedef struct cm_view_opts {
+    int width, height;     /* pixels, 1..CM_VIEW_MAX_W x 1..CM_VIEW_MAX_H */
+    cm_view_dir dir;
+    int perspective;       /* 0: orthographic; 1: a 30 degree field of view */
+    uint32_t background;   /* 0xRRGGBB */
+    int edges;             /* 1: draw the curve mesh's edges */
+} cm_view_opts;
+
+/** Defaults: 800 x 480 (within the build's frame), iso, orthographic, white, edges on. */
+void cm_view_opts_default(cm_view_opts *o);
+
+typedef struct cm_view {
+    cm_view_opts o;
+    /* the camera: a point of view space is ((p - c).r, (p - c).u, (p - c).f), f into the screen */
+    double c[3], r[3], u[3], f[3];
+    double scale;          /* orthographic: pixels per mm; perspective: the focal length in pixels */
+    double eye;            /* perspective: the eye's depth in view space (negative) */
+    uint64_t triangles, edge_segments; /* drawn (for tests and --verbose) */
+    uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
+    float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
+} cm_view;
+
+/**
+ * Start a frame: camera fitted to the box [lo, hi] (mm), the frame cleared.
+ * @return CM_E_LIMIT (VIEW_SIZE) when the size is beyond the build's frame, CM_E_ARG for a size
+ *         below 1 pixel, a direction out of range or a box that is not finite
+ */
+CM_NODISCARD cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const float hi[3],
+                                  cm_status *st);
+
+/**
+ * Orthographic frames: centre and scale the camera on the mesh's own outline (its vertices seen
+ * from the camera) instead of its box's, which from an oblique direction is larger.  Call after
+ * cm_view_begin, before drawing; perspective frames keep the box's fit.
+ */
+void cm_view_fit(cm_view *v, const cm_mesh *mesh);
+
+/** Fill every triangle of the mesh (faces coloured by their rgb when they have one). */
+void cm_view_mesh(cm_view *v, const cm_mesh *mesh);
+
+/**
+ * Draw the model's edges (each edge curve sampled into CM_VIEW_EDGE_SEGMENTS lines) for its own
+ * faces and each placement's copies.  An edge the evaluator refuses is skipped.
+ */
+void cm_view_edges(cm_view *v, const cm_model *m);
+
+#endif /* CM_VIEW_H */

@@ -1,0 +1,392 @@
+/* cm_view.c - the software viewer: z-buffered triangles and the curve mesh's edges (see cm_view.h). */
+#include "cm/cm_view.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "cm/cm_bspline.h"
+
+/* the default face colour (no colour in the model): a light steel grey-blue */
+#define VIEW_DEFAULT_RGB 0x9fb0c2u
+/* edges are drawn this many pixels' worth of depth in front of the faces */
+#define VIEW_EDGE_BIAS_PX 2.0
+/* the edges' colour: near black */
+#define VIEW_EDGE_RGB 0x1a1a1au
+/* light: ambient share, the head light's and the fill light's */
+#define VIEW_AMBIENT 0.22
+#define VIEW_HEAD 0.62
+#define VIEW_FILL 0.16
+/* margin left round the fitted box, as a share of the frame's smaller side */
+#define VIEW_MARGIN 0.06
+/* perspective: tan of half the 30 degree field of view, as a constant (no libm tan: the same bits
+   everywhere) */
+#define VIEW_TAN_HALF_FOV 0.2679491924311227
+
+static const char *const dir_names[CM_VIEW_DIR_COUNT] = {"iso", "front", "back", "left", "right", "top", "bottom"};
+
+const char *cm_view_dir_name(cm_view_dir d)
+{
+    return (unsigned)d < CM_VIEW_DIR_COUNT ? dir_names[d] : "?";
+}
+
+/* the same string (the decoder library calls no strcmp: check-noheap's allowlist) */
+static int same_name(const char *a, const char *b)
+{
+    while (*a && *a == *b)
+        a++, b++;
+    return *a == *b;
+}
+
+int cm_view_dir_parse(const char *name)
+{
+    for (int d = 0; d < CM_VIEW_DIR_COUNT; d++)
+        if (same_name(name, dir_names[d]))
+            return d;
+    return -1;
+}
+
+void cm_view_opts_default(cm_view_opts *o)
+{
+    o->width = CM_VIEW_MAX_W < 800 ? CM_VIEW_MAX_W : 800;
+    o->height = CM_VIEW_MAX_H < 480 ? CM_VIEW_MAX_H : 480;
+    o->dir = CM_VIEW_ISO;
+    o->perspective = 0;
+    o->background = 0xffffffu;
+    o->edges = 1;
+}
+
+static void set3(double *a, double x, double y, double z)
+{
+    a[0] = x;
+    a[1] = y;
+    a[2] = z;
+}
+
+static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* the camera's right, up and forward (into the screen) for a direction */
+static void camera_axes(cm_view *v, cm_view_dir d)
+{
+    switch (d) {
+    case CM_VIEW_FRONT:
+        set3(v->r, 1, 0, 0), set3(v->u, 0, 0, 1), set3(v->f, 0, 1, 0);
+        break;
+    case CM_VIEW_BACK:
+        set3(v->r, -1, 0, 0), set3(v->u, 0, 0, 1), set3(v->f, 0, -1, 0);
+        break;
+    case CM_VIEW_LEFT:
+        set3(v->r, 0, -1, 0), set3(v->u, 0, 0, 1), set3(v->f, 1, 0, 0);
+        break;
+    case CM_VIEW_RIGHT:
+        set3(v->r, 0, 1, 0), set3(v->u, 0, 0, 1), set3(v->f, -1, 0, 0);
+        break;
+    case CM_VIEW_TOP:
+        set3(v->r, 1, 0, 0), set3(v->u, 0, 1, 0), set3(v->f, 0, 0, -1);
+        break;
+    case CM_VIEW_BOTTOM:
+        set3(v->r, 1, 0, 0), set3(v->u, 0, -1, 0), set3(v->f, 0, 0, 1);
+        break;
+    default: { /* iso: f = (-1, 1, -1)/sqrt 3, r = f x z = (1, 1, 0)/sqrt 2, u = r x f = (-1, 1, 2)/sqrt 6 */
+        double s2 = sqrt(2.0), s3 = sqrt(3.0), s6 = sqrt(6.0);
+        set3(v->r, 1.0 / s2, 1.0 / s2, 0.0);
+        set3(v->u, -1.0 / s6, 1.0 / s6, 2.0 / s6);
+        set3(v->f, -1.0 / s3, 1.0 / s3, -1.0 / s3);
+        break;
+    }
+    }
+}
+
+/* view space of a point: x right, y up, z depth (into the screen) */
+static void to_view(const cm_view *v, double x, double y, double z, double out[3])
+{
+    double d[3] = {x - v->c[0], y - v->c[1], z - v->c[2]};
+    out[0] = dot3(d, v->r);
+    out[1] = dot3(d, v->u);
+    out[2] = dot3(d, v->f);
+}
+
+/* screen position (pixel units, y down, pixel centres at + 0.5) and depth of a view-space point;
+   0 when it is behind the eye (perspective) */
+static int to_screen(const cm_view *v, const double p[3], double s[3])
+{
+    double k = v->scale;
+    if (v->o.perspective) {
+        double ze = p[2] - v->eye;
+        if (!(ze > 1e-9 * (-v->eye)))
+            return 0;
+        k = v->scale / ze;
+    }
+    s[0] = 0.5 * (double)v->o.width + p[0] * k;
+    s[1] = 0.5 * (double)v->o.height - p[1] * k;
+    s[2] = p[2];
+    return 1;
+}
+
+cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const float hi[3], cm_status *st)
+{
+    if (o->width > CM_VIEW_MAX_W || o->height > CM_VIEW_MAX_H) {
+        if (st && st->code == CM_OK) {
+            st->need = (uint64_t)o->width * (uint64_t)o->height;
+            st->have = (uint64_t)CM_VIEW_MAX_W * (uint64_t)CM_VIEW_MAX_H;
+        }
+        return cm_fail(st, CM_E_LIMIT, "view: a frame larger than this build's (CM_VIEW_MAX_W x CM_VIEW_MAX_H)");
+    }
+    if (o->width < 1 || o->height < 1 || (unsigned)o->dir >= CM_VIEW_DIR_COUNT)
+        return cm_fail(st, CM_E_ARG, "view: size or direction");
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(lo[i]) || !isfinite(hi[i]) || !(lo[i] <= hi[i]))
+            return cm_fail(st, CM_E_ARG, "view: the model's box");
+    v->o = *o;
+    v->triangles = v->edge_segments = 0;
+    camera_axes(v, o->dir);
+    for (int i = 0; i < 3; i++)
+        v->c[i] = 0.5 * ((double)lo[i] + (double)hi[i]);
+    /* the box's corners in view space: their extent across the screen and in depth */
+    double ex = 0.0, ey = 0.0, diag2 = 0.0;
+    for (int k = 0; k < 8; k++) {
+        double p[3];
+        to_view(v, (double)((k & 1) ? hi[0] : lo[0]), (double)((k & 2) ? hi[1] : lo[1]),
+                (double)((k & 4) ? hi[2] : lo[2]), p);
+        ex = fabs(p[0]) > ex ? fabs(p[0]) : ex;
+        ey = fabs(p[1]) > ey ? fabs(p[1]) : ey;
+        diag2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] > diag2 ? p[0] * p[0] + p[1] * p[1] + p[2] * p[2] : diag2;
+    }
+    double w = (double)o->width, h = (double)o->height, side = w < h ? w : h;
+    double room_x = 0.5 * w - VIEW_MARGIN * side, room_y = 0.5 * h - VIEW_MARGIN * side;
+    room_x = room_x > 0.5 ? room_x : 0.5;
+    room_y = room_y > 0.5 ? room_y : 0.5;
+    double radius = sqrt(diag2);
+    if (!(radius > 0.0))
+        radius = 1.0; /* a point: any scale shows it */
+    if (!o->perspective) {
+        double sx = ex > 0.0 ? room_x / ex : 1e300, sy = ey > 0.0 ? room_y / ey : 1e300;
+        v->scale = sx < sy ? sx : sy;
+        if (!(v->scale < 1e300))
+            v->scale = (room_x < room_y ? room_x : room_y) / radius;
+        v->eye = 0.0;
+    } else {
+        /* the eye on the axis, far enough that the box's bounding sphere fits the field of view */
+        double room = room_x < room_y ? room_x : room_y;
+        double dist = radius / VIEW_TAN_HALF_FOV * 1.05 + radius;
+        v->eye = -dist;
+        v->scale = room / VIEW_TAN_HALF_FOV; /* a point at x = tan(fov/2) z lands on the room's edge */
+    }
+    size_t npix = (size_t)o->width * (size_t)o->height;
+    for (size_t i = 0; i < npix; i++) {
+        v->rgb[3 * i] = (uint8_t)(o->background >> 16);
+        v->rgb[3 * i + 1] = (uint8_t)(o->background >> 8);
+        v->rgb[3 * i + 2] = (uint8_t)o->background;
+        v->depth[i] = 3.0e38f;
+    }
+    return CM_OK;
+}
+
+void cm_view_fit(cm_view *v, const cm_mesh *mesh)
+{
+    if (v->o.perspective || mesh->nverts == 0)
+        return;
+    double xlo = 0, xhi = 0, ylo = 0, yhi = 0;
+    for (uint32_t i = 0; i < mesh->nverts; i++) {
+        float p[3];
+        double q[3];
+        cm_mesh_pos(mesh, i, p);
+        to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
+        if (i == 0 || q[0] < xlo)
+            xlo = q[0];
+        if (i == 0 || q[0] > xhi)
+            xhi = q[0];
+        if (i == 0 || q[1] < ylo)
+            ylo = q[1];
+        if (i == 0 || q[1] > yhi)
+            yhi = q[1];
+    }
+    double mx = 0.5 * (xlo + xhi), my = 0.5 * (ylo + yhi);
+    for (int k = 0; k < 3; k++)
+        v->c[k] += mx * v->r[k] + my * v->u[k];
+    double w = (double)v->o.width, h = (double)v->o.height, side = w < h ? w : h;
+    double room_x = 0.5 * w - VIEW_MARGIN * side, room_y = 0.5 * h - VIEW_MARGIN * side;
+    double ex = 0.5 * (xhi - xlo), ey = 0.5 * (yhi - ylo);
+    double sx = ex > 0.0 ? room_x / ex : 1e300, sy = ey > 0.0 ? room_y / ey : 1e300;
+    double s = sx < sy ? sx : sy;
+    if (s < 1e300 && s > 0.0)
+        v->scale = s;
+}
+
+/* brightness of a surface whose unit normal is n (view space), lit from both sides */
+static double shade(const double n[3])
+{
+    /* the head light along the view (towards the viewer: -z), the fill light from the upper left */
+    static const double fill[3] = {-0.40824829046386302, 0.81649658092772603, -0.40824829046386302};
+    double head = fabs(n[2]);
+    double fl = fabs(dot3(n, fill));
+    return VIEW_AMBIENT + VIEW_HEAD * head + VIEW_FILL * fl;
+}
+
+static uint8_t channel(double base, double light)
+{
+    double c = base * light;
+    return (uint8_t)(c >= 255.0 ? 255 : (c <= 0.0 ? 0 : (int)(c + 0.5)));
+}
+
+/* edge function: twice the signed area of (a, b, p) */
+static double edge_fn(const double *a, const double *b, double px, double py)
+{
+    return (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0]);
+}
+
+/* fill the triangle of screen points s[3] (x, y, depth) with brightnesses l[3] and colour rgb */
+static void fill_triangle(cm_view *v, const double s[3][3], const double l[3], uint32_t rgb)
+{
+    double area = edge_fn(s[0], s[1], s[2][0], s[2][1]);
+    if (!(fabs(area) > 1e-12))
+        return; /* edge-on or a point: nothing covered */
+    double xmin = s[0][0], xmax = s[0][0], ymin = s[0][1], ymax = s[0][1];
+    for (int i = 1; i < 3; i++) {
+        xmin = s[i][0] < xmin ? s[i][0] : xmin;
+        xmax = s[i][0] > xmax ? s[i][0] : xmax;
+        ymin = s[i][1] < ymin ? s[i][1] : ymin;
+        ymax = s[i][1] > ymax ? s[i][1] : ymax;
+    }
+    /* pixels whose centres (x + 0.5, y + 0.5) may be inside, clipped to the frame */
+    double fx0 = xmin - 0.5, fx1 = xmax - 0.5, fy0 = ymin - 0.5, fy1 = ymax - 0.5;
+    if (!(fx1 >= 0.0) || !(fy1 >= 0.0) || !(fx0 < (double)v->o.width) || !(fy0 < (double)v->o.height))
+        return;
+    int x0 = fx0 <= 0.0 ? 0 : (int)fx0, y0 = fy0 <= 0.0 ? 0 : (int)fy0; /* (the edge tests decide) */
+    int x1 = fx1 >= (double)(v->o.width - 1) ? v->o.width - 1 : (int)fx1;
+    int y1 = fy1 >= (double)(v->o.height - 1) ? v->o.height - 1 : (int)fy1;
+    double inv = 1.0 / area;
+    double br = (double)((rgb >> 16) & 0xff), bg = (double)((rgb >> 8) & 0xff), bb = (double)(rgb & 0xff);
+    int drawn = 0;
+    for (int y = y0; y <= y1; y++) {
+        double py = (double)y + 0.5;
+        for (int x = x0; x <= x1; x++) {
+            double px = (double)x + 0.5;
+            double w0 = edge_fn(s[1], s[2], px, py) * inv;
+            double w1 = edge_fn(s[2], s[0], px, py) * inv;
+            double w2 = edge_fn(s[0], s[1], px, py) * inv;
+            if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0)
+                continue;
+            double z = w0 * s[0][2] + w1 * s[1][2] + w2 * s[2][2];
+            size_t at = (size_t)y * (size_t)v->o.width + (size_t)x;
+            if (!((float)z < v->depth[at]))
+                continue;
+            v->depth[at] = (float)z;
+            double light = w0 * l[0] + w1 * l[1] + w2 * l[2];
+            v->rgb[3 * at] = channel(br, light);
+            v->rgb[3 * at + 1] = channel(bg, light);
+            v->rgb[3 * at + 2] = channel(bb, light);
+            drawn = 1;
+        }
+    }
+    v->triangles += (uint64_t)drawn;
+}
+
+void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
+{
+    for (uint32_t fi = 0; fi < mesh->nfaces; fi++) {
+        const cm_mesh_face *F = &mesh->faces[fi];
+        uint32_t rgb = F->has_color ? F->rgb : VIEW_DEFAULT_RGB;
+        for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
+            double s[3][3], l[3];
+            int ok = 1;
+            for (int i = 0; i < 3 && ok; i++) {
+                uint32_t vi = cm_mesh_idx(mesh, F->first_index + k + (uint32_t)i);
+                float p[3], n[3];
+                cm_mesh_pos(mesh, vi, p);
+                cm_mesh_nrm(mesh, vi, n);
+                double q[3], nv[3];
+                to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
+                nv[0] = (double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2];
+                nv[1] = (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2];
+                nv[2] = (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2];
+                ok = to_screen(v, q, s[i]);
+                l[i] = shade(nv);
+            }
+            if (ok)
+                fill_triangle(v, s, l, rgb);
+        }
+    }
+}
+
+/* a line from a to b (screen x, y, depth), depth-tested against the faces, drawn nearer by zbias */
+static void draw_line(cm_view *v, const double a[3], const double b[3])
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1];
+    double len = fabs(dx) > fabs(dy) ? fabs(dx) : fabs(dy);
+    if (!(len < 1e5))
+        return; /* off in the distance (perspective near the eye): not a line worth drawing */
+    int n = (int)len + 1;
+    for (int i = 0; i <= n; i++) {
+        double t = (double)i / (double)n;
+        double z = a[2] + (b[2] - a[2]) * t;
+        double x = a[0] + dx * t, y = a[1] + dy * t;
+        /* nearer by a few pixels' worth of depth: enough for the faces' own boundary (their triangles
+           meet the edge at its samples, and may lie up to the tessellation's tolerance off between),
+           not enough to see a back edge through a plate a few pixels thick */
+        z -= VIEW_EDGE_BIAS_PX * (v->o.perspective ? (z - v->eye) / v->scale : 1.0 / v->scale);
+        if (!(x >= 0.0 && y >= 0.0 && x < (double)v->o.width && y < (double)v->o.height))
+            continue;
+        size_t at = (size_t)(int)y * (size_t)v->o.width + (size_t)(int)x;
+        if (!((float)z <= v->depth[at]))
+            continue;
+        v->depth[at] = (float)z;
+        v->rgb[3 * at] = (uint8_t)(VIEW_EDGE_RGB >> 16);
+        v->rgb[3 * at + 1] = (uint8_t)(VIEW_EDGE_RGB >> 8);
+        v->rgb[3 * at + 2] = (uint8_t)VIEW_EDGE_RGB;
+    }
+    v->edge_segments++;
+}
+
+/* edge e of m, placed by a (3 x 4, row by row; NULL: as it is), sampled and drawn */
+static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a)
+{
+    cm_curve c;
+    cm_model_edge_curve(m, e, &c);
+    double prev[3] = {0, 0, 0};
+    int have = 0;
+    for (int k = 0; k <= CM_VIEW_EDGE_SEGMENTS; k++) {
+        cm_vec3 d[CM_MAX_DERS + 1];
+        if (cm_curve_eval(&c, (double)k / (double)CM_VIEW_EDGE_SEGMENTS, 0, d, NULL) != CM_OK)
+            return;
+        double x = d[0].x, y = d[0].y, z = d[0].z;
+        if (a) {
+            double X = a[0] * x + a[1] * y + a[2] * z + a[3];
+            double Y = a[4] * x + a[5] * y + a[6] * z + a[7];
+            double Z = a[8] * x + a[9] * y + a[10] * z + a[11];
+            x = X, y = Y, z = Z;
+        }
+        double q[3], s[3];
+        to_view(v, x, y, z, q);
+        if (!to_screen(v, q, s)) {
+            have = 0;
+            continue;
+        }
+        if (have)
+            draw_line(v, prev, s);
+        prev[0] = s[0], prev[1] = s[1], prev[2] = s[2];
+        have = 1;
+    }
+}
+
+/* the edges of faces [first, first + count), placed by a */
+static void draw_face_edges(cm_view *v, const cm_model *m, uint32_t first, uint32_t count, const double *a)
+{
+    for (uint32_t f = first; f < first + count && f < m->nfaces; f++) {
+        const cm_face *F = &m->faces[f];
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            const cm_loop *L = &m->loops[F->loop0 + l];
+            for (uint32_t k = 0; k < L->nuse; k++)
+                draw_edge(v, m, m->uses[L->use0 + k].edge, a);
+        }
+    }
+}
+
+void cm_view_edges(cm_view *v, const cm_model *m)
+{
+    if (!v->o.edges)
+        return;
+    draw_face_edges(v, m, 0, m->nfaces, NULL);
+    for (uint32_t k = 0; k < m->nplacements; k++)
+        draw_face_edges(v, m, m->placements[k].first, m->placements[k].count, m->placements[k].m);
+}

@@ -1,0 +1,264 @@
+/*
+ * test_view.c - the software viewer (cm_view.h) and its PNG writer
+ * (cm_png.h): a box seen from the front fills the square the fitted camera
+ * promises, with the head light's shade; the nearer of two triangles wins
+ * whatever the order; a frame beyond the build's is refused by name; the
+ * PNG's chunks, CRCs, stored deflate blocks and Adler-32 check out, its
+ * pixels are the frame's, and its size is the one announced.
+ */
+#include "test_util.h"
+
+#include <stdio.h>
+
+#include "cm/cm_crc32.h"
+#include "cm/cm_png.h"
+#include "cm/cm_view.h"
+
+static cm_view view;
+
+#define MAXV 64
+#define MAXI 96
+static float g_pos[MAXV][3], g_nrm[MAXV][3];
+static uint32_t g_idx[MAXI];
+static cm_mesh_face g_faces[8];
+
+static cm_mesh mesh_storage(void)
+{
+    cm_mesh m;
+    memset(&m, 0, sizeof m);
+    m.pos = g_pos;
+    m.nrm = g_nrm;
+    m.idx = g_idx;
+    m.faces = g_faces;
+    m.cap_verts = MAXV;
+    m.cap_index = MAXI;
+    m.cap_faces = 8;
+    return m;
+}
+
+/* a quad (a, b, c, d) with normal n as one face of two triangles */
+static void add_quad(cm_mesh *m, const float q[4][3], const float n[3], uint32_t rgb, int has_color)
+{
+    cm_mesh_face *f = &m->faces[m->nfaces++];
+    memset(f, 0, sizeof *f);
+    f->first_vert = m->nverts;
+    f->first_index = m->nindex;
+    f->rgb = rgb;
+    f->has_color = (uint8_t)has_color;
+    for (int i = 0; i < 4; i++) {
+        memcpy(m->pos[m->nverts + (uint32_t)i], q[i], sizeof(float[3]));
+        memcpy(m->nrm[m->nverts + (uint32_t)i], n, sizeof(float[3]));
+    }
+    static const int tri[6] = {0, 1, 2, 0, 2, 3};
+    for (int i = 0; i < 6; i++)
+        m->idx[m->nindex + (uint32_t)i] = m->nverts + (uint32_t)tri[i];
+    m->nverts += 4;
+    m->nindex += 6;
+    f->nverts = 4;
+    f->nindex = 6;
+}
+
+static size_t count_not(const cm_view *v, uint32_t rgb)
+{
+    size_t n = 0, npix = (size_t)v->o.width * (size_t)v->o.height;
+    for (size_t i = 0; i < npix; i++)
+        if (v->rgb[3 * i] != (uint8_t)(rgb >> 16) || v->rgb[3 * i + 1] != (uint8_t)(rgb >> 8) ||
+            v->rgb[3 * i + 2] != (uint8_t)rgb)
+            n++;
+    return n;
+}
+
+/* the unit box's front face (y = 0, normal -y) seen from the front, orthographic, 100 x 100: the
+   camera leaves a margin of 6 px, so the box's 1 mm fills 88 px across and down */
+static void test_front_box(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
+        skip(); /* the tiny profile's frame: test_refuses_large_frame covers it */
+    cm_mesh m = mesh_storage();
+    const float front[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
+    const float ny[3] = {0, -1, 0};
+    add_quad(&m, front, ny, 0x808080u, 1);
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    o.width = o.height = 100;
+    o.dir = CM_VIEW_FRONT;
+    o.edges = 0;
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_view_begin(&view, &o, lo, hi, &st));
+    cm_view_mesh(&view, &m);
+    assert_int_equal(view.triangles, 2);
+    assert_int_equal(count_not(&view, o.background), 88 * 88);
+    /* the middle pixel: grey 128 times ambient + head light + the fill light's |n . fill| */
+    size_t mid = 50 * 100 + 50;
+    double light = 0.22 + 0.62 * 1.0 + 0.16 * 0.40824829046386302;
+    int want = (int)(128.0 * light + 0.5);
+    assert_int_equal(view.rgb[3 * mid], want);
+    assert_int_equal(view.rgb[3 * mid + 1], want);
+    /* the corner pixel stays background */
+    assert_int_equal(view.rgb[0], 0xff);
+}
+
+/* two overlapping squares at different depths: the nearer one shows, drawn first or last */
+static void test_depth_order(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64)
+        skip();
+    for (int order = 0; order < 2; order++) {
+        cm_mesh m = mesh_storage();
+        const float nearq[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
+        const float farq[4][3] = {{0, 1, 0}, {1, 1, 0}, {1, 1, 1}, {0, 1, 1}};
+        const float ny[3] = {0, -1, 0};
+        add_quad(&m, order ? nearq : farq, ny, order ? 0xff0000u : 0x0000ffu, 1);
+        add_quad(&m, order ? farq : nearq, ny, order ? 0x0000ffu : 0xff0000u, 1);
+        cm_view_opts o;
+        cm_view_opts_default(&o);
+        o.width = o.height = 64;
+        o.dir = CM_VIEW_FRONT;
+        o.edges = 0;
+        const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        cm_view_mesh(&view, &m);
+        size_t mid = 32 * 64 + 32;
+        assert_true(view.rgb[3 * mid] > 0); /* red: the near square */
+        assert_int_equal(view.rgb[3 * mid + 2], 0);
+    }
+}
+
+static void test_refuses_large_frame(void **state)
+{
+    (void)state;
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    o.width = CM_VIEW_MAX_W + 1;
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    cm_status st;
+    cm_status_init(&st);
+    assert_int_equal(cm_view_begin(&view, &o, lo, hi, &st), CM_E_LIMIT);
+    assert_non_null(strstr(st.where, "CM_VIEW_MAX_W"));
+    assert_int_equal(st.have, (uint64_t)CM_VIEW_MAX_W * CM_VIEW_MAX_H);
+    o.width = 10;
+    o.height = 0;
+    assert_int_equal(cm_view_begin(&view, &o, lo, hi, NULL), CM_E_ARG);
+    const float bad[3] = {0, NAN, 0};
+    o.height = 10;
+    assert_int_equal(cm_view_begin(&view, &o, lo, bad, NULL), CM_E_ARG);
+}
+
+static void test_dir_names(void **state)
+{
+    (void)state;
+    for (int d = 0; d < CM_VIEW_DIR_COUNT; d++)
+        assert_int_equal(cm_view_dir_parse(cm_view_dir_name((cm_view_dir)d)), d);
+    assert_int_equal(cm_view_dir_parse("sideways"), -1);
+}
+
+/* ---- PNG ---- */
+
+static uint8_t g_png[1 << 18];
+static size_t g_png_n;
+
+static int put_mem(void *ctx, const uint8_t *p, size_t n)
+{
+    (void)ctx;
+    if (g_png_n + n > sizeof g_png)
+        return -1;
+    memcpy(g_png + g_png_n, p, n);
+    g_png_n += n;
+    return 0;
+}
+
+static int put_fail(void *ctx, const uint8_t *p, size_t n)
+{
+    (void)ctx, (void)p, (void)n;
+    return -1;
+}
+
+static uint32_t be32(const uint8_t *p) { return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]; }
+
+/* walk the PNG: chunks and CRCs, IHDR, the zlib stream's stored blocks into raw[], Adler-32 */
+static void check_png(const uint8_t *rgb, uint32_t w, uint32_t h)
+{
+    static uint8_t raw[1 << 18], z[1 << 18];
+    static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    assert_int_equal(g_png_n, cm_png_size(w, h));
+    assert_memory_equal(g_png, sig, 8);
+    size_t at = 8, zn = 0;
+    int saw_end = 0;
+    while (at < g_png_n) {
+        uint32_t len = be32(g_png + at);
+        assert_true(at + 12 + len <= g_png_n);
+        const uint8_t *type = g_png + at + 4, *data = type + 4;
+        assert_int_equal(be32(data + len), cm_crc32(type, 4 + (size_t)len));
+        if (memcmp(type, "IHDR", 4) == 0) {
+            assert_int_equal(len, 13);
+            assert_int_equal(be32(data), w);
+            assert_int_equal(be32(data + 4), h);
+            assert_int_equal(data[8], 8);
+            assert_int_equal(data[9], 2);
+        } else if (memcmp(type, "IDAT", 4) == 0) {
+            memcpy(z + zn, data, len);
+            zn += len;
+        } else if (memcmp(type, "IEND", 4) == 0) {
+            saw_end = 1;
+        }
+        at += 12 + len;
+    }
+    assert_true(saw_end);
+    /* zlib: header, stored blocks, Adler-32 */
+    assert_int_equal((z[0] * 256 + z[1]) % 31, 0);
+    size_t zi = 2, rn = 0;
+    for (int last = 0; !last;) {
+        last = z[zi] & 1;
+        assert_int_equal(z[zi] >> 1, 0); /* stored */
+        uint32_t len = (uint32_t)z[zi + 1] | (uint32_t)z[zi + 2] << 8;
+        uint32_t nlen = (uint32_t)z[zi + 3] | (uint32_t)z[zi + 4] << 8;
+        assert_int_equal(len ^ 0xffffu, nlen);
+        memcpy(raw + rn, z + zi + 5, len);
+        rn += len;
+        zi += 5 + len;
+    }
+    uint32_t a = 1, b = 0;
+    for (size_t i = 0; i < rn; i++) {
+        a = (a + raw[i]) % 65521u;
+        b = (b + a) % 65521u;
+    }
+    assert_int_equal(be32(z + zi), (b << 16) | a);
+    assert_int_equal(zi + 4, zn);
+    assert_int_equal(rn, (size_t)h * (1 + 3 * (size_t)w));
+    for (uint32_t y = 0; y < h; y++) {
+        assert_int_equal(raw[y * (1 + 3 * w)], 0); /* filter: none */
+        assert_memory_equal(raw + y * (1 + 3 * w) + 1, rgb + (size_t)y * 3 * w, 3 * (size_t)w);
+    }
+}
+
+static void test_png(void **state)
+{
+    (void)state;
+    static uint8_t rgb[3 * 200 * 120];
+    uint32_t sizes[][2] = {{1, 1}, {3, 2}, {200, 120}}; /* the last: 72 120 raw bytes, two stored blocks */
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+        uint32_t w = sizes[k][0], h = sizes[k][1];
+        for (size_t i = 0; i < 3 * (size_t)w * h; i++)
+            rgb[i] = (uint8_t)(i * 7 + k);
+        g_png_n = 0;
+        assert_ok(cm_png_write(rgb, w, h, put_mem, NULL, NULL));
+        check_png(rgb, w, h);
+    }
+    cm_status st;
+    cm_status_init(&st);
+    assert_int_equal(cm_png_write(rgb, 4, 4, put_fail, NULL, &st), CM_E_IO);
+    assert_int_equal(cm_png_write(rgb, 0, 4, put_mem, NULL, NULL), CM_E_ARG);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_front_box),   cmocka_unit_test(test_depth_order), cmocka_unit_test(test_refuses_large_frame),
+        cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_png),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
