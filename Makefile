@@ -121,7 +121,8 @@ NOHEAP_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free,--wrap
 KERNEL_SRC := $(sort $(wildcard decoder/kernels/*.c))
 DECODER_SRC := $(sort $(wildcard decoder/src/*.c decoder/methods/*.c))
 OUT_SRC := $(sort $(wildcard decoder/out/*.c))
-LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC) $(OUT_SRC)
+VIEW_SRC := $(sort $(wildcard decoder/view/*.c))
+LIB_SRC := $(KERNEL_SRC) $(DECODER_SRC) $(OUT_SRC) $(VIEW_SRC)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_NAMES := $(patsubst tests/unit/%.c,%,$(UNIT_SRC))
 # workstation code: everything under host_tools/ except the program mains (*_main.c)
@@ -174,6 +175,12 @@ unit-tests-$(1): $(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES) kernel_
 
 # the terminal's decoder, built with this profile; no heap on its path (linked with the abort wrappers)
 $(call bdir,$(1))/cmz-decode: $(call bdir,$(1))/platform/cmz_decode_main.o $(call bdir,$(1))/platform/cm_decode_file.o \
+		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ -lm
+
+# what the terminal shows, as a PNG (issue 17): the decoder and the software viewer, no heap either
+$(call bdir,$(1))/cmz-view: $(call bdir,$(1))/platform/cmz_view_main.o $(call bdir,$(1))/platform/cm_decode_file.o \
 		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ -lm
@@ -250,7 +257,7 @@ $(CMZ): $(call bdir,host)/host_tools/cmz_main.o $(PROFILE_TABLES) $(CMZ_EXTRA_OB
 -include tests/tools/gltf_check.mk
 .PHONY: all lib unit-tests $(addprefix unit-tests-,$(PROFILES)) $(addprefix host-tests-,$(PROFILES))
 
-all: lib $(B)/cm-limits $(B)/cmz-decode $(CMZ)
+all: lib $(B)/cm-limits $(B)/cmz-decode $(B)/cmz-view $(CMZ)
 lib: $(B)/libcmdecoder.a
 unit-tests: unit-tests-$(PROFILE)
 
@@ -271,7 +278,7 @@ $(STACK_CHECK): tests/tools/check_stack.c
 	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
 .PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-fuzz-decode-replay \
-	check-corpus-roundtrip check-decode-cross check-corpus-occt check-step-occt check-step-roundtrip deps
+	check-corpus-roundtrip check-decode-cross check-view check-view-cross check-corpus-occt check-step-occt check-step-roundtrip deps
 # `make check` on a fresh machine: install what is missing, then test.
 # The builds run on every core (CHECK_JOBS); the suites and gates still run one at a time, but their
 # own builds (clang, cross, -O0) share the job slots.
@@ -311,6 +318,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:step-roundtrip:$(MAKE) --no-print-directory -s check-step-roundtrip" \
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
+		"gate:view-cross:$(MAKE) --no-print-directory -s check-view-cross" \
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
 		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
 		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
@@ -337,7 +345,8 @@ test: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,termi
 		"gate:bundled-roundtrip:$(MAKE) --no-print-directory -s check-bundled-roundtrip" \
 		"gate:vault:$(MAKE) --no-print-directory -s check-vault" \
 		"gate:lying-header:$(MAKE) --no-print-directory -s check-lying-header" \
-		"gate:old-files:$(MAKE) --no-print-directory -s check-old-files"
+		"gate:old-files:$(MAKE) --no-print-directory -s check-old-files" \
+		"gate:view:$(MAKE) --no-print-directory -s check-view"
 
 # every fuzz target's seeds and regressions replayed under the sanitizers, the shared corpus left
 # to check-fuzz-replay (2.5 minutes of 2-4 MB models under ASan)
@@ -554,6 +563,17 @@ check-decode-cross: $(CMZ) $(call bdir,terminal)/cmz-decode $(call bdir,tiny)/cm
 		$(BUILD_ROOT)/O0/$(TRIPLET)-terminal/cmz-decode
 	$(Q)tests/tools/check_decode_cross.sh $(CMZ) $(BUILD_ROOT) $(SHARED_MODELS)
 
+# what the terminal shows (issue 17): cmz-view on the bundled models, every direction and in
+# perspective (valid PNG, the model inside the margin and fitted, the same bytes twice; a frame
+# beyond the build's and a truncated file refused); check-view-cross also draws them with the
+# aarch64 build under qemu-user: the same pixels
+check-view: $(CMZ) $(call bdir,terminal)/cmz-view
+	$(Q)tests/tools/check_view.sh $(CMZ) $(call bdir,terminal)/cmz-view
+check-view-cross: $(CMZ) $(call bdir,terminal)/cmz-view
+	$(Q)$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- CC=aarch64-linux-gnu-gcc AR=aarch64-linux-gnu-ar \
+		PKG_CONFIG=aarch64-linux-gnu-pkg-config $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-view
+	$(Q)tests/tools/check_view.sh $(CMZ) $(call bdir,terminal)/cmz-view $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-view
+
 # unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine
 check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 	$(Q)for x in $(CROSS_TARGETS); do \
@@ -624,7 +644,8 @@ bench-link: $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bdir,host)/tests/to
 # (README "udev rules") and the LICENSE under DOCDIR.  A cross build installs the board's binaries:
 #   make install CROSS_COMPILE=aarch64-linux-gnu- PREFIX=/usr DESTDIR=/tmp/stage
 DOCDIR ?= $(PREFIX)/share/doc/curvemesh
-INSTALL_PROGS := $(CMZ) host_tools/scripts/cmz-usb-gadget.sh $(B)/cmz-decode $(B)/cmz-terminal $(B)/cm-limits
+INSTALL_PROGS := $(CMZ) host_tools/scripts/cmz-usb-gadget.sh $(B)/cmz-decode $(B)/cmz-view $(B)/cmz-terminal \
+                 $(B)/cm-limits
 INSTALL_DOCS := platform/99-cmz-terminal.rules.example LICENSE
 .PHONY: install clean
 install: $(INSTALL_PROGS) $(INSTALL_DOCS)

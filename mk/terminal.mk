@@ -143,7 +143,7 @@ check-link-recovery: $(LINK_RECOVERY_BIN)
 # no recursion, every indirect call resolved by tests/tools/stack_indirect.txt, the deepest path
 # within CM_STACK_PROGRAM_BUDGET (libc, libusb and libgpiod frames are not seen: the budget leaves
 # them the rest of a small thread's stack).  gcc only (clang writes no call graph).
-STACK_PROGRAM_SRC := platform/cmz_decode_main.c platform/cm_decode_file.c platform/cm_report.c \
+STACK_PROGRAM_SRC := platform/cmz_decode_main.c platform/cmz_view_main.c platform/cm_decode_file.c platform/cm_report.c \
 	platform/cmz_terminal_main.c platform/cm_term_store.c $(LINK_TERM_SRC) $(GPIO_SRC)
 STACK_PROGRAM_CI := $(patsubst %.c,$(B)/stackgate/%.ci,$(STACK_PROGRAM_SRC))
 $(B)/stackgate/%.ci: %.c
@@ -160,9 +160,11 @@ check-stack-programs: $(B)/libcmdecoder.a $(BUILD_ROOT)/tools/check_stack $(STAC
 		$$(find $(B)/decoder -name '*.ci' | sort) $(STACK_PROGRAM_CI)
 
 # ---- the terminal programs' static RAM (issue 15.3) ----
-# data + bss of cmz-decode and cmz-terminal within CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET
+# data + bss of cmz-decode and cmz-terminal within CM_DECODE_STATE_BUDGET + CM_PROGRAM_STATIC_BUDGET,
+# cmz-view's within CM_VIEW_STATIC_BUDGET more (its frame)
 .PHONY: check-ram
-check-ram: $(B)/cmz-decode $(B)/cmz-terminal
+check-ram: $(B)/cmz-decode $(B)/cmz-terminal $(B)/cmz-view
 	$(Q)CM_TEXT_BUDGET=$(if $(filter aarch64-%,$(TRIPLET)),$(call limit_of,$(PROFILE),CM_PROGRAM_TEXT_BUDGET)) \
+		CM_VIEW_BUDGET=$(call limit_of,$(PROFILE),CM_VIEW_STATIC_BUDGET) \
 		tests/tools/check_ram.sh $(CROSS_COMPILE)size $(CROSS_COMPILE)nm $(call limit_of,$(PROFILE),CM_DECODE_STATE_BUDGET) \
-		$(call limit_of,$(PROFILE),CM_PROGRAM_STATIC_BUDGET) $(B)/cmz-decode $(B)/cmz-terminal
+		$(call limit_of,$(PROFILE),CM_PROGRAM_STATIC_BUDGET) $(B)/cmz-decode $(B)/cmz-terminal $(B)/cmz-view

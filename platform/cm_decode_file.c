@@ -169,6 +169,11 @@ size_t cm_decode_file_static_bytes(void)
     return sizeof read_chunk + sizeof write_chunk + sizeof spill_fs;
 }
 
+size_t cm_decode_file_read_static_bytes(void)
+{
+    return sizeof read_chunk + sizeof spill_fs;
+}
+
 void cm_decode_spill_close(void)
 {
     for (int k = 0; k < CM_SPILL_STREAMS; k++) {

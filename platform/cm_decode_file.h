@@ -128,5 +128,8 @@ static inline uint64_t cm_out_bytes_bound(cm_out_format fmt, uint64_t cmz_bytes)
 
 /** The static storage of this file's reader and writer (their I/O chunks), for `--limits`. */
 size_t cm_decode_file_static_bytes(void);
+/** ... of them, what a program that reads and decodes but writes no mesh links (cmz-view): the
+ *  reader's chunk and the mesh spill's files. */
+size_t cm_decode_file_read_static_bytes(void);
 
 #endif /* CM_DECODE_FILE_H */

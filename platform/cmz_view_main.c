@@ -1,0 +1,237 @@
+/*
+ * cmz-view - what the terminal shows, as a picture: a .cmz decoded and drawn
+ * by the terminal's own software viewer (cm_view.h) into a PNG.
+ *
+ *   cmz-view MODEL.cmz --png OUT.png [--size WxH] [--view iso|front|back|left|right|top|bottom]
+ *            [--perspective] [--no-edges] [--background RRGGBB] [--tess MM]
+ *   cmz-view --limits | --version | --help
+ *
+ * The same program on the workstation and the board (profile terminal by
+ * default): a person at the workstation sees exactly the pixels the
+ * terminal will show.  Heap-free like cmz-decode: the frame and its depth
+ * buffer are static, sized by fixedcfg (CM_VIEW_MAX_W x CM_VIEW_MAX_H).
+ * The PNG appears atomically (a temporary file renamed into place).
+ *
+ * Exit status: 0 success, 1 the file is malformed or exceeds a limit,
+ * 2 usage, 3 I/O error.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cm/cm_decode_state.h"
+#include "cm/cm_limits_info.h"
+#include "cm/cm_png.h"
+#include "cm/cm_view.h"
+#include "cm_decode_file.h"
+#include "cm_report.h"
+
+/* everything big is static: the decode and draw paths never touch the heap */
+static cm_decode_state state;
+static cm_view view;
+
+static void report(FILE *f, const char *level, const char *in, const cm_status *st)
+{
+    char text[512];
+    cm_format_status(text, sizeof text, st);
+    fprintf(f, "cmz-view: %s%s: %s\n", level, in, text);
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: cmz-view MODEL.cmz --png OUT.png [--size WxH] [--view DIR] [--perspective]\n"
+            "                [--no-edges] [--background RRGGBB] [--tess MM]\n"
+            "       cmz-view --limits | --version | --help\n"
+            "\n"
+            "Rebuild a curvemesh model and draw it as the terminal's viewer does: shaded\n"
+            "triangles with the decoder's normals, in the faces' colours, and the model's\n"
+            "exact edges on top; the camera fitted to the model.  DIR: iso (default), front,\n"
+            "back, left, right, top, bottom (CAD axes, Z up; front looks along +Y).\n"
+            "--size: pixels, default 800x480, at most %dx%d in this build (profile %s).\n"
+            "--perspective: a 30 degree field of view instead of a parallel projection.\n"
+            "--background: the colour behind the model, default ffffff.  --tess: chordal\n"
+            "tolerance in mm (default: the file's recommendation).  The PNG is uncompressed\n"
+            "(stored deflate) and appears whole or not at all.\n"
+            "\n"
+            "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error.\n",
+            CM_VIEW_MAX_W, CM_VIEW_MAX_H, cm_profile_name);
+}
+
+static int put_fd(void *ctx, const uint8_t *p, size_t n)
+{
+    int fd = *(int *)ctx;
+    while (n > 0) {
+        ssize_t k = write(fd, p, n);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return -1;
+        p += k;
+        n -= (size_t)k;
+    }
+    return 0;
+}
+
+/* the frame as out_path, atomically: 0, or 3 after saying why */
+static int write_png(const char *out_path)
+{
+    char tmp[4096];
+    if (strlen(out_path) + 24 > sizeof tmp) {
+        fprintf(stderr, "cmz-view: %s: output path too long\n", out_path);
+        return 2;
+    }
+    snprintf(tmp, sizeof tmp, "%s.part%ld", out_path, (long)getpid());
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        fprintf(stderr, "cmz-view: %s: %s\n", tmp, strerror(errno));
+        return 3;
+    }
+    cm_status st;
+    cm_status_init(&st);
+    cm_err e = cm_png_write(view.rgb, (uint32_t)view.o.width, (uint32_t)view.o.height, put_fd, &fd, &st);
+    int err = e == CM_OK ? 0 : errno;
+    if (close(fd) != 0 && e == CM_OK) {
+        e = CM_E_IO;
+        err = errno;
+    }
+    if (e == CM_OK && rename(tmp, out_path) != 0) {
+        e = CM_E_IO;
+        err = errno;
+    }
+    if (e != CM_OK) {
+        unlink(tmp);
+        fprintf(stderr, "cmz-view: %s: %s\n", out_path, err ? strerror(err) : cm_err_name(e));
+        return 3;
+    }
+    return 0;
+}
+
+static int parse_hex_rgb(const char *s, uint32_t *rgb)
+{
+    char *end;
+    unsigned long v = strtoul(s, &end, 16);
+    if (strlen(s) != 6 || *end || v > 0xffffffUL)
+        return 0;
+    *rgb = (uint32_t)v;
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    const char *in = NULL, *out = NULL;
+    double tol = 0;
+    cm_view_opts vo;
+    cm_view_opts_default(&vo);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        int more = i + 1 < argc;
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            usage(stdout);
+            return 0;
+        } else if (strcmp(a, "--limits") == 0) {
+            cm_report_limits(stdout);
+            const cm_ram_part own[] = {
+                {"  frame", "the viewer's RGB frame and depth buffer (CM_VIEW_MAX_W x CM_VIEW_MAX_H)", sizeof view},
+                {"  I/O chunks", "the reader's chunk, the mesh spill's files", cm_decode_file_read_static_bytes()}};
+            cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
+            return 0;
+        } else if (strcmp(a, "--version") == 0) {
+            printf("cmz-view 0.1.0 (profile %s)\n", cm_profile_name);
+            return 0;
+        } else if (strcmp(a, "--png") == 0 && more) {
+            out = argv[++i];
+        } else if (strcmp(a, "--size") == 0 && more) {
+            char *end;
+            long w = strtol(argv[++i], &end, 10), h = 0;
+            if (*end == 'x')
+                h = strtol(end + 1, &end, 10);
+            if (*end || w < 1 || h < 1 || w > CM_VIEW_MAX_W || h > CM_VIEW_MAX_H) {
+                fprintf(stderr, "cmz-view: --size wants WxH within 1x1 .. %dx%d (this build), not '%s'\n",
+                        CM_VIEW_MAX_W, CM_VIEW_MAX_H, argv[i]);
+                return 2;
+            }
+            vo.width = (int)w;
+            vo.height = (int)h;
+        } else if (strcmp(a, "--view") == 0 && more) {
+            int d = cm_view_dir_parse(argv[++i]);
+            if (d < 0) {
+                fprintf(stderr, "cmz-view: --view wants iso, front, back, left, right, top or bottom, not '%s'\n",
+                        argv[i]);
+                return 2;
+            }
+            vo.dir = (cm_view_dir)d;
+        } else if (strcmp(a, "--perspective") == 0) {
+            vo.perspective = 1;
+        } else if (strcmp(a, "--no-edges") == 0) {
+            vo.edges = 0;
+        } else if (strcmp(a, "--background") == 0 && more) {
+            if (!parse_hex_rgb(argv[++i], &vo.background)) {
+                fprintf(stderr, "cmz-view: --background wants six hex digits RRGGBB, not '%s'\n", argv[i]);
+                return 2;
+            }
+        } else if (strcmp(a, "--tess") == 0 && more) {
+            char *end;
+            tol = strtod(argv[++i], &end);
+            if (*end || !(tol > 0)) {
+                fprintf(stderr, "cmz-view: --tess wants a positive number of millimetres, not '%s'\n", argv[i]);
+                return 2;
+            }
+        } else if (a[0] == '-') {
+            fprintf(stderr, "cmz-view: unknown option %s\n", a);
+            usage(stderr);
+            return 2;
+        } else if (!in) {
+            in = a;
+        } else {
+            fprintf(stderr, "cmz-view: one model at a time\n");
+            return 2;
+        }
+    }
+    if (!in || !out) {
+        usage(stderr);
+        return 2;
+    }
+    cm_mesh mesh = cm_decode_stream_mesh(&state, out, 0);
+    cm_status st;
+    cm_status_init(&st);
+    cm_decode_summary sum;
+    if (cm_decode_read(in, &state.dec, &st) != CM_OK ||
+        cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK) {
+        report(stderr, "", in, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
+    for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++)
+        report(stderr, "warning: ", in, &sum.left_out[i]);
+    float lo[3], hi[3];
+    if (!cm_mesh_bounds(&mesh, lo, hi)) {
+        fprintf(stderr, "cmz-view: %s: nothing to show (no triangles)\n", in);
+        return 1;
+    }
+    if (cm_view_begin(&view, &vo, lo, hi, &st) != CM_OK) {
+        report(stderr, "", in, &st);
+        return 1;
+    }
+    cm_view_fit(&view, &mesh);
+    cm_view_mesh(&view, &mesh);
+    cm_view_edges(&view, &state.dec.model);
+    if (cm_mesh_spill_failed(&mesh)) {
+        fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
+        return 3;
+    }
+    int rc = write_png(out);
+    cm_decode_spill_close();
+    if (rc != 0)
+        return rc;
+    printf("%s -> %s: %dx%d, %s%s, %u faces, %llu triangles drawn", in, out, vo.width, vo.height,
+           cm_view_dir_name(vo.dir), vo.perspective ? " perspective" : "", sum.faces,
+           (unsigned long long)view.triangles);
+    if (sum.faces_left_out > 0)
+        printf(", %lu faces left out", (unsigned long)sum.faces_left_out);
+    printf("\n");
+    return 0;
+}

@@ -1,0 +1,119 @@
+#!/usr/bin/env bash
+# check_view.sh CMZ CMZ_VIEW [ARM_CMZ_VIEW] - what the terminal shows (issue 17), on the bundled models.
+#
+# Each bundled model is encoded and drawn by cmz-view from every direction (orthographic) and in
+# perspective: the PNG must be valid (chunk CRCs, the zlib stream), of the size asked, show the
+# model inside the frame's margin (the fitted camera leaves a 6 % border empty) and, orthographic,
+# with its outline spanning the room across or down (the fit), and come out the same twice.  With
+# ARM_CMZ_VIEW (the aarch64 build, run under qemu-user), the same pixels on ARM, byte for byte.
+# A frame beyond the build's is refused with exit 2 and the limit named, and nothing is written.
+# One TAP line per check; "N passed, N failed" last.
+set -u
+cmz=$1 view=$2 arm=${3:-}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+if [ -e /usr/lib/aarch64-linux-gnu/libc.so.6 ]; then qemu=(qemu-aarch64); else qemu=(qemu-aarch64 -L /usr/aarch64-linux-gnu); fi
+n=0 fail=0
+ok() { n=$((n + 1)); echo "ok $n - $*"; }
+bad() { n=$((n + 1)); fail=$((fail + 1)); echo "not ok $n - $*"; }
+
+# the share of pixels that are not the background (white), the border's pixels being background:
+# from the PNG's stored deflate blocks (tests/tools/png_stats.py-free: the PNG is ours, rows
+# unfiltered)
+png_stats() {
+    python3 - "$1" <<'EOF'
+import struct, sys, zlib
+d = open(sys.argv[1], 'rb').read()
+assert d[:8] == b'\x89PNG\r\n\x1a\n'
+at, idat, w, h = 8, b'', 0, 0
+while at < len(d):
+    n, t = struct.unpack('>I4s', d[at:at + 8])
+    body = d[at + 8:at + 8 + n]
+    assert zlib.crc32(t + body) == struct.unpack('>I', d[at + 8 + n:at + 12 + n])[0], 'crc'
+    if t == b'IHDR':
+        w, h = struct.unpack('>II', body[:8])
+    if t == b'IDAT':
+        idat += body
+    at += 12 + n
+raw = zlib.decompress(idat)
+assert len(raw) == h * (1 + 3 * w)
+fg = border = 0
+m = int(0.06 * min(w, h)) - 1
+x0, y0, x1, y1 = w, h, -1, -1
+for y in range(h):
+    row = raw[y * (1 + 3 * w) + 1:(y + 1) * (1 + 3 * w)]
+    for x in range(w):
+        if row[3 * x:3 * x + 3] != b'\xff\xff\xff':
+            fg += 1
+            x0, y0, x1, y1 = min(x0, x), min(y0, y), max(x1, x), max(y1, y)
+            if x < m or y < m or x >= w - m or y >= h - m:
+                border += 1
+# the outline's extent across and down (pixels), against the room the fitted camera gives it
+room_x, room_y = w - 2 * 0.06 * min(w, h), h - 2 * 0.06 * min(w, h)
+fits = abs((x1 - x0 + 1) - room_x) <= 3 or abs((y1 - y0 + 1) - room_y) <= 3
+print(w, h, fg, border, x1 - x0 + 1, y1 - y0 + 1, 1 if fits else 0)
+EOF
+}
+
+for m in tests/data/*.igs; do
+    b=$(basename "${m%.*}")
+    if ! "$cmz" encode -q "$m" -o "$tmp/$b.cmz" > /dev/null 2> "$tmp/err"; then
+        bad "$b: encode failed: $(tail -n 1 "$tmp/err")"
+        continue
+    fi
+    for v in iso front back left right top bottom iso-p; do
+        args=(--view "${v%-p}" --size 320x200)
+        [ "$v" = iso-p ] && args+=(--perspective)
+        if ! "$view" "$tmp/$b.cmz" --png "$tmp/x.png" "${args[@]}" > /dev/null 2> "$tmp/err"; then
+            bad "$b $v: cmz-view failed: $(cat "$tmp/err")"
+            continue
+        fi
+        fits=
+        read -r w h fg border bw bh fits < <(png_stats "$tmp/x.png" 2> "$tmp/perr") || true
+        if [ -z "${fits:-}" ]; then
+            bad "$b $v: not a valid PNG: $(tail -n 1 "$tmp/perr")"
+            continue
+        fi
+        # orthographic: the outline spans the room across or down; perspective: it shows, inside
+        if [ "$w $h" != "320 200" ]; then
+            bad "$b $v: a $w x $h PNG, asked for 320 x 200"
+        elif [ "$fg" -gt 0 ] && [ "$border" -eq 0 ] && { [ "$v" = iso-p ] || [ "$fits" = 1 ]; }; then
+            ok "$b $v: $fg pixels of model, its outline $bw x $bh, none in the border"
+        else
+            bad "$b $v: $fg pixels of model, its outline $bw x $bh (fits the room: $fits), $border in the border"
+        fi
+        "$view" "$tmp/$b.cmz" --png "$tmp/y.png" "${args[@]}" > /dev/null 2>&1
+        cmp -s "$tmp/x.png" "$tmp/y.png" || bad "$b $v: a second run gives other bytes"
+        if [ -n "$arm" ]; then
+            if ! "${qemu[@]}" "$arm" "$tmp/$b.cmz" --png "$tmp/a.png" "${args[@]}" > /dev/null 2> "$tmp/err"; then
+                bad "$b $v: cmz-view on aarch64 failed: $(cat "$tmp/err")"
+            elif cmp -s "$tmp/x.png" "$tmp/a.png"; then
+                ok "$b $v: the same pixels on aarch64"
+            else
+                bad "$b $v: aarch64 draws other pixels ($(cmp "$tmp/x.png" "$tmp/a.png" | head -n 1))"
+            fi
+        fi
+    done
+done
+
+# a frame beyond the build's: refused by name, exit 2, nothing written
+m=$(ls tests/data/*.igs | head -n 1)
+b=$(basename "${m%.*}")
+"$view" "$tmp/$b.cmz" --png "$tmp/big.png" --size 100000x100 > /dev/null 2> "$tmp/err"
+st=$?
+if [ $st -eq 2 ] && grep -q "within 1x1" "$tmp/err" && [ ! -e "$tmp/big.png" ]; then
+    ok "a frame beyond the build's is refused: $(cat "$tmp/err")"
+else
+    bad "a frame beyond the build's: exit $st, $(cat "$tmp/err")"
+fi
+# a damaged file: exit 1, nothing written
+head -c 300 "$tmp/$b.cmz" > "$tmp/cut.cmz"
+"$view" "$tmp/cut.cmz" --png "$tmp/cut.png" > /dev/null 2> "$tmp/err"
+st=$?
+if [ $st -eq 1 ] && [ ! -e "$tmp/cut.png" ] && [ -z "$(ls "$tmp" | grep '\.part')" ]; then
+    ok "a truncated file is refused: $(head -c 200 "$tmp/err")"
+else
+    bad "a truncated file: exit $st, $(cat "$tmp/err")"
+fi
+echo "$((n - fail)) passed, $fail failed"
+[ $fail -eq 0 ]
