@@ -3,7 +3,7 @@
  * by the terminal's own software viewer (cm_view.h) into a PNG.
  *
  *   cmz-view MODEL.cmz --png OUT.png [--size WxH] [--view iso|front|back|left|right|top|bottom]
- *            [--perspective] [--no-edges] [--background RRGGBB] [--tess MM]
+ *            [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]
  *   cmz-view --limits | --version | --help
  *
  * The same program on the workstation and the board (profile terminal by
@@ -45,7 +45,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: cmz-view MODEL.cmz --png OUT.png [--size WxH] [--view DIR] [--perspective]\n"
-            "                [--no-edges] [--background RRGGBB] [--tess MM]\n"
+            "                [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
             "       cmz-view --limits | --version | --help\n"
             "\n"
             "Rebuild a curvemesh model and draw it as the terminal's viewer does: shaded\n"
@@ -54,6 +54,10 @@ static void usage(FILE *f)
             "back, left, right, top, bottom (CAD axes, Z up; front looks along +Y).\n"
             "--size: pixels, default 800x480, at most %dx%d in this build (profile %s).\n"
             "--perspective: a 30 degree field of view instead of a parallel projection.\n"
+            "--step K: assembly step K: parts 1..K shown, part K highlighted, the others\n"
+            "dimmed.  The parts are the model's connected pieces (faces joined by edges) in\n"
+            "file order, then each placed copy of a part (IGES subfigure instances, STEP\n"
+            "occurrences); the summary line counts them.\n"
             "--background: the colour behind the model, default ffffff.  --tess: chordal\n"
             "tolerance in mm (default: the file's recommendation).  The PNG is uncompressed\n"
             "(stored deflate) and appears whole or not at all.\n"
@@ -165,6 +169,15 @@ int main(int argc, char **argv)
                 return 2;
             }
             vo.dir = (cm_view_dir)d;
+        } else if (strcmp(a, "--step") == 0 && more) {
+            char *end;
+            long k = strtol(argv[++i], &end, 10);
+            if (*end || k < 0 || k > 0x7fffffffL) {
+                fprintf(stderr, "cmz-view: --step wants a part number from 1 (0: the whole model), not '%s'\n",
+                        argv[i]);
+                return 2;
+            }
+            vo.step = (uint32_t)k;
         } else if (strcmp(a, "--perspective") == 0) {
             vo.perspective = 1;
         } else if (strcmp(a, "--no-edges") == 0) {
@@ -216,6 +229,11 @@ int main(int argc, char **argv)
         report(stderr, "", in, &st);
         return 1;
     }
+    uint32_t parts = cm_view_parts(&view, &state.dec.model);
+    if (vo.step > parts) {
+        fprintf(stderr, "cmz-view: %s: --step %u: the model has %u parts\n", in, vo.step, parts);
+        return 2;
+    }
     cm_view_fit(&view, &mesh);
     cm_view_mesh(&view, &mesh);
     cm_view_edges(&view, &state.dec.model);
@@ -227,9 +245,11 @@ int main(int argc, char **argv)
     cm_decode_spill_close();
     if (rc != 0)
         return rc;
-    printf("%s -> %s: %dx%d, %s%s, %u faces, %llu triangles drawn", in, out, vo.width, vo.height,
-           cm_view_dir_name(vo.dir), vo.perspective ? " perspective" : "", sum.faces,
-           (unsigned long long)view.triangles);
+    printf("%s -> %s: %dx%d, %s%s, %u faces, %u parts", in, out, vo.width, vo.height, cm_view_dir_name(vo.dir),
+           vo.perspective ? " perspective" : "", sum.faces, parts);
+    if (vo.step > 0)
+        printf(" (step %u)", vo.step);
+    printf(", %llu triangles drawn", (unsigned long long)view.triangles);
     if (sum.faces_left_out > 0)
         printf(", %lu faces left out", (unsigned long)sum.faces_left_out);
     printf("\n");

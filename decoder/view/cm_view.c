@@ -9,6 +9,8 @@
 
 /* the default face colour (no colour in the model): a light steel grey-blue */
 #define VIEW_DEFAULT_RGB 0x9fb0c2u
+/* assembly steps: the part of the step */
+#define VIEW_HIGHLIGHT_RGB 0xe8742au
 /* edges are drawn this many pixels' worth of depth in front of the faces */
 #define VIEW_EDGE_BIAS_PX 2.0
 /* the edges' colour: near black */
@@ -54,6 +56,7 @@ void cm_view_opts_default(cm_view_opts *o)
     o->perspective = 0;
     o->background = 0xffffffu;
     o->edges = 1;
+    o->step = 0;
 }
 
 static void set3(double *a, double x, double y, double z)
@@ -139,6 +142,7 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
             return cm_fail(st, CM_E_ARG, "view: the model's box");
     v->o = *o;
     v->triangles = v->edge_segments = 0;
+    v->nparts = v->nbase_parts = 0;
     camera_axes(v, o->dir);
     for (int i = 0; i < 3; i++)
         v->c[i] = 0.5 * ((double)lo[i] + (double)hi[i]);
@@ -213,6 +217,126 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
         v->scale = s;
 }
 
+/* the root of face f's set (path halving: no recursion) */
+static uint32_t find_root(uint32_t *up, uint32_t f)
+{
+    while (up[f] != f) {
+        up[f] = up[up[f]];
+        f = up[f];
+    }
+    return f;
+}
+
+/* uses of one edge beyond which the viewer pairs none of them (a hostile file's edge of thousands of
+   uses would cost their square) */
+#define VIEW_MAX_PAIRED_USES 64
+
+/* the use of edge e nearest to use u in file order (by face, then the lower face) that runs the edge
+   the other way; -1 if none does */
+static int32_t nearest_other(const cm_view *v, const cm_model *m, uint32_t e, int32_t u)
+{
+    uint32_t fu = v->use_face[u], bd = UINT32_MAX, bf = 0;
+    int32_t best = -1;
+    for (int32_t w = v->edge_head[e]; w >= 0; w = v->use_next[w]) {
+        uint32_t fw = v->use_face[w];
+        if (w == u || m->uses[w].rev == m->uses[u].rev)
+            continue;
+        uint32_t d = fw > fu ? fw - fu : fu - fw;
+        if (d < bd || (d == bd && fw < bf)) {
+            bd = d;
+            bf = fw;
+            best = w;
+        }
+    }
+    return best;
+}
+
+uint32_t cm_view_parts(cm_view *v, const cm_model *m)
+{
+    uint32_t *up = v->part_of_face, nf = m->nfaces < CM_MAX_FACES ? m->nfaces : CM_MAX_FACES;
+    uint32_t ne = m->nedges < CM_MAX_EDGES ? m->nedges : CM_MAX_EDGES;
+    for (uint32_t f = 0; f < nf; f++)
+        up[f] = f;
+    for (uint32_t e = 0; e < ne; e++)
+        v->edge_head[e] = -1;
+    /* each edge's uses in a list (face of each use) */
+    for (uint32_t f = 0; f < nf; f++) {
+        const cm_face *F = &m->faces[f];
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            const cm_loop *L = &m->loops[F->loop0 + l];
+            for (uint32_t k = 0; k < L->nuse; k++) {
+                uint32_t u = L->use0 + k, e = m->uses[u].edge;
+                if (u >= CM_MAX_MODEL_USES || e >= ne)
+                    continue;
+                v->use_face[u] = f;
+                v->use_next[u] = v->edge_head[e];
+                v->edge_head[e] = (int32_t)u;
+            }
+        }
+    }
+    /* an edge of two uses joins its two faces.  Where three or more faces meet (touching parts of a
+       flattened assembly: as1_pe_203's 88 such edges would hold its 24 solids together as 3), the
+       file does not say which belong together: two uses are joined when each is the other's nearest
+       in file order among those running the edge the other way (a solid's faces come one after
+       another, and its two faces at an edge run it in opposite directions) */
+    for (uint32_t e = 0; e < ne; e++) {
+        int n = 0;
+        for (int32_t u = v->edge_head[e]; u >= 0 && n <= VIEW_MAX_PAIRED_USES; u = v->use_next[u])
+            n++;
+        if (n < 2 || n > VIEW_MAX_PAIRED_USES)
+            continue;
+        for (int32_t u = v->edge_head[e]; u >= 0; u = v->use_next[u]) {
+            int32_t w = n == 2 ? (u == v->edge_head[e] ? v->use_next[u] : v->edge_head[e]) : nearest_other(v, m, e, u);
+            if (w < 0 || (n > 2 && nearest_other(v, m, e, w) != u))
+                continue; /* three or more: only uses that are each other's nearest */
+            uint32_t a = find_root(up, v->use_face[u]), b = find_root(up, v->use_face[w]);
+            if (a != b) /* the smaller face stays the root: a part is named by its first face */
+                up[a > b ? a : b] = a < b ? a : b;
+        }
+    }
+    /* every face to its root first (numbering as it goes would break the sets' paths), then the
+       roots in face order get 1, 2, ... and every other face its root's number (a root is its set's
+       smallest face: numbered before its faces ask) */
+    for (uint32_t f = 0; f < nf; f++)
+        up[f] = find_root(up, f);
+    uint32_t n = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        up[f] = up[f] == f ? ++n : up[up[f]];
+    v->nbase_parts = n;
+    v->nparts = n + m->nplacements;
+    return v->nparts;
+}
+
+/* part of model face f (1 when the parts were not numbered) */
+static uint32_t face_part(const cm_view *v, uint32_t f)
+{
+    return v->nbase_parts > 0 && f < CM_MAX_FACES ? v->part_of_face[f] : 1;
+}
+
+/* how a part shows at the current step: 0 not at all, 1 as it is, 2 highlighted, 3 dimmed */
+static int part_look(const cm_view *v, uint32_t part)
+{
+    if (v->o.step == 0)
+        return 1;
+    return part > v->o.step ? 0 : (part == v->o.step ? 2 : 3);
+}
+
+/* the colour a face is drawn in, for its look */
+static uint32_t look_rgb(const cm_view *v, uint32_t rgb, int look)
+{
+    if (look == 2)
+        return VIEW_HIGHLIGHT_RGB;
+    if (look != 3)
+        return rgb;
+    /* dimmed: two thirds of the way to the background */
+    uint32_t out = 0;
+    for (int sh = 16; sh >= 0; sh -= 8) {
+        uint32_t c = (rgb >> sh) & 0xffu, bgc = (v->o.background >> sh) & 0xffu;
+        out |= ((c + 2u * bgc) / 3u) << sh;
+    }
+    return out;
+}
+
 /* brightness of a surface whose unit normal is n (view space), lit from both sides */
 static double shade(const double n[3])
 {
@@ -284,9 +408,30 @@ static void fill_triangle(cm_view *v, const double s[3][3], const double l[3], u
 
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
+    /* placed copies follow the model's own faces, placement by placement, each in source order
+       (cm_mesh_place): a copy whose source face does not come after the last one's, or lies beyond
+       its placement's faces, starts the next placement that holds it */
+    int64_t placement = -1;
+    uint32_t last_source = 0;
     for (uint32_t fi = 0; fi < mesh->nfaces; fi++) {
         const cm_mesh_face *F = &mesh->faces[fi];
-        uint32_t rgb = F->has_color ? F->rgb : VIEW_DEFAULT_RGB;
+        if (fi >= mesh->nbase_faces && mesh->nplace > 0 && mesh->place) {
+            const cm_placement *P = placement >= 0 ? &mesh->place[placement] : NULL;
+            if (!P || F->source_face <= last_source || F->source_face >= P->first + P->count)
+                placement++;
+            while (placement + 1 < (int64_t)mesh->nplace &&
+                   !(F->source_face >= mesh->place[placement].first &&
+                     F->source_face < mesh->place[placement].first + mesh->place[placement].count))
+                placement++;
+            if (placement >= (int64_t)mesh->nplace)
+                placement = (int64_t)mesh->nplace - 1; /* (a mesh not made by cm_mesh_place) */
+        }
+        last_source = F->source_face;
+        uint32_t part = placement < 0 ? face_part(v, F->source_face) : v->nbase_parts + 1u + (uint32_t)placement;
+        int look = part_look(v, part);
+        if (look == 0)
+            continue;
+        uint32_t rgb = look_rgb(v, F->has_color ? F->rgb : VIEW_DEFAULT_RGB, look);
         for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
             double s[3][3], l[3];
             int ok = 1;
@@ -369,15 +514,19 @@ static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a
     }
 }
 
-/* the edges of faces [first, first + count), placed by a */
-static void draw_face_edges(cm_view *v, const cm_model *m, uint32_t first, uint32_t count, const double *a)
+/* the edges of faces [first, first + count), placed by a (placement k; -1: the model's own) */
+static void draw_face_edges(cm_view *v, const cm_model *m, uint32_t first, uint32_t count, const double *a,
+                            int64_t k)
 {
     for (uint32_t f = first; f < first + count && f < m->nfaces; f++) {
+        uint32_t part = k < 0 ? face_part(v, f) : v->nbase_parts + 1u + (uint32_t)k;
+        if (part_look(v, part) == 0)
+            continue;
         const cm_face *F = &m->faces[f];
         for (uint32_t l = 0; l < F->nloops; l++) {
             const cm_loop *L = &m->loops[F->loop0 + l];
-            for (uint32_t k = 0; k < L->nuse; k++)
-                draw_edge(v, m, m->uses[L->use0 + k].edge, a);
+            for (uint32_t u = 0; u < L->nuse; u++)
+                draw_edge(v, m, m->uses[L->use0 + u].edge, a);
         }
     }
 }
@@ -386,7 +535,7 @@ void cm_view_edges(cm_view *v, const cm_model *m)
 {
     if (!v->o.edges)
         return;
-    draw_face_edges(v, m, 0, m->nfaces, NULL);
+    draw_face_edges(v, m, 0, m->nfaces, NULL, -1);
     for (uint32_t k = 0; k < m->nplacements; k++)
-        draw_face_edges(v, m, m->placements[k].first, m->placements[k].count, m->placements[k].m);
+        draw_face_edges(v, m, m->placements[k].first, m->placements[k].count, m->placements[k].m, k);
 }

@@ -96,6 +96,35 @@ for m in tests/data/*.igs; do
     done
 done
 
+# assembly steps: the summary counts the parts; the last step shows the whole model's outline (its
+# colours changed: the last part highlighted, the rest dimmed), the first no more than that, and a
+# step beyond the parts is refused
+for m in tests/data/*.igs; do
+    b=$(basename "${m%.*}")
+    parts=$("$view" "$tmp/$b.cmz" --png "$tmp/s0.png" --size 320x200 | sed -n 's/.* \([0-9]*\) parts.*/\1/p')
+    if [ -z "$parts" ] || [ "$parts" -lt 1 ]; then
+        bad "$b steps: no part count in the summary"
+        continue
+    fi
+    "$view" "$tmp/$b.cmz" --png "$tmp/sl.png" --size 320x200 --step "$parts" > /dev/null 2>&1
+    "$view" "$tmp/$b.cmz" --png "$tmp/s1.png" --size 320x200 --step 1 > /dev/null 2>&1
+    read -r _ _ fg0 _ bw0 bh0 _ < <(png_stats "$tmp/s0.png")
+    read -r _ _ fgl _ bwl bhl _ < <(png_stats "$tmp/sl.png")
+    read -r _ _ fg1 _ _ _ _ < <(png_stats "$tmp/s1.png")
+    if [ "$fg0 $bw0 $bh0" = "$fgl $bwl $bhl" ] && ! cmp -s "$tmp/s0.png" "$tmp/sl.png" && [ "$fg1" -le "$fg0" ] && [ "$fg1" -gt 0 ]; then
+        ok "$b steps: $parts parts; step $parts covers the model's $fg0 pixels in other colours, step 1 $fg1"
+    else
+        bad "$b steps: $parts parts; step 0 $fg0 pixels ($bw0 x $bh0), step $parts $fgl ($bwl x $bhl), step 1 $fg1"
+    fi
+    "$view" "$tmp/$b.cmz" --png "$tmp/sx.png" --size 320x200 --step $((parts + 1)) > /dev/null 2> "$tmp/err"
+    st=$?
+    if [ $st -eq 2 ] && grep -q "has $parts parts" "$tmp/err" && [ ! -e "$tmp/sx.png" ]; then
+        ok "$b steps: step $((parts + 1)) refused: $(cat "$tmp/err")"
+    else
+        bad "$b steps: step $((parts + 1)): exit $st, $(cat "$tmp/err")"
+    fi
+done
+
 # a frame beyond the build's: refused by name, exit 2, nothing written
 m=$(ls tests/data/*.igs | head -n 1)
 b=$(basename "${m%.*}")

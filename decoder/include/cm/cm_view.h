@@ -52,6 +52,8 @@ typedef struct cm_view_opts {
     int perspective;       /* 0: orthographic; 1: a 30 degree field of view */
     uint32_t background;   /* 0xRRGGBB */
     int edges;             /* 1: draw the curve mesh's edges */
+    uint32_t step;         /* assembly step k >= 1: parts 1..k shown, part k highlighted, the others
+                              dimmed (cm_view_parts numbers them); 0: the whole model as it is */
 } cm_view_opts;
 
 /** Defaults: 800 x 480 (within the build's frame), iso, orthographic, white, edges on. */
@@ -64,6 +66,14 @@ typedef struct cm_view {
     double scale;          /* orthographic: pixels per mm; perspective: the focal length in pixels */
     double eye;            /* perspective: the eye's depth in view space (negative) */
     uint64_t triangles, edge_segments; /* drawn (for tests and --verbose) */
+    /* the model's parts (cm_view_parts): a face's part among its own faces' connected components
+       (faces joined by their edges, see there), numbered from 1 in face order; placement k's copies
+       are part nbase_parts + 1 + k */
+    uint32_t nparts, nbase_parts;
+    uint32_t part_of_face[CM_MAX_FACES];
+    int32_t edge_head[CM_MAX_EDGES];       /* (scratch: each edge's uses in a list, ... */
+    int32_t use_next[CM_MAX_MODEL_USES];   /* ... the next use of the same edge, -1 at the end, */
+    uint32_t use_face[CM_MAX_MODEL_USES];  /* ... and the face of each use) */
     uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
     float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
 } cm_view;
@@ -82,6 +92,16 @@ CM_NODISCARD cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float
  * cm_view_begin, before drawing; perspective frames keep the box's fit.
  */
 void cm_view_fit(cm_view *v, const cm_mesh *mesh);
+
+/**
+ * Number the model's parts for assembly steps (opts.step): the connected components of its own faces
+ * (an edge used by two faces joins them; where three or more meet, touching parts of a flattened
+ * assembly, each face is joined to the nearest one in file order that runs the edge the other
+ * way), in the order of their first face, then each placement's
+ * copies (format 4.3: an IGES subfigure instance, a STEP occurrence) one part each, in file order.
+ * Until it is called every face is part 1.  Returns the number of parts.
+ */
+uint32_t cm_view_parts(cm_view *v, const cm_model *m);
 
 /** Fill every triangle of the mesh (faces coloured by their rgb when they have one). */
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh);
