@@ -171,6 +171,13 @@
 #  define CM_VIEW_MAX_H 480
 #endif
 
+/* Vertices of one mesh face the viewer projects once for all its triangles (33 bytes each); a
+ * larger face's are projected at each triangle corner, the same pixels more slowly.  Unit:
+ * vertices.  Not a limit of the format. */
+#ifndef CM_VIEW_FACE_VERTS
+#  define CM_VIEW_FACE_VERTS CM_MAX_TESS_POINTS
+#endif
+
 /* Straight pieces the viewer draws each edge curve with (its points are the curve's own, at even
  * parameter steps).  Unit: segments per edge.  Not a limit of the format. */
 #ifndef CM_VIEW_EDGE_SEGMENTS

@@ -249,7 +249,7 @@ int main(int argc, char **argv)
            vo.perspective ? " perspective" : "", sum.faces, parts);
     if (vo.step > 0)
         printf(" (step %u)", vo.step);
-    printf(", %llu triangles drawn", (unsigned long long)view.triangles);
+    printf(", %u triangles (%llu drawn)", sum.triangles, (unsigned long long)view.triangles);
     if (sum.faces_left_out > 0)
         printf(", %lu faces left out", (unsigned long)sum.faces_left_out);
     printf("\n");

@@ -11,6 +11,10 @@
 #define VIEW_DEFAULT_RGB 0x9fb0c2u
 /* assembly steps: the part of the step */
 #define VIEW_HIGHLIGHT_RGB 0xe8742au
+/* barycentric weights down to minus this still cover a pixel (see fill_triangle) */
+#define VIEW_INSIDE_EPS 1e-9
+/* a curved edge is drawn in straight pieces of about this many pixels */
+#define VIEW_EDGE_PIECE_PX 6.0
 /* edges are drawn this many pixels' worth of depth in front of the faces */
 #define VIEW_EDGE_BIAS_PX 2.0
 /* the edges' colour: near black */
@@ -381,15 +385,37 @@ static void fill_triangle(cm_view *v, const double s[3][3], const double l[3], u
     int y1 = fy1 >= (double)(v->o.height - 1) ? v->o.height - 1 : (int)fy1;
     double inv = 1.0 / area;
     double br = (double)((rgb >> 16) & 0xff), bg = (double)((rgb >> 8) & 0xff), bb = (double)(rgb & 0xff);
+    /* w_i, the barycentric weight of corner i, is linear along a row: it steps by dw[i] a pixel */
+    const double dw[3] = {-(s[2][1] - s[1][1]) * inv, -(s[0][1] - s[2][1]) * inv, -(s[1][1] - s[0][1]) * inv};
     int drawn = 0;
     for (int y = y0; y <= y1; y++) {
         double py = (double)y + 0.5;
-        for (int x = x0; x <= x1; x++) {
-            double px = (double)x + 0.5;
-            double w0 = edge_fn(s[1], s[2], px, py) * inv;
-            double w1 = edge_fn(s[2], s[0], px, py) * inv;
-            double w2 = edge_fn(s[0], s[1], px, py) * inv;
-            if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0)
+        /* the row's span: where each weight is >= 0, from its value at the box's first pixel and its
+           step, widened by a pixel each way (the tests below decide; this only skips the rest) */
+        double w[3] = {edge_fn(s[1], s[2], (double)x0 + 0.5, py) * inv, edge_fn(s[2], s[0], (double)x0 + 0.5, py) * inv,
+                       edge_fn(s[0], s[1], (double)x0 + 0.5, py) * inv};
+        double lo = 0.0, hi = (double)(x1 - x0);
+        for (int i = 0; i < 3; i++) {
+            if (dw[i] > 0.0) {
+                double t = -w[i] / dw[i] - 1.0;
+                lo = t > lo ? t : lo;
+            } else if (dw[i] < 0.0) {
+                double t = w[i] / -dw[i] + 1.0;
+                hi = t < hi ? t : hi;
+            } else if (w[i] < 0.0) {
+                hi = -1.0;
+            }
+        }
+        if (!(lo <= hi))
+            continue;
+        int xs = x0 + (int)lo, xe = x0 + (int)hi;
+        double steps = (double)(xs - x0);
+        double w0 = w[0] + steps * dw[0], w1 = w[1] + steps * dw[1], w2 = w[2] + steps * dw[2];
+        for (int x = xs; x <= xe; x++, w0 += dw[0], w1 += dw[1], w2 += dw[2]) {
+            /* (a hair outside counts as inside: two triangles' rounded weights along their shared
+               side must not both miss a pixel centre that lies on it; drawn twice, the depth test
+               keeps the first) */
+            if (w0 < -VIEW_INSIDE_EPS || w1 < -VIEW_INSIDE_EPS || w2 < -VIEW_INSIDE_EPS)
                 continue;
             double z = w0 * s[0][2] + w1 * s[1][2] + w2 * s[2][2];
             size_t at = (size_t)y * (size_t)v->o.width + (size_t)x;
@@ -404,6 +430,21 @@ static void fill_triangle(cm_view *v, const double s[3][3], const double l[3], u
         }
     }
     v->triangles += (uint64_t)drawn;
+}
+
+/* vertex vi of the mesh on the screen (x, y, depth) and its brightness; 0 when behind the eye */
+static int vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, double s[3], double *light)
+{
+    float p[3], n[3];
+    cm_mesh_pos(mesh, vi, p);
+    cm_mesh_nrm(mesh, vi, n);
+    double q[3], nv[3];
+    to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
+    nv[0] = (double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2];
+    nv[1] = (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2];
+    nv[2] = (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2];
+    *light = shade(nv);
+    return to_screen(v, q, s);
 }
 
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
@@ -432,21 +473,22 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         if (look == 0)
             continue;
         uint32_t rgb = look_rgb(v, F->has_color ? F->rgb : VIEW_DEFAULT_RGB, look);
+        /* a face's vertices (each in about six triangles) projected and lit once, where they fit */
+        int cached = F->nverts <= CM_VIEW_FACE_VERTS;
+        for (uint32_t i = 0; cached && i < F->nverts; i++)
+            v->fv_ok[i] = (uint8_t)vertex_screen(v, mesh, F->first_vert + i, v->fv[i], &v->fl[i]);
         for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
             double s[3][3], l[3];
             int ok = 1;
             for (int i = 0; i < 3 && ok; i++) {
-                uint32_t vi = cm_mesh_idx(mesh, F->first_index + k + (uint32_t)i);
-                float p[3], n[3];
-                cm_mesh_pos(mesh, vi, p);
-                cm_mesh_nrm(mesh, vi, n);
-                double q[3], nv[3];
-                to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
-                nv[0] = (double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2];
-                nv[1] = (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2];
-                nv[2] = (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2];
-                ok = to_screen(v, q, s[i]);
-                l[i] = shade(nv);
+                uint32_t vi = cm_mesh_idx(mesh, F->first_index + k + (uint32_t)i), j = vi - F->first_vert;
+                if (cached && vi >= F->first_vert && j < F->nverts) {
+                    ok = v->fv_ok[j];
+                    s[i][0] = v->fv[j][0], s[i][1] = v->fv[j][1], s[i][2] = v->fv[j][2];
+                    l[i] = v->fl[j];
+                } else {
+                    ok = vertex_screen(v, mesh, vi, s[i], &l[i]);
+                }
             }
             if (ok)
                 fill_triangle(v, s, l, rgb);
@@ -483,26 +525,54 @@ static void draw_line(cm_view *v, const double a[3], const double b[3])
     v->edge_segments++;
 }
 
-/* edge e of m, placed by a (3 x 4, row by row; NULL: as it is), sampled and drawn */
+/* p placed by a (3 x 4, row by row; NULL: as it is), in view space */
+static void placed_view(const cm_view *v, cm_vec3 p, const double *a, double q[3])
+{
+    double x = p.x, y = p.y, z = p.z;
+    if (a) {
+        double X = a[0] * x + a[1] * y + a[2] * z + a[3];
+        double Y = a[4] * x + a[5] * y + a[6] * z + a[7];
+        double Z = a[8] * x + a[9] * y + a[10] * z + a[11];
+        x = X, y = Y, z = Z;
+    }
+    to_view(v, x, y, z, q);
+}
+
+/* edge e of m, placed by a, sampled and drawn: a line (degree 1) at its control points, a curve in
+   pieces of about VIEW_EDGE_PIECE_PX pixels of its control polygon on the screen (at least one a
+   span, at most CM_VIEW_EDGE_SEGMENTS) */
 static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a)
 {
     cm_curve c;
     cm_model_edge_curve(m, e, &c);
+    int n = c.n_ctrl - 1;
+    if (c.p > 1) {
+        double len = 0.0, prevq[3] = {0, 0, 0};
+        for (int i = 0; i < c.n_ctrl; i++) {
+            double q[3];
+            placed_view(v, c.ctrl[i], a, q);
+            if (i > 0) {
+                double dx = q[0] - prevq[0], dy = q[1] - prevq[1];
+                len += sqrt(dx * dx + dy * dy);
+            }
+            prevq[0] = q[0], prevq[1] = q[1], prevq[2] = q[2];
+        }
+        double k = v->o.perspective ? v->scale / (v->scale > 0.0 ? -v->eye : 1.0) : v->scale; /* px per mm, about */
+        double want = len * k / VIEW_EDGE_PIECE_PX;
+        n = !(want < (double)CM_VIEW_EDGE_SEGMENTS) ? CM_VIEW_EDGE_SEGMENTS : (int)want + 1;
+        n = n < c.n_ctrl - c.p ? c.n_ctrl - c.p : n;
+    }
+    n = n < 1 ? 1 : (n > CM_VIEW_EDGE_SEGMENTS && c.p > 1 ? CM_VIEW_EDGE_SEGMENTS : n);
     double prev[3] = {0, 0, 0};
     int have = 0;
-    for (int k = 0; k <= CM_VIEW_EDGE_SEGMENTS; k++) {
+    for (int k = 0; k <= n; k++) {
         cm_vec3 d[CM_MAX_DERS + 1];
-        if (cm_curve_eval(&c, (double)k / (double)CM_VIEW_EDGE_SEGMENTS, 0, d, NULL) != CM_OK)
+        if (c.p == 1 && n == c.n_ctrl - 1)
+            d[0] = c.ctrl[k]; /* a polyline: its points */
+        else if (cm_curve_eval(&c, (double)k / (double)n, 0, d, NULL) != CM_OK)
             return;
-        double x = d[0].x, y = d[0].y, z = d[0].z;
-        if (a) {
-            double X = a[0] * x + a[1] * y + a[2] * z + a[3];
-            double Y = a[4] * x + a[5] * y + a[6] * z + a[7];
-            double Z = a[8] * x + a[9] * y + a[10] * z + a[11];
-            x = X, y = Y, z = Z;
-        }
         double q[3], s[3];
-        to_view(v, x, y, z, q);
+        placed_view(v, d[0], a, q);
         if (!to_screen(v, q, s)) {
             have = 0;
             continue;
@@ -514,28 +584,39 @@ static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a
     }
 }
 
-/* the edges of faces [first, first + count), placed by a (placement k; -1: the model's own) */
-static void draw_face_edges(cm_view *v, const cm_model *m, uint32_t first, uint32_t count, const double *a,
-                            int64_t k)
+/* does a face using edge e show (placement k's copy; -1: the model's own), and (range) lie in
+   faces [first, first + count)?  Through the edge's uses where cm_view_parts listed them */
+static int edge_shows(const cm_view *v, const cm_model *m, uint32_t e, int64_t k, uint32_t first, uint32_t count)
 {
-    for (uint32_t f = first; f < first + count && f < m->nfaces; f++) {
-        uint32_t part = k < 0 ? face_part(v, f) : v->nbase_parts + 1u + (uint32_t)k;
-        if (part_look(v, part) == 0)
-            continue;
-        const cm_face *F = &m->faces[f];
-        for (uint32_t l = 0; l < F->nloops; l++) {
-            const cm_loop *L = &m->loops[F->loop0 + l];
-            for (uint32_t u = 0; u < L->nuse; u++)
-                draw_edge(v, m, m->uses[L->use0 + u].edge, a);
+    uint32_t part = k < 0 ? 0 : v->nbase_parts + 1u + (uint32_t)k;
+    if (v->nbase_parts > 0 && e < CM_MAX_EDGES) {
+        for (int32_t u = v->edge_head[e]; u >= 0; u = v->use_next[u]) {
+            uint32_t f = v->use_face[u];
+            if (f >= first && f - first < count && part_look(v, k < 0 ? face_part(v, f) : part) != 0)
+                return 1;
         }
+        return 0;
     }
+    for (int i = 0; i < 2; i++) {
+        int32_t f = m->edge_face[e][i];
+        if (f >= 0 && (uint32_t)f >= first && (uint32_t)f - first < count && part_look(v, k < 0 ? 1 : part) != 0)
+            return 1;
+    }
+    return 0;
 }
 
 void cm_view_edges(cm_view *v, const cm_model *m)
 {
     if (!v->o.edges)
         return;
-    draw_face_edges(v, m, 0, m->nfaces, NULL, -1);
-    for (uint32_t k = 0; k < m->nplacements; k++)
-        draw_face_edges(v, m, m->placements[k].first, m->placements[k].count, m->placements[k].m, k);
+    /* each edge once (not once for each face that uses it), for the model and each placement */
+    for (uint32_t e = 0; e < m->nedges; e++)
+        if (edge_shows(v, m, e, -1, 0, m->nfaces))
+            draw_edge(v, m, e, NULL);
+    for (uint32_t k = 0; k < m->nplacements; k++) {
+        const cm_placement *P = &m->placements[k];
+        for (uint32_t e = 0; e < m->nedges; e++)
+            if (edge_shows(v, m, e, k, P->first, P->count))
+                draw_edge(v, m, e, P->m);
+    }
 }

@@ -74,6 +74,11 @@ typedef struct cm_view {
     int32_t edge_head[CM_MAX_EDGES];       /* (scratch: each edge's uses in a list, ... */
     int32_t use_next[CM_MAX_MODEL_USES];   /* ... the next use of the same edge, -1 at the end, */
     uint32_t use_face[CM_MAX_MODEL_USES];  /* ... and the face of each use) */
+    /* a face's vertices on the screen (x, y, depth), their brightness and whether they are in front
+       of the eye: a vertex is in about six triangles */
+    double fv[CM_VIEW_FACE_VERTS][3];
+    double fl[CM_VIEW_FACE_VERTS];
+    uint8_t fv_ok[CM_VIEW_FACE_VERTS];
     uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
     float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
 } cm_view;
