@@ -626,6 +626,8 @@ bench:
 	$(Q)$(MAKE) --no-print-directory -s $(CMZ) $(call bdir,terminal)/cmz-decode $(ORACLE_BIN)
 	$(Q)host_tools/scripts/bench.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(BUILD_ROOT)/bench $(BENCH_MODELS)
 	$(Q)host_tools/scripts/bench_peers.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(ORACLE_BIN) $(BUILD_ROOT)/bench $(BENCH_MODELS)
+	$(Q)$(MAKE) --no-print-directory -s $(call bdir,terminal)/cmz-view
+	$(Q)host_tools/scripts/bench_view.sh $(call bdir,terminal)/cmz-view $(BUILD_ROOT)/bench
 	$(Q)$(MAKE) --no-print-directory -s bench-link
 
 # the link's speed: cmz send -> cmz-terminal over ptys, unpaced, paced at 115200 baud, and noisy
