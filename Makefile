@@ -594,7 +594,7 @@ DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzz
 	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf libc6-dev-arm64-cross libc6-dev-armhf-cross qemu-user \
 	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf \
 	libusb-1.0-0-dev libgpiod-dev libusb-1.0-0-dev:arm64 libgpiod-dev:arm64 \
-	qemu-system-x86 busybox-static cpio kmod xz-utils linux-headers-amd64 usbutils gpiod strace
+	qemu-system-x86 busybox-static cpio kmod xz-utils linux-headers-amd64 usbutils gpiod strace python3
 deps:
 	$(Q)DEPS_ARCHS="$(DEPS_ARCHS)" tests/tools/deps.sh $(DEPS_PKGS)
 
