@@ -171,6 +171,9 @@ $(call bdir,$(1))/cm-limits: $(call bdir,$(1))/platform/cm_report.o $(call bdir,
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
 
+# the framebuffer output's pixel work, on plain memory (platform code: the one unit test that links it)
+$(call bdir,$(1))/tests/unit/test_fb: $(call bdir,$(1))/platform/cm_fb.o
+
 unit-tests-$(1): $(addprefix $(call bdir,$(1))/tests/unit/,$(UNIT_NAMES) kernel_vectors)
 
 # the terminal's decoder, built with this profile; no heap on its path (linked with the abort wrappers)
@@ -181,6 +184,7 @@ $(call bdir,$(1))/cmz-decode: $(call bdir,$(1))/platform/cmz_decode_main.o $(cal
 
 # what the terminal shows, as a PNG (issue 17): the decoder and the software viewer, no heap either
 $(call bdir,$(1))/cmz-view: $(call bdir,$(1))/platform/cmz_view_main.o $(call bdir,$(1))/platform/cm_decode_file.o \
+		$(call bdir,$(1))/platform/cm_fb.o \
 		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ -lm

@@ -65,6 +65,9 @@ check-link: $(LINK_TEST_BIN) $(CMZ) $(call bdir,terminal)/cmz-terminal $(call bd
 HW_MODELS := $(BUILD_ROOT)/hw-models
 HW_TEST_DEPS += $(CMZ) $(call bdir,terminal)/cmz-terminal $(HW_MODELS)/as1_pe_203.cmz $(HW_MODELS)/geo_example.cmz
 HW_TEST_ENV += HW_CMZ=$(CMZ) HW_TERMINAL=$(call bdir,terminal)/cmz-terminal HW_MODELS=$(HW_MODELS)
+# the viewer on a kernel framebuffer (tests/hw/vm-display.sh: vfb)
+HW_TEST_DEPS += $(call bdir,terminal)/cmz-view
+HW_TEST_ENV += HW_VIEW=$(call bdir,terminal)/cmz-view
 $(HW_MODELS)/%.cmz: tests/data/%.igs $(CMZ)
 	@mkdir -p $(@D)
 	$(Q)$(CMZ) encode -q $< -o $@ > /dev/null
@@ -143,7 +146,8 @@ check-link-recovery: $(LINK_RECOVERY_BIN)
 # no recursion, every indirect call resolved by tests/tools/stack_indirect.txt, the deepest path
 # within CM_STACK_PROGRAM_BUDGET (libc, libusb and libgpiod frames are not seen: the budget leaves
 # them the rest of a small thread's stack).  gcc only (clang writes no call graph).
-STACK_PROGRAM_SRC := platform/cmz_decode_main.c platform/cmz_view_main.c platform/cm_decode_file.c platform/cm_report.c \
+STACK_PROGRAM_SRC := platform/cmz_decode_main.c platform/cmz_view_main.c platform/cm_fb.c platform/cm_decode_file.c \
+	platform/cm_report.c \
 	platform/cmz_terminal_main.c platform/cm_term_store.c $(LINK_TERM_SRC) $(GPIO_SRC)
 STACK_PROGRAM_CI := $(patsubst %.c,$(B)/stackgate/%.ci,$(STACK_PROGRAM_SRC))
 $(B)/stackgate/%.ci: %.c

@@ -2,7 +2,7 @@
  * cmz-view - what the terminal shows, as a picture: a .cmz decoded and drawn
  * by the terminal's own software viewer (cm_view.h) into a PNG.
  *
- *   cmz-view MODEL.cmz --png OUT.png [--size WxH] [--view iso|front|back|left|right|top|bottom]
+ *   cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view iso|front|back|left|right|top|bottom]
  *            [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]
  *   cmz-view --limits | --version | --help
  *
@@ -28,6 +28,7 @@
 #include "cm/cm_png.h"
 #include "cm/cm_view.h"
 #include "cm_decode_file.h"
+#include "cm_fb.h"
 #include "cm_report.h"
 
 /* everything big is static: the decode and draw paths never touch the heap */
@@ -44,15 +45,18 @@ static void report(FILE *f, const char *level, const char *in, const cm_status *
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: cmz-view MODEL.cmz --png OUT.png [--size WxH] [--view DIR] [--perspective]\n"
-            "                [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
+            "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR]\n"
+            "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
             "       cmz-view --limits | --version | --help\n"
             "\n"
             "Rebuild a curvemesh model and draw it as the terminal's viewer does: shaded\n"
             "triangles with the decoder's normals, in the faces' colours, and the model's\n"
             "exact edges on top; the camera fitted to the model.  DIR: iso (default), front,\n"
             "back, left, right, top, bottom (CAD axes, Z up; front looks along +Y).\n"
-            "--size: pixels, default 800x480, at most %dx%d in this build (profile %s).\n"
+            "--png: write the picture as a PNG file; --fb: show it on the Linux framebuffer\n"
+            "DEV (/dev/fb0: 16, 24 or 32-bit, centred, the rest of the screen background).\n"
+            "--size: pixels, default 800x480 (with --fb alone: the screen's), at most %dx%d\n"
+            "in this build (profile %s).\n"
             "--perspective: a 30 degree field of view instead of a parallel projection.\n"
             "--step K: assembly step K: parts 1..K shown, part K highlighted, the others\n"
             "dimmed.  The parts are the model's connected pieces (faces joined by edges) in\n"
@@ -127,7 +131,8 @@ static int parse_hex_rgb(const char *s, uint32_t *rgb)
 
 int main(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL;
+    const char *in = NULL, *out = NULL, *fb = NULL;
+    int sized = 0;
     double tol = 0;
     cm_view_opts vo;
     cm_view_opts_default(&vo);
@@ -149,6 +154,8 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(a, "--png") == 0 && more) {
             out = argv[++i];
+        } else if (strcmp(a, "--fb") == 0 && more) {
+            fb = argv[++i];
         } else if (strcmp(a, "--size") == 0 && more) {
             char *end;
             long w = strtol(argv[++i], &end, 10), h = 0;
@@ -161,6 +168,7 @@ int main(int argc, char **argv)
             }
             vo.width = (int)w;
             vo.height = (int)h;
+            sized = 1;
         } else if (strcmp(a, "--view") == 0 && more) {
             int d = cm_view_dir_parse(argv[++i]);
             if (d < 0) {
@@ -205,13 +213,23 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (!in || !out) {
+    if (!in || (!out && !fb)) {
         usage(stderr);
         return 2;
     }
-    cm_mesh mesh = cm_decode_stream_mesh(&state, out, 0);
     cm_status st;
     cm_status_init(&st);
+    if (fb && !sized) { /* the screen's size, within the build's frame */
+        cm_fb_format ff;
+        if (cm_fb_query(fb, &ff, &st) != 0) {
+            report(stderr, "", fb, &st);
+            return st.code == CM_E_IO ? 3 : 1;
+        }
+        vo.width = ff.width < CM_VIEW_MAX_W ? (int)ff.width : CM_VIEW_MAX_W;
+        vo.height = ff.height < CM_VIEW_MAX_H ? (int)ff.height : CM_VIEW_MAX_H;
+    }
+    /* the mesh spills beside the PNG, or in the working directory */
+    cm_mesh mesh = cm_decode_stream_mesh(&state, out ? out : ".", out ? 0 : 1);
     cm_decode_summary sum;
     if (cm_decode_read(in, &state.dec, &st) != CM_OK ||
         cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK) {
@@ -241,11 +259,16 @@ int main(int argc, char **argv)
         fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
         return 3;
     }
-    int rc = write_png(out);
+    int rc = out ? write_png(out) : 0;
     cm_decode_spill_close();
     if (rc != 0)
         return rc;
-    printf("%s -> %s: %dx%d, %s%s, %u faces, %u parts", in, out, vo.width, vo.height, cm_view_dir_name(vo.dir),
+    if (fb && cm_fb_show(fb, view.rgb, (uint32_t)vo.width, (uint32_t)vo.height, vo.background, &st) != 0) {
+        report(stderr, "", fb, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
+    printf("%s -> %s%s%s: %dx%d, %s%s, %u faces, %u parts", in, out ? out : "", out && fb ? " and " : "", fb ? fb : "",
+           vo.width, vo.height, cm_view_dir_name(vo.dir),
            vo.perspective ? " perspective" : "", sum.faces, parts);
     if (vo.step > 0)
         printf(" (step %u)", vo.step);

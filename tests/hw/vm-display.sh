@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# vm-display.sh - runs INSIDE the test VM (tests/hw/run-hw-tests.sh boots it): cmz-view --fb on a
+# real kernel framebuffer, the kernel's virtual one (vfb: the fbdev ioctls and mmap of any board's
+# /dev/fb0, over memory).  For a 32-bit and a 16-bit screen of 320 x 200 (vfb's channels run blue,
+# green, red from the top: the layout the driver reports is the one used):
+#   1. cmz-view draws the model at the screen's size on /dev/fb0 (no --size), exit 0;
+#   2. the screen's memory, read back from /dev/fb0, holds the PNG's pixels cmz-view writes of the
+#      same frame, in the screen's format (16-bit: each channel's top bits);
+#   3. a frame smaller than the screen is centred, the rest of the screen the background.
+# Env: HW_VIEW (cmz-view; default this checkout's terminal build), HW_MODELS (the .cmz files,
+# encoded on the host).  Prints TAP lines; exit 0 iff all passed.
+set -u
+triplet=$(gcc -dumpmachine)
+view=${HW_VIEW:-build/$triplet-terminal/cmz-view}
+model=${HW_MODELS:-build/hw-models}/as1_pe_203.cmz
+T=$(mktemp -d /tmp/vm-display.XXXXXX)
+n=0 failed=0
+pass() { n=$((n + 1)); echo "ok $n - $1"; }
+fail() { n=$((n + 1)); failed=$((failed + 1)); echo "not ok $n - $1${2:+: $2}"; }
+bail() { fail "$1" "$2"; echo "# vm-display: cannot go on"; exit 1; }
+[ -x "$view" ] || bail "cmz-view is built" "no executable $view"
+[ -f "$model" ] || bail "the model is encoded" "no $model"
+
+# compare the framebuffer dump $1 (bpp $2, 320 x 200, stride 320 * bpp / 8) with the PNG $3 placed
+# at ($4, $5), background $6 round it; prints the first difference
+compare() {
+    python3 - "$@" <<'PY'
+import struct, sys, zlib
+dump, bpp, png, x0, y0, bg = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6], 16)
+d = open(png, 'rb').read()
+at, idat, w, h = 8, b'', 0, 0
+while at < len(d):
+    n, t = struct.unpack('>I4s', d[at:at + 8])
+    if t == b'IHDR':
+        w, h = struct.unpack('>II', d[at + 8:at + 16])
+    if t == b'IDAT':
+        idat += d[at + 8:at + 8 + n]
+    at += 12 + n
+raw = zlib.decompress(idat)
+fb = open(dump, 'rb').read()
+B = bpp // 8
+# the channels' bit offsets and lengths as the driver reports them (FBIOGET_VSCREENINFO: struct
+# fb_var_screeninfo, red/green/blue after eight fields); vfb lays out B,G,R from the top
+import fcntl
+with open('/dev/fb0', 'rb') as f:
+    var = struct.unpack('40I', fcntl.ioctl(f.fileno(), 0x4600, bytes(160)))
+(ro, rl), (go, gl), (bo, bl) = (var[8], var[9]), (var[11], var[12]), (var[14], var[15])
+def want(x, y):
+    fx, fy = x - x0, y - y0
+    if 0 <= fx < w and 0 <= fy < h:
+        o = fy * (1 + 3 * w) + 1 + 3 * fx
+        r, g, b = raw[o], raw[o + 1], raw[o + 2]
+    else:
+        r, g, b = bg >> 16, (bg >> 8) & 255, bg & 255
+    return ((r >> (8 - rl)) << ro) | ((g >> (8 - gl)) << go) | ((b >> (8 - bl)) << bo)
+bad = 0
+for y in range(200):
+    for x in range(320):
+        o = (y * 320 + x) * B
+        got = int.from_bytes(fb[o:o + B], 'little') & (0xffffff if bpp == 32 else 0xffff)
+        if got != want(x, y):
+            if bad == 0:
+                print('first difference at (%d, %d): %06x, expected %06x' % (x, y, got, want(x, y)))
+            bad += 1
+print('%d pixels differ, channels at %d/%d/%d' % (bad, ro, go, bo))
+sys.exit(1 if bad else 0)
+PY
+}
+
+for bpp in 32 16; do
+    rmmod vfb 2> /dev/null
+    if ! modprobe vfb vfb_enable=1 mode_option=320x200-$bpp > "$T/modprobe" 2>&1 || [ ! -c /dev/fb0 ]; then
+        fail "$bpp-bit: vfb gives /dev/fb0" "$(cat "$T/modprobe")"
+        continue
+    fi
+    got=$(cat /sys/class/graphics/fb0/bits_per_pixel 2> /dev/null)
+    [ "$got" = "$bpp" ] || { fail "$bpp-bit: vfb's mode" "bits_per_pixel $got"; continue; }
+    # 1. the model at the screen's size, the PNG of the same frame beside it
+    if out=$("$view" "$model" --fb /dev/fb0 --png "$T/a.png" 2> "$T/err"); then
+        pass "$bpp-bit: cmz-view --fb /dev/fb0 shows the model ($out)"
+    else
+        fail "$bpp-bit: cmz-view --fb /dev/fb0" "$(cat "$T/err")"
+        continue
+    fi
+    # 2. the screen's memory holds those pixels
+    dd if=/dev/fb0 of="$T/fb" bs=$((320 * bpp / 8)) count=200 2> /dev/null
+    if res=$(compare "$T/fb" "$bpp" "$T/a.png" 0 0 ffffff); then
+        pass "$bpp-bit: the screen holds the frame's pixels ($res)"
+    else
+        fail "$bpp-bit: the screen holds the frame's pixels" "$res"
+    fi
+    # 3. a smaller frame, centred on a dark background
+    if "$view" "$model" --fb /dev/fb0 --png "$T/b.png" --size 200x100 --background 203040 > /dev/null 2> "$T/err"; then
+        dd if=/dev/fb0 of="$T/fb" bs=$((320 * bpp / 8)) count=200 2> /dev/null
+        if res=$(compare "$T/fb" "$bpp" "$T/b.png" 60 50 203040); then
+            pass "$bpp-bit: a 200 x 100 frame centred, the background round it ($res)"
+        else
+            fail "$bpp-bit: a 200 x 100 frame centred" "$res"
+        fi
+    else
+        fail "$bpp-bit: cmz-view --size 200x100 --fb" "$(cat "$T/err")"
+    fi
+done
+rmmod vfb 2> /dev/null
+rm -rf "$T"
+[ $failed -eq 0 ]
