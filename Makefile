@@ -85,11 +85,14 @@ CM_GC_SECTIONS := -Wl,--gc-sections
 # 262 122 bytes at -O2, over the budget with the first review fix).  Appended after CFLAGS: it wins.
 CM_PLATFORM_OPT := -Os
 # and so is the decoder's code that runs once per file or per face, never per vertex: the file parser
-# and its tables, limits and messages, the number formatting of the text outputs (with
+# and its tables, limits and messages, the face methods' records (their kernels stay -O2), the
+# number formatting of the text outputs (with
 # -ffp-contract=off every sum rounds alike at any -O): 7.3 KB of cmz-terminal's aarch64 text (the parser
-# 5.1, the rest 2.2), room in the budget for the evaluator's per-degree fast paths
+# 5.1, the rest 2.2), room in the budget for the evaluator's per-degree fast paths; the methods
+# 0.9 KB more, room for cmz-terminal --display
 CM_COLD_SRC := decoder/src/cm_decode.c decoder/src/cm_format.c decoder/src/cm_sections.c decoder/src/cm_limits.c \
-               decoder/src/cm_error.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c
+               decoder/src/cm_error.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c \
+               $(wildcard decoder/methods/*.c)
 endif
 CM_WARN := -Wall -Wextra -Wundef -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wcast-align \
            -Wformat=2 -Wvla -Walloca -Wdouble-promotion -Werror

@@ -28,6 +28,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -63,6 +64,7 @@ static int quiet;
 
 typedef struct config {
     char serial[256], usb[128], out[CM_TERM_PATH], name[CM_LINK_MAX_NAME + 1];
+    char display[256], viewer[256]; /* --display DEV: the viewer program draws each model there */
     char gpio_spec[CM_GPIO_NOUT + 1][128];
     int use_stdio, stl, once, ready_pulse_ms;
     double tess;
@@ -111,6 +113,7 @@ static void usage(FILE *f)
             "  --gpio-error SPEC      output, active after a refused or failed model until the next good one\n"
             "  --gpio-request SPEC    input (button), a rising edge asks the workstation to send again\n"
             "  --ready-pulse-ms N     length of the ready pulse (default 500)\n"
+            "  --display DEV          show each model on the framebuffer DEV with --viewer PROG (cmz-view)\n"
             "  --config FILE          read 'key = value' lines (the long options without --) first\n"
             "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
             "  -q                     only warnings and errors\n"
@@ -140,6 +143,10 @@ static int set_opt(config *c, const char *key, const char *val, const char *wher
         snprintf(c->out, sizeof c->out, "%s", val);
     else if (strcmp(key, "name") == 0)
         snprintf(c->name, sizeof c->name, "%s", val);
+    else if (strcmp(key, "display") == 0)
+        snprintf(c->display, sizeof c->display, "%s", val);
+    else if (strcmp(key, "viewer") == 0)
+        snprintf(c->viewer, sizeof c->viewer, "%s", val);
     else if (strcmp(key, "ready-pulse-ms") == 0) {
         char *end;
         long v = strtol(val, &end, 10);
@@ -313,6 +320,46 @@ static void nap_ms(int ms)
     nanosleep(&ts, NULL);
 }
 
+/* the viewer drawing the model on the display (issue 17): a program of its own (cmz-view), so that
+   the daemon's code and RAM stay within their budgets; 0 when none runs */
+static pid_t viewer_pid;
+
+/* reap a viewer that has finished (wait: block until it has), logging how it ended */
+static void viewer_reap(int wait)
+{
+    int status = 0;
+    if (viewer_pid > 0 && waitpid(viewer_pid, &status, wait ? 0 : WNOHANG) == viewer_pid) {
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+            logline("warn", "display", "status=%d", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+        viewer_pid = 0;
+    }
+}
+
+/* draw DIR/current/model.cmz on the display: a viewer still drawing an older model is stopped first */
+static void show_current(const config *c)
+{
+    if (!c->display[0])
+        return;
+    if (viewer_pid > 0) {
+        kill(viewer_pid, SIGTERM);
+        viewer_reap(1);
+    }
+    char path[CM_TERM_PATH + 32];
+    snprintf(path, sizeof path, "%s/current/model.cmz", c->out);
+    if (access(path, R_OK) != 0)
+        return; /* nothing stored yet */
+    const char *prog = c->viewer[0] ? c->viewer : "cmz-view";
+    pid_t pid = fork();
+    if (pid == 0) {
+        execlp(prog, prog, path, "--fb", c->display, "-q", (char *)NULL);
+        _exit(127);
+    }
+    if (pid < 0)
+        logline("warn", "display", "why=fork");
+    else
+        viewer_pid = pid;
+}
+
 /* decode .incoming.cmz (fed: already fed to the decoder as it arrived) and show it; 0 ok */
 static int decode_into_place(const config *c, int fed, char *text, size_t cap)
 {
@@ -442,6 +489,8 @@ int main(int argc, char **argv)
 
     int rc = 0, said_waiting = 0, busy = 0;
     int64_t ready_off_at = 0, started_ms = 0;
+    if (!term.recovered)
+        show_current(&c); /* the last good model, on the screen again after a restart */
     if (term.recovered) {
         /* received whole and verified, then killed before it was shown: show it now, and answer the
            sender's repeated END with the outcome (it waited through the restart) */
@@ -451,6 +500,7 @@ int main(int argc, char **argv)
         int code = decode_into_place(&c, 0, text, sizeof text);
         cm_link_term_recovered(&term, code, text);
         cm_gpio_set(&gpio, CM_GPIO_BUSY, 0);
+        show_current(&c);
         if (code == 0) {
             logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
             cm_gpio_set(&gpio, CM_GPIO_READY, 1);
@@ -462,6 +512,7 @@ int main(int argc, char **argv)
     }
     cm_transport *link = NULL;
     while (!stop_signal) {
+        viewer_reap(0);
         if (ready_off_at && cm_clock_ms() >= ready_off_at) {
             cm_gpio_set(&gpio, CM_GPIO_READY, 0);
             ready_off_at = 0;
@@ -535,6 +586,7 @@ int main(int argc, char **argv)
             cm_link_term_decoded(&term, code, text);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
             if (code == 0) {
+                show_current(&c);
                 logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
                 cm_gpio_set(&gpio, CM_GPIO_ERROR, 0);
                 cm_gpio_set(&gpio, CM_GPIO_READY, 1);
@@ -557,6 +609,7 @@ int main(int argc, char **argv)
         logline("info", "stop", "signal=%d", (int)stop_signal);
     if (ready_off_at)
         nap_ms((int)(ready_off_at - cm_clock_ms() > 0 ? ready_off_at - cm_clock_ms() : 0));
+    viewer_reap(1); /* (the picture it draws stays on the screen) */
     cm_link_term_close(&term);
     cm_term_store_close(&store);
     if (link)

@@ -46,7 +46,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR]\n"
-            "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
+            "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM] [-q]\n"
             "       cmz-view --limits | --version | --help\n"
             "\n"
             "Rebuild a curvemesh model and draw it as the terminal's viewer does: shaded\n"
@@ -64,7 +64,7 @@ static void usage(FILE *f)
             "occurrences); the summary line counts them.\n"
             "--background: the colour behind the model, default ffffff.  --tess: chordal\n"
             "tolerance in mm (default: the file's recommendation).  The PNG is uncompressed\n"
-            "(stored deflate) and appears whole or not at all.\n"
+            "(stored deflate) and appears whole or not at all.  -q: no summary line.\n"
             "\n"
             "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error.\n",
             CM_VIEW_MAX_W, CM_VIEW_MAX_H, cm_profile_name);
@@ -132,7 +132,7 @@ static int parse_hex_rgb(const char *s, uint32_t *rgb)
 int main(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL, *fb = NULL;
-    int sized = 0;
+    int sized = 0, quiet = 0;
     double tol = 0;
     cm_view_opts vo;
     cm_view_opts_default(&vo);
@@ -186,6 +186,8 @@ int main(int argc, char **argv)
                 return 2;
             }
             vo.step = (uint32_t)k;
+        } else if (strcmp(a, "-q") == 0) {
+            quiet = 1;
         } else if (strcmp(a, "--perspective") == 0) {
             vo.perspective = 1;
         } else if (strcmp(a, "--no-edges") == 0) {
@@ -228,8 +230,9 @@ int main(int argc, char **argv)
         vo.width = ff.width < CM_VIEW_MAX_W ? (int)ff.width : CM_VIEW_MAX_W;
         vo.height = ff.height < CM_VIEW_MAX_H ? (int)ff.height : CM_VIEW_MAX_H;
     }
-    /* the mesh spills beside the PNG, or in the working directory */
-    cm_mesh mesh = cm_decode_stream_mesh(&state, out ? out : ".", out ? 0 : 1);
+    /* the mesh spills beside the PNG, or in $TMPDIR (/tmp) */
+    const char *tmpdir = getenv("TMPDIR");
+    cm_mesh mesh = cm_decode_stream_mesh(&state, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1);
     cm_decode_summary sum;
     if (cm_decode_read(in, &state.dec, &st) != CM_OK ||
         cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK) {
@@ -267,6 +270,8 @@ int main(int argc, char **argv)
         report(stderr, "", fb, &st);
         return st.code == CM_E_IO ? 3 : 1;
     }
+    if (quiet)
+        return 0;
     printf("%s -> %s%s%s: %dx%d, %s%s, %u faces, %u parts", in, out ? out : "", out && fb ? " and " : "", fb ? fb : "",
            vo.width, vo.height, cm_view_dir_name(vo.dir),
            vo.perspective ? " perspective" : "", sum.faces, parts);

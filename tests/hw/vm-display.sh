@@ -6,12 +6,15 @@
 #   1. cmz-view draws the model at the screen's size on /dev/fb0 (no --size), exit 0;
 #   2. the screen's memory, read back from /dev/fb0, holds the PNG's pixels cmz-view writes of the
 #      same frame, in the screen's format (16-bit: each channel's top bits);
-#   3. a frame smaller than the screen is centred, the rest of the screen the background.
-# Env: HW_VIEW (cmz-view; default this checkout's terminal build), HW_MODELS (the .cmz files,
-# encoded on the host).  Prints TAP lines; exit 0 iff all passed.
+#   3. a frame smaller than the screen is centred, the rest of the screen the background;
+#   4. cmz-terminal --display: a model sent to it (cmz send over pipes) ends on the screen.
+# Env: HW_VIEW (cmz-view; default this checkout's terminal build), HW_TERMINAL, HW_CMZ, HW_MODELS
+# (the .cmz files, encoded on the host).  Prints TAP lines; exit 0 iff all passed.
 set -u
 triplet=$(gcc -dumpmachine)
 view=${HW_VIEW:-build/$triplet-terminal/cmz-view}
+terminal=${HW_TERMINAL:-build/$triplet-terminal/cmz-terminal}
+cmz=${HW_CMZ:-build/$triplet-host/cmz}
 model=${HW_MODELS:-build/hw-models}/as1_pe_203.cmz
 T=$(mktemp -d /tmp/vm-display.XXXXXX)
 n=0 failed=0
@@ -20,6 +23,16 @@ fail() { n=$((n + 1)); failed=$((failed + 1)); echo "not ok $n - $1${2:+: $2}"; 
 bail() { fail "$1" "$2"; echo "# vm-display: cannot go on"; exit 1; }
 [ -x "$view" ] || bail "cmz-view is built" "no executable $view"
 [ -f "$model" ] || bail "the model is encoded" "no $model"
+
+# the framebuffer console (fbcon) takes a new framebuffer and blinks its cursor in the corner: a
+# terminal's screen belongs to the viewer (on a board: fbcon=map:9 or vt.global_cursor_default=0)
+release_console() {
+    local vc
+    for vc in /sys/class/vtconsole/vtcon*; do
+        grep -qi "frame buffer" "$vc/name" 2> /dev/null && echo 0 > "$vc/bind" 2> /dev/null
+    done
+    return 0
+}
 
 # compare the framebuffer dump $1 (bpp $2, 320 x 200, stride 320 * bpp / 8) with the PNG $3 placed
 # at ($4, $5), background $6 round it; prints the first difference
@@ -73,6 +86,7 @@ for bpp in 32 16; do
         fail "$bpp-bit: vfb gives /dev/fb0" "$(cat "$T/modprobe")"
         continue
     fi
+    release_console
     got=$(cat /sys/class/graphics/fb0/bits_per_pixel 2> /dev/null)
     [ "$got" = "$bpp" ] || { fail "$bpp-bit: vfb's mode" "bits_per_pixel $got"; continue; }
     # 1. the model at the screen's size, the PNG of the same frame beside it
@@ -101,6 +115,33 @@ for bpp in 32 16; do
         fail "$bpp-bit: cmz-view --size 200x100 --fb" "$(cat "$T/err")"
     fi
 done
+# 4. the terminal shows what it receives: cmz send -> cmz-terminal --display /dev/fb0 (frames over a
+#    pair of pipes), which runs cmz-view on the stored model; the screen then holds the pixels
+#    cmz-view draws of that model, and the terminal's log names no viewer failure
+rmmod vfb 2> /dev/null
+if modprobe vfb vfb_enable=1 mode_option=320x200-32 > "$T/modprobe" 2>&1 && [ -c /dev/fb0 ] &&
+        [ -x "$terminal" ] && [ -x "$cmz" ]; then
+    release_console
+    mkdir -p "$T/store"
+    coproc TERMINAL { "$terminal" --stdio --out "$T/store" --once --display /dev/fb0 --viewer "$view" 2> "$T/term.log"; }
+    timeout 60 "$cmz" send "$model" --stdio <&"${TERMINAL[0]}" >&"${TERMINAL[1]}" 2> "$T/send.log"
+    st=$?
+    wait "$TERMINAL_PID"
+    tst=$?
+    dd if=/dev/fb0 of="$T/fb" bs=1280 count=200 2> /dev/null
+    "$view" "$T/store/current/model.cmz" --png "$T/t.png" --size 320x200 > /dev/null 2>&1
+    if [ $st -ne 0 ] || [ $tst -ne 0 ]; then
+        fail "cmz-terminal --display: send and decode" "send $st, terminal $tst: $(tail -n 3 "$T/send.log" "$T/term.log")"
+    elif grep -q "event=display" "$T/term.log"; then
+        fail "cmz-terminal --display: the viewer ran" "$(grep event=display "$T/term.log")"
+    elif res=$(compare "$T/fb" 32 "$T/t.png" 0 0 ffffff); then
+        pass "cmz-terminal --display /dev/fb0: the received model on the screen ($res)"
+    else
+        fail "cmz-terminal --display /dev/fb0: the received model on the screen" "$res"
+    fi
+else
+    fail "cmz-terminal --display: vfb and the programs" "$(cat "$T/modprobe"); terminal $terminal, cmz $cmz"
+fi
 rmmod vfb 2> /dev/null
 rm -rf "$T"
 [ $failed -eq 0 ]
