@@ -80,6 +80,13 @@ endif
 ifeq ($(findstring -fsanitize,$(CFLAGS)),)
 CM_STD += -fno-asynchronous-unwind-tables -fno-unwind-tables -ffunction-sections -fdata-sections
 CM_GC_SECTIONS := -Wl,--gc-sections
+# aarch64: Cortex-A53 erratum 843419 fixed by rewriting the affected ADRP as ADR (the linker fails,
+# loudly, where an ADR cannot reach), not by ld's default veneers, whose section it aligns to 4 KiB:
+# one veneer cost cmz-terminal 4 096 bytes of text in a layout where a function's ADRP fell on a
+# page's last words (a Raspberry Pi 3's core has the erratum: the fix stays on)
+ifneq ($(filter aarch64-%,$(TRIPLET)),)
+CM_GC_SECTIONS += -Wl,--fix-cortex-a53-843419=adr
+endif
 # platform/ (the link, the store, the transports, the programs' mains: I/O, no numerics) is
 # compiled for size: 8.6 KB less aarch64 code, which made room for issue 15's streaming (cmz-terminal
 # 262 122 bytes at -O2, over the budget with the first review fix).  Appended after CFLAGS: it wins.

@@ -92,7 +92,24 @@ void cm_fb_compose(const cm_fb_format *fmt, uint8_t *mem, const uint8_t *rgb, ui
     }
 }
 
-int cm_fb_show(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, uint32_t background, cm_status *st)
+void cm_fb_compose_bottom(const cm_fb_format *fmt, uint8_t *mem, const uint8_t *rgb, uint32_t w, uint32_t h)
+{
+    uint32_t bytes = fmt->bpp / 8, rows = h < fmt->height ? h : fmt->height, cols = w < fmt->width ? w : fmt->width;
+    for (uint32_t r = 0; r < rows; r++) {
+        uint32_t y = fmt->height - rows + r, fy = h - rows + r;
+        uint8_t *row = mem + (uint64_t)(fmt->yoffset + y) * fmt->stride + (uint64_t)fmt->xoffset * bytes;
+        for (uint32_t x = 0; x < cols; x++) {
+            const uint8_t *p = rgb + ((uint64_t)fy * w + x) * 3;
+            uint32_t v = pixel(fmt, p[0], p[1], p[2]);
+            for (uint32_t k = 0; k < bytes; k++)
+                row[(uint64_t)x * bytes + k] = (uint8_t)(v >> (8 * k));
+        }
+    }
+}
+
+/* map dev's screen and put the frame on it: centred over a background, or (bottom) on its last rows */
+static int show(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, uint32_t background, int bottom,
+                cm_status *st)
 {
     int fd = open(dev, O_RDWR | O_CLOEXEC);
     if (fd < 0)
@@ -109,8 +126,21 @@ int cm_fb_show(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, uint
         close(fd);
         return -1;
     }
-    cm_fb_compose(&fmt, mem, rgb, w, h, background);
+    if (bottom)
+        cm_fb_compose_bottom(&fmt, mem, rgb, w, h);
+    else
+        cm_fb_compose(&fmt, mem, rgb, w, h, background);
     munmap(mem, len);
     close(fd);
     return 0;
+}
+
+int cm_fb_show(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, uint32_t background, cm_status *st)
+{
+    return show(dev, rgb, w, h, background, 0, st);
+}
+
+int cm_fb_show_bottom(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, cm_status *st)
+{
+    return show(dev, rgb, w, h, 0, 1, st);
 }

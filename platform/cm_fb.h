@@ -36,7 +36,14 @@ int cm_fb_query(const char *dev, cm_fb_format *fmt, cm_status *st);
 void cm_fb_compose(const cm_fb_format *fmt, uint8_t *mem, const uint8_t *rgb, uint32_t w, uint32_t h,
                    uint32_t background);
 
+/** The w x h frame on the screen's last rows, from its left edge (cut to the screen), nothing else
+ *  touched: a status line over what the screen shows. */
+void cm_fb_compose_bottom(const cm_fb_format *fmt, uint8_t *mem, const uint8_t *rgb, uint32_t w, uint32_t h);
+
 /** cm_fb_query, map the screen, cm_fb_compose, unmap (0 on success; -1 with st saying why). */
 int cm_fb_show(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, uint32_t background, cm_status *st);
+
+/** The same with cm_fb_compose_bottom. */
+int cm_fb_show_bottom(const char *dev, const uint8_t *rgb, uint32_t w, uint32_t h, cm_status *st);
 
 #endif /* CM_FB_H */

@@ -113,7 +113,8 @@ static void usage(FILE *f)
             "  --gpio-error SPEC      output, active after a refused or failed model until the next good one\n"
             "  --gpio-request SPEC    input (button), a rising edge asks the workstation to send again\n"
             "  --ready-pulse-ms N     length of the ready pulse (default 500)\n"
-            "  --display DEV          show each model on the framebuffer DEV with --viewer PROG (cmz-view)\n"
+            "  --display DEV          show each model and a status line on the framebuffer DEV with\n"
+            "                         --viewer PROG (cmz-view)\n"
             "  --config FILE          read 'key = value' lines (the long options without --) first\n"
             "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
             "  -q                     only warnings and errors\n"
@@ -324,40 +325,60 @@ static void nap_ms(int ms)
    the daemon's code and RAM stay within their budgets; 0 when none runs */
 static pid_t viewer_pid;
 
-/* reap a viewer that has finished (wait: block until it has), logging how it ended */
+/* reap the viewers that have finished (wait: block until every one has: a status line still being
+   drawn must not land over a newer picture), logging a failure */
 static void viewer_reap(int wait)
 {
     int status = 0;
-    if (viewer_pid > 0 && waitpid(viewer_pid, &status, wait ? 0 : WNOHANG) == viewer_pid) {
+    pid_t p;
+    while ((p = waitpid(-1, &status, wait ? 0 : WNOHANG)) > 0) {
         if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
             logline("warn", "display", "status=%d", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-        viewer_pid = 0;
+        if (p == viewer_pid)
+            viewer_pid = 0;
     }
 }
 
-/* draw DIR/current/model.cmz on the display: a viewer still drawing an older model is stopped first */
-static void show_current(const config *c)
+/* run the viewer: model (NULL: the status line alone) with the status line text; its pid */
+static pid_t viewer_run(const config *c, const char *model, const char *text)
 {
-    if (!c->display[0])
-        return;
-    if (viewer_pid > 0) {
-        kill(viewer_pid, SIGTERM);
-        viewer_reap(1);
-    }
-    char path[CM_TERM_PATH + 32];
-    snprintf(path, sizeof path, "%s/current/model.cmz", c->out);
-    if (access(path, R_OK) != 0)
-        return; /* nothing stored yet */
     const char *prog = c->viewer[0] ? c->viewer : "cmz-view";
     pid_t pid = fork();
     if (pid == 0) {
-        execlp(prog, prog, path, "--fb", c->display, "-q", (char *)NULL);
+        if (model)
+            execlp(prog, prog, model, "--fb", c->display, "--status", text, "-q", (char *)NULL);
+        else
+            execlp(prog, prog, "--fb", c->display, "--status", text, (char *)NULL);
         _exit(127);
     }
     if (pid < 0)
         logline("warn", "display", "why=fork");
-    else
-        viewer_pid = pid;
+    return pid > 0 ? pid : 0;
+}
+
+/* draw DIR/current/model.cmz on the display with the status text: a viewer still drawing an older
+   model is stopped first */
+static void show_current(const config *c, const char *text)
+{
+    if (!c->display[0])
+        return;
+    if (viewer_pid > 0)
+        kill(viewer_pid, SIGTERM);
+    viewer_reap(1);
+    char path[CM_TERM_PATH + 32];
+    snprintf(path, sizeof path, "%s/current/model.cmz", c->out);
+    if (access(path, R_OK) == 0) /* (nothing stored yet: nothing to show) */
+        viewer_pid = viewer_run(c, path, text);
+}
+
+/* the status line alone (receiving, refused, failed), over the model on the screen */
+static void show_status(const config *c, const char *name, const char *what)
+{
+    if (!c->display[0])
+        return;
+    char text[CM_LINK_MAX_TEXT + CM_LINK_MAX_NAME + 8];
+    snprintf(text, sizeof text, "%s: %s", name, what);
+    (void)viewer_run(c, NULL, text);
 }
 
 /* decode .incoming.cmz (fed: already fed to the decoder as it arrived) and show it; 0 ok */
@@ -490,7 +511,7 @@ int main(int argc, char **argv)
     int rc = 0, said_waiting = 0, busy = 0;
     int64_t ready_off_at = 0, started_ms = 0;
     if (!term.recovered)
-        show_current(&c); /* the last good model, on the screen again after a restart */
+        show_current(&c, "ready"); /* the last good model, on the screen again after a restart */
     if (term.recovered) {
         /* received whole and verified, then killed before it was shown: show it now, and answer the
            sender's repeated END with the outcome (it waited through the restart) */
@@ -500,7 +521,7 @@ int main(int argc, char **argv)
         int code = decode_into_place(&c, 0, text, sizeof text);
         cm_link_term_recovered(&term, code, text);
         cm_gpio_set(&gpio, CM_GPIO_BUSY, 0);
-        show_current(&c);
+        show_current(&c, text);
         if (code == 0) {
             logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
             cm_gpio_set(&gpio, CM_GPIO_READY, 1);
@@ -559,6 +580,7 @@ int main(int argc, char **argv)
             logline("info", "receiving", "name=\"%s\" bytes=%u from=%u chunk=%u", term.offer.name,
                     (unsigned)term.offer.size, (unsigned)term.prefix, (unsigned)term.chunk);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
+            show_status(&c, term.offer.name, "receiving");
             if (term.prefix == 0)
                 cm_kill_point("part-created");
             break;
@@ -569,6 +591,7 @@ int main(int argc, char **argv)
             break;
         case CM_TERM_FAILED:
             logline("error", "refused", "name=\"%s\" why=\"%s\"", term.offer.name, term.why);
+            show_status(&c, term.offer.name, term.why);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
             cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
             if (c.once) {
@@ -586,7 +609,7 @@ int main(int argc, char **argv)
             cm_link_term_decoded(&term, code, text);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 0), busy = 0;
             if (code == 0) {
-                show_current(&c);
+                show_current(&c, text);
                 logline("info", "decoded", "name=\"%s\" %s", term.offer.name, text);
                 cm_gpio_set(&gpio, CM_GPIO_ERROR, 0);
                 cm_gpio_set(&gpio, CM_GPIO_READY, 1);
@@ -594,6 +617,7 @@ int main(int argc, char **argv)
             } else {
                 logline("error", "decode-failed", "name=\"%s\" why=\"%s\"", term.offer.name, text);
                 cm_gpio_set(&gpio, CM_GPIO_ERROR, 1);
+                show_status(&c, term.offer.name, text);
             }
             if (c.once) {
                 rc = code == 0 ? 0 : 1;

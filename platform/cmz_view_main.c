@@ -3,7 +3,8 @@
  * by the terminal's own software viewer (cm_view.h) into a PNG.
  *
  *   cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view iso|front|back|left|right|top|bottom]
- *            [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]
+ *            [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM] [--status TEXT]
+ *   cmz-view --fb DEV --status TEXT
  *   cmz-view --limits | --version | --help
  *
  * The same program on the workstation and the board (profile terminal by
@@ -46,7 +47,9 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR]\n"
-            "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM] [-q]\n"
+            "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
+            "                [--status TEXT] [-q]\n"
+            "       cmz-view --fb DEV --status TEXT\n"
             "       cmz-view --limits | --version | --help\n"
             "\n"
             "Rebuild a curvemesh model and draw it as the terminal's viewer does: shaded\n"
@@ -64,7 +67,9 @@ static void usage(FILE *f)
             "occurrences); the summary line counts them.\n"
             "--background: the colour behind the model, default ffffff.  --tess: chordal\n"
             "tolerance in mm (default: the file's recommendation).  The PNG is uncompressed\n"
-            "(stored deflate) and appears whole or not at all.  -q: no summary line.\n"
+            "(stored deflate) and appears whole or not at all.  --status: a status line of\n"
+            "TEXT across the bottom (without a model: drawn alone on the screen's last rows,\n"
+            "the rest of the screen untouched).  -q: no summary line.\n"
             "\n"
             "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error.\n",
             CM_VIEW_MAX_W, CM_VIEW_MAX_H, cm_profile_name);
@@ -131,7 +136,7 @@ static int parse_hex_rgb(const char *s, uint32_t *rgb)
 
 int main(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL, *fb = NULL;
+    const char *in = NULL, *out = NULL, *fb = NULL, *status = NULL;
     int sized = 0, quiet = 0;
     double tol = 0;
     cm_view_opts vo;
@@ -186,6 +191,8 @@ int main(int argc, char **argv)
                 return 2;
             }
             vo.step = (uint32_t)k;
+        } else if (strcmp(a, "--status") == 0 && more) {
+            status = argv[++i];
         } else if (strcmp(a, "-q") == 0) {
             quiet = 1;
         } else if (strcmp(a, "--perspective") == 0) {
@@ -215,13 +222,13 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (!in || (!out && !fb)) {
+    if ((!in && !(status && fb)) || (in && !out && !fb)) {
         usage(stderr);
         return 2;
     }
     cm_status st;
     cm_status_init(&st);
-    if (fb && !sized) { /* the screen's size, within the build's frame */
+    if (fb && (!sized || !in)) { /* the screen's size, within the build's frame */
         cm_fb_format ff;
         if (cm_fb_query(fb, &ff, &st) != 0) {
             report(stderr, "", fb, &st);
@@ -229,6 +236,22 @@ int main(int argc, char **argv)
         }
         vo.width = ff.width < CM_VIEW_MAX_W ? (int)ff.width : CM_VIEW_MAX_W;
         vo.height = ff.height < CM_VIEW_MAX_H ? (int)ff.height : CM_VIEW_MAX_H;
+    }
+    if (!in) { /* the status line alone, over what the screen shows */
+        const float zero[3] = {0, 0, 0};
+        if (cm_view_begin(&view, &vo, zero, zero, &st) != CM_OK) {
+            report(stderr, "", fb, &st);
+            return 1;
+        }
+        cm_view_status(&view, status);
+        int h = cm_view_status_height(&view);
+        h = h < vo.height ? h : vo.height;
+        const uint8_t *rows = view.rgb + (size_t)(vo.height - h) * (size_t)vo.width * 3;
+        if (cm_fb_show_bottom(fb, rows, (uint32_t)vo.width, (uint32_t)h, &st) != 0) {
+            report(stderr, "", fb, &st);
+            return st.code == CM_E_IO ? 3 : 1;
+        }
+        return 0;
     }
     /* the mesh spills beside the PNG, or in $TMPDIR (/tmp) */
     const char *tmpdir = getenv("TMPDIR");
@@ -258,6 +281,8 @@ int main(int argc, char **argv)
     cm_view_fit(&view, &mesh);
     cm_view_mesh(&view, &mesh);
     cm_view_edges(&view, &state.dec.model);
+    if (status)
+        cm_view_status(&view, status);
     if (cm_mesh_spill_failed(&mesh)) {
         fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
         return 3;

@@ -7,7 +7,10 @@
 #   2. the screen's memory, read back from /dev/fb0, holds the PNG's pixels cmz-view writes of the
 #      same frame, in the screen's format (16-bit: each channel's top bits);
 #   3. a frame smaller than the screen is centred, the rest of the screen the background;
-#   4. cmz-terminal --display: a model sent to it (cmz send over pipes) ends on the screen.
+#   4. cmz-terminal --display: a model sent to it (cmz send over pipes) ends on the screen, with the
+#      status line the terminal gives it;
+#   5. a status line alone (cmz-view --fb --status: the terminal's receiving and refusal notes)
+#      changes only the screen's last rows.
 # Env: HW_VIEW (cmz-view; default this checkout's terminal build), HW_TERMINAL, HW_CMZ, HW_MODELS
 # (the .cmz files, encoded on the host).  Prints TAP lines; exit 0 iff all passed.
 set -u
@@ -129,15 +132,37 @@ if modprobe vfb vfb_enable=1 mode_option=320x200-32 > "$T/modprobe" 2>&1 && [ -c
     wait "$TERMINAL_PID"
     tst=$?
     dd if=/dev/fb0 of="$T/fb" bs=1280 count=200 2> /dev/null
-    "$view" "$T/store/current/model.cmz" --png "$T/t.png" --size 320x200 > /dev/null 2>&1
+    # the status line the terminal gave the viewer: what it logged of the model
+    text=$(sed -n 's/.*event=decoded name="[^"]*" //p' "$T/term.log" | tail -n 1)
+    "$view" "$T/store/current/model.cmz" --png "$T/t.png" --size 320x200 --status "$text" > /dev/null 2>&1
     if [ $st -ne 0 ] || [ $tst -ne 0 ]; then
         fail "cmz-terminal --display: send and decode" "send $st, terminal $tst: $(tail -n 3 "$T/send.log" "$T/term.log")"
     elif grep -q "event=display" "$T/term.log"; then
         fail "cmz-terminal --display: the viewer ran" "$(grep event=display "$T/term.log")"
     elif res=$(compare "$T/fb" 32 "$T/t.png" 0 0 ffffff); then
-        pass "cmz-terminal --display /dev/fb0: the received model on the screen ($res)"
+        pass "cmz-terminal --display /dev/fb0: the received model on the screen, '$text' below it ($res)"
     else
         fail "cmz-terminal --display /dev/fb0: the received model on the screen" "$res"
+    fi
+    # 5. a status line alone (what the terminal shows while receiving, or a refusal): the screen's
+    #    last rows change, the model above them stays
+    cp "$T/fb" "$T/before"
+    if "$view" --fb /dev/fb0 --status "refused: MAX_FACES" 2> "$T/err"; then
+        dd if=/dev/fb0 of="$T/fb" bs=1280 count=200 2> /dev/null
+        if res=$(python3 - "$T/before" "$T/fb" <<'PY'
+import sys
+a, b = open(sys.argv[1], 'rb').read(), open(sys.argv[2], 'rb').read()
+rows = [y for y in range(200) if a[y * 1280:(y + 1) * 1280] != b[y * 1280:(y + 1) * 1280]]
+print('rows %d..%d changed' % (rows[0], rows[-1]) if rows else 'nothing changed')
+sys.exit(0 if rows and rows[0] >= 200 - 11 else 1)
+PY
+        ); then
+            pass "cmz-view --status alone: only the status line's rows change ($res)"
+        else
+            fail "cmz-view --status alone: only the status line's rows change" "$res"
+        fi
+    else
+        fail "cmz-view --fb --status" "$(cat "$T/err")"
     fi
 else
     fail "cmz-terminal --display: vfb and the programs" "$(cat "$T/modprobe"); terminal $terminal, cmz $cmz"

@@ -156,6 +156,36 @@ static void test_dir_names(void **state)
     assert_int_equal(cm_view_dir_parse("sideways"), -1);
 }
 
+/* the status line: a dark bar over the frame's last 11 rows (scale 1 below 300 rows), the text's
+   glyphs from the third column and row in it, the rows above untouched */
+static void test_status_line(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 50)
+        skip();
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    o.width = 100;
+    o.height = 50;
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_status(&view, "A\x01");
+    assert_int_equal(cm_view_status_height(&view), 11);
+    int y0 = 50 - 11;
+    size_t above = (size_t)(y0 - 1) * 100 + 50, bar = (size_t)(y0 + 1) * 100 + 50;
+    assert_int_equal(view.rgb[3 * above], 0xff); /* background */
+    assert_int_equal(view.rgb[3 * bar], 0x26);   /* the bar */
+    /* 'A''s first row " ### ": columns 1-3 of its cell at x = 2, row y0 + 2 */
+    for (int x = 0; x < 8; x++) {
+        size_t at = (size_t)(y0 + 2) * 100 + (size_t)x;
+        int lit = x >= 3 && x <= 5;
+        assert_int_equal(view.rgb[3 * at], lit ? 0xf2 : 0x26);
+    }
+    /* a character outside ASCII shows as '?' (its top row " ### " too, in the next cell, x = 8) */
+    size_t q = (size_t)(y0 + 2) * 100 + 9;
+    assert_int_equal(view.rgb[3 * q], 0xf2);
+}
+
 /* ---- PNG ---- */
 
 static uint8_t g_png[1 << 18];
@@ -258,7 +288,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_front_box),   cmocka_unit_test(test_depth_order), cmocka_unit_test(test_refuses_large_frame),
-        cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_png),
+        cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -117,4 +117,13 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh);
  */
 void cm_view_edges(cm_view *v, const cm_model *m);
 
+/**
+ * The status line (transfer progress, refusals, errors: issue 17): a dark bar across the bottom of
+ * the frame, cm_view_status_height() pixels high, with text in a built-in 5 x 7 bitmap font (scaled
+ * twice on frames 300 pixels high or more); characters outside ASCII show as '?', what does not fit
+ * is cut.  Drawn over whatever the frame holds.
+ */
+void cm_view_status(cm_view *v, const char *text);
+int cm_view_status_height(const cm_view *v);
+
 #endif /* CM_VIEW_H */
