@@ -36,11 +36,12 @@
 static cm_decode_state state;
 static cm_view view;
 
+/* "cmz-view: [LEVEL]IN: [face F, ]byte N: text (CODE) [in where]" (cm_report_status) */
 static void report(FILE *f, const char *level, const char *in, const cm_status *st)
 {
-    char text[512];
-    cm_format_status(text, sizeof text, st);
-    fprintf(f, "cmz-view: %s%s: %s\n", level, in, text);
+    char subject[4096];
+    snprintf(subject, sizeof subject, "%s%s", level, in);
+    cm_report_status(f, "cmz-view", subject, st);
 }
 
 static void usage(FILE *f)

@@ -483,6 +483,20 @@ cm_err cm_surf_eval(const cm_surf *s, double u, double v, int nd, cm_vec3 S[CM_M
     return CM_OK;
 }
 
+/* a grid parameter t clamped to the domain as cm_surf_eval clamps it, its span and its basis (the
+   degree p checked by the caller); returns the span */
+static int grid_basis(int n_ctrl, int p, const double *knots, double t, double N[CM_MAX_DERS + 1][CM_MAX_ORDER])
+{
+    double lo = knots[p], hi = knots[n_ctrl];
+    if (!(t > lo))
+        t = lo;
+    if (t > hi)
+        t = hi;
+    int span = cm_bspl_find_span(n_ctrl, p, knots, t);
+    ders_basis_any(span, t, p, 0, knots, N);
+    return span;
+}
+
 cm_err cm_surf_eval_grid(const cm_surf *s, const double *u, int nu, const double *v, int nv, cm_vec3 *g,
                         cm_status *st)
 {
@@ -492,26 +506,11 @@ cm_err cm_surf_eval_grid(const cm_surf *s, const double *u, int nu, const double
     cm_err e;
     if ((e = check_degree(p, st, __func__)) != CM_OK || (e = check_degree(q, st, __func__)) != CM_OK)
         return e;
-    double u0 = s->U[p], u1 = s->U[s->nu], v0 = s->V[q], v1 = s->V[s->nv];
     for (int i = 0; i < nu; i++) {
-        double ui = u[i];
-        if (!(ui > u0))
-            ui = u0;
-        if (ui > u1)
-            ui = u1;
-        int us = cm_bspl_find_span(s->nu, p, s->U, ui);
-        if ((e = cm_bspl_ders_basis(us, ui, p, 0, s->U, Nu, st)) != CM_OK)
-            return e;
+        int us = grid_basis(s->nu, p, s->U, u[i], Nu);
         int temp_vs = -1; /* the v span temp[] was contracted for: grid points in one span share it */
         for (int j = 0; j < nv; j++) {
-            double vj = v[j];
-            if (!(vj > v0))
-                vj = v0;
-            if (vj > v1)
-                vj = v1;
-            int vs = cm_bspl_find_span(s->nv, q, s->V, vj);
-            if ((e = cm_bspl_ders_basis(vs, vj, q, 0, s->V, Nv, st)) != CM_OK)
-                return e;
+            int vs = grid_basis(s->nv, q, s->V, v[j], Nv);
             if (vs != temp_vs) {
                 for (int sidx = 0; sidx <= q; sidx++) {
                     cm_hpt t = {0, 0, 0, 0};

@@ -464,32 +464,53 @@ static void test_derivative_paths_same_bits(void **state)
     }
 }
 
+/* the surfaces the same-bits tests run over: a NET_U x NET_V net of seeded points and weights, and
+   for each pair of degrees (within the build's) knots uneven in u from 0 to 1, even in v from -2 to 3 */
+enum { NET_U = 7, NET_V = 6 };
+static const int net_degs[][2] = {{3, 3}, {1, 2}, {2, 5}, {5, 1}, {3, 2}};
+typedef struct test_net {
+    cm_vec3 ctrl[NET_U * NET_V];
+    double w[NET_U * NET_V];
+    double U[NET_U + CM_MAX_ORDER], V[NET_V + CM_MAX_ORDER];
+} test_net;
+
+static void net_points(test_net *n, uint32_t seed)
+{
+    for (int i = 0; i < NET_U * NET_V; i++) {
+        seed = seed * 1103515245u + 12345u;
+        n->ctrl[i] = cm_v3((double)(seed % 1000) / 7.0, (double)((seed >> 10) % 1000) / 3.0,
+                           (double)((seed >> 20) % 1000) / 11.0);
+        n->w[i] = 0.5 + (double)((seed >> 5) % 100) / 50.0;
+    }
+}
+
+/* the surface of degree pair d over n (0 when the build cannot take its degrees) */
+static int net_surface(test_net *n, size_t d, int rational, cm_surf *s)
+{
+    int p = net_degs[d][0], q = net_degs[d][1];
+    if (p > CM_MAX_DEGREE || q > CM_MAX_DEGREE)
+        return 0; /* the tiny profile's degree limit */
+    for (int i = 0; i < NET_U + p + 1; i++)
+        n->U[i] = i <= p ? 0.0 : i >= NET_U ? 1.0 : (double)(i - p) / (NET_U - p) + 0.01 * (i & 1);
+    for (int i = 0; i < NET_V + q + 1; i++)
+        n->V[i] = i <= q ? -2.0 : i >= NET_V ? 3.0 : -2.0 + 5.0 * (i - q) / (NET_V - q);
+    *s = (cm_surf){.p = p, .q = q, .nu = NET_U, .nv = NET_V, .U = n->U, .V = n->V, .ctrl = n->ctrl,
+                   .w = rational ? n->w : NULL};
+    return 1;
+}
+
 /* the surface's first-derivative path (nd = 1) gives the general loop's bits (nd = 2 runs it), on
    rational and polynomial nets of several degrees, across spans and at the ends */
 static void test_surface_first_derivative_path_same_bits(void **state)
 {
     (void)state;
-    enum { NU = 7, NV = 6 };
-    static const int degs[][2] = {{3, 3}, {1, 2}, {2, 5}, {5, 1}, {3, 2}};
-    uint32_t seed = 777u;
-    cm_vec3 ctrl[NU * NV];
-    double w[NU * NV];
-    for (int i = 0; i < NU * NV; i++) {
-        seed = seed * 1103515245u + 12345u;
-        ctrl[i] = cm_v3((double)(seed % 1000) / 7.0, (double)((seed >> 10) % 1000) / 3.0, (double)((seed >> 20) % 1000) / 11.0);
-        w[i] = 0.5 + (double)((seed >> 5) % 100) / 50.0;
-    }
-    for (size_t d = 0; d < sizeof degs / sizeof degs[0]; d++)
+    static test_net net;
+    net_points(&net, 777u);
+    for (size_t d = 0; d < sizeof net_degs / sizeof net_degs[0]; d++)
         for (int rational = 0; rational <= 1; rational++) {
-            int p = degs[d][0], q = degs[d][1];
-            if (p > CM_MAX_DEGREE || q > CM_MAX_DEGREE)
-                continue; /* the tiny profile's degree limit */
-            double U[NU + CM_MAX_ORDER], V[NV + CM_MAX_ORDER];
-            for (int i = 0; i < NU + p + 1; i++)
-                U[i] = i <= p ? 0.0 : i >= NU ? 1.0 : (double)(i - p) / (NU - p) + 0.01 * (i & 1);
-            for (int i = 0; i < NV + q + 1; i++)
-                V[i] = i <= q ? -2.0 : i >= NV ? 3.0 : -2.0 + 5.0 * (i - q) / (NV - q);
-            cm_surf s = {.p = p, .q = q, .nu = NU, .nv = NV, .U = U, .V = V, .ctrl = ctrl, .w = rational ? w : NULL};
+            cm_surf s;
+            if (!net_surface(&net, d, rational, &s))
+                continue;
             for (int t = 0; t <= 40; t++) {
                 double u = t / 40.0, v = -2.0 + 5.0 * ((t * 7) % 41) / 40.0;
                 cm_vec3 S1[CM_MAX_DERS + 1][CM_MAX_DERS + 1], S2[CM_MAX_DERS + 1][CM_MAX_DERS + 1];
@@ -566,32 +587,19 @@ static void test_curve_eval_same_bits(void **state)
 static void test_surface_grid_same_bits(void **state)
 {
     (void)state;
-    enum { NU = 7, NV = 6, GU = 13, GV = 17 };
-    static const int degs[][2] = {{3, 3}, {1, 2}, {2, 5}, {5, 1}, {3, 2}};
-    uint32_t seed = 4242u;
-    cm_vec3 ctrl[NU * NV];
-    double w[NU * NV];
-    for (int i = 0; i < NU * NV; i++) {
-        seed = seed * 1103515245u + 12345u;
-        ctrl[i] = cm_v3((double)(seed % 1000) / 7.0, (double)((seed >> 10) % 1000) / 3.0, (double)((seed >> 20) % 1000) / 11.0);
-        w[i] = 0.5 + (double)((seed >> 5) % 100) / 50.0;
-    }
+    enum { GU = 13, GV = 17 };
+    static test_net net;
+    net_points(&net, 4242u);
     double gu[GU], gv[GV];
     for (int i = 0; i < GU; i++)
         gu[i] = -0.1 + 1.2 * i / (GU - 1); /* from below the domain to above it */
     for (int j = 0; j < GV; j++)
         gv[j] = -2.0 + 5.0 * j / (GV - 1) + (j % 3 == 1 ? 1e-3 : 0.0);
-    for (size_t d = 0; d < sizeof degs / sizeof degs[0]; d++)
+    for (size_t d = 0; d < sizeof net_degs / sizeof net_degs[0]; d++)
         for (int rational = 0; rational <= 1; rational++) {
-            int p = degs[d][0], q = degs[d][1];
-            if (p > CM_MAX_DEGREE || q > CM_MAX_DEGREE)
-                continue; /* the tiny profile's degree limit */
-            double U[NU + CM_MAX_ORDER], V[NV + CM_MAX_ORDER];
-            for (int i = 0; i < NU + p + 1; i++)
-                U[i] = i <= p ? 0.0 : i >= NU ? 1.0 : (double)(i - p) / (NU - p) + 0.01 * (i & 1);
-            for (int i = 0; i < NV + q + 1; i++)
-                V[i] = i <= q ? -2.0 : i >= NV ? 3.0 : -2.0 + 5.0 * (i - q) / (NV - q);
-            cm_surf s = {.p = p, .q = q, .nu = NU, .nv = NV, .U = U, .V = V, .ctrl = ctrl, .w = rational ? w : NULL};
+            cm_surf s;
+            if (!net_surface(&net, d, rational, &s))
+                continue;
             cm_vec3 g[GU * GV];
             assert_ok(cm_surf_eval_grid(&s, gu, GU, gv, GV, g, NULL));
             for (int i = 0; i < GU; i++)
