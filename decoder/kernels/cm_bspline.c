@@ -182,27 +182,31 @@ static inline __attribute__((always_inline)) void ders_basis_p(int span, double 
        spent most of their time in the loop's bookkeeping.) */
     double inv_prev = 0.0;
     double fac1 = (double)p, fac2 = fac1 * (double)(p - 1);
+    /* (n >= 1 tested once, outside: with it in the loop's condition gcc -O0 drops the unroll
+       annotation with a warning) */
+    if (n >= 1) {
 #pragma GCC unroll 4
-    for (int r = 0; r <= p && n >= 1; r++) {
-        double a10 = inv_prev, a11 = 0.0, d = 0.0;
-        if (r >= 1)
-            d = a10 * ndu[r - 1][p - 1];
-        if (r <= p - 1) {
-            double inv = 1.0 / ndu[p][r];
-            a11 = -inv;
-            d += a11 * ndu[r][p - 1];
-            inv_prev = inv;
-        }
-        ders[1][r] = d * fac1;
-        if (n == 2) {
-            double d2 = 0.0;
-            if (r >= 2)
-                d2 = (a10 / ndu[p - 1][r - 2]) * ndu[r - 2][p - 2];
-            if (r >= 1 && r <= p - 1)
-                d2 += ((a11 - a10) / ndu[p - 1][r - 1]) * ndu[r - 1][p - 2];
-            if (r <= p - 2)
-                d2 += (-a11 / ndu[p - 1][r]) * ndu[r][p - 2];
-            ders[2][r] = d2 * fac2;
+        for (int r = 0; r <= p; r++) {
+            double a10 = inv_prev, a11 = 0.0, d = 0.0;
+            if (r >= 1)
+                d = a10 * ndu[r - 1][p - 1];
+            if (r <= p - 1) {
+                double inv = 1.0 / ndu[p][r];
+                a11 = -inv;
+                d += a11 * ndu[r][p - 1];
+                inv_prev = inv;
+            }
+            ders[1][r] = d * fac1;
+            if (n == 2) {
+                double d2 = 0.0;
+                if (r >= 2)
+                    d2 = (a10 / ndu[p - 1][r - 2]) * ndu[r - 2][p - 2];
+                if (r >= 1 && r <= p - 1)
+                    d2 += ((a11 - a10) / ndu[p - 1][r - 1]) * ndu[r - 1][p - 2];
+                if (r <= p - 2)
+                    d2 += (-a11 / ndu[p - 1][r]) * ndu[r][p - 2];
+                ders[2][r] = d2 * fac2;
+            }
         }
     }
     for (int k = n + 1; k <= nd; k++)
