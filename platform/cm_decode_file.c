@@ -1,6 +1,7 @@
 /* cm_decode_file.c - .cmz -> mesh -> file with POSIX I/O and no heap (see cm_decode_file.h). */
 #define _POSIX_C_SOURCE 200809L
 #include "cm_decode_file.h"
+#include "cm_report.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -36,14 +37,6 @@ int cm_out_format_of(const char *path)
     return -1;
 }
 
-static cm_err io_fail(cm_status *st, const char *where)
-{
-    int err = errno;
-    cm_err e = cm_fail(st, CM_E_IO, where);
-    if (st && st->code == CM_E_IO && st->sys_errno == 0)
-        st->sys_errno = err;
-    return e;
-}
 
 /* The file's bytes on their way to the decoder, and the serialiser's on their way to a file: static,
  * not on the stack, so that a terminal program's deepest call path stays within
@@ -82,7 +75,7 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
     static int fd; /* the source's context: the decoder reads the file again through it */
     fd = open(in_path, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
-        return io_fail(st, "open");
+        return cm_fail_errno(st, "open");
     cm_dec_set_source(dec, cm_decode_pread, &fd);
     cm_err e = CM_OK;
     for (;;) {
@@ -90,7 +83,7 @@ cm_err cm_decode_read(const char *in_path, cm_decoder *dec, cm_status *st)
         if (n < 0) {
             if (errno == EINTR)
                 continue;
-            e = io_fail(st, "read");
+            e = cm_fail_errno(st, "read");
             break;
         }
         if (n == 0)
@@ -293,7 +286,7 @@ static cm_err write_all(cm_out *w, int fd, uint64_t *total, cm_write_step *step,
             if (k < 0 && errno == EINTR)
                 continue;
             if (k <= 0)
-                return io_fail(st, "write");
+                return cm_fail_errno(st, "write");
             off += (size_t)k;
         }
         if (*total == 0 && step)
@@ -317,15 +310,15 @@ cm_err cm_write_mesh(const cm_mesh *mesh, cm_out_format fmt, const char *out_pat
         return e;
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0)
-        return io_fail(st, "create");
+        return cm_fail_errno(st, "create");
     uint64_t total = 0;
     e = write_all(&w, fd, &total, NULL, NULL, st);
     if (e == CM_OK && sync && fsync(fd) != 0)
-        e = io_fail(st, "fsync");
+        e = cm_fail_errno(st, "fsync");
     if (close(fd) != 0 && e == CM_OK)
-        e = io_fail(st, "close");
+        e = cm_fail_errno(st, "close");
     if (e == CM_OK && rename(tmp, out_path) != 0)
-        e = io_fail(st, "rename");
+        e = cm_fail_errno(st, "rename");
     if (e != CM_OK)
         unlink(tmp);
     else if (bytes)
@@ -342,15 +335,15 @@ cm_err cm_write_mesh_at(const cm_mesh *mesh, cm_out_format fmt, int dirfd, const
         return e;
     int fd = openat(dirfd, name, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0)
-        return io_fail(st, "create");
+        return cm_fail_errno(st, "create");
     if (step)
         step(ctx, "created");
     uint64_t total = 0;
     e = write_all(&w, fd, &total, step, ctx, st);
     if (e == CM_OK && fsync(fd) != 0)
-        e = io_fail(st, "fsync");
+        e = cm_fail_errno(st, "fsync");
     if (close(fd) != 0 && e == CM_OK)
-        e = io_fail(st, "close");
+        e = cm_fail_errno(st, "close");
     if (e != CM_OK) {
         unlinkat(dirfd, name, 0);
         return e;

@@ -1,6 +1,7 @@
 /* cm_fb.c - a frame on the Linux framebuffer (see cm_fb.h). */
 #define _POSIX_C_SOURCE 200809L
 #include "cm_fb.h"
+#include "cm_report.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -11,10 +12,7 @@
 
 static int fb_fail(cm_status *st, const char *where)
 {
-    int err = errno;
-    cm_fail(st, CM_E_IO, where);
-    if (st && st->code == CM_E_IO && st->sys_errno == 0)
-        st->sys_errno = err;
+    cm_fail_errno(st, where);
     return -1;
 }
 

@@ -119,6 +119,15 @@ char *cm_format_status(char *buf, size_t cap, const cm_status *st)
     return buf;
 }
 
+cm_err cm_fail_errno(cm_status *st, const char *where)
+{
+    int err = errno;
+    cm_err e = cm_fail(st, CM_E_IO, where);
+    if (st && st->code == CM_E_IO && st->sys_errno == 0)
+        st->sys_errno = err;
+    return e;
+}
+
 void cm_report_status(FILE *f, const char *prog, const char *subject, const cm_status *st)
 {
     char buf[512];

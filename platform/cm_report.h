@@ -46,6 +46,10 @@ void cm_report_errors_markdown(FILE *f);
  */
 void cm_report_status(FILE *f, const char *prog, const char *subject, const cm_status *st);
 
+/** A failed system call at `where`: CM_E_IO, with errno kept in st->sys_errno (the first failure
+ *  wins, as cm_fail's).  Returns CM_E_IO. */
+cm_err cm_fail_errno(cm_status *st, const char *where);
+
 /** Format the same text into buf (always NUL-terminated); returns buf. */
 char *cm_format_status(char *buf, size_t cap, const cm_status *st);
 

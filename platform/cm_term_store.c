@@ -1,6 +1,7 @@
 /* cm_term_store.c - the displayed model in generations behind one symlink (see cm_term_store.h). */
 #define _GNU_SOURCE /* getdents64: reading a directory without opendir's heap */
 #include "cm_term_store.h"
+#include "cm_report.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -21,14 +22,6 @@
 static const char *const outputs[] = {"model.glb", "model.cmz", "model.stl"};
 #define STL_OUTPUT 2
 
-static cm_err store_fail(cm_status *st, const char *where)
-{
-    int err = errno;
-    cm_err e = cm_fail(st, CM_E_IO, where);
-    if (st && st->code == CM_E_IO && st->sys_errno == 0)
-        st->sys_errno = err;
-    return e;
-}
 
 static void gen_name(char *out, size_t cap, uint64_t n)
 {
@@ -231,10 +224,10 @@ static cm_err swap(cm_term_store *s, uint64_t n, cm_status *st)
     gen_name(target, sizeof target, n);
     unlinkat(s->dirfd, CURRENT_NEW, 0);
     if (symlinkat(target, s->dirfd, CURRENT_NEW) != 0)
-        return store_fail(st, "store: symlink " CURRENT_NEW);
+        return cm_fail_errno(st, "store: symlink " CURRENT_NEW);
     cm_kill_point("link-created");
     if (renameat(s->dirfd, CURRENT_NEW, s->dirfd, CURRENT) != 0) {
-        cm_err e = store_fail(st, "store: rename " CURRENT_NEW " over " CURRENT);
+        cm_err e = cm_fail_errno(st, "store: rename " CURRENT_NEW " over " CURRENT);
         unlinkat(s->dirfd, CURRENT_NEW, 0);
         return e;
     }
@@ -342,12 +335,12 @@ cm_err cm_term_store_install(cm_term_store *s, const cm_mesh *mesh, const char *
     gen_name(old_name, sizeof old_name, old);
     remove_gen(s->dirfd, name, false); /* an earlier install that failed midway */
     if (mkdirat(s->dirfd, name, 0755) != 0)
-        return store_fail(st, "store: create the generation directory");
+        return cm_fail_errno(st, "store: create the generation directory");
     cm_kill_point("gen-created");
     cm_err e = CM_OK;
     int g = openat(s->dirfd, name, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (g < 0)
-        e = store_fail(st, "store: open the generation directory");
+        e = cm_fail_errno(st, "store: open the generation directory");
     if (e == CM_OK && s->stl)
         e = cm_write_mesh_at(mesh, CM_OUT_STL, g, "model.stl", NULL, write_step, "stl", st);
     if (e == CM_OK)
@@ -355,11 +348,11 @@ cm_err cm_term_store_install(cm_term_store *s, const cm_mesh *mesh, const char *
     /* a hard link, not a copy: no second copy of the bytes to write, and until the swap the
        received file stays at cmz_path for a restart to finish */
     if (e == CM_OK && linkat(AT_FDCWD, cmz_path, g, "model.cmz", 0) != 0)
-        e = store_fail(st, "store: link the received file into the generation");
+        e = cm_fail_errno(st, "store: link the received file into the generation");
     if (e == CM_OK)
         cm_kill_point("cmz-linked");
     if (e == CM_OK && fsync(g) != 0)
-        e = store_fail(st, "store: sync the generation directory");
+        e = cm_fail_errno(st, "store: sync the generation directory");
     if (e == CM_OK)
         cm_kill_point("gen-synced");
     if (g >= 0)

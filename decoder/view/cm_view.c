@@ -133,6 +133,15 @@ static int to_screen(const cm_view *v, const double p[3], double s[3])
     return 1;
 }
 
+/* half the frame across and down, less the margin: where the fitted model may reach from the centre */
+static void frame_room(const cm_view *v, double *room_x, double *room_y)
+{
+    double w = (double)v->o.width, h = (double)v->o.height, side = w < h ? w : h;
+    double rx = 0.5 * w - VIEW_MARGIN * side, ry = 0.5 * h - VIEW_MARGIN * side;
+    *room_x = rx > 0.5 ? rx : 0.5;
+    *room_y = ry > 0.5 ? ry : 0.5;
+}
+
 cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const float hi[3], cm_status *st)
 {
     if (o->width > CM_VIEW_MAX_W || o->height > CM_VIEW_MAX_H) {
@@ -163,10 +172,8 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         ey = fabs(p[1]) > ey ? fabs(p[1]) : ey;
         diag2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] > diag2 ? p[0] * p[0] + p[1] * p[1] + p[2] * p[2] : diag2;
     }
-    double w = (double)o->width, h = (double)o->height, side = w < h ? w : h;
-    double room_x = 0.5 * w - VIEW_MARGIN * side, room_y = 0.5 * h - VIEW_MARGIN * side;
-    room_x = room_x > 0.5 ? room_x : 0.5;
-    room_y = room_y > 0.5 ? room_y : 0.5;
+    double room_x, room_y;
+    frame_room(v, &room_x, &room_y);
     double radius = sqrt(diag2);
     if (!(radius > 0.0))
         radius = 1.0; /* a point: any scale shows it */
@@ -215,8 +222,8 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
     double mx = 0.5 * (xlo + xhi), my = 0.5 * (ylo + yhi);
     for (int k = 0; k < 3; k++)
         v->c[k] += mx * v->r[k] + my * v->u[k];
-    double w = (double)v->o.width, h = (double)v->o.height, side = w < h ? w : h;
-    double room_x = 0.5 * w - VIEW_MARGIN * side, room_y = 0.5 * h - VIEW_MARGIN * side;
+    double room_x, room_y;
+    frame_room(v, &room_x, &room_y);
     double ex = 0.5 * (xhi - xlo), ey = 0.5 * (yhi - ylo);
     double sx = ex > 0.0 ? room_x / ex : 1e300, sy = ey > 0.0 ? room_y / ey : 1e300;
     double s = sx < sy ? sx : sy;
