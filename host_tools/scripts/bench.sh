@@ -5,7 +5,7 @@
 # ratios; faces by method (plane / gregory / gregory-exact / gregory-fit / g1fit / nfill / kept) and the share whose surface was deleted; the
 # largest §12 error ratio over rebuilt faces and the worst G1 angle on their tangent edges (from
 # the encoder's --report, which measures with the decoder's code); encode time (workstation, host profile); decode time of the
-# terminal's decoder (terminal profile, to .glb; best of 3 runs); its peak resident memory;
+# terminal's decoder (terminal profile, to .glb; best of 3 runs, tests/tools/wall_min); its peak resident memory;
 # triangles; and, with BENCH_CALLGRIND=1, the decoder's instruction count under callgrind
 # (stable where wall time is noisy).  Times on a shared machine are noisy: compare ratios
 # within one run.  Writes OUTDIR/bench.tsv and prints a Markdown table (README's).
@@ -15,7 +15,9 @@ shift 3
 mkdir -p "$out"
 tsv=$out/bench.tsv
 printf 'model\tiges_bytes\tgzip9\txz9\tcmz_bytes\tx_iges\tx_gzip\tx_xz\tfaces\tplane\tkeep\tenc_s\tdec_s\tdec_rss_kib\ttriangles\tdec_instr\tterminal\tgregory\tdeleted_pct\tmax_ratio_pct\tg1_worst_deg\tgregory_exact\tgregory_fit\tnfill\tg1fit\n' > "$tsv"
-now() { date +%s.%N; }
+now() { date +%s.%N; } # encode times (seconds: the shell's few ms do not matter there)
+wall_min=${WALL_MIN:-}
+[ -x "$wall_min" ] || { echo "bench: WALL_MIN (tests/tools/wall_min) not built (make bench builds it)" >&2; exit 2; }
 for m in "$@"; do
     name=$(basename "${m%.*}")
     # a model in both forms (o3dv__as1_pe_203.igs and .stp) gets two names: their outputs must not meet
@@ -44,19 +46,12 @@ for m in "$@"; do
             term="$term; --profile terminal: refused"
         fi
     fi
-    best=
-    for r in 1 2 3; do
-        s=$(now)
-        if ! decout=$("${run[@]}" "$c" -o "$g" 2>&1); then
-            echo "# $name: decode failed: $decout" >&2
-            best=
-            break
-        fi
-        e=$(now)
-        d=$(echo "$e - $s" | bc)
-        if [ -z "$best" ] || [ "$(echo "$d < $best" | bc)" = 1 ]; then best=$d; fi
-    done
-    [ -n "$best" ] || continue
+    if ! decout=$("${run[@]}" "$c" -o "$g" 2>&1); then
+        echo "# $name: decode failed: $decout" >&2
+        continue
+    fi
+    # the best of 3 wall times, fork to wait (tests/tools/wall_min: no shell `date` inside the time)
+    best=$("$wall_min" 3 -- "${run[@]}" "$c" -o "$g") || { echo "# $name: decode failed when timed" >&2; continue; }
     rss=-
     if [ -x /usr/bin/time ]; then
         rss=$(/usr/bin/time -f %M "${run[@]}" "$c" -o "$g" 2>&1 >/dev/null | tail -n 1)

@@ -8,9 +8,10 @@
 #     meshes it with BRepMesh), compressed by Draco (`draco_encoder -cl 10`, default quantisation:
 #     positions on 11 bits of the box's largest side, a step of 5e-4 of it, within the deflection);
 #   - decode: the terminal's cmz-decode at the same deflection (--tess) against `draco_decoder` on
-#     that Draco file (best of 3 wall times; with BENCH_CALLGRIND=1 also instruction counts, stable
-#     where wall time is noisy), and against Open CASCADE reading the IGES and meshing it (one run:
-#     what a terminal running OCCT would do instead);
+#     that Draco file (the best of BENCH_RUNS=7 wall times each, run in turns by tests/tools/wall_min;
+#     with BENCH_CALLGRIND=1 also instruction counts, stable where wall time is noisy), and against
+#     Open CASCADE reading the IGES and meshing it (one timed run, by wall_min too: what a terminal
+#     running OCCT would do instead);
 #   - triangles each makes at that deflection, and the two-sided deviation (Hausdorff distance) of
 #     each decoded mesh from the B-rep as Open CASCADE reads it (`occt_oracle mesh-dev`: the larger
 #     of mesh -> model and model -> mesh, against the better of its two readings of the trim
@@ -18,11 +19,11 @@
 #
 # A model the terminal's profile refuses is decoded by the workstation's `cmz decode` (same code),
 # and the table says so.  Ratios above 1 favour curvemesh.  Writes OUTDIR/peers.tsv and prints a
-# Markdown table (README's) with the medians.  Needs draco (Debian package `draco`), xz, bc.
+# Markdown table (README's) with the medians.  Needs draco (Debian package `draco`) and xz.
 set -u
 cmz=$1 dec=$2 oracle=$3 out=$4
 shift 4
-for tool in draco_encoder draco_decoder xz bc; do
+for tool in draco_encoder draco_decoder xz; do
     command -v "$tool" > /dev/null || { echo "bench_peers: $tool not found (make bench installs it)" >&2; exit 2; }
 done
 [ -x "$oracle" ] || { echo "bench_peers: $oracle not built (make oracle)" >&2; exit 2; }
@@ -40,19 +41,11 @@ hausdorff() {
              $1 == "mesh_to_model_max" || $1 == "model_to_mesh_max" { if ($2 > m) m = $2; n++ }
              END { if (n == 2 && (best == "" || m < best)) best = m; if (best == "") print "-"; else printf "%.4g\n", best }'
 }
-now() { date +%s.%N; }
-# best of 3 wall times of a command (its output thrown away); empty if it fails
-best3() {
-    local best= s e d
-    for _ in 1 2 3; do
-        s=$(now)
-        "$@" > /dev/null 2>&1 || return 1
-        e=$(now)
-        d=$(echo "$e - $s" | bc)
-        if [ -z "$best" ] || [ "$(echo "$d < $best" | bc)" = 1 ]; then best=$d; fi
-    done
-    echo "$best"
-}
+# wall times by tests/tools/wall_min (fork to wait, in C: a shell's `date` around a run added its own
+# 1-2 ms to both sides of a ratio of 2-10 ms runs); the decoders in turns, the best of BENCH_RUNS each
+wall_min=${WALL_MIN:-}
+[ -x "$wall_min" ] || { echo "bench_peers: WALL_MIN (tests/tools/wall_min) not built (make bench builds it)" >&2; exit 2; }
+runs=${BENCH_RUNS:-7}
 instr() {
     if [ "${BENCH_CALLGRIND:-0}" = 1 ] && command -v valgrind > /dev/null; then
         valgrind --tool=callgrind --callgrind-out-file=/dev/null "$@" 2>&1 | sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
@@ -65,13 +58,13 @@ for m in "$@"; do
     c=$out/$name.cmz
     [ -s "$c" ] || { echo "# $name: no $c (bench.sh did not encode it): skipped" >&2; continue; }
     # Open CASCADE: read + mesh (+ a binary STL, small next to the meshing), timed once
-    s=$(now)
     if ! occ=$("$oracle" write-stl "$m" "$work/m.stl" --defl-rel 1e-3 2>&1); then
         echo "# $name: Open CASCADE failed: $(tail -n 1 <<<"$occ")" >&2
         continue
     fi
-    e=$(now)
-    occt_s=$(echo "$e - $s" | bc)
+    # timed again, as the decoders are, with the file in the page cache
+    occt_s=$("$wall_min" 1 -- "$oracle" write-stl "$m" "$work/m.stl" --defl-rel 1e-3) ||
+        { echo "# $name: Open CASCADE failed when timed" >&2; continue; }
     defl=$(sed -n 's/^defl \([0-9.eE+-]*\)$/\1/p' <<<"$occ")
     occt_tris=$(sed -n 's/^triangles \([0-9]*\)$/\1/p' <<<"$occ")
     [ -n "$defl" ] && [ -n "$occt_tris" ] || { echo "# $name: cannot read occt_oracle's output: $occ" >&2; continue; }
@@ -89,8 +82,9 @@ for m in "$@"; do
         d=$("$cmz" decode "$c" -o "$work/c.glb" --tess "$defl" 2>&1) || { echo "# $name: decode failed: $d" >&2; continue; }
     fi
     cmz_tris=$(sed -n 's/.* \([0-9]*\) triangles.*/\1/p' <<<"$d" | head -n 1)
-    cmz_s=$(best3 "${run[@]}" "$c" -o "$work/c.glb" --tess "$defl") || { echo "# $name: decode failed" >&2; continue; }
-    draco_s=$(best3 draco_decoder -i "$work/m.drc" -o "$work/m.ply") || { echo "# $name: draco_decoder failed" >&2; continue; }
+    times=$("$wall_min" "$runs" -- "${run[@]}" "$c" -o "$work/c.glb" --tess "$defl" -- \
+        draco_decoder -i "$work/m.drc" -o "$work/m.ply") || { echo "# $name: a decoder failed when timed" >&2; continue; }
+    read -r cmz_s draco_s <<<"$times"
     "$cmz" decode "$c" -o "$work/c.stl" --tess "$defl" > /dev/null 2>&1 || rm -f "$work/c.stl"
     draco_decoder -i "$work/m.drc" -o "$work/d.stl" > /dev/null 2>&1 || rm -f "$work/d.stl"
     cdev=$([ -s "$work/c.stl" ] && hausdorff "$m" "$work/c.stl" || echo -)
