@@ -64,6 +64,7 @@ void cm_view_opts_default(cm_view_opts *o)
     o->background = 0xffffffu;
     o->edges = 1;
     o->step = 0;
+    o->turn = 0;
 }
 
 static void set3(double *a, double x, double y, double z)
@@ -104,6 +105,43 @@ static void camera_axes(cm_view *v, cm_view_dir d)
         set3(v->f, -1.0 / s3, 1.0 / s3, -1.0 / s3);
         break;
     }
+    }
+}
+
+/* cos and sin of k x 15 degrees, k = 0..6 (a quarter turn), as constants: no libm trig, the same bits
+   everywhere */
+_Static_assert(CM_VIEW_TURN_DEG == 15, "turn_cos holds steps of 15 degrees");
+static const double turn_cos[7] = {1.0,
+                                   0.96592582628906829,
+                                   0.86602540378443865,
+                                   0.70710678118654752,
+                                   0.5,
+                                   0.25881904510252076,
+                                   0.0};
+
+/* the camera's axes turned about Z by -turn steps: the model seems turned by +turn (counter-clockwise
+   from above) */
+static void camera_turn(cm_view *v, int turn)
+{
+    int k = turn % CM_VIEW_TURNS;
+    if (k < 0)
+        k += CM_VIEW_TURNS;
+    if (k == 0)
+        return;
+    /* the angle -k x 15 degrees: its cos and sin from the quarter-turn table by symmetry */
+    int q = k / 6, m = k % 6;
+    double c = turn_cos[m], s = turn_cos[6 - m]; /* of +m x 15 degrees */
+    for (int i = 0; i < q; i++) { /* + a quarter turn each: (c, s) -> (-s, c) */
+        double t = c;
+        c = -s;
+        s = t;
+    }
+    s = -s; /* the camera turns the other way */
+    double *ax[3] = {v->r, v->u, v->f};
+    for (int a = 0; a < 3; a++) {
+        double x = ax[a][0], y = ax[a][1];
+        ax[a][0] = c * x - s * y;
+        ax[a][1] = s * x + c * y;
     }
 }
 
@@ -157,9 +195,10 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         if (!isfinite(lo[i]) || !isfinite(hi[i]) || !(lo[i] <= hi[i]))
             return cm_fail(st, CM_E_ARG, "view: the model's box");
     v->o = *o;
-    v->triangles = v->edge_segments = 0;
+    v->triangles = v->edge_segments = v->silhouette_segments = 0;
     v->nparts = v->nbase_parts = 0;
     camera_axes(v, o->dir);
+    camera_turn(v, o->turn);
     for (int i = 0; i < 3; i++)
         v->c[i] = 0.5 * ((double)lo[i] + (double)hi[i]);
     /* the box's corners in view space: their extent across the screen and in depth */
@@ -442,8 +481,12 @@ static void fill_triangle(cm_view *v, const double s[3][3], const double l[3], u
     v->triangles += (uint64_t)drawn;
 }
 
-/* vertex vi of the mesh on the screen (x, y, depth) and its brightness; 0 when behind the eye */
-static int vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, double s[3], double *light)
+static void draw_line(cm_view *v, const double a[3], const double b[3]);
+
+/* vertex vi of the mesh on the screen (x, y, depth), its brightness and its normal's component
+   along the line of sight (positive: facing away); 0 when behind the eye */
+static int vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, double s[3], double *light,
+                         double *facing)
 {
     float p[3], n[3];
     cm_mesh_pos(mesh, vi, p);
@@ -454,7 +497,40 @@ static int vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, dou
     nv[1] = (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2];
     nv[2] = (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2];
     *light = shade(nv);
+    /* the line of sight: the view axis (orthographic), from the eye at (0, 0, eye) (perspective) */
+    *facing = v->o.perspective ? nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye) : nv[2];
     return to_screen(v, q, s);
+}
+
+/*
+ * The silhouette across one triangle (screen corners s, facing values d): where d, linear across
+ * it, is zero, a segment between the two sides whose ends differ in sign (0 counts as facing the
+ * viewer).  A side's crossing depends on its two corners alone, so the segments of neighbouring
+ * triangles meet; a plane's corners share one normal and never cross.
+ */
+static void silhouette(cm_view *v, const double s[3][3], const double d[3])
+{
+    double pt[2][3];
+    int n = 0;
+    for (int i = 0; i < 3 && n < 2; i++) {
+        int j = (i + 1) % 3;
+        if ((d[i] > 0.0) == (d[j] > 0.0))
+            continue;
+        double t = d[i] / (d[i] - d[j]);
+        for (int k = 0; k < 3; k++)
+            pt[n][k] = s[i][k] + t * (s[j][k] - s[i][k]);
+        n++;
+    }
+    if (n == 2) {
+        /* at the depth of the triangle's nearest corner: the surface beside a silhouette turns away
+           within a pixel (a tube of radius r pixels spans sqrt(2 r) pixels of depth there), more
+           than an edge's bias; what lies nearer than the whole triangle still hides it */
+        double zmin = s[0][2] < s[1][2] ? s[0][2] : s[1][2];
+        zmin = s[2][2] < zmin ? s[2][2] : zmin;
+        pt[0][2] = pt[1][2] = zmin;
+        draw_line(v, pt[0], pt[1]);
+        v->silhouette_segments++;
+    }
 }
 
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
@@ -486,9 +562,9 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         /* a face's vertices (each in about six triangles) projected and lit once, where they fit */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
         for (uint32_t i = 0; cached && i < F->nverts; i++)
-            v->fv_ok[i] = (uint8_t)vertex_screen(v, mesh, F->first_vert + i, v->fv[i], &v->fl[i]);
+            v->fv_ok[i] = (uint8_t)vertex_screen(v, mesh, F->first_vert + i, v->fv[i], &v->fl[i], &v->fd[i]);
         for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
-            double s[3][3], l[3];
+            double s[3][3], l[3], d[3];
             int ok = 1;
             for (int i = 0; i < 3 && ok; i++) {
                 uint32_t vi = cm_mesh_idx(mesh, F->first_index + k + (uint32_t)i), j = vi - F->first_vert;
@@ -496,12 +572,16 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
                     ok = v->fv_ok[j];
                     s[i][0] = v->fv[j][0], s[i][1] = v->fv[j][1], s[i][2] = v->fv[j][2];
                     l[i] = v->fl[j];
+                    d[i] = v->fd[j];
                 } else {
-                    ok = vertex_screen(v, mesh, vi, s[i], &l[i]);
+                    ok = vertex_screen(v, mesh, vi, s[i], &l[i], &d[i]);
                 }
             }
-            if (ok)
-                fill_triangle(v, s, l, rgb);
+            if (!ok)
+                continue;
+            fill_triangle(v, s, l, rgb);
+            if (v->o.edges)
+                silhouette(v, s, d);
         }
     }
 }

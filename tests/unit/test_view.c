@@ -8,6 +8,7 @@
  */
 #include "test_util.h"
 
+#include <math.h>
 #include <stdio.h>
 
 #include "cm/cm_crc32.h"
@@ -17,7 +18,7 @@
 static cm_view view;
 
 #define MAXV 64
-#define MAXI 96
+#define MAXI 192
 static float g_pos[MAXV][3], g_nrm[MAXV][3];
 static uint32_t g_idx[MAXI];
 static cm_mesh_face g_faces[8];
@@ -126,6 +127,132 @@ static void test_depth_order(void **state)
         assert_true(view.rgb[3 * mid] > 0); /* red: the near square */
         assert_int_equal(view.rgb[3 * mid + 2], 0);
     }
+}
+
+/* the turntable: the front view of a model turned a quarter (6 steps of 15 degrees counter-clockwise
+   from above) is its left view, pixel for pixel; 24 steps are a whole turn, -18 the same as 6; the
+   front face (red) and half of the left face (blue: the right view, its mirror, differs) tell the
+   views apart */
+static uint8_t g_frame[64 * 64 * 3];
+static void turned_frame(cm_view_dir dir, int turn)
+{
+    cm_mesh m = mesh_storage();
+    const float front[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
+    const float left[4][3] = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, {0, 0.5f, 1}}; /* half: not its mirror */
+    const float ny[3] = {0, -1, 0}, nx[3] = {-1, 0, 0};
+    add_quad(&m, front, ny, 0xff0000u, 1);
+    add_quad(&m, left, nx, 0x0000ffu, 1);
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    o.width = o.height = 64;
+    o.dir = dir;
+    o.turn = turn;
+    o.edges = 0;
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_mesh(&view, &m);
+}
+
+static void test_turn(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64)
+        skip();
+    size_t n = sizeof g_frame, mid = 3 * (32 * 64 + 32), right = 3 * (32 * 64 + 48);
+    turned_frame(CM_VIEW_LEFT, 0);
+    assert_true(view.rgb[right + 2] > 0 && view.rgb[right] == 0); /* the left view: blue on the right */
+    memcpy(g_frame, view.rgb, n);
+    turned_frame(CM_VIEW_RIGHT, 0);
+    assert_memory_not_equal(view.rgb, g_frame, n);
+    turned_frame(CM_VIEW_FRONT, 6);
+    assert_memory_equal(view.rgb, g_frame, n);
+    turned_frame(CM_VIEW_FRONT, -18);
+    assert_memory_equal(view.rgb, g_frame, n);
+    turned_frame(CM_VIEW_FRONT, 0);
+    assert_true(view.rgb[mid] > 0 && view.rgb[mid + 2] == 0); /* unturned: red */
+    memcpy(g_frame, view.rgb, n);
+    turned_frame(CM_VIEW_FRONT, 24);
+    assert_memory_equal(view.rgb, g_frame, n);
+    turned_frame(CM_VIEW_FRONT, 1); /* 15 degrees: both faces, neither view */
+    assert_memory_not_equal(view.rgb, g_frame, n);
+}
+
+/* a tube along x (radius 0.5, 24 sides, outward normals) seen from the front: its silhouettes are
+   its top and bottom generators, drawn in the edge colour across its width; with edges off, none;
+   a flat square has none either (one normal: no sign change) */
+static size_t count_rgb(const cm_view *v, uint32_t rgb)
+{
+    size_t npix = (size_t)v->o.width * (size_t)v->o.height;
+    return npix - count_not(v, rgb);
+}
+
+static void test_silhouette(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
+        skip();
+    enum { SIDES = 24 };
+    for (int edges = 0; edges < 2; edges++) {
+        cm_mesh m = mesh_storage();
+        cm_mesh_face *f = &m.faces[m.nfaces++];
+        memset(f, 0, sizeof *f);
+        for (int k = 0; k < SIDES; k++) {
+            double a = 2.0 * 3.14159265358979323846 * (double)k / SIDES;
+            for (int end = 0; end < 2; end++) {
+                float *p = m.pos[2 * k + end], *n = m.nrm[2 * k + end];
+                p[0] = (float)end, p[1] = (float)(0.5 + 0.5 * cos(a)), p[2] = (float)(0.5 + 0.5 * sin(a));
+                n[0] = 0.0f, n[1] = (float)cos(a), n[2] = (float)sin(a);
+            }
+            uint32_t a0 = (uint32_t)(2 * k), b0 = (uint32_t)(2 * ((k + 1) % SIDES));
+            const uint32_t tri[6] = {a0, a0 + 1, b0 + 1, a0, b0 + 1, b0};
+            memcpy(&m.idx[m.nindex], tri, sizeof tri);
+            m.nindex += 6;
+        }
+        m.nverts = 2 * SIDES;
+        f->nverts = m.nverts;
+        f->nindex = m.nindex;
+        cm_view_opts o;
+        cm_view_opts_default(&o);
+        o.width = o.height = 100;
+        o.dir = CM_VIEW_FRONT;
+        o.edges = edges;
+        const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        cm_view_mesh(&view, &m);
+        size_t lines = count_rgb(&view, 0x1a1a1au);
+        if (!edges) {
+            assert_int_equal(view.silhouette_segments, 0);
+            assert_int_equal(lines, 0);
+            continue;
+        }
+        /* the two generators: each about the tube's 88 pixels across, in the top and bottom rows of
+           its outline (rows 6 and 93 of the fitted frame, give or take one) */
+        assert_true(view.silhouette_segments >= 2);
+        size_t top = 0, bottom = 0;
+        for (int y = 0; y < 100; y++)
+            for (int x = 0; x < 100; x++) {
+                const uint8_t *px = &view.rgb[3 * (y * 100 + x)];
+                if (px[0] == 0x1a && px[1] == 0x1a && px[2] == 0x1a) {
+                    assert_true(y <= 8 || y >= 91); /* nowhere in between */
+                    top += y <= 8;
+                    bottom += y >= 91;
+                }
+            }
+        assert_true(top >= 80 && bottom >= 80);
+    }
+    /* a plane: no silhouette */
+    cm_mesh m = mesh_storage();
+    const float front[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
+    const float ny[3] = {0, -1, 0};
+    add_quad(&m, front, ny, 0x808080u, 1);
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    o.width = o.height = 100;
+    o.dir = CM_VIEW_ISO;
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_mesh(&view, &m);
+    assert_int_equal(view.silhouette_segments, 0);
 }
 
 static void test_refuses_large_frame(void **state)
@@ -288,7 +415,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_front_box),   cmocka_unit_test(test_depth_order), cmocka_unit_test(test_refuses_large_frame),
-        cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
+        cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

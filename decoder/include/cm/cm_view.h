@@ -51,12 +51,18 @@ typedef struct cm_view_opts {
     cm_view_dir dir;
     int perspective;       /* 0: orthographic; 1: a 30 degree field of view */
     uint32_t background;   /* 0xRRGGBB */
-    int edges;             /* 1: draw the curve mesh's edges */
+    int edges;             /* 1: draw the curve mesh's edges and the silhouettes of curved faces */
     uint32_t step;         /* assembly step k >= 1: parts 1..k shown, part k highlighted, the others
                               dimmed (cm_view_parts numbers them); 0: the whole model as it is */
+    int turn;              /* the model turned about its vertical (Z) axis by turn x CM_VIEW_TURN_DEG
+                              degrees, counter-clockwise seen from above (a turntable; any integer) */
 } cm_view_opts;
 
-/** Defaults: 800 x 480 (within the build's frame), iso, orthographic, white, edges on. */
+/** One turn step of cm_view_opts.turn (a rotate button press, a turntable tick), in degrees. */
+#define CM_VIEW_TURN_DEG 15
+#define CM_VIEW_TURNS (360 / CM_VIEW_TURN_DEG)
+
+/** Defaults: 800 x 480 (within the build's frame), iso, unturned, orthographic, white, edges on. */
 void cm_view_opts_default(cm_view_opts *o);
 
 typedef struct cm_view {
@@ -65,7 +71,7 @@ typedef struct cm_view {
     double c[3], r[3], u[3], f[3];
     double scale;          /* orthographic: pixels per mm; perspective: the focal length in pixels */
     double eye;            /* perspective: the eye's depth in view space (negative) */
-    uint64_t triangles, edge_segments; /* drawn (for tests and --verbose) */
+    uint64_t triangles, edge_segments, silhouette_segments; /* drawn (for tests and --verbose) */
     /* the model's parts (cm_view_parts): a face's part among its own faces' connected components
        (faces joined by their edges, see there), numbered from 1 in face order; placement k's copies
        are part nbase_parts + 1 + k */
@@ -78,6 +84,7 @@ typedef struct cm_view {
        of the eye: a vertex is in about six triangles */
     double fv[CM_VIEW_FACE_VERTS][3];
     double fl[CM_VIEW_FACE_VERTS];
+    double fd[CM_VIEW_FACE_VERTS]; /* the normal along the line of sight: the silhouette where it is 0 */
     uint8_t fv_ok[CM_VIEW_FACE_VERTS];
     uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
     float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
@@ -108,7 +115,12 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh);
  */
 uint32_t cm_view_parts(cm_view *v, const cm_model *m);
 
-/** Fill every triangle of the mesh (faces coloured by their rgb when they have one). */
+/**
+ * Fill every triangle of the mesh (faces coloured by their rgb when they have one), and with
+ * opts.edges the silhouettes of curved faces: where the mesh's normals turn from facing the viewer
+ * to facing away, the line on which their component along the line of sight, interpolated across
+ * each triangle, is zero (drawn like an edge: depth-tested, a little in front).
+ */
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh);
 
 /**
