@@ -197,7 +197,7 @@ $(call bdir,$(1))/cmz-view: $(call bdir,$(1))/platform/cmz_view_main.o $(call bd
 		$(call bdir,$(1))/platform/cm_fb.o \
 		$(call bdir,$(1))/platform/cm_report.o $(call bdir,$(1))/platform/cm_noheap_wrap.o $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
-	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ -lm
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(GPIO_LIBS) -lm
 
 $(call bdir,$(1))/libcmhost.a: $(patsubst %.c,$(call bdir,$(1))/%.o,$(HOST_SRC) platform/cm_report.c)
 	$$(call say,AR      ,$$@)

@@ -39,6 +39,8 @@ $(call bdir,$(1))/cmz-terminal: $(call bdir,$(1))/platform/cmz_terminal_main.o \
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) $$(CM_GC_SECTIONS) $$(NOHEAP_WRAP) -o $$@ $$^ $$(LINK_USB_LIBS) $$(GPIO_LIBS) -lm
 endef
 $(foreach p,$(PROFILES),$(eval $(call TERMINAL_RULES,$(p))))
+# cmz-view's buttons (issue 17): the GPIO back end too (its libraries in the Makefile's link rule)
+$(foreach p,$(PROFILES),$(eval $(call bdir,$(p))/cmz-view: $(call gpio_obj,$(p))))
 
 CMZ_EXTRA_OBJS += $(patsubst %.c,$(call bdir,host)/%.o,$(LINK_HOST_SRC))
 CMZ_EXTRA_LIBS += $(LINK_USB_LIBS)

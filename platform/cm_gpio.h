@@ -1,6 +1,7 @@
 /*
  * cm_gpio.h - the terminal's signal lines: what the operator sees (busy,
- * ready, error lamps) and the button that asks for the model again.
+ * ready, error lamps), the button that asks for the model again, and the
+ * viewer's buttons (rotate, next step, previous step, reset view: issue 17).
  *
  * One back end, cm_gpio_gpiod.c (libgpiod 1.6, the only file that includes
  * <gpiod.h>); a build without libgpiod gets cm_gpio_none.c, whose open
@@ -18,16 +19,29 @@
 
 typedef enum cm_gpio_line { CM_GPIO_BUSY, CM_GPIO_READY, CM_GPIO_ERROR, CM_GPIO_NOUT } cm_gpio_line;
 
+/* the viewer's buttons (cmz-view --gpio-rotate ...) */
+typedef enum cm_gpio_button {
+    CM_GPIO_ROTATE,
+    CM_GPIO_NEXT,
+    CM_GPIO_PREV,
+    CM_GPIO_RESET,
+    CM_GPIO_NBUTTON
+} cm_gpio_button;
+
+/* slots: the outputs, the request button, the viewer's buttons */
+#define CM_GPIO_SLOTS (CM_GPIO_NOUT + 1 + CM_GPIO_NBUTTON)
+
 typedef struct cm_gpio_config {
     const char *out[CM_GPIO_NOUT]; /* output lines, NULL = unused */
     const char *request;           /* input line (button), rising edge = pressed; NULL = unused */
     const char *consumer;          /* consumer name shown by gpioinfo ("cmz-terminal") */
+    const char *button[CM_GPIO_NBUTTON]; /* the viewer's input lines, as request; NULL = unused */
 } cm_gpio_config;
 
 typedef struct cm_gpio {
-    void *chip[CM_GPIO_NOUT + 1]; /* back end's handles (libgpiod: struct gpiod_chip *) */
-    void *line[CM_GPIO_NOUT + 1]; /* (struct gpiod_line *) */
-    bool active_low[CM_GPIO_NOUT + 1];
+    void *chip[CM_GPIO_SLOTS]; /* back end's handles (libgpiod: struct gpiod_chip *) */
+    void *line[CM_GPIO_SLOTS]; /* (struct gpiod_line *) */
+    bool active_low[CM_GPIO_SLOTS];
     bool open;
     char err[192];
 } cm_gpio;
@@ -40,6 +54,9 @@ int cm_gpio_set(cm_gpio *g, cm_gpio_line line, int active);
 int cm_gpio_request_fd(const cm_gpio *g);
 /** Consume pending request edges. @return 1 if the button was pressed since the last call, 0 if not, -1 on error */
 int cm_gpio_request_pressed(cm_gpio *g);
+/** The same for a viewer's button: its fd (-1 when not configured), and whether it was pressed. */
+int cm_gpio_button_fd(const cm_gpio *g, cm_gpio_button b);
+int cm_gpio_button_pressed(cm_gpio *g, cm_gpio_button b);
 /** Release every line (outputs go inactive first); safe to call twice. */
 void cm_gpio_close(cm_gpio *g);
 

@@ -1,6 +1,6 @@
 /*
- * cm_gpio_gpiod.c - the terminal's lamps and request button through libgpiod
- * 1.6 (the GPIO character device).  The only file that includes <gpiod.h>.
+ * cm_gpio_gpiod.c - the terminal's lamps, its request button and the viewer's
+ * buttons through libgpiod 1.6 (the GPIO character device).  The only file that includes <gpiod.h>.
  *
  * Each configured line gets its own chip handle, so "busy" and "request" may
  * sit on different chips.  Active-low is requested from the kernel
@@ -31,7 +31,8 @@
 #endif
 
 /* the name of each slot in error messages, as the configuration calls it */
-static const char *const role_name[CM_GPIO_NOUT + 1] = {"busy", "ready", "error", "request"};
+static const char *const role_name[CM_GPIO_SLOTS] = {"busy", "ready", "error", "request",
+                                                     "rotate", "next", "prev", "reset"};
 
 /* a chip or line description longer than this is a configuration mistake */
 enum { SPEC_MAX = 96 };
@@ -128,7 +129,7 @@ static void request_failed(cm_gpio *g, int slot, const char *spec, struct gpiod_
             gpio_fail(g, slot, spec, "line is used by another program (no consumer name)");
         return;
     }
-    gpio_fail(g, slot, spec, "cannot request the line as %s: %s", slot == CM_GPIO_NOUT ? "an edge input" : "an output",
+    gpio_fail(g, slot, spec, "cannot request the line as %s: %s", slot >= CM_GPIO_NOUT ? "an edge input" : "an output",
               strerror(e));
 }
 
@@ -159,7 +160,7 @@ static int open_one(cm_gpio *g, int slot, const char *spec, const char *consumer
         return -1;
     }
     int flags = active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
-    int rc = (slot == CM_GPIO_NOUT) ? gpiod_line_request_rising_edge_events_flags(line, consumer, flags)
+    int rc = (slot >= CM_GPIO_NOUT) ? gpiod_line_request_rising_edge_events_flags(line, consumer, flags)
                                     : gpiod_line_request_output_flags(line, consumer, flags, 0);
     if (rc < 0) {
         request_failed(g, slot, spec, line);
@@ -175,8 +176,10 @@ static int open_one(cm_gpio *g, int slot, const char *spec, const char *consumer
 int cm_gpio_open(cm_gpio *g, const cm_gpio_config *cfg) {
     memset(g, 0, sizeof *g);
     const char *consumer = (cfg->consumer && *cfg->consumer) ? cfg->consumer : "curvemesh";
-    for (int slot = 0; slot <= CM_GPIO_NOUT; slot++) {
-        const char *spec = (slot == CM_GPIO_NOUT) ? cfg->request : cfg->out[slot];
+    for (int slot = 0; slot < CM_GPIO_SLOTS; slot++) {
+        const char *spec = slot < CM_GPIO_NOUT    ? cfg->out[slot]
+                           : slot == CM_GPIO_NOUT ? cfg->request
+                                                  : cfg->button[slot - CM_GPIO_NOUT - 1];
         if (!spec) continue;
         if (open_one(g, slot, spec, consumer) < 0) {
             char keep[sizeof g->err];
@@ -207,13 +210,14 @@ int cm_gpio_set(cm_gpio *g, cm_gpio_line line, int active) {
     return 0;
 }
 
-int cm_gpio_request_fd(const cm_gpio *g) {
-    struct gpiod_line *l = g->line[CM_GPIO_NOUT];
+static int input_fd(const cm_gpio *g, int slot) {
+    struct gpiod_line *l = g->line[slot];
     return l ? gpiod_line_event_get_fd(l) : -1;
 }
 
-int cm_gpio_request_pressed(cm_gpio *g) {
-    struct gpiod_line *l = g->line[CM_GPIO_NOUT];
+/* the rising edges queued on input slot: 1 if any (a press), 0 if none, -1 on error */
+static int input_pressed(cm_gpio *g, int slot) {
+    struct gpiod_line *l = g->line[slot];
     if (!l) return 0;
     int fd = gpiod_line_event_get_fd(l);
     int pressed = 0;
@@ -224,15 +228,15 @@ int cm_gpio_request_pressed(cm_gpio *g) {
         int n = poll(&pfd, 1, 0);
         if (n < 0 && errno == EINTR) continue;
         if (n < 0) {
-            snprintf(g->err, sizeof g->err, "gpio request (%s line %u): poll: %s", gpiod_chip_name(g->chip[CM_GPIO_NOUT]),
-                     gpiod_line_offset(l), strerror(errno));
+            snprintf(g->err, sizeof g->err, "gpio %s (%s line %u): poll: %s", role_name[slot],
+                     gpiod_chip_name(g->chip[slot]), gpiod_line_offset(l), strerror(errno));
             return -1;
         }
         if (n == 0 || !(pfd.revents & POLLIN)) break;
         struct gpiod_line_event ev;
         if (gpiod_line_event_read(l, &ev) < 0) {
-            snprintf(g->err, sizeof g->err, "gpio request (%s line %u): cannot read the edge event: %s",
-                     gpiod_chip_name(g->chip[CM_GPIO_NOUT]), gpiod_line_offset(l), strerror(errno));
+            snprintf(g->err, sizeof g->err, "gpio %s (%s line %u): cannot read the edge event: %s", role_name[slot],
+                     gpiod_chip_name(g->chip[slot]), gpiod_line_offset(l), strerror(errno));
             return -1;
         }
         if (ev.event_type == GPIOD_LINE_EVENT_RISING_EDGE) pressed = 1;
@@ -240,9 +244,20 @@ int cm_gpio_request_pressed(cm_gpio *g) {
     return pressed;
 }
 
+int cm_gpio_request_fd(const cm_gpio *g) { return input_fd(g, CM_GPIO_NOUT); }
+int cm_gpio_request_pressed(cm_gpio *g) { return input_pressed(g, CM_GPIO_NOUT); }
+
+int cm_gpio_button_fd(const cm_gpio *g, cm_gpio_button b) {
+    return (unsigned)b < CM_GPIO_NBUTTON ? input_fd(g, CM_GPIO_NOUT + 1 + (int)b) : -1;
+}
+
+int cm_gpio_button_pressed(cm_gpio *g, cm_gpio_button b) {
+    return (unsigned)b < CM_GPIO_NBUTTON ? input_pressed(g, CM_GPIO_NOUT + 1 + (int)b) : 0;
+}
+
 void cm_gpio_close(cm_gpio *g) {
     if (!g->open) return;
-    for (int slot = 0; slot <= CM_GPIO_NOUT; slot++) {
+    for (int slot = 0; slot < CM_GPIO_SLOTS; slot++) {
         struct gpiod_line *l = g->line[slot];
         if (l) {
             /* a lamp must not stay lit after the program is gone: the kernel

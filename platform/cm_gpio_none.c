@@ -11,10 +11,13 @@
 #include <string.h>
 
 int cm_gpio_open(cm_gpio *g, const cm_gpio_config *cfg) {
-    static const char *const role_name[CM_GPIO_NOUT + 1] = {"busy", "ready", "error", "request"};
+    static const char *const role_name[CM_GPIO_SLOTS] = {"busy", "ready", "error", "request",
+                                                         "rotate", "next", "prev", "reset"};
     memset(g, 0, sizeof *g);
-    for (int slot = 0; slot <= CM_GPIO_NOUT; slot++) {
-        const char *spec = (slot == CM_GPIO_NOUT) ? cfg->request : cfg->out[slot];
+    for (int slot = 0; slot < CM_GPIO_SLOTS; slot++) {
+        const char *spec = slot < CM_GPIO_NOUT    ? cfg->out[slot]
+                           : slot == CM_GPIO_NOUT ? cfg->request
+                                                  : cfg->button[slot - CM_GPIO_NOUT - 1];
         if (!spec) continue;
         snprintf(g->err, sizeof g->err,
                  "gpio %s=%s: this build has no GPIO support (libgpiod 1.6 was not found at build time)",
@@ -41,6 +44,18 @@ int cm_gpio_request_fd(const cm_gpio *g) {
 
 int cm_gpio_request_pressed(cm_gpio *g) {
     (void)g;
+    return 0;
+}
+
+int cm_gpio_button_fd(const cm_gpio *g, cm_gpio_button b) {
+    (void)g;
+    (void)b;
+    return -1;
+}
+
+int cm_gpio_button_pressed(cm_gpio *g, cm_gpio_button b) {
+    (void)g;
+    (void)b;
     return 0;
 }
 

@@ -62,12 +62,17 @@ static cm_gpio gpio;
 static volatile sig_atomic_t stop_signal;
 static int quiet;
 
+/* at most this many viewer options after -- */
+#define VIEW_ARGS_MAX 16
+
 typedef struct config {
     char serial[256], usb[128], out[CM_TERM_PATH], name[CM_LINK_MAX_NAME + 1];
     char display[256], viewer[256]; /* --display DEV: the viewer program draws each model there */
     char gpio_spec[CM_GPIO_NOUT + 1][128];
     int use_stdio, stl, once, ready_pulse_ms;
     double tess;
+    char **view_args; /* after --: more options for the viewer of a model (its buttons) */
+    int nview_args;
 } config;
 
 static void on_signal(int sig)
@@ -94,6 +99,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: " PROG " (--serial DEV[:BAUD] | --usb VID:PID[:SERIAL] | --stdio) --out DIR [options]\n"
+            "       " PROG " ... --display DEV [-- VIEWER-OPTION...]\n"
             "       " PROG " --limits | --version | --help\n"
             "\n"
             "Receive curvemesh models from `cmz send`, decode each into DIR/model.glb (atomically) and\n"
@@ -114,7 +120,8 @@ static void usage(FILE *f)
             "  --gpio-request SPEC    input (button), a rising edge asks the workstation to send again\n"
             "  --ready-pulse-ms N     length of the ready pulse (default 500)\n"
             "  --display DEV          show each model and a status line on the framebuffer DEV with\n"
-            "                         --viewer PROG (cmz-view)\n"
+            "                         --viewer PROG (cmz-view); options after -- go to the viewer of\n"
+            "                         each model (its buttons, e.g. -- --gpio-next gpiochip0:5)\n"
             "  --config FILE          read 'key = value' lines (the long options without --) first\n"
             "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
             "  -q                     only warnings and errors\n"
@@ -233,6 +240,10 @@ static int parse_args(config *c, int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--config") == 0) {
             i++;
+        } else if (strcmp(a, "--") == 0 && argc - i - 1 <= VIEW_ARGS_MAX) {
+            c->view_args = argv + i + 1;
+            c->nview_args = argc - i - 1;
+            break;
         } else if (strcmp(a, "-q") == 0) {
             quiet = 1;
         } else if (strcmp(a, "--stl") == 0 || strcmp(a, "--stdio") == 0 || strcmp(a, "--once") == 0) {
@@ -339,16 +350,23 @@ static void viewer_reap(int wait)
     }
 }
 
-/* run the viewer: model (NULL: the status line alone) with the status line text; its pid */
+/* run the viewer: model (NULL: the status line alone) with the status line text, a model's with the
+   options after -- (its buttons: such a viewer stays until stopped); its pid */
 static pid_t viewer_run(const config *c, const char *model, const char *text)
 {
     const char *prog = c->viewer[0] ? c->viewer : "cmz-view";
     pid_t pid = fork();
     if (pid == 0) {
-        if (model)
-            execlp(prog, prog, model, "--fb", c->display, "--status", text, "-q", (char *)NULL);
-        else
-            execlp(prog, prog, "--fb", c->display, "--status", text, (char *)NULL);
+        const char *av[VIEW_ARGS_MAX + 8] = {prog, "--fb", c->display, "--status", text};
+        int k = 5;
+        if (model) {
+            av[k++] = model;
+            av[k++] = "-q";
+            for (int i = 0; i < c->nview_args; i++)
+                av[k++] = c->view_args[i];
+        }
+        av[k] = NULL;
+        execvp(prog, (char *const *)av);
         _exit(127);
     }
     if (pid < 0)
@@ -484,7 +502,7 @@ int main(int argc, char **argv)
     sa.sa_handler = SIG_IGN;
     sigaction(SIGPIPE, &sa, NULL);
 
-    cm_gpio_config gc = {{NULL, NULL, NULL}, NULL, PROG};
+    cm_gpio_config gc = {.consumer = PROG};
     for (int i = 0; i < CM_GPIO_NOUT; i++)
         gc.out[i] = c.gpio_spec[i][0] ? c.gpio_spec[i] : NULL;
     gc.request = c.gpio_spec[CM_GPIO_NOUT][0] ? c.gpio_spec[CM_GPIO_NOUT] : NULL;
@@ -633,6 +651,8 @@ int main(int argc, char **argv)
         logline("info", "stop", "signal=%d", (int)stop_signal);
     if (ready_off_at)
         nap_ms((int)(ready_off_at - cm_clock_ms() > 0 ? ready_off_at - cm_clock_ms() : 0));
+    if (c.nview_args && viewer_pid > 0) /* a viewer waiting for its buttons goes with the daemon */
+        kill(viewer_pid, SIGTERM);
     viewer_reap(1); /* (the picture it draws stays on the screen) */
     cm_link_term_close(&term);
     cm_term_store_close(&store);

@@ -3,9 +3,14 @@
  * by the terminal's own software viewer (cm_view.h) into a PNG.
  *
  *   cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view iso|front|back|left|right|top|bottom]
- *            [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM] [--status TEXT]
+ *            [--turn N] [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]
+ *            [--status TEXT]
+ *            [--gpio-rotate|--gpio-next|--gpio-prev|--gpio-reset SPEC] [--turntable S] [--idle S]
  *   cmz-view --fb DEV --status TEXT
  *   cmz-view --limits | --version | --help
+ *
+ * With --fb and a button or a turntable, the viewer stays on the screen: it keeps the decoded mesh
+ * (its spill files) and draws again on each press or turntable tick, until SIGTERM or SIGINT.
  *
  * The same program on the workstation and the board (profile terminal by
  * default): a person at the workstation sees exactly the pixels the
@@ -14,11 +19,13 @@
  * The PNG appears atomically (a temporary file renamed into place).
  *
  * Exit status: 0 success, 1 the file is malformed or exceeds a limit,
- * 2 usage, 3 I/O error.
+ * 2 usage, 3 I/O error, 4 GPIO (a button's line cannot be had: the picture stays).
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,13 +35,17 @@
 #include "cm/cm_limits_info.h"
 #include "cm/cm_png.h"
 #include "cm/cm_view.h"
+#include "cm_clock.h"
 #include "cm_decode_file.h"
 #include "cm_fb.h"
+#include "cm_gpio.h"
 #include "cm_report.h"
 
 /* everything big is static: the decode and draw paths never touch the heap */
 static cm_decode_state state;
 static cm_view view;
+static cm_gpio gpio;
+static volatile sig_atomic_t stop_signal;
 
 /* "cmz-view: [LEVEL]IN: [face F, ]byte N: text (CODE) [in where]" (cm_report_status) */
 static void report(FILE *f, const char *level, const char *in, const cm_status *st)
@@ -47,9 +58,11 @@ static void report(FILE *f, const char *level, const char *in, const cm_status *
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR]\n"
+            "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR] [--turn N]\n"
             "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
             "                [--status TEXT] [-q]\n"
+            "                [--gpio-rotate SPEC] [--gpio-next SPEC] [--gpio-prev SPEC] [--gpio-reset SPEC]\n"
+            "                [--turntable SECONDS] [--idle SECONDS]\n"
             "       cmz-view --fb DEV --status TEXT\n"
             "       cmz-view --limits | --version | --help\n"
             "\n"
@@ -61,6 +74,8 @@ static void usage(FILE *f)
             "DEV (/dev/fb0: 16, 24 or 32-bit, centred, the rest of the screen background).\n"
             "--size: pixels, default 800x480 (with --fb alone: the screen's), at most %dx%d\n"
             "in this build (profile %s).\n"
+            "--turn N: the model turned N x %d degrees about its vertical axis, counter-clockwise\n"
+            "seen from above (what N presses of the rotate button show).\n"
             "--perspective: a 30 degree field of view instead of a parallel projection.\n"
             "--step K: assembly step K: parts 1..K shown, part K highlighted, the others\n"
             "dimmed.  The parts are the model's connected pieces (faces joined by edges) in\n"
@@ -72,8 +87,18 @@ static void usage(FILE *f)
             "TEXT across the bottom (without a model: drawn alone on the screen's last rows,\n"
             "the rest of the screen untouched).  -q: no summary line.\n"
             "\n"
-            "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error.\n",
-            CM_VIEW_MAX_W, CM_VIEW_MAX_H, cm_profile_name);
+            "The operator's buttons (with --fb; the viewer then stays, drawing again on each\n"
+            "press, until SIGTERM or SIGINT): --gpio-rotate turns the model one step, --gpio-next\n"
+            "and --gpio-prev go through the assembly steps (the whole model, step 1, ..., the\n"
+            "last, and round again; the status line says which), --gpio-reset goes back to the\n"
+            "view and step the command line gave.  SPEC: CHIP:LINE, CHIP a name (gpiochip0),\n"
+            "path or label, LINE a name or offset, '!' in front for active-low; a press is a\n"
+            "rising edge.  --turntable S: after --idle S (default 30) without a press, the\n"
+            "model turns one step every S seconds until the next press.\n"
+            "\n"
+            "exit status: 0 success, 1 malformed file or over a limit, 2 usage, 3 I/O error,\n"
+            "4 a button's GPIO line cannot be had (the picture stays on the screen).\n",
+            CM_VIEW_MAX_W, CM_VIEW_MAX_H, cm_profile_name, CM_VIEW_TURN_DEG);
 }
 
 static int put_fd(void *ctx, const uint8_t *p, size_t n)
@@ -135,9 +160,165 @@ static int parse_hex_rgb(const char *s, uint32_t *rgb)
     return 1;
 }
 
+/* the status line: the caller's text, and in an interactive viewer the step on show */
+static const char *status_text(char *buf, size_t cap, const char *status, int interactive, uint32_t step,
+                               uint32_t parts)
+{
+    if (!interactive || step == 0)
+        return status;
+    snprintf(buf, cap, "%s%sstep %u of %u", status ? status : "", status ? "  -  " : "", step, parts);
+    return buf;
+}
+
+/* draw the model into the frame as vo asks (the parts numbered again: cm_view_begin clears them)
+   and count its parts: 0, or the exit status after reporting why not */
+static int draw(const cm_view_opts *vo, const float lo[3], const float hi[3], const cm_mesh *mesh,
+                const char *status, int interactive, const char *in, uint32_t *nparts)
+{
+    cm_status st;
+    cm_status_init(&st);
+    if (cm_view_begin(&view, vo, lo, hi, &st) != CM_OK) {
+        report(stderr, "", in, &st);
+        return 1;
+    }
+    uint32_t parts = cm_view_parts(&view, &state.dec.model);
+    *nparts = parts;
+    if (vo->step > parts) {
+        fprintf(stderr, "cmz-view: %s: --step %u: the model has %u parts\n", in, vo->step, parts);
+        return 2;
+    }
+    cm_view_fit(&view, mesh);
+    cm_view_mesh(&view, mesh);
+    cm_view_edges(&view, &state.dec.model);
+    char buf[512];
+    const char *text = status_text(buf, sizeof buf, status, interactive, vo->step, parts);
+    if (text)
+        cm_view_status(&view, text);
+    return 0;
+}
+
+static void on_stop(int sig) { stop_signal = sig; }
+
+/*
+ * The operator's buttons and the turntable (issue 17): draw again on each press or tick until
+ * SIGTERM or SIGINT.  A press drains its line's queued edges (a bouncing contact is one press); a
+ * turntable tick comes every `tick_ms` once `idle_ms` have passed since the last press.  Returns the
+ * exit status.
+ */
+static int interact(const char *fb, const char *const button[CM_GPIO_NBUTTON], int64_t tick_ms, int64_t idle_ms,
+                    cm_view_opts vo, const float lo[3], const float hi[3], const cm_mesh *mesh, uint32_t parts,
+                    const char *status, const char *in, int quiet)
+{
+    cm_gpio_config gc = {.consumer = "cmz-view"};
+    for (int b = 0; b < CM_GPIO_NBUTTON; b++)
+        gc.button[b] = button[b];
+    if (cm_gpio_open(&gpio, &gc) != 0) {
+        fprintf(stderr, "cmz-view: %s\n", gpio.err);
+        return 4;
+    }
+    if (!quiet) /* (once the lines are held: a press from now on is seen) */
+        printf("%s -> %s: %u parts, waiting for the buttons\n", in, fb, parts);
+    fflush(stdout);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop; /* no SA_RESTART: poll returns EINTR */
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+    const cm_view_opts start = vo;
+    int64_t last_press = cm_clock_ms(), next_tick = last_press + idle_ms;
+    int rc = 0;
+    while (!stop_signal) {
+        struct pollfd pfd[CM_GPIO_NBUTTON];
+        nfds_t n = 0;
+        for (int b = 0; b < CM_GPIO_NBUTTON; b++) {
+            int fd = cm_gpio_button_fd(&gpio, (cm_gpio_button)b);
+            if (fd >= 0)
+                pfd[n++] = (struct pollfd){.fd = fd, .events = POLLIN};
+        }
+        int timeout = -1;
+        if (tick_ms > 0) {
+            int64_t wait = next_tick - cm_clock_ms();
+            timeout = wait <= 0 ? 0 : wait > 3600000 ? 3600000 : (int)wait;
+        }
+        int r = poll(pfd, n, timeout);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0) {
+            fprintf(stderr, "cmz-view: waiting for the buttons: %s\n", strerror(errno));
+            rc = 3;
+            break;
+        }
+        int changed = 0;
+        for (int b = 0; b < CM_GPIO_NBUTTON && rc == 0; b++) {
+            int p = cm_gpio_button_pressed(&gpio, (cm_gpio_button)b);
+            if (p < 0) {
+                fprintf(stderr, "cmz-view: %s\n", gpio.err);
+                rc = 4;
+            } else if (p > 0) {
+                changed = 1;
+                if (b == CM_GPIO_ROTATE)
+                    vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
+                else if (b == CM_GPIO_NEXT) /* the whole model (0), 1, ..., parts, and round */
+                    vo.step = vo.step >= parts ? 0 : vo.step + 1;
+                else if (b == CM_GPIO_PREV)
+                    vo.step = vo.step == 0 ? parts : vo.step - 1;
+                else
+                    vo = start;
+            }
+        }
+        if (rc != 0)
+            break;
+        int64_t now = cm_clock_ms();
+        if (changed) {
+            last_press = now;
+            next_tick = last_press + idle_ms;
+        } else if (tick_ms > 0 && now >= next_tick) {
+            vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
+            next_tick = now + tick_ms;
+            changed = 1;
+        }
+        if (!changed)
+            continue;
+        cm_status st;
+        cm_status_init(&st);
+        uint32_t nparts;
+        if ((rc = draw(&vo, lo, hi, mesh, status, 1, in, &nparts)) != 0)
+            break;
+        if (cm_mesh_spill_failed(mesh)) {
+            fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
+            rc = 3;
+            break;
+        }
+        if (cm_fb_show(fb, view.rgb, (uint32_t)vo.width, (uint32_t)vo.height, vo.background, &st) != 0) {
+            report(stderr, "", fb, &st);
+            rc = st.code == CM_E_IO ? 3 : 1;
+            break;
+        }
+    }
+    cm_gpio_close(&gpio);
+    return rc;
+}
+
+static int parse_seconds(const char *opt, const char *s, int64_t *ms)
+{
+    char *end;
+    double v = strtod(s, &end);
+    if (*end || !(v >= 0.05 && v <= 86400.0)) {
+        fprintf(stderr, "cmz-view: %s wants seconds from 0.05 to 86400, not '%s'\n", opt, s);
+        return 0;
+    }
+    *ms = (int64_t)(v * 1000.0 + 0.5);
+    return 1;
+}
+
 int main(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL, *fb = NULL, *status = NULL;
+    const char *button[CM_GPIO_NBUTTON] = {NULL, NULL, NULL, NULL};
+    static const char *const button_opt[CM_GPIO_NBUTTON] = {"--gpio-rotate", "--gpio-next", "--gpio-prev",
+                                                            "--gpio-reset"};
+    int64_t tick_ms = 0, idle_ms = 30000;
     int sized = 0, quiet = 0;
     double tol = 0;
     cm_view_opts vo;
@@ -192,6 +373,31 @@ int main(int argc, char **argv)
                 return 2;
             }
             vo.step = (uint32_t)k;
+        } else if (strcmp(a, "--turn") == 0 && more) {
+            char *end;
+            long t = strtol(argv[++i], &end, 10);
+            if (*end || argv[i][0] == '\0' || t < -1000000 || t > 1000000) {
+                fprintf(stderr, "cmz-view: --turn wants a whole number of %d degree steps, not '%s'\n",
+                        CM_VIEW_TURN_DEG, argv[i]);
+                return 2;
+            }
+            vo.turn = (int)(t % CM_VIEW_TURNS);
+        } else if (strcmp(a, "--turntable") == 0 && more) {
+            if (!parse_seconds(a, argv[++i], &tick_ms))
+                return 2;
+        } else if (strcmp(a, "--idle") == 0 && more) {
+            if (!parse_seconds(a, argv[++i], &idle_ms))
+                return 2;
+        } else if (strncmp(a, "--gpio-", 7) == 0 && more) {
+            int b = 0;
+            while (b < CM_GPIO_NBUTTON && strcmp(a, button_opt[b]) != 0)
+                b++;
+            if (b == CM_GPIO_NBUTTON) {
+                fprintf(stderr, "cmz-view: unknown option %s (buttons: --gpio-rotate, --gpio-next, --gpio-prev, "
+                                "--gpio-reset)\n", a);
+                return 2;
+            }
+            button[b] = argv[++i];
         } else if (strcmp(a, "--status") == 0 && more) {
             status = argv[++i];
         } else if (strcmp(a, "-q") == 0) {
@@ -225,6 +431,11 @@ int main(int argc, char **argv)
     }
     if ((!in && !(status && fb)) || (in && !out && !fb)) {
         usage(stderr);
+        return 2;
+    }
+    int interactive = in && fb && (tick_ms > 0 || button[0] || button[1] || button[2] || button[3]);
+    if (!interactive && (tick_ms > 0 || button[0] || button[1] || button[2] || button[3]) && in) {
+        fprintf(stderr, "cmz-view: the buttons and --turntable need --fb (a screen to draw on again)\n");
         return 2;
     }
     cm_status st;
@@ -270,32 +481,27 @@ int main(int argc, char **argv)
         fprintf(stderr, "cmz-view: %s: nothing to show (no triangles)\n", in);
         return 1;
     }
-    if (cm_view_begin(&view, &vo, lo, hi, &st) != CM_OK) {
-        report(stderr, "", in, &st);
-        return 1;
-    }
-    uint32_t parts = cm_view_parts(&view, &state.dec.model);
-    if (vo.step > parts) {
-        fprintf(stderr, "cmz-view: %s: --step %u: the model has %u parts\n", in, vo.step, parts);
-        return 2;
-    }
-    cm_view_fit(&view, &mesh);
-    cm_view_mesh(&view, &mesh);
-    cm_view_edges(&view, &state.dec.model);
-    if (status)
-        cm_view_status(&view, status);
+    uint32_t parts = 0;
+    int rc = draw(&vo, lo, hi, &mesh, status, interactive, in, &parts);
+    if (rc != 0)
+        return rc;
     if (cm_mesh_spill_failed(&mesh)) {
         fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
         return 3;
     }
-    int rc = out ? write_png(out) : 0;
-    cm_decode_spill_close();
+    rc = out ? write_png(out) : 0;
     if (rc != 0)
         return rc;
     if (fb && cm_fb_show(fb, view.rgb, (uint32_t)vo.width, (uint32_t)vo.height, vo.background, &st) != 0) {
         report(stderr, "", fb, &st);
         return st.code == CM_E_IO ? 3 : 1;
     }
+    if (interactive) { /* the buttons (the mesh stays in its spill files for the next pictures) */
+        rc = interact(fb, button, tick_ms, idle_ms, vo, lo, hi, &mesh, parts, status, in, quiet);
+        cm_decode_spill_close();
+        return rc;
+    }
+    cm_decode_spill_close();
     if (quiet)
         return 0;
     printf("%s -> %s%s%s: %dx%d, %s%s, %u faces, %u parts", in, out ? out : "", out && fb ? " and " : "", fb ? fb : "",

@@ -10,7 +10,14 @@
 #   4. cmz-terminal --display: a model sent to it (cmz send over pipes) ends on the screen, with the
 #      status line the terminal gives it;
 #   5. a status line alone (cmz-view --fb --status: the terminal's receiving and refusal notes)
-#      changes only the screen's last rows.
+#      changes only the screen's last rows;
+#   6. the operator's buttons on gpio-sim lines (cmz-view --gpio-rotate/-next/-prev/-reset): each
+#      press draws the frame `cmz-view --png` draws with the same --turn/--step and the status line
+#      "step k of N"; a second viewer asking for a held line is refused by name (exit 4); SIGTERM
+#      ends the viewer (exit 0);
+#   7. the idle turntable (--turntable 3 --idle 1): the screen goes to --turn 1, then --turn 2;
+#   8. cmz-terminal passes the options after -- to the viewer of each model: a press shows step 1
+#      under the terminal's status line, and the viewer goes when the daemon is stopped.
 # Env: HW_VIEW (cmz-view; default this checkout's terminal build), HW_TERMINAL, HW_CMZ, HW_MODELS
 # (the .cmz files, encoded on the host).  Prints TAP lines; exit 0 iff all passed.
 set -u
@@ -166,6 +173,146 @@ PY
     fi
 else
     fail "cmz-terminal --display: vfb and the programs" "$(cat "$T/modprobe"); terminal $terminal, cmz $cmz"
+fi
+
+# ---- 6-8: the operator's buttons (gpio-sim) and the turntable, on a 320 x 200 32-bit screen ----
+# the screen's expected memory for the PNG $1 (a whole-screen frame): written once to $2, then the
+# screen is read until it holds exactly that (a press is drawn in the background) or $3 s pass
+expected_dump() {
+    python3 - "$1" "$2" <<'PY'
+import fcntl, struct, sys, zlib
+d = open(sys.argv[1], 'rb').read()
+at, idat, w, h = 8, b'', 0, 0
+while at < len(d):
+    n, t = struct.unpack('>I4s', d[at:at + 8])
+    if t == b'IHDR':
+        w, h = struct.unpack('>II', d[at + 8:at + 16])
+    if t == b'IDAT':
+        idat += d[at + 8:at + 8 + n]
+    at += 12 + n
+raw = zlib.decompress(idat)
+with open('/dev/fb0', 'rb') as f:
+    var = struct.unpack('40I', fcntl.ioctl(f.fileno(), 0x4600, bytes(160)))
+ro, go, bo = var[8], var[11], var[14]
+out = bytearray()
+for y in range(h):
+    for x in range(w):
+        o = y * (1 + 3 * w) + 1 + 3 * x
+        out += ((raw[o] << ro) | (raw[o + 1] << go) | (raw[o + 2] << bo)).to_bytes(4, 'little')
+open(sys.argv[2], 'wb').write(out)
+PY
+}
+# screen_becomes WHAT TIMEOUT VIEW-OPTION...: the screen shows `cmz-view --png` of those options
+screen_becomes() {
+    local what=$1 secs=$2
+    shift 2
+    if ! "$view" "$model" --png "$T/e.png" --size 320x200 "$@" > /dev/null 2> "$T/err"; then
+        fail "$what" "cmz-view --png $*: $(cat "$T/err")"
+        return 1
+    fi
+    expected_dump "$T/e.png" "$T/e.raw"
+    local end=$((SECONDS + secs))
+    while :; do
+        dd if=/dev/fb0 of="$T/fb" bs=1280 count=200 2> /dev/null
+        # (the unused fourth byte of each 32-bit pixel: vfb keeps what was written, the viewer 0)
+        if python3 -c 'import sys; a = open(sys.argv[1], "rb").read(); b = open(sys.argv[2], "rb").read()
+sys.exit(0 if all(x == y for i, (x, y) in enumerate(zip(a, b)) if i % 4 != 3) and len(a) == len(b) else 1)' \
+                "$T/fb" "$T/e.raw"; then
+            pass "$what"
+            return 0
+        fi
+        [ $SECONDS -lt $end ] || break
+        sleep 0.2
+    done
+    fail "$what" "the screen does not show cmz-view --png $* within $secs s"
+    return 1
+}
+rmmod vfb 2> /dev/null
+G=/sys/kernel/config/gpio-sim/cm-view
+label=cm-view-sim
+if ! modprobe vfb vfb_enable=1 mode_option=320x200-32 > "$T/modprobe" 2>&1 || [ ! -c /dev/fb0 ]; then
+    fail "buttons: vfb gives /dev/fb0" "$(cat "$T/modprobe")"
+elif ! modprobe gpio-sim || ! mkdir "$G" "$G/bank0"; then
+    fail "buttons: a gpio-sim chip" "modprobe gpio-sim or mkdir $G failed"
+else
+    release_console
+    echo 4 > "$G/bank0/num_lines"
+    echo "$label" > "$G/bank0/label"
+    names=(rotate next prev reset)
+    for i in 0 1 2 3; do mkdir "$G/bank0/line$i" && echo "${names[$i]}" > "$G/bank0/line$i/name"; done
+    echo 1 > "$G/live"
+    sim=/sys/devices/platform/$(cat "$G/dev_name")/$(cat "$G/bank0/chip_name")
+    press() { echo pull-up > "$sim/sim_gpio$1/pull"; sleep 0.05; echo pull-down > "$sim/sim_gpio$1/pull"; }
+    buttons=(--gpio-rotate "$label:rotate" --gpio-next "$label:next" --gpio-prev "$label:prev" --gpio-reset "$label:reset")
+    # 6. the buttons
+    "$view" "$model" --fb /dev/fb0 "${buttons[@]}" > "$T/v.out" 2> "$T/v.err" &
+    vpid=$!
+    for _ in $(seq 300); do grep -q "waiting for the buttons" "$T/v.out" && break; sleep 0.1; done
+    parts=$(sed -n 's/.*: \([0-9]*\) parts, waiting for the buttons$/\1/p' "$T/v.out")
+    if [ -z "$parts" ]; then
+        fail "buttons: cmz-view waits for its buttons" "$(cat "$T/v.out" "$T/v.err")"
+    else
+        pass "buttons: cmz-view --fb with four buttons draws the model and waits ($parts parts)"
+        out=$("$view" "$model" --fb /dev/fb0 --gpio-next "$label:next" 2>&1)
+        st=$?
+        if [ $st = 4 ] && [[ $out == *"gpio next=$label:next: line is used by 'cmz-view'"* ]]; then
+            pass "buttons: a second viewer asking for a held line is refused by name (exit 4)"
+        else
+            fail "buttons: a second viewer asking for a held line is refused by name" "exit $st: $out"
+        fi
+        press 1
+        screen_becomes "buttons: next shows step 1 of $parts" 30 --step 1 --status "step 1 of $parts"
+        press 0
+        screen_becomes "buttons: rotate turns it 15 degrees" 30 --step 1 --turn 1 --status "step 1 of $parts"
+        press 2
+        screen_becomes "buttons: prev from step 1 shows the whole model" 30 --turn 1
+        press 2
+        screen_becomes "buttons: prev from the whole model shows the last step" 30 --turn 1 --step "$parts" \
+            --status "step $parts of $parts"
+        press 3
+        screen_becomes "buttons: reset goes back to the first view" 30
+    fi
+    kill -TERM "$vpid" 2> /dev/null
+    for _ in $(seq 100); do kill -0 "$vpid" 2> /dev/null || break; sleep 0.1; done
+    wait "$vpid"
+    st=$?
+    [ $st = 0 ] && pass "buttons: SIGTERM ends the viewer (exit 0)" ||
+        fail "buttons: SIGTERM ends the viewer" "exit $st: $(cat "$T/v.err")"
+    # 7. the idle turntable
+    "$view" "$model" --fb /dev/fb0 --turntable 3 --idle 1 > /dev/null 2> "$T/v.err" &
+    vpid=$!
+    screen_becomes "turntable: after a second idle the model turns a step" 60 --turn 1 &&
+        screen_becomes "turntable: and another three seconds later" 60 --turn 2
+    kill -TERM "$vpid" 2> /dev/null
+    wait "$vpid"
+    # 8. cmz-terminal -- VIEWER-OPTIONS: the viewer of the received model has the next button
+    if [ -x "$terminal" ] && [ -x "$cmz" ]; then
+        rm -rf "$T/store2" && mkdir -p "$T/store2"
+        coproc TERM2 { exec "$terminal" --stdio --out "$T/store2" --display /dev/fb0 --viewer "$view" \
+            -- --gpio-next "$label:next" 2> "$T/term2.log"; }
+        term_pid=$TERM2_PID
+        timeout 60 "$cmz" send "$model" --stdio <&"${TERM2[0]}" >&"${TERM2[1]}" 2> "$T/send2.log"
+        text=$(sed -n 's/.*event=decoded name="[^"]*" //p' "$T/term2.log" | tail -n 1)
+        if screen_becomes "terminal: the received model on the screen" 60 --status "$text"; then
+            # (the viewer asks for its line once the picture is up: a press before that is not seen)
+            for _ in $(seq 100); do grep -q "cmz-view" /sys/kernel/debug/gpio 2> /dev/null && break; sleep 0.1; done
+            press 1
+            screen_becomes "terminal -- --gpio-next: a press shows step 1 under the terminal's status" 30 \
+                --step 1 --status "$text  -  step 1 of $parts"
+        fi
+        kill -TERM "$term_pid" 2> /dev/null
+        for _ in $(seq 100); do kill -0 "$term_pid" 2> /dev/null || break; sleep 0.1; done
+        if kill -0 "$term_pid" 2> /dev/null; then
+            fail "terminal: stops with its viewer on SIGTERM" "still running after 10 s"
+            kill -KILL "$term_pid"
+        elif pgrep -f "cmz-view.*--gpio-next" > /dev/null; then
+            fail "terminal: stops with its viewer on SIGTERM" "the viewer is still running"
+        else
+            pass "terminal: stops with its viewer on SIGTERM"
+        fi
+    fi
+    echo 0 > "$G/live"
+    rmdir "$G"/bank0/line* "$G/bank0" "$G"
 fi
 rmmod vfb 2> /dev/null
 rm -rf "$T"
