@@ -527,7 +527,8 @@ int main(int argc, char **argv)
     logline("info", "start", "out=%s profile=%s max_file_bytes=%u", c.out, cm_profile_name, (unsigned)CM_MAX_FILE_BYTES);
 
     int rc = 0, said_waiting = 0, busy = 0;
-    int64_t ready_off_at = 0, started_ms = 0;
+    int64_t ready_off_at = 0, started_ms = 0, shown_ms = 0;
+    unsigned shown_pct = 0; /* the progress on the status line */
     if (!term.recovered)
         show_current(&c, "ready"); /* the last good model, on the screen again after a restart */
     if (term.recovered) {
@@ -582,6 +583,17 @@ int main(int argc, char **argv)
         int ev = cm_link_term_poll(&term, 200);
         if (term.active && term.prefix >= term.offer.size / 2 && term.prefix < term.offer.size)
             cm_kill_point("incoming-mid-write");
+        /* the transfer's progress on the status line: in steps of 10 %, at most once a second */
+        if (term.active && term.offer.size && cm_clock_ms() - shown_ms >= 1000) {
+            unsigned pct = (unsigned)((uint64_t)term.prefix * 10u / term.offer.size) * 10u;
+            if (pct != shown_pct && pct < 100) {
+                char what[32];
+                snprintf(what, sizeof what, "receiving %u %%", pct);
+                show_status(&c, term.offer.name, what);
+                shown_pct = pct;
+                shown_ms = cm_clock_ms();
+            }
+        }
         if (ev < 0) {
             logline("warn", "link-down", "link=\"%s\" why=\"%s\"", link->name,
                     ev == CM_T_HANGUP ? "hang-up" : link->err);
@@ -599,6 +611,8 @@ int main(int argc, char **argv)
                     (unsigned)term.offer.size, (unsigned)term.prefix, (unsigned)term.chunk);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
             show_status(&c, term.offer.name, "receiving");
+            shown_pct = (unsigned)((uint64_t)term.prefix * 10u / (term.offer.size ? term.offer.size : 1)) * 10u;
+            shown_ms = started_ms;
             if (term.prefix == 0)
                 cm_kill_point("part-created");
             break;

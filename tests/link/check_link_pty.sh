@@ -17,7 +17,11 @@
 #      a newer minor version than the terminal reads likewise (5b);
 #   6. sigterm_mid_transfer: `kill -TERM` of `cmz send` mid-transfer on a
 #      2400 baud line: it exits within a second with 143, and the next send
-#      resumes from what the terminal kept.
+#      resumes from what the terminal kept;
+#   7. the transfer's progress on the status line (`--display`, issue 17): a viewer standing in for
+#      cmz-view records what the terminal asks it to draw while a model comes in at 9600 baud:
+#      "receiving", then "receiving N %" rising in steps of 10, at most once a second, then the
+#      model.
 # Waits are measured (poll for the state, with a wide deadline), not fixed
 # sleeps: the suite must pass on a machine busy with another build.
 # TERMINAL may be prefixed by an emulator through $TERMINAL_EMU (qemu-aarch64).
@@ -236,6 +240,37 @@ elif [ $rc2 -ne 0 ] || [ -z "$at" ] || [ "$at" -eq 0 ] || ! same "$tmp/out6/mode
     nok "sigterm_mid_transfer: the next send did not resume (rc $rc2): $(tr '\n' ' ' <<<"$out")"
 else
     ok "sigterm_mid_transfer: SIGTERM at 2400 baud: exit 143 after $ms ms; the next send resumed at byte $at, file identical"
+fi
+kill "$term_pid" "$relay_pid" 2>/dev/null
+wait 2>/dev/null
+
+# ---- 7. progress on the status line ----
+cat > "$tmp/fakeview.sh" <<EOF
+#!/bin/sh
+# what the terminal asks the viewer to draw, one line a call, with the time in ms
+echo "\$(date +%s%3N) \$*" >> "$tmp/view.calls"
+EOF
+chmod +x "$tmp/fakeview.sh"
+start_relay prog --baud 9600 || { nok "relay (progress) did not start"; exit 1; }
+start_term "$tmp/prog.b" "$tmp/out7" --display /dev/fb-test --viewer "$tmp/fakeview.sh"
+if ! out=$("$cmz" send "$tmp/geo_example.cmz" --serial "$tmp/prog.a:9600" --timeout 60 2>&1); then
+    nok "progress: cmz send at 9600 baud failed: $(tail -n 1 <<<"$out")"
+else
+    for _ in $(seq 200); do grep -q "model.cmz" "$tmp/view.calls" 2> /dev/null && break; sleep 0.05; done
+    # the percentages in order, and the calls' times
+    pcts=$(sed -n 's/.*--status geo_example.cmz: receiving \([0-9]*\) %.*/\1/p' "$tmp/view.calls" | tr '\n' ' ')
+    if ! grep -q -- "--status geo_example.cmz: receiving\$" "$tmp/view.calls"; then
+        nok "progress: no 'receiving' status at the start: $(tr '\n' '|' < "$tmp/view.calls")"
+    elif ! awk -v p="$pcts" 'BEGIN { n = split(p, a, " "); if (n < 2) exit 1
+            for (i = 1; i <= n; i++) if (a[i] % 10 || a[i] >= 100 || (i > 1 && a[i] <= a[i - 1])) exit 1 }'; then
+        nok "progress: want two or more rising multiples of 10 below 100, got '$pcts': $(tr '\n' '|' < "$tmp/view.calls")"
+    elif ! awk '/receiving [0-9]+ %/ { if (last != "" && $1 - last < 990) bad = 1; last = $1 } END { exit bad }' "$tmp/view.calls"; then
+        nok "progress: two progress statuses less than a second apart: $(tr '\n' '|' < "$tmp/view.calls")"
+    elif ! tail -n 1 "$tmp/view.calls" | grep -q "current/model.cmz"; then
+        nok "progress: the model is not drawn last: $(tail -n 1 "$tmp/view.calls")"
+    else
+        ok "progress: 'receiving', then ${pcts}% at least a second apart, then the model"
+    fi
 fi
 kill "$term_pid" "$relay_pid" 2>/dev/null
 wait 2>/dev/null
