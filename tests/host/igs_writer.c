@@ -546,6 +546,25 @@ void igw_t_vertex_half_cylinder_144(igw *w, double r, double h, int pieces, int 
     }
 }
 
+void igw_ruled_half_cylinder_144(igw *w, double r, double h, int pieces)
+{
+    int axis = line(w, (v3){0, 0, 0}, (v3){0, 0, 1});
+    int gen = line(w, (v3){r, 0, 0}, (v3){r, 0, h});
+    int surf = igw_add(w, 120, 0, "%d,%d,0,%.17g", axis, gen, M_PI);
+    igw_set(w, surf, 1, 0, 0);
+    int m[2 + 2 * 16], k = 0;
+    pieces = pieces < 1 ? 1 : (pieces > 16 ? 16 : pieces);
+    cut_arc(w, r, 0, 0, M_PI, 1, m, &k);
+    for (int i = 0; i < pieces; i++) /* up the line at angle pi, in pieces of unequal length */
+        m[k++] = line(w, (v3){-r, 0, h * (i * (i + 3.0)) / (pieces * (pieces + 3.0))},
+                      (v3){-r, 0, h * ((i + 1) * (i + 4.0)) / (pieces * (pieces + 3.0))});
+    cut_arc(w, r, h, 0, M_PI, 1, m, &k); /* written 0 -> pi, run backwards (as the t-vertex cylinder's) */
+    for (int i = pieces; i > 0; i--) /* down the line at angle 0 */
+        m[k++] = line(w, (v3){r, 0, h * (i * (i + 3.0)) / (pieces * (pieces + 3.0))},
+                      (v3){r, 0, h * ((i - 1) * (i + 2.0)) / (pieces * (pieces + 3.0))});
+    igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, k)));
+}
+
 void igw_split_half_cylinder_144(igw *w, double r, double h)
 {
     igw_t_vertex_half_cylinder_144(w, r, h, 1, 0);

@@ -79,6 +79,11 @@ void igw_dense_128(igw *w, int n, double a, double h);
  *  120 surface of revolution, sharing the line at angle pi/2 (spec §17 T5). */
 void igw_split_half_cylinder_144(igw *w, double r, double h);
 
+/* one half cylinder (a 120 from 0 to pi, as igw_half_cylinder_120) trimmed by a 144 whose two
+   straight edges are each cut into `pieces` (1..16) lines of unequal length: as1_pe_203's kept
+   half cylinders, whose loops have points along their rulings */
+void igw_ruled_half_cylinder_144(igw *w, double r, double h, int pieces);
+
 /* one face: a bicubic bump of height h over the square [0,a]^2 at z = 0, flat (with its cross
    slopes) on its four straight edges - the patches from the boundary come out flat */
 /* igw_split_half_cylinder_144 with T-vertices: the first quarter's bottom arc and the second's top

@@ -484,6 +484,66 @@ static void test_half_cylinder(void **state)
     model_free(&lm);
 }
 
+/* ---- format 4.9: a kept face straight in one direction is tessellated in strips along it ----
+   A long half cylinder (IGES 120: a line turned half round, kept: a rational (1, 2) net; its two
+   straight edges each in four pieces, as as1_pe_203's are) at 5 % of its radius: format 4.8's tessellation (the model's refine_49 off) and 4.9's; both keep every
+   vertex on the cylinder and every triangle's centre within the tolerance inside it, 4.9's with at
+   most half the triangles (it puts one column of grid points along the rulings and triangulates
+   in a plane squeezed along them; 4.8 scattered points over the face) */
+static int cylinder_mesh_ok(const cm_mesh *mesh, double R, double q, double tol)
+{
+    for (uint32_t i = 0; i < mesh->nverts; i++)
+        if (!(fabs(hypot((double)pos[i][0], (double)pos[i][1]) - R) <= 4 * q + 1e-5))
+            return 0;
+    for (uint32_t t = 0; t < mesh->nindex / 3; t++) {
+        double c[3] = {0, 0, 0};
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                c[j] += (double)pos[idx[3 * t + (uint32_t)k]][j] / 3.0;
+        double rho = hypot(c[0], c[1]);
+        if (!(rho <= R + 4 * q + 1e-5 && rho >= R - tol - 4 * q - 1e-5))
+            return 0;
+    }
+    return 1;
+}
+
+static void test_ruled_kept_strips(void **state)
+{
+    (void)state;
+    const double R = 127, H = 940;
+    igw w;
+    igw_init(&w);
+    igw_ruled_half_cylinder_144(&w, R, H, 4);
+    loaded_model lm;
+    encode_result r;
+    encode_opts o;
+    encode_opts_default(&o);
+    o.gregory = o.gregory_exact = o.gregory_fit = o.g1fit = o.nfill = 0; /* kept */
+    encode_igw_opts(&w, &lm, &r, &o);
+    igw_free(&w);
+    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+    cm_status st;
+    assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+    assert_true(dec.model.refine_49); /* the default writer's format */
+    /* as1_pe_203's half cylinders: a chordal tolerance of 5 % of the radius (six rows half round) */
+    dec.model.tess_tol = 0.05 * R;
+    double q = dec.model.q, tol = dec.model.tess_tol;
+    cm_mesh mesh;
+    uint32_t tris[2];
+    for (int v49 = 0; v49 < 2; v49++) {
+        dec.model.refine_49 = v49;
+        tessellate_all(&mesh);
+        tris[v49] = mesh.nindex / 3;
+        if (!cylinder_mesh_ok(&mesh, R, q, tol))
+            fail_msg("format 4.%d's mesh leaves the cylinder by more than the tolerance %.3g", 8 + v49, tol);
+    }
+    if (!(2 * tris[1] <= tris[0]))
+        fail_msg("4.9: %u triangles, 4.8: %u (want at most half)", tris[1], tris[0]);
+    print_message("# half cylinder R %g H %g kept: 4.8 %u triangles, 4.9 %u\n", R, H, tris[0], tris[1]);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 /* ---- the refinement spares tests of pieces that passed the round before, and (format 4.8) of
    pieces its corners' normals predict flat, and gives the same mesh ----
    Each model (a KEEP B-spline net, an exact Gregory face over two half circles, a GREGORY-FIT bump)
@@ -529,7 +589,7 @@ static void test_refine_skips_passed_pieces(void **state)
         igw_free(&w);
         cm_status st;
         assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
-        assert_true(dec.model.refine_48); /* the default writer's format */
+        assert_true(dec.model.refine_48 && dec.model.refine_49); /* the default writer's format */
         cm_mesh mesh;
         long tested, skipped, predicted, tested0, skipped0, predicted0;
         tess.pass_slots = 1;
@@ -939,6 +999,7 @@ int main(void)
         cmocka_unit_test(test_half_cylinder),
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test(test_refine_skips_passed_pieces),
+        cmocka_unit_test(test_ruled_kept_strips),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good45, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good3, teardown_good),

@@ -56,6 +56,7 @@ typedef struct cm_tess_ws {
     int refine_47;                         /* the refinement of format 4.7 (cm_model.refine_47), set
                                               likewise */
     int refine_48;                         /* ... and of format 4.8 (cm_model.refine_48) */
+    int refine_49;                         /* ... and of format 4.9 (cm_model.refine_49) */
     int test_every_piece;                  /* tests: 1 turns format 4.8's predicted passes off (on
                                               smooth models the mesh must not change) */
 } cm_tess_ws;
