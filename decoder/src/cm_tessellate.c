@@ -1102,42 +1102,59 @@ static cm_err tess_gregory(const cm_model *m, uint32_t f, const cm_greg_surface 
     return e;
 }
 
+/* format 4.9: the most a kept face's plane of triangulation squeezes a curved direction whose grid
+   cells are longer than the other's (a ruled direction, degree 1, is squeezed without limit) */
+#define TESS_SQUEEZE_MAX_49 4.0
+
 /*
- * Format 4.9: a kept surface of degree 1 in one direction (and not the other) is straight along
- * it within each knot span: a cylinder, a cone, a surface of revolution or an extrusion of a line,
- * exported as a rational (1, 2) net.  Its curvature grid put one column across such a face, and in
- * the plane scaled by the mean speeds (about millimetres) the triangulation joined the loop's points
- * across the curved direction: triangles spanning the whole arc, which the refinement then split at
- * their centres, scattering points over the face (as1_pe_203's twelve half-cylinders of 127 mm:
- * 312 triangles each, 3744 of the model's 6928; Open CASCADE meshes the whole model in 3848).  The
- * grid gets one column per knot span along the straight direction, and the plane is squeezed along
- * it until a column is as wide as a row is high: the triangles then run along the rulings, each
- * across one row of the curved direction, where the curvature grid put the rows (as1: 3592
- * triangles in all, the deviation Open CASCADE measures 3.3 mm where it was 5.8).  A bilinear
- * net (degree 1 both ways) is twisted: left as it was.  The refinement still tests what it made.
+ * Format 4.9: the plane a kept face is triangulated in.  Before, (u,v) scaled by the surface's mean
+ * speeds (about millimetres), whatever its curvature grid: on a face curved one way and straight or
+ * nearly so the other (a cylinder, a fillet, a hull's strake) the Delaunay triangulation joined the
+ * loop's points straight across the curved direction, and the refinement split those triangles at
+ * their centres, scattering points over the face (as1_pe_203's twelve half cylinders of 127 mm:
+ * 312 triangles each, 3744 of the model's 6928; Open CASCADE meshes the whole model in 3848).  Now
+ * the direction whose grid cells are longer is squeezed until its cells are as wide as the other's
+ * are high, so that the triangles run along the flatter direction, each across about one cell of
+ * the curved one, where the curvature grid put them:
+ * - a surface of degree 1 in exactly one direction (a rational (1, 2) cylinder, cone, surface of
+ *   revolution or extrusion of a line) is straight along it within each knot span: its grid gets at
+ *   least a column per span, and the squeeze has no limit (no bump can hide along a ruling);
+ * - otherwise by at most TESS_SQUEEZE_MAX_49: a direction the 5 x 5 curvature samples call flat may
+ *   still bend between them, and triangles four cells long are tested as before.
+ * Over the corpus at the bench's deflections: as1_pe_203 6928 -> 3592 triangles, occ22470 4196 ->
+ * 3118, ship_kvlcc2 2676 -> 2042, Open CASCADE's deviation of each mesh the same or smaller.  A
+ * bilinear net (degree 1 both ways) is twisted: the general rule.  The refinement still tests what
+ * this makes.
  */
-static void ruled_grid(const cm_surf *s, double umin, double umax, double vmin, double vmax, int *nu, int *nv,
+static void kept_plane(const cm_surf *s, double umin, double umax, double vmin, double vmax, int *nu, int *nv,
                        double *su, double *sv)
 {
-    if ((s->p == 1) == (s->q == 1) || !(umax > umin) || !(vmax > vmin))
+    if (!(umax > umin) || !(vmax > vmin) || *nu < 1 || *nv < 1)
         return;
-    int along_u = s->p == 1;
-    const double *K = along_u ? s->U : s->V;
-    int nk = along_u ? s->nu + 2 : s->nv + 2; /* n + p + 1 knots, p = 1 */
-    double lo = along_u ? umin : vmin, hi = along_u ? umax : vmax;
-    int spans = 1; /* the interior knots inside the loop's range each start a span */
-    for (int i = 1; i < nk && spans < CM_MAX_TESS_POINTS / 4; i++)
-        if (K[i] > K[i - 1] && K[i - 1] > lo && K[i - 1] < hi)
-            spans++;
-    if (along_u) {
-        if (spans > *nu) /* (the curvature grid's count: more only where the ruling kinks at a knot) */
+    double limit = TESS_SQUEEZE_MAX_49;
+    if ((s->p == 1) != (s->q == 1)) {
+        int along_u = s->p == 1;
+        const double *K = along_u ? s->U : s->V;
+        int nk = along_u ? s->nu + 2 : s->nv + 2; /* n + p + 1 knots, p = 1 */
+        double lo = along_u ? umin : vmin, hi = along_u ? umax : vmax;
+        int spans = 1; /* the interior knots inside the loop's range each start a span */
+        for (int i = 1; i < nk && spans < CM_MAX_TESS_POINTS / 4; i++)
+            if (K[i] > K[i - 1] && K[i - 1] > lo && K[i - 1] < hi)
+                spans++;
+        if (along_u && spans > *nu) /* (more than the curvature grid's only where a ruling kinks) */
             *nu = spans;
-        *su = (vmax - vmin) * *sv / (double)*nv / ((umax - umin) / (double)*nu);
-    } else {
-        if (spans > *nv)
+        if (!along_u && spans > *nv)
             *nv = spans;
-        *sv = (umax - umin) * *su / (double)*nu / ((vmax - vmin) / (double)*nv);
+        limit = 1e300;
     }
+    double cu = (umax - umin) * *su / (double)*nu, cv = (vmax - vmin) * *sv / (double)*nv; /* cells, mm */
+    if (!(cu > 0.0) || !(cv > 0.0))
+        return;
+    double r = cu / cv;
+    if (r > 1.0)
+        *su /= r < limit ? r : limit;
+    else if (r < 1.0)
+        *sv *= r > 1.0 / limit ? r : 1.0 / limit;
 }
 
 static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh *mesh, cm_tess_ws *ws,
@@ -1264,7 +1281,7 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
         }
         int nu_i = (int)ceil(nu_f), nv_i = (int)ceil(nv_f);
         if (ws->refine_49)
-            ruled_grid(&ps.s, umin, umax, vmin, vmax, &nu_i, &nv_i, &su, &sv);
+            kept_plane(&ps.s, umin, umax, vmin, vmax, &nu_i, &nv_i, &su, &sv);
         grid_nu = nu_i;
         grid_nv = nv_i;
         if (nu_i > 1 || nv_i > 1)

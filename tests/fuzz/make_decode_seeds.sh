@@ -19,7 +19,7 @@ for f in "$here"/corpus_iges/box_hole_144.igs "$here"/corpus_iges/box_hole_186.i
     "$cmz" encode -q "$f" -o "$tmp/$b.cmz"
     # the two sampled methods: these faces are G1FIT by default, NFILL without it
     case $b in l_shape_144|dome_square_hole_144) "$cmz" encode -q --no-g1fit "$f" -o "$tmp/${b}_nfill.cmz" ;; esac
-    # and the same in format 4.8 (kept ruled faces meshed as before 4.9), 4.7 (the refinement before
+    # and the same in format 4.8 (kept faces meshed as before 4.9), 4.7 (the refinement before
     # 4.8's predictions), 4.6 (the refinement before 4.7's), 4.5 (the varint header, a stream per
     # section), 4.4 (edge uses named by `back`), 4.2 (no placed copies), 4.1 (no net corrections),
     # 4.0's header, format 3's fixed one and format 2's coding (format 4.9 is the default): every

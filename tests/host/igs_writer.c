@@ -565,6 +565,49 @@ void igw_ruled_half_cylinder_144(igw *w, double r, double h, int pieces)
     igw_add(w, 144, 0, "%d,1,0,%d", surf, on_surface(w, surf, composite(w, m, k)));
 }
 
+/* a cubic Bezier curve (polynomial 126) through control points p[4], in the plane x = p[0].x */
+static int bezier_x_126(igw *w, const v3 p[4])
+{
+    char buf[2048];
+    int k = snprintf(buf, sizeof buf, "3,3,1,0,1,0,0,0,0,0,1,1,1,1,1,1,1,1");
+    for (int i = 0; i < 4; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", p[i].x, p[i].y, p[i].z);
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,1,0,0");
+    int de = igw_add(w, 126, 0, "%s", buf);
+    igw_set(w, de, 1, 0, 0);
+    return de;
+}
+
+void igw_trough_144(igw *w, double a, double b, double h, int pieces)
+{
+    /* z = 4 h t (1 - t), t = y / b: the cubic Bezier rows (0, 4h/3, 4h/3, 0) over y = 0, b/3, 2b/3, b
+       (the quadratic's (0, 2h, 0) raised a degree), x running linearly over [0, a] */
+    static const double zr[4] = {0, 4.0 / 3.0, 4.0 / 3.0, 0};
+    char buf[4096];
+    int k = snprintf(buf, sizeof buf, "3,3,3,3,0,0,1,0,0,0,0,0,0,1,1,1,1,0,0,0,0,1,1,1,1");
+    for (int i = 0; i < 16; i++)
+        k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
+    for (int j = 0; j < 4; j++)     /* v index outer */
+        for (int i = 0; i < 4; i++) /* u index runs fastest in the file */
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", a * i / 3.0, b * j / 3.0, h * zr[j]);
+    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
+    int s = igw_add(w, 128, 0, "%s", buf);
+    igw_set(w, s, 1, 0, 0);
+    int m[2 + 2 * 16], n = 0;
+    pieces = pieces < 1 ? 1 : (pieces > 16 ? 16 : pieces);
+    for (int i = 0; i < pieces; i++) /* along y = 0, pieces of unequal length */
+        m[n++] = line(w, (v3){a * (i * (i + 3.0)) / (pieces * (pieces + 3.0)), 0, 0},
+                      (v3){a * ((i + 1) * (i + 4.0)) / (pieces * (pieces + 3.0)), 0, 0});
+    const v3 e1[4] = {{a, 0, 0}, {a, b / 3, 4 * h / 3}, {a, 2 * b / 3, 4 * h / 3}, {a, b, 0}};
+    m[n++] = bezier_x_126(w, e1);
+    for (int i = pieces; i > 0; i--) /* back along y = b */
+        m[n++] = line(w, (v3){a * (i * (i + 3.0)) / (pieces * (pieces + 3.0)), b, 0},
+                      (v3){a * ((i - 1) * (i + 2.0)) / (pieces * (pieces + 3.0)), b, 0});
+    const v3 e0[4] = {{0, b, 0}, {0, 2 * b / 3, 4 * h / 3}, {0, b / 3, 4 * h / 3}, {0, 0, 0}};
+    m[n++] = bezier_x_126(w, e0);
+    igw_add(w, 144, 0, "%d,1,0,%d", s, on_surface(w, s, composite(w, m, n)));
+}
+
 void igw_split_half_cylinder_144(igw *w, double r, double h)
 {
     igw_t_vertex_half_cylinder_144(w, r, h, 1, 0);

@@ -84,6 +84,11 @@ void igw_split_half_cylinder_144(igw *w, double r, double h);
    half cylinders, whose loops have points along their rulings */
 void igw_ruled_half_cylinder_144(igw *w, double r, double h, int pieces);
 
+/* a trough z = 4 h t (1 - t), t = y / b, over [0, a] x [0, b] as one bicubic 128 (straight along x
+   but of degree 3 both ways, as an exporter's re-fitted cylinder), trimmed by a 144 whose two
+   straight edges are each cut into `pieces` (1..16) lines of unequal length */
+void igw_trough_144(igw *w, double a, double b, double h, int pieces);
+
 /* one face: a bicubic bump of height h over the square [0,a]^2 at z = 0, flat (with its cross
    slopes) on its four straight edges - the patches from the boundary come out flat */
 /* igw_split_half_cylinder_144 with T-vertices: the first quarter's bottom arc and the second's top

@@ -484,12 +484,14 @@ static void test_half_cylinder(void **state)
     model_free(&lm);
 }
 
-/* ---- format 4.9: a kept face straight in one direction is tessellated in strips along it ----
-   A long half cylinder (IGES 120: a line turned half round, kept: a rational (1, 2) net; its two
-   straight edges each in four pieces, as as1_pe_203's are) at 5 % of its radius: format 4.8's tessellation (the model's refine_49 off) and 4.9's; both keep every
-   vertex on the cylinder and every triangle's centre within the tolerance inside it, 4.9's with at
-   most half the triangles (it puts one column of grid points along the rulings and triangulates
-   in a plane squeezed along them; 4.8 scattered points over the face) */
+/* ---- format 4.9: a kept face curved one way is meshed in strips along the other ----
+   Two kept faces whose loops have points along their straight edges (each cut into four pieces, as
+   as1_pe_203's half cylinders are): a long half cylinder (IGES 120: a line turned half round, a
+   rational (1, 2) net: straight along its rulings) at 5 % of its radius, and a long trough (a
+   bicubic 128, straight along x but of degree 3 both ways: the squeeze is then at most 4) at 5 % of
+   its depth.  Format 4.8's tessellation (the model's refine_49 off) and 4.9's: both keep every
+   vertex on the surface and every triangle's centre within the tolerance of it, 4.9's with fewer
+   triangles (at most half on the cylinder, at most 3/4 on the trough) */
 static int cylinder_mesh_ok(const cm_mesh *mesh, double R, double q, double tol)
 {
     for (uint32_t i = 0; i < mesh->nverts; i++)
@@ -507,41 +509,72 @@ static int cylinder_mesh_ok(const cm_mesh *mesh, double R, double q, double tol)
     return 1;
 }
 
-static void test_ruled_kept_strips(void **state)
+/* z = 4 h t (1 - t), t = y / b: vertices on it, centres (below it: it is concave) within tol; both
+   up to `net` more, the kept net's own distance from the trough (the encoder may re-approximate it
+   within a quarter of the face's tolerance) */
+static int trough_mesh_ok(const cm_mesh *mesh, double b, double h, double q, double tol, double net)
+{
+    for (uint32_t i = 0; i < mesh->nverts; i++) {
+        double t = (double)pos[i][1] / b;
+        if (!(fabs((double)pos[i][2] - 4 * h * t * (1 - t)) <= net + 4 * q + 1e-5))
+            return 0;
+    }
+    for (uint32_t f = 0; f < mesh->nindex / 3; f++) {
+        double c[3] = {0, 0, 0};
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                c[j] += (double)pos[idx[3 * f + (uint32_t)k]][j] / 3.0;
+        double t = c[1] / b, under = 4 * h * t * (1 - t) - c[2];
+        if (!(under >= -net - 4 * q - 1e-5 && under <= tol + net + 4 * q + 1e-5))
+            return 0;
+    }
+    return 1;
+}
+
+static void test_kept_strips(void **state)
 {
     (void)state;
-    const double R = 127, H = 940;
-    igw w;
-    igw_init(&w);
-    igw_ruled_half_cylinder_144(&w, R, H, 4);
-    loaded_model lm;
-    encode_result r;
-    encode_opts o;
-    encode_opts_default(&o);
-    o.gregory = o.gregory_exact = o.gregory_fit = o.g1fit = o.nfill = 0; /* kept */
-    encode_igw_opts(&w, &lm, &r, &o);
-    igw_free(&w);
-    assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
-    cm_status st;
-    assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
-    assert_true(dec.model.refine_49); /* the default writer's format */
-    /* as1_pe_203's half cylinders: a chordal tolerance of 5 % of the radius (six rows half round) */
-    dec.model.tess_tol = 0.05 * R;
-    double q = dec.model.q, tol = dec.model.tess_tol;
-    cm_mesh mesh;
-    uint32_t tris[2];
-    for (int v49 = 0; v49 < 2; v49++) {
-        dec.model.refine_49 = v49;
-        tessellate_all(&mesh);
-        tris[v49] = mesh.nindex / 3;
-        if (!cylinder_mesh_ok(&mesh, R, q, tol))
-            fail_msg("format 4.%d's mesh leaves the cylinder by more than the tolerance %.3g", 8 + v49, tol);
+    const double R = 127, H = 940, A = 600, B = 60, D = 20;
+    for (int model = 0; model < 2; model++) {
+        igw w;
+        igw_init(&w);
+        if (model == 0)
+            igw_ruled_half_cylinder_144(&w, R, H, 4);
+        else
+            igw_trough_144(&w, A, B, D, 4);
+        loaded_model lm;
+        encode_result r;
+        encode_opts o;
+        encode_opts_default(&o);
+        o.gregory = o.gregory_exact = o.gregory_fit = o.g1fit = o.nfill = 0; /* kept */
+        encode_igw_opts(&w, &lm, &r, &o);
+        igw_free(&w);
+        assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 1);
+        cm_status st;
+        assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+        assert_true(dec.model.refine_49); /* the default writer's format */
+        dec.model.tess_tol = 0.05 * (model == 0 ? R : D);
+        double q = dec.model.q, tol = dec.model.tess_tol;
+        cm_mesh mesh;
+        uint32_t tris[2];
+        for (int v49 = 0; v49 < 2; v49++) {
+            dec.model.refine_49 = v49;
+            tessellate_all(&mesh);
+            tris[v49] = mesh.nindex / 3;
+            /* (the face's tolerance: 1e-3 of the model's diagonal, here the face's own) */
+            double net = 0.25 * 1e-3 * sqrt(A * A + B * B + D * D);
+            if (!(model == 0 ? cylinder_mesh_ok(&mesh, R, q, tol) : trough_mesh_ok(&mesh, B, D, q, tol, net)))
+                fail_msg("%s, format 4.%d: the mesh leaves the surface by more than the tolerance %.3g",
+                         model == 0 ? "cylinder" : "trough", 8 + v49, tol);
+        }
+        print_message("# %s kept: 4.8 %u triangles, 4.9 %u\n", model == 0 ? "half cylinder" : "trough", tris[0],
+                      tris[1]);
+        if (model == 0 ? !(2 * tris[1] <= tris[0]) : !(4 * tris[1] <= 3 * tris[0]))
+            fail_msg("%s: 4.9 %u triangles, 4.8 %u (too few spared)", model == 0 ? "cylinder" : "trough", tris[1],
+                     tris[0]);
+        encode_result_free(&r);
+        model_free(&lm);
     }
-    if (!(2 * tris[1] <= tris[0]))
-        fail_msg("4.9: %u triangles, 4.8: %u (want at most half)", tris[1], tris[0]);
-    print_message("# half cylinder R %g H %g kept: 4.8 %u triangles, 4.9 %u\n", R, H, tris[0], tris[1]);
-    encode_result_free(&r);
-    model_free(&lm);
 }
 
 /* ---- the refinement spares tests of pieces that passed the round before, and (format 4.8) of
@@ -999,7 +1032,7 @@ int main(void)
         cmocka_unit_test(test_half_cylinder),
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test(test_refine_skips_passed_pieces),
-        cmocka_unit_test(test_ruled_kept_strips),
+        cmocka_unit_test(test_kept_strips),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good45, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good3, teardown_good),

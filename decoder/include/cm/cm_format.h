@@ -100,9 +100,9 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_PREDICT_FLAT_MINOR 8u   /* 4.8: the bytes of 4.7; the refinement passes untested a piece its
                                           corners' normals predict flat, a kept face's loop starts from its
                                           control net (cm_model.refine_48) */
-#define CM_FMT_RULED_MINOR 9u          /* 4.9: the bytes of 4.8; a kept face straight in one direction (degree 1:
-                                          a ruling in each knot span) is tessellated in strips along it
-                                          (cm_model.refine_49) */
+#define CM_FMT_RULED_MINOR 9u          /* 4.9: the bytes of 4.8; a kept face is triangulated in a plane squeezed
+                                          along its flatter direction, a ruled one (degree 1) in strips
+                                          along its rulings (cm_model.refine_49) */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -298,10 +298,10 @@ typedef struct cm_model {
                              of the tolerance passes untested, and a kept face's loop finds its first
                              (u,v) from the surface's control net before any grid (cm_tessellate.c,
                              cm_param.c); the encoder measured the needs that way */
-    int refine_49;        /* format 4.9 on: a kept face of degree 1 in one direction (a cylinder, cone or
-                             extrusion along its rulings) gets one grid column per knot span of that
-                             direction and is triangulated in a plane squeezed along it, so that its
-                             triangles run along the rulings (cm_tessellate.c) */
+    int refine_49;        /* format 4.9 on: a kept face is triangulated in a plane squeezed along the
+                             direction whose grid cells are longer (by at most 4; a ruled direction,
+                             degree 1, without limit and with a grid column per knot span), so that
+                             its triangles run along the flatter direction (cm_tessellate.c) */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
        face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
        model (MAX_TRIS).  The tessellation's work on a face, and on the model, is bounded by these
