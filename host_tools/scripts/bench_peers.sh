@@ -107,8 +107,8 @@ awk -F'\t' 'function med(a, n,   i, j, t) { for (i = 2; i <= n; i++) for (j = i;
       print "| model | .cmz | xz -9e | ×xz | Draco (OCCT mesh) | Draco/.cmz | deflection mm | triangles OCCT / cmz | deviation mm cmz / Draco | decode cmz s | draco_decoder s | cmz/draco time | OCCT read+mesh s | OCCT/cmz time |" (cg ? " cmz/draco instr |" : "")
       print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|" (cg ? "---:|" : "")
       for (i = 1; i <= n; i++) { split(row[i], f, "\t")
-          printf "| %s%s | %d | %d | %.2f | %d | %.2f | %.3g | %d / %d | %s / %s | %.3f | %.3f | %.1f | %.2f | %.1f |%s\n", f[1], (f[14] == "ok" ? "" : " (host decoder: " f[14] ")"),
+          printf "| %s%s | %d | %d | %.2f | %d | %.2f | %.3g | %d / %d | %s / %s | %.4f | %.4f | %.2f | %.2f | %.1f |%s\n", f[1], (f[14] == "ok" ? "" : " (host decoder: " f[14] ")"),
                  f[4], f[3], xr[i], f[5], dr[i], f[6], f[7], f[8], f[15], f[16], f[10], f[11], sr[i], f[9], orr[i], (cg ? (ir[i] < 0 ? " - |" : sprintf(" %.1f |", ir[i])) : "") }
-      printf "| **median** (%d models) | | | %.2f | | %.2f | | | | | | %.1f | | %.1f |%s\n", n, med(xs, n), med(ds, n), med(ss, n), med(os, n), (cg ? sprintf(" %.1f |", med(irs, ni)) : "")
+      printf "| **median** (%d models) | | | %.2f | | %.2f | | | | | | %.2f | | %.1f |%s\n", n, med(xs, n), med(ds, n), med(ss, n), med(os, n), (cg ? sprintf(" %.1f |", med(irs, ni)) : "")
     }' "$tsv"
 echo "(written to $tsv)"
