@@ -463,7 +463,9 @@ void igw_half_cylinder_120(igw *w, double r, double h)
 
 const double igw_bicubic_z[4][4] = {{0, 0.5, 0.2, 0}, {0.3, 1.0, 0.8, 0.1}, {0.1, 0.9, 1.2, 0.4}, {0, 0.2, 0.5, 0.3}};
 
-void igw_bicubic_128(igw *w)
+/* one bicubic Bezier patch (a polynomial 128 on [0,1]^2) of control points p[j][i] (v index j, u
+   index i); its DE */
+static int bezier_128(igw *w, const v3 p[4][4])
 {
     char buf[4096];
     int k = snprintf(buf, sizeof buf, "3,3,3,3,0,0,1,0,0,0,0,0,0,1,1,1,1,0,0,0,0,1,1,1,1");
@@ -471,9 +473,18 @@ void igw_bicubic_128(igw *w)
         k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
     for (int j = 0; j < 4; j++)     /* v index outer */
         for (int i = 0; i < 4; i++) /* u index runs fastest in the file */
-            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%d,%d,%.17g", i, j, igw_bicubic_z[i][j]);
+            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", p[j][i].x, p[j][i].y, p[j][i].z);
     snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
-    igw_add(w, 128, 0, "%s", buf);
+    return igw_add(w, 128, 0, "%s", buf);
+}
+
+void igw_bicubic_128(igw *w)
+{
+    v3 p[4][4];
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++)
+            p[j][i] = (v3){i, j, igw_bicubic_z[i][j]};
+    bezier_128(w, p);
 }
 
 static double dense_knot(int i, int n)
@@ -583,15 +594,11 @@ void igw_trough_144(igw *w, double a, double b, double h, int pieces)
     /* z = 4 h t (1 - t), t = y / b: the cubic Bezier rows (0, 4h/3, 4h/3, 0) over y = 0, b/3, 2b/3, b
        (the quadratic's (0, 2h, 0) raised a degree), x running linearly over [0, a] */
     static const double zr[4] = {0, 4.0 / 3.0, 4.0 / 3.0, 0};
-    char buf[4096];
-    int k = snprintf(buf, sizeof buf, "3,3,3,3,0,0,1,0,0,0,0,0,0,1,1,1,1,0,0,0,0,1,1,1,1");
-    for (int i = 0; i < 16; i++)
-        k += snprintf(buf + k, sizeof buf - (size_t)k, ",1");
-    for (int j = 0; j < 4; j++)     /* v index outer */
-        for (int i = 0; i < 4; i++) /* u index runs fastest in the file */
-            k += snprintf(buf + k, sizeof buf - (size_t)k, ",%.17g,%.17g,%.17g", a * i / 3.0, b * j / 3.0, h * zr[j]);
-    snprintf(buf + k, sizeof buf - (size_t)k, ",0,1,0,1");
-    int s = igw_add(w, 128, 0, "%s", buf);
+    v3 p[4][4];
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++)
+            p[j][i] = (v3){a * i / 3.0, b * j / 3.0, h * zr[j]};
+    int s = bezier_128(w, p);
     igw_set(w, s, 1, 0, 0);
     int m[2 + 2 * 16], n = 0;
     pieces = pieces < 1 ? 1 : (pieces > 16 ? 16 : pieces);

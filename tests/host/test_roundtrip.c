@@ -439,6 +439,51 @@ static void test_profile_coarsens_tessellation(void **state)
     igw_free(&w);
 }
 
+/* the centre of the mesh's triangle t */
+static void tri_centre(uint32_t t, double c[3])
+{
+    c[0] = c[1] = c[2] = 0;
+    for (int k = 0; k < 3; k++)
+        for (int j = 0; j < 3; j++)
+            c[j] += (double)pos[idx[3 * t + (uint32_t)k]][j] / 3.0;
+}
+
+/* a cylinder of radius R about z: vertices on it, triangle centres within tol inside it */
+static int cylinder_mesh_ok(const cm_mesh *mesh, double R, double q, double tol)
+{
+    for (uint32_t i = 0; i < mesh->nverts; i++)
+        if (!(fabs(hypot((double)pos[i][0], (double)pos[i][1]) - R) <= 4 * q + 1e-5))
+            return 0;
+    for (uint32_t t = 0; t < mesh->nindex / 3; t++) {
+        double c[3];
+        tri_centre(t, c);
+        double rho = hypot(c[0], c[1]);
+        if (!(rho <= R + 4 * q + 1e-5 && rho >= R - tol - 4 * q - 1e-5))
+            return 0;
+    }
+    return 1;
+}
+
+/* z = 4 h t (1 - t), t = y / b: vertices on it, centres (below it: it is concave) within tol; both
+   up to `net` more, the kept net's own distance from the trough (the encoder may re-approximate it
+   within a quarter of the face's tolerance) */
+static int trough_mesh_ok(const cm_mesh *mesh, double b, double h, double q, double tol, double net)
+{
+    for (uint32_t i = 0; i < mesh->nverts; i++) {
+        double t = (double)pos[i][1] / b;
+        if (!(fabs((double)pos[i][2] - 4 * h * t * (1 - t)) <= net + 4 * q + 1e-5))
+            return 0;
+    }
+    for (uint32_t f = 0; f < mesh->nindex / 3; f++) {
+        double c[3];
+        tri_centre(f, c);
+        double t = c[1] / b, under = 4 * h * t * (1 - t) - c[2];
+        if (!(under >= -net - 4 * q - 1e-5 && under <= tol + net + 4 * q + 1e-5))
+            return 0;
+    }
+    return 1;
+}
+
 static void test_half_cylinder(void **state)
 {
     (void)state;
@@ -458,17 +503,8 @@ static void test_half_cylinder(void **state)
     cm_mesh mesh;
     tessellate_all(&mesh);
     /* vertices on the surface, triangle centres within the chordal tolerance inside it */
-    for (uint32_t i = 0; i < mesh.nverts; i++)
-        assert_near(hypot((double)pos[i][0], (double)pos[i][1]), R, 4 * q + 1e-5);
-    for (uint32_t t = 0; t < mesh.nindex / 3; t++) {
-        double c[3] = {0, 0, 0};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++)
-                c[j] += (double)pos[idx[3 * t + (uint32_t)k]][j] / 3.0;
-        double rho = hypot(c[0], c[1]);
-        if (!(rho <= R + 4 * q + 1e-5 && rho >= R - tol - 4 * q - 1e-5))
-            fail_msg("triangle %u centre at radius %.9g: off the cylinder by more than the tolerance %.3g", t, rho, tol);
-    }
+    if (!cylinder_mesh_ok(&mesh, R, q, tol))
+        fail_msg("the mesh leaves the cylinder by more than the tolerance %.3g", tol);
     /* the open boundary is the face's four edges: two half circles (z = 0, z = H) and two lines (y = 0) */
     mesh_topo tp;
     topo(&mesh, &tp);
@@ -492,45 +528,6 @@ static void test_half_cylinder(void **state)
    its depth.  Format 4.8's tessellation (the model's refine_49 off) and 4.9's: both keep every
    vertex on the surface and every triangle's centre within the tolerance of it, 4.9's with fewer
    triangles (at most half on the cylinder, at most 3/4 on the trough) */
-static int cylinder_mesh_ok(const cm_mesh *mesh, double R, double q, double tol)
-{
-    for (uint32_t i = 0; i < mesh->nverts; i++)
-        if (!(fabs(hypot((double)pos[i][0], (double)pos[i][1]) - R) <= 4 * q + 1e-5))
-            return 0;
-    for (uint32_t t = 0; t < mesh->nindex / 3; t++) {
-        double c[3] = {0, 0, 0};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++)
-                c[j] += (double)pos[idx[3 * t + (uint32_t)k]][j] / 3.0;
-        double rho = hypot(c[0], c[1]);
-        if (!(rho <= R + 4 * q + 1e-5 && rho >= R - tol - 4 * q - 1e-5))
-            return 0;
-    }
-    return 1;
-}
-
-/* z = 4 h t (1 - t), t = y / b: vertices on it, centres (below it: it is concave) within tol; both
-   up to `net` more, the kept net's own distance from the trough (the encoder may re-approximate it
-   within a quarter of the face's tolerance) */
-static int trough_mesh_ok(const cm_mesh *mesh, double b, double h, double q, double tol, double net)
-{
-    for (uint32_t i = 0; i < mesh->nverts; i++) {
-        double t = (double)pos[i][1] / b;
-        if (!(fabs((double)pos[i][2] - 4 * h * t * (1 - t)) <= net + 4 * q + 1e-5))
-            return 0;
-    }
-    for (uint32_t f = 0; f < mesh->nindex / 3; f++) {
-        double c[3] = {0, 0, 0};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++)
-                c[j] += (double)pos[idx[3 * f + (uint32_t)k]][j] / 3.0;
-        double t = c[1] / b, under = 4 * h * t * (1 - t) - c[2];
-        if (!(under >= -net - 4 * q - 1e-5 && under <= tol + net + 4 * q + 1e-5))
-            return 0;
-    }
-    return 1;
-}
-
 static void test_kept_strips(void **state)
 {
     (void)state;

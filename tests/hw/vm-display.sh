@@ -45,7 +45,8 @@ release_console() {
 }
 
 # compare the framebuffer dump $1 (bpp $2, 320 x 200, stride 320 * bpp / 8) with the PNG $3 placed
-# at ($4, $5), background $6 round it; prints the first difference
+# at ($4, $5), background $6 round it; prints the first difference.  With a seventh argument
+# `write`: write to $1 the screen's memory that frame should make, and compare nothing
 compare() {
     python3 - "$@" <<'PY'
 import struct, sys, zlib
@@ -60,7 +61,6 @@ while at < len(d):
         idat += d[at + 8:at + 8 + n]
     at += 12 + n
 raw = zlib.decompress(idat)
-fb = open(dump, 'rb').read()
 B = bpp // 8
 # the channels' bit offsets and lengths as the driver reports them (FBIOGET_VSCREENINFO: struct
 # fb_var_screeninfo, red/green/blue after eight fields); vfb lays out B,G,R from the top
@@ -76,6 +76,10 @@ def want(x, y):
     else:
         r, g, b = bg >> 16, (bg >> 8) & 255, bg & 255
     return ((r >> (8 - rl)) << ro) | ((g >> (8 - gl)) << go) | ((b >> (8 - bl)) << bo)
+if len(sys.argv) > 7 and sys.argv[7] == 'write':
+    open(dump, 'wb').write(b''.join(want(x, y).to_bytes(B, 'little') for y in range(200) for x in range(320)))
+    sys.exit(0)
+fb = open(dump, 'rb').read()
 bad = 0
 for y in range(200):
     for x in range(320):
@@ -176,32 +180,8 @@ else
 fi
 
 # ---- 6-8: the operator's buttons (gpio-sim) and the turntable, on a 320 x 200 32-bit screen ----
-# the screen's expected memory for the PNG $1 (a whole-screen frame): written once to $2, then the
-# screen is read until it holds exactly that (a press is drawn in the background) or $3 s pass
-expected_dump() {
-    python3 - "$1" "$2" <<'PY'
-import fcntl, struct, sys, zlib
-d = open(sys.argv[1], 'rb').read()
-at, idat, w, h = 8, b'', 0, 0
-while at < len(d):
-    n, t = struct.unpack('>I4s', d[at:at + 8])
-    if t == b'IHDR':
-        w, h = struct.unpack('>II', d[at + 8:at + 16])
-    if t == b'IDAT':
-        idat += d[at + 8:at + 8 + n]
-    at += 12 + n
-raw = zlib.decompress(idat)
-with open('/dev/fb0', 'rb') as f:
-    var = struct.unpack('40I', fcntl.ioctl(f.fileno(), 0x4600, bytes(160)))
-ro, go, bo = var[8], var[11], var[14]
-out = bytearray()
-for y in range(h):
-    for x in range(w):
-        o = y * (1 + 3 * w) + 1 + 3 * x
-        out += ((raw[o] << ro) | (raw[o + 1] << go) | (raw[o + 2] << bo)).to_bytes(4, 'little')
-open(sys.argv[2], 'wb').write(out)
-PY
-}
+# the screen's expected memory for the PNG $1 (a whole-screen frame), written to $2 (compare's)
+expected_dump() { compare "$2" 32 "$1" 0 0 ffffff write; }
 # screen_becomes WHAT TIMEOUT VIEW-OPTION...: the screen shows `cmz-view --png` of those options
 screen_becomes() {
     local what=$1 secs=$2

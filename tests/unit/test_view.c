@@ -59,6 +59,27 @@ static void add_quad(cm_mesh *m, const float q[4][3], const float n[3], uint32_t
     f->nindex = 6;
 }
 
+/* the unit box's front face (y = 0, normal -y) in grey, one face of two triangles */
+static cm_mesh front_square(void)
+{
+    cm_mesh m = mesh_storage();
+    const float front[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
+    const float ny[3] = {0, -1, 0};
+    add_quad(&m, front, ny, 0x808080u, 1);
+    return m;
+}
+
+/* options for a square frame of `size` pixels from `dir`, edges (and silhouettes) on or off */
+static cm_view_opts square_opts(int size, cm_view_dir dir, int edges)
+{
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    o.width = o.height = size;
+    o.dir = dir;
+    o.edges = edges;
+    return o;
+}
+
 static size_t count_not(const cm_view *v, uint32_t rgb)
 {
     size_t n = 0, npix = (size_t)v->o.width * (size_t)v->o.height;
@@ -76,15 +97,8 @@ static void test_front_box(void **state)
     (void)state;
     if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
         skip(); /* the tiny profile's frame: test_refuses_large_frame covers it */
-    cm_mesh m = mesh_storage();
-    const float front[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
-    const float ny[3] = {0, -1, 0};
-    add_quad(&m, front, ny, 0x808080u, 1);
-    cm_view_opts o;
-    cm_view_opts_default(&o);
-    o.width = o.height = 100;
-    o.dir = CM_VIEW_FRONT;
-    o.edges = 0;
+    cm_mesh m = front_square();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     cm_status st;
     cm_status_init(&st);
@@ -115,11 +129,7 @@ static void test_depth_order(void **state)
         const float ny[3] = {0, -1, 0};
         add_quad(&m, order ? nearq : farq, ny, order ? 0xff0000u : 0x0000ffu, 1);
         add_quad(&m, order ? farq : nearq, ny, order ? 0x0000ffu : 0xff0000u, 1);
-        cm_view_opts o;
-        cm_view_opts_default(&o);
-        o.width = o.height = 64;
-        o.dir = CM_VIEW_FRONT;
-        o.edges = 0;
+        cm_view_opts o = square_opts(64, CM_VIEW_FRONT, 0);
         const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
         assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
         cm_view_mesh(&view, &m);
@@ -142,12 +152,8 @@ static void turned_frame(cm_view_dir dir, int turn)
     const float ny[3] = {0, -1, 0}, nx[3] = {-1, 0, 0};
     add_quad(&m, front, ny, 0xff0000u, 1);
     add_quad(&m, left, nx, 0x0000ffu, 1);
-    cm_view_opts o;
-    cm_view_opts_default(&o);
-    o.width = o.height = 64;
-    o.dir = dir;
+    cm_view_opts o = square_opts(64, dir, 0);
     o.turn = turn;
-    o.edges = 0;
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
     cm_view_mesh(&view, &m);
@@ -211,11 +217,7 @@ static void test_silhouette(void **state)
         m.nverts = 2 * SIDES;
         f->nverts = m.nverts;
         f->nindex = m.nindex;
-        cm_view_opts o;
-        cm_view_opts_default(&o);
-        o.width = o.height = 100;
-        o.dir = CM_VIEW_FRONT;
-        o.edges = edges;
+        cm_view_opts o = square_opts(100, CM_VIEW_FRONT, edges);
         const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
         assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
         cm_view_mesh(&view, &m);
@@ -241,14 +243,8 @@ static void test_silhouette(void **state)
         assert_true(top >= 80 && bottom >= 80);
     }
     /* a plane: no silhouette */
-    cm_mesh m = mesh_storage();
-    const float front[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
-    const float ny[3] = {0, -1, 0};
-    add_quad(&m, front, ny, 0x808080u, 1);
-    cm_view_opts o;
-    cm_view_opts_default(&o);
-    o.width = o.height = 100;
-    o.dir = CM_VIEW_ISO;
+    cm_mesh m = front_square();
+    cm_view_opts o = square_opts(100, CM_VIEW_ISO, 1);
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
     cm_view_mesh(&view, &m);
