@@ -38,6 +38,15 @@ typedef struct cm_gpio_config {
     const char *button[CM_GPIO_NBUTTON]; /* the viewer's input lines, as request; NULL = unused */
 } cm_gpio_config;
 
+/* each slot's name in messages, as the configuration calls it (both back ends) */
+#define CM_GPIO_ROLE_NAMES {"busy", "ready", "error", "request", "rotate", "next", "prev", "reset"}
+
+/** The line configured for slot `slot` (an output, the request button, a viewer's button), or NULL. */
+static inline const char *cm_gpio_slot_spec(const cm_gpio_config *cfg, int slot)
+{
+    return slot < CM_GPIO_NOUT ? cfg->out[slot] : slot == CM_GPIO_NOUT ? cfg->request : cfg->button[slot - CM_GPIO_NOUT - 1];
+}
+
 typedef struct cm_gpio {
     void *chip[CM_GPIO_SLOTS]; /* back end's handles (libgpiod: struct gpiod_chip *) */
     void *line[CM_GPIO_SLOTS]; /* (struct gpiod_line *) */

@@ -31,8 +31,7 @@
 #endif
 
 /* the name of each slot in error messages, as the configuration calls it */
-static const char *const role_name[CM_GPIO_SLOTS] = {"busy", "ready", "error", "request",
-                                                     "rotate", "next", "prev", "reset"};
+static const char *const role_name[CM_GPIO_SLOTS] = CM_GPIO_ROLE_NAMES;
 
 /* a chip or line description longer than this is a configuration mistake */
 enum { SPEC_MAX = 96 };
@@ -177,9 +176,7 @@ int cm_gpio_open(cm_gpio *g, const cm_gpio_config *cfg) {
     memset(g, 0, sizeof *g);
     const char *consumer = (cfg->consumer && *cfg->consumer) ? cfg->consumer : "curvemesh";
     for (int slot = 0; slot < CM_GPIO_SLOTS; slot++) {
-        const char *spec = slot < CM_GPIO_NOUT    ? cfg->out[slot]
-                           : slot == CM_GPIO_NOUT ? cfg->request
-                                                  : cfg->button[slot - CM_GPIO_NOUT - 1];
+        const char *spec = cm_gpio_slot_spec(cfg, slot);
         if (!spec) continue;
         if (open_one(g, slot, spec, consumer) < 0) {
             char keep[sizeof g->err];

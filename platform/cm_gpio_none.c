@@ -11,13 +11,10 @@
 #include <string.h>
 
 int cm_gpio_open(cm_gpio *g, const cm_gpio_config *cfg) {
-    static const char *const role_name[CM_GPIO_SLOTS] = {"busy", "ready", "error", "request",
-                                                         "rotate", "next", "prev", "reset"};
+    static const char *const role_name[CM_GPIO_SLOTS] = CM_GPIO_ROLE_NAMES;
     memset(g, 0, sizeof *g);
     for (int slot = 0; slot < CM_GPIO_SLOTS; slot++) {
-        const char *spec = slot < CM_GPIO_NOUT    ? cfg->out[slot]
-                           : slot == CM_GPIO_NOUT ? cfg->request
-                                                  : cfg->button[slot - CM_GPIO_NOUT - 1];
+        const char *spec = cm_gpio_slot_spec(cfg, slot);
         if (!spec) continue;
         snprintf(g->err, sizeof g->err,
                  "gpio %s=%s: this build has no GPIO support (libgpiod 1.6 was not found at build time)",

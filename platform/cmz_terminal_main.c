@@ -240,7 +240,11 @@ static int parse_args(config *c, int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--config") == 0) {
             i++;
-        } else if (strcmp(a, "--") == 0 && argc - i - 1 <= VIEW_ARGS_MAX) {
+        } else if (strcmp(a, "--") == 0) {
+            if (argc - i - 1 > VIEW_ARGS_MAX) {
+                fprintf(stderr, PROG ": at most %d viewer options after --, not %d\n", VIEW_ARGS_MAX, argc - i - 1);
+                return -1;
+            }
             c->view_args = argv + i + 1;
             c->nview_args = argc - i - 1;
             break;
@@ -611,7 +615,7 @@ int main(int argc, char **argv)
                     (unsigned)term.offer.size, (unsigned)term.prefix, (unsigned)term.chunk);
             cm_gpio_set(&gpio, CM_GPIO_BUSY, 1), busy = 1;
             show_status(&c, term.offer.name, "receiving");
-            shown_pct = (unsigned)((uint64_t)term.prefix * 10u / (term.offer.size ? term.offer.size : 1)) * 10u;
+            shown_pct = 0; /* (a resumed transfer shows where it resumed a second from now) */
             shown_ms = started_ms;
             if (term.prefix == 0)
                 cm_kill_point("part-created");

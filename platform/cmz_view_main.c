@@ -171,7 +171,8 @@ static const char *status_text(char *buf, size_t cap, const char *status, int in
 }
 
 /* draw the model into the frame as vo asks (the parts numbered again: cm_view_begin clears them)
-   and count its parts: 0, or the exit status after reporting why not */
+   and count its parts: 0, or the exit status after reporting why not (3: the mesh could not be read
+   back from its spill files) */
 static int draw(const cm_view_opts *vo, const float lo[3], const float hi[3], const cm_mesh *mesh,
                 const char *status, int interactive, const char *in, uint32_t *nparts)
 {
@@ -194,7 +195,22 @@ static int draw(const cm_view_opts *vo, const float lo[3], const float hi[3], co
     const char *text = status_text(buf, sizeof buf, status, interactive, vo->step, parts);
     if (text)
         cm_view_status(&view, text);
+    if (cm_mesh_spill_failed(mesh)) {
+        fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
+        return 3;
+    }
     return 0;
+}
+
+/* the frame on the framebuffer fb: 0, or the exit status after reporting why not */
+static int show_frame(const char *fb, const cm_view_opts *vo)
+{
+    cm_status st;
+    cm_status_init(&st);
+    if (cm_fb_show(fb, view.rgb, (uint32_t)vo->width, (uint32_t)vo->height, vo->background, &st) == 0)
+        return 0;
+    report(stderr, "", fb, &st);
+    return st.code == CM_E_IO ? 3 : 1;
 }
 
 static void on_stop(int sig) { stop_signal = sig; }
@@ -280,21 +296,9 @@ static int interact(const char *fb, const char *const button[CM_GPIO_NBUTTON], i
         }
         if (!changed)
             continue;
-        cm_status st;
-        cm_status_init(&st);
         uint32_t nparts;
-        if ((rc = draw(&vo, lo, hi, mesh, status, 1, in, &nparts)) != 0)
+        if ((rc = draw(&vo, lo, hi, mesh, status, 1, in, &nparts)) != 0 || (rc = show_frame(fb, &vo)) != 0)
             break;
-        if (cm_mesh_spill_failed(mesh)) {
-            fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
-            rc = 3;
-            break;
-        }
-        if (cm_fb_show(fb, view.rgb, (uint32_t)vo.width, (uint32_t)vo.height, vo.background, &st) != 0) {
-            report(stderr, "", fb, &st);
-            rc = st.code == CM_E_IO ? 3 : 1;
-            break;
-        }
     }
     cm_gpio_close(&gpio);
     return rc;
@@ -433,11 +437,14 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    int interactive = in && fb && (tick_ms > 0 || button[0] || button[1] || button[2] || button[3]);
-    if (!interactive && (tick_ms > 0 || button[0] || button[1] || button[2] || button[3]) && in) {
+    int stays = tick_ms > 0; /* a button or the turntable: the viewer stays to draw again */
+    for (int b = 0; b < CM_GPIO_NBUTTON; b++)
+        stays |= button[b] != NULL;
+    if (stays && in && !fb) {
         fprintf(stderr, "cmz-view: the buttons and --turntable need --fb (a screen to draw on again)\n");
         return 2;
     }
+    int interactive = stays && in;
     cm_status st;
     cm_status_init(&st);
     if (fb && (!sized || !in)) { /* the screen's size, within the build's frame */
@@ -485,17 +492,11 @@ int main(int argc, char **argv)
     int rc = draw(&vo, lo, hi, &mesh, status, interactive, in, &parts);
     if (rc != 0)
         return rc;
-    if (cm_mesh_spill_failed(&mesh)) {
-        fprintf(stderr, "cmz-view: %s: reading the mesh back from its spill files failed\n", in);
-        return 3;
-    }
     rc = out ? write_png(out) : 0;
+    if (rc == 0 && fb)
+        rc = show_frame(fb, &vo);
     if (rc != 0)
         return rc;
-    if (fb && cm_fb_show(fb, view.rgb, (uint32_t)vo.width, (uint32_t)vo.height, vo.background, &st) != 0) {
-        report(stderr, "", fb, &st);
-        return st.code == CM_E_IO ? 3 : 1;
-    }
     if (interactive) { /* the buttons (the mesh stays in its spill files for the next pictures) */
         rc = interact(fb, button, tick_ms, idle_ms, vo, lo, hi, &mesh, parts, status, in, quiet);
         cm_decode_spill_close();
