@@ -10,7 +10,7 @@
 //   occt_oracle points    MODEL POINTS.xyz [--tol-rel 1e-6] [--out FILE]
 //   occt_oracle mesh-dev  MODEL MESH.stl   [--defl-rel 1e-4] [--max-points N] [--per-face-out F]
 //   occt_oracle sample    MODEL OUT.xyz    [--per-face 20]
-//   occt_oracle write-stl MODEL OUT.stl    [--defl-rel 1e-4]   (hidden: test meshes)
+//   occt_oracle write-stl MODEL OUT.stl    [--defl-rel 1e-4] [--angle 0.5]   (hidden: test and bench meshes)
 //   every command: [--curves file|3d]   (which trim curves define the faces)
 //
 // MODEL is an IGES file or a STEP file (ISO 10303-21, any AP that OCCT's
@@ -1892,7 +1892,9 @@ private:
 };
 
 // Meshes the model with OCCT, face by face.  Linear deflection is absolute
-// (defl_rel * diag), the angle 0.5 rad.
+// (defl_rel * diag), the angle 0.5 rad unless told (write-stl --angle: make bench coarsens Open
+// CASCADE's mesh to a measured deviation, and at 0.5 rad the angle, not the deflection, decides
+// how finely most curved faces are meshed).
 //
 // One BRepMesh_IncrementalMesh call for the whole shape ran for more than 10 minutes
 // on occt__bug22869_Spring (--curves 3d or not) and took 1.6 GB, in BRepMesh_Delaun's
@@ -1901,10 +1903,10 @@ private:
 // (IMeshData_SelfIntersectingWire).  So every face is meshed by its own call; faces
 // that still get no triangles are sampled by sample_face_grid instead.  The calls are
 // sequential: BRepMesh's parallel mode works across the faces of one call.
-void mesh_model(const Model& m, double defl) {
+void mesh_model(const Model& m, double defl, double angle = 0.5) {
     for (int i = 1; i <= m.faces.Extent(); i++) {
         try {
-            BRepMesh_IncrementalMesh mesher(m.faces(i), defl, Standard_False, 0.5, Standard_False);
+            BRepMesh_IncrementalMesh mesher(m.faces(i), defl, Standard_False, angle, Standard_False);
         } catch (const Standard_Failure& e) {
             warn("face %d: BRepMesh failed: %s", i, occt_what(e).c_str());
         }
@@ -2319,8 +2321,10 @@ int cmd_write_stl(const Args& a) {
     if (a.pos.size() != 2) throw UsageError("write-stl needs MODEL OUT.stl");
     double defl_rel = 1e-4;
     if (a.opt.count("--defl-rel")) defl_rel = parse_positive(a.opt.at("--defl-rel"), "--defl-rel");
+    double angle = 0.5;
+    if (a.opt.count("--angle")) angle = parse_positive(a.opt.at("--angle"), "--angle");
     Model m = load_model(a.pos[0].c_str());
-    mesh_model(m, defl_rel * m.diag);
+    mesh_model(m, defl_rel * m.diag, angle);
 
     std::vector<float> rec;  // 12 floats per triangle: normal, 3 vertices
     for (int i = 1; i <= m.faces.Extent(); i++) {
@@ -2441,7 +2445,7 @@ int run(int argc, char** argv) {
     if (cmd == "mesh-dev")
         return cmd_mesh_dev(args({"--defl-rel", "--max-points", "--per-face-out", "--mesh-faces", "--mesh-faces-out"}));
     if (cmd == "sample") return cmd_sample(args({"--per-face"}));
-    if (cmd == "write-stl") return cmd_write_stl(args({"--defl-rel"}));
+    if (cmd == "write-stl") return cmd_write_stl(args({"--defl-rel", "--angle"}));
     throw UsageError(strf("unknown command '%s'", cmd.c_str()));
 }
 
