@@ -14,8 +14,14 @@
 #define VIEW_STATUS_RGB 0xf2f2f2u
 /* assembly steps: the part of the step */
 #define VIEW_HIGHLIGHT_RGB 0xe8742au
-/* barycentric weights down to minus this still cover a pixel (see fill_triangle) */
-#define VIEW_INSIDE_EPS 1e-9
+/* the rasteriser's fixed point (see fill_triangle): 1/VIEW_SUBPIX of a pixel; a triangle with a
+   corner VIEW_COORD_MAX pixels or more off the frame's corner is not filled, so that its edge
+   functions fit 64 bits (2^28 units each way; a fitted camera keeps every corner near the frame) */
+#define VIEW_SUBPIX 256
+#define VIEW_COORD_MAX 1048576.0
+/* brightness across a row in 8.24 fixed point (at most 1: ambient, head and fill light add to 1) */
+#define VIEW_LIGHT_ONE 16777216.0
+#define VIEW_LIGHT_MAX 33554431 /* (below 2: a rounding's overshoot is clamped by the channel) */
 /* a curved edge is drawn in straight pieces of about this many pixels */
 #define VIEW_EDGE_PIECE_PX 6.0
 /* edges are drawn this many pixels' worth of depth in front of the faces */
@@ -229,13 +235,17 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         v->eye = -dist;
         v->scale = room / VIEW_TAN_HALF_FOV; /* a point at x = tan(fov/2) z lands on the room's edge */
     }
-    size_t npix = (size_t)o->width * (size_t)o->height;
-    for (size_t i = 0; i < npix; i++) {
+    /* the first row pixel by pixel, the others copies of it; the depth as far as a float goes */
+    size_t w = (size_t)o->width, npix = w * (size_t)o->height;
+    for (size_t i = 0; i < w; i++) {
         v->rgb[3 * i] = (uint8_t)(o->background >> 16);
         v->rgb[3 * i + 1] = (uint8_t)(o->background >> 8);
         v->rgb[3 * i + 2] = (uint8_t)o->background;
-        v->depth[i] = 3.0e38f;
     }
+    for (size_t y = 1; y < (size_t)o->height; y++)
+        memcpy(&v->rgb[3 * w * y], v->rgb, 3 * w);
+    for (size_t i = 0; i < npix; i++)
+        v->depth[i] = 3.0e38f;
     return CM_OK;
 }
 
@@ -357,6 +367,27 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
         up[f] = up[f] == f ? ++n : up[up[f]];
     v->nbase_parts = n;
     v->nparts = n + m->nplacements;
+    /* a part is closed when each edge of its faces is used twice, the two uses running it opposite
+       ways: the encoder turned such a part's faces outwards (host_tools/encode/orient.c, by its
+       signed volume), so none of its back faces can show (cm_view_mesh skips them); one edge used
+       once, or three times, or twice the same way, and the part is drawn whole */
+    for (uint32_t p = 0; p <= n; p++)
+        v->part_closed[p] = 1;
+    v->part_closed[0] = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        const cm_face *F = &m->faces[f];
+        for (uint32_t l = 0; l < F->nloops; l++) {
+            const cm_loop *L = &m->loops[F->loop0 + l];
+            for (uint32_t k = 0; k < L->nuse; k++) {
+                uint32_t u = L->use0 + k, e = m->uses[u].edge;
+                int32_t first = u < CM_MAX_MODEL_USES && e < ne ? v->edge_head[e] : -1;
+                int32_t second = first >= 0 ? v->use_next[first] : -1;
+                if (second < 0 || v->use_next[second] >= 0 || m->uses[first].rev == m->uses[second].rev)
+                    v->part_closed[up[f]] = 0;
+            }
+        }
+    }
+    v->parts_nfaces = nf;
     return v->nparts;
 }
 
@@ -400,81 +431,130 @@ static double shade(const double n[3])
     return VIEW_AMBIENT + VIEW_HEAD * head + VIEW_FILL * fl;
 }
 
-static uint8_t channel(double base, double light)
+/* a colour channel (0..255) at a brightness in 8.24 fixed point (>= 0), rounded: 32-bit products */
+static uint8_t channel(uint32_t base, uint32_t light)
 {
-    double c = base * light;
-    return (uint8_t)(c >= 255.0 ? 255 : (c <= 0.0 ? 0 : (int)(c + 0.5)));
+    uint32_t c = (base * (light >> 8) + 0x8000u) >> 16;
+    return (uint8_t)(c > 255u ? 255u : c);
 }
 
-/* edge function: twice the signed area of (a, b, p) */
-static double edge_fn(const double *a, const double *b, double px, double py)
+/* floor(a / b), b > 0 */
+static int64_t floor_div(int64_t a, int64_t b)
 {
-    return (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0]);
+    int64_t q = a / b;
+    return a % b != 0 && a < 0 ? q - 1 : q;
 }
 
-/* fill the triangle of screen points s[3] (x, y, depth) with brightnesses l[3] and colour rgb */
-static void fill_triangle(cm_view *v, const double s[3][3], const double l[3], uint32_t rgb)
+/* one side p -> q of a triangle as an edge function E(P) = A (Px - Xp) + B (Py - Yp), in the fixed
+   point's units, >= 0 inside (the corners ordered so); bias -1 on all but top and left sides: a
+   pixel centre exactly on a side shared by two triangles is filled by one of them, once */
+typedef struct view_side {
+    int64_t A, B, bias;
+} view_side;
+
+static view_side side_fn(int64_t Xp, int64_t Yp, int64_t Xq, int64_t Yq)
 {
-    double area = edge_fn(s[0], s[1], s[2][0], s[2][1]);
-    if (!(fabs(area) > 1e-12))
+    view_side e = {Yp - Yq, Xq - Xp, 0};
+    /* the inside lies towards (A, B): a left side has it to its right, a top side (level) below */
+    e.bias = e.A > 0 || (e.A == 0 && e.B > 0) ? 0 : -1;
+    return e;
+}
+
+/*
+ * Fill the triangle of screen points s[3] (x, y, depth) with brightnesses l[3] and colour rgb.
+ * The corners are rounded to 1/VIEW_SUBPIX of a pixel and the three edge functions stepped in
+ * 64-bit integers from pixel centre to pixel centre, with the top-left rule: exact, so shared sides
+ * neither crack nor fill twice, and a pixel's coverage is the same on every machine; depth and
+ * brightness step along a row from their values at its first pixel (doubles, then the brightness
+ * in fixed point).  A triangle covering no pixel centre costs its box; a row's span comes from
+ * the edge functions' values at its start and their steps, exactly (a division per slanted side).  (Until 2026-12-07 each pixel's three barycentric weights were
+ * doubles with a hair's tolerance, each row's span found by three divisions, and each channel
+ * rounded from a double: 3.1 k instructions a triangle on C1G0B0O's frame.)
+ */
+static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t rgb)
+{
+    const int64_t X[3] = {t[0]->X, t[1]->X, t[2]->X}, Y[3] = {t[0]->Y, t[1]->Y, t[2]->Y};
+    const double z[3] = {t[0]->z, t[1]->z, t[2]->z}, l[3] = {t[0]->light, t[1]->light, t[2]->light};
+    int a = 0, b = 1, c = 2;
+    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
+    if (area == 0)
         return; /* edge-on or a point: nothing covered */
-    double xmin = s[0][0], xmax = s[0][0], ymin = s[0][1], ymax = s[0][1];
-    for (int i = 1; i < 3; i++) {
-        xmin = s[i][0] < xmin ? s[i][0] : xmin;
-        xmax = s[i][0] > xmax ? s[i][0] : xmax;
-        ymin = s[i][1] < ymin ? s[i][1] : ymin;
-        ymax = s[i][1] > ymax ? s[i][1] : ymax;
+    if (area < 0) {
+        b = 2, c = 1;
+        area = -area;
     }
-    /* pixels whose centres (x + 0.5, y + 0.5) may be inside, clipped to the frame */
-    double fx0 = xmin - 0.5, fx1 = xmax - 0.5, fy0 = ymin - 0.5, fy1 = ymax - 0.5;
-    if (!(fx1 >= 0.0) || !(fy1 >= 0.0) || !(fx0 < (double)v->o.width) || !(fy0 < (double)v->o.height))
+    /* the pixels whose centres (256 x + 128 in the fixed point) lie in the box, within the frame */
+    int64_t xmin = X[0], xmax = X[0], ymin = Y[0], ymax = Y[0];
+    for (int i = 1; i < 3; i++) {
+        xmin = X[i] < xmin ? X[i] : xmin;
+        xmax = X[i] > xmax ? X[i] : xmax;
+        ymin = Y[i] < ymin ? Y[i] : ymin;
+        ymax = Y[i] > ymax ? Y[i] : ymax;
+    }
+    const int64_t half = VIEW_SUBPIX / 2;
+    int64_t x0 = floor_div(xmin - half + VIEW_SUBPIX - 1, VIEW_SUBPIX), x1 = floor_div(xmax - half, VIEW_SUBPIX);
+    int64_t y0 = floor_div(ymin - half + VIEW_SUBPIX - 1, VIEW_SUBPIX), y1 = floor_div(ymax - half, VIEW_SUBPIX);
+    x0 = x0 < 0 ? 0 : x0;
+    y0 = y0 < 0 ? 0 : y0;
+    x1 = x1 > v->o.width - 1 ? v->o.width - 1 : x1;
+    y1 = y1 > v->o.height - 1 ? v->o.height - 1 : y1;
+    if (x0 > x1 || y0 > y1)
         return;
-    int x0 = fx0 <= 0.0 ? 0 : (int)fx0, y0 = fy0 <= 0.0 ? 0 : (int)fy0; /* (the edge tests decide) */
-    int x1 = fx1 >= (double)(v->o.width - 1) ? v->o.width - 1 : (int)fx1;
-    int y1 = fy1 >= (double)(v->o.height - 1) ? v->o.height - 1 : (int)fy1;
-    double inv = 1.0 / area;
-    double br = (double)((rgb >> 16) & 0xff), bg = (double)((rgb >> 8) & 0xff), bb = (double)(rgb & 0xff);
-    /* w_i, the barycentric weight of corner i, is linear along a row: it steps by dw[i] a pixel */
-    const double dw[3] = {-(s[2][1] - s[1][1]) * inv, -(s[0][1] - s[2][1]) * inv, -(s[1][1] - s[0][1]) * inv};
+    /* e[0] is corner a's weight (the side b -> c) times the area, e[1] b's, e[2] c's */
+    view_side e[3] = {side_fn(X[b], Y[b], X[c], Y[c]), side_fn(X[c], Y[c], X[a], Y[a]), side_fn(X[a], Y[a], X[b], Y[b])};
+    const int from[3] = {b, c, a};
+    /* depth and brightness: the corner a's plus the other two weights' shares of the differences */
+    double inv = 1.0 / (double)area;
+    double dzb = z[b] - z[a], dzc = z[c] - z[a], dlb = l[b] - l[a], dlc = l[c] - l[a];
+    double zx = ((double)e[1].A * dzb + (double)e[2].A * dzc) * VIEW_SUBPIX * inv;
+    double lx = ((double)e[1].A * dlb + (double)e[2].A * dlc) * VIEW_SUBPIX * inv;
+    int64_t lx_fx = (int64_t)floor(lx * VIEW_LIGHT_ONE + 0.5);
+    const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
+    int64_t step[3] = {e[0].A * VIEW_SUBPIX, e[1].A * VIEW_SUBPIX, e[2].A * VIEW_SUBPIX};
     int drawn = 0;
-    for (int y = y0; y <= y1; y++) {
-        double py = (double)y + 0.5;
-        /* the row's span: where each weight is >= 0, from its value at the box's first pixel and its
-           step, widened by a pixel each way (the tests below decide; this only skips the rest) */
-        double w[3] = {edge_fn(s[1], s[2], (double)x0 + 0.5, py) * inv, edge_fn(s[2], s[0], (double)x0 + 0.5, py) * inv,
-                       edge_fn(s[0], s[1], (double)x0 + 0.5, py) * inv};
-        double lo = 0.0, hi = (double)(x1 - x0);
+    /* the edge functions, depth and brightness at (x0, y0), each stepped down a row */
+    int64_t px = x0 * VIEW_SUBPIX + half, py = y0 * VIEW_SUBPIX + half, wr[3], down[3];
+    for (int i = 0; i < 3; i++) {
+        wr[i] = e[i].A * (px - X[from[i]]) + e[i].B * (py - Y[from[i]]) + e[i].bias;
+        down[i] = e[i].B * VIEW_SUBPIX;
+    }
+    double zr = z[a] + ((double)(wr[1] - e[1].bias) * dzb + (double)(wr[2] - e[2].bias) * dzc) * inv;
+    double lr = l[a] + ((double)(wr[1] - e[1].bias) * dlb + (double)(wr[2] - e[2].bias) * dlc) * inv;
+    double zy = ((double)e[1].B * dzb + (double)e[2].B * dzc) * VIEW_SUBPIX * inv;
+    double ly = ((double)e[1].B * dlb + (double)e[2].B * dlc) * VIEW_SUBPIX * inv;
+    for (int64_t y = y0; y <= y1; y++, zr += zy, lr += ly) {
+        /* the row's span [lo, hi] (pixels from x0): where all three biased edge functions are >= 0,
+           exactly, from their values at x0 and their steps (one division per slanted side) */
+        int64_t lo = 0, hi = x1 - x0;
         for (int i = 0; i < 3; i++) {
-            if (dw[i] > 0.0) {
-                double t = -w[i] / dw[i] - 1.0;
-                lo = t > lo ? t : lo;
-            } else if (dw[i] < 0.0) {
-                double t = w[i] / -dw[i] + 1.0;
-                hi = t < hi ? t : hi;
-            } else if (w[i] < 0.0) {
-                hi = -1.0;
+            int64_t wb = wr[i];
+            wr[i] += down[i];
+            if (step[i] > 0) {
+                if (wb < 0) {
+                    int64_t k0 = (-wb + step[i] - 1) / step[i];
+                    lo = k0 > lo ? k0 : lo;
+                }
+            } else if (wb < 0) {
+                hi = -1;
+            } else if (step[i] < 0) {
+                int64_t k1 = wb / -step[i];
+                hi = k1 < hi ? k1 : hi;
             }
         }
-        if (!(lo <= hi))
+        if (lo > hi)
             continue;
-        int xs = x0 + (int)lo, xe = x0 + (int)hi;
-        double steps = (double)(xs - x0);
-        double w0 = w[0] + steps * dw[0], w1 = w[1] + steps * dw[1], w2 = w[2] + steps * dw[2];
-        for (int x = xs; x <= xe; x++, w0 += dw[0], w1 += dw[1], w2 += dw[2]) {
-            /* (a hair outside counts as inside: two triangles' rounded weights along their shared
-               side must not both miss a pixel centre that lies on it; drawn twice, the depth test
-               keeps the first) */
-            if (w0 < -VIEW_INSIDE_EPS || w1 < -VIEW_INSIDE_EPS || w2 < -VIEW_INSIDE_EPS)
+        double zp = zr + (double)lo * zx, lstart = (lr + (double)lo * lx) * VIEW_LIGHT_ONE;
+        int64_t lfx = lstart > 0.0 ? (int64_t)(lstart + 0.5) : 0; /* (the span's corners are >= 0: so is it) */
+        size_t at = (size_t)y * (size_t)v->o.width + (size_t)(x0 + lo);
+        for (int64_t x = lo; x <= hi; x++, at++, zp += zx, lfx += lx_fx) {
+            float zf = (float)zp;
+            if (!(zf < v->depth[at]))
                 continue;
-            double z = w0 * s[0][2] + w1 * s[1][2] + w2 * s[2][2];
-            size_t at = (size_t)y * (size_t)v->o.width + (size_t)x;
-            if (!((float)z < v->depth[at]))
-                continue;
-            v->depth[at] = (float)z;
-            double light = w0 * l[0] + w1 * l[1] + w2 * l[2];
-            v->rgb[3 * at] = channel(br, light);
-            v->rgb[3 * at + 1] = channel(bg, light);
-            v->rgb[3 * at + 2] = channel(bb, light);
+            v->depth[at] = zf;
+            uint32_t light = lfx <= 0 ? 0u : (lfx >= VIEW_LIGHT_MAX ? (uint32_t)VIEW_LIGHT_MAX : (uint32_t)lfx);
+            v->rgb[3 * at] = channel(base[0], light);
+            v->rgb[3 * at + 1] = channel(base[1], light);
+            v->rgb[3 * at + 2] = channel(base[2], light);
             drawn = 1;
         }
     }
@@ -485,21 +565,25 @@ static void draw_line(cm_view *v, const double a[3], const double b[3]);
 
 /* vertex vi of the mesh on the screen (x, y, depth), its brightness and its normal's component
    along the line of sight (positive: facing away); 0 when behind the eye */
-static int vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, double s[3], double *light,
-                         double *facing)
+static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm_view_vert *t)
 {
     float p[3], n[3];
     cm_mesh_pos(mesh, vi, p);
     cm_mesh_nrm(mesh, vi, n);
-    double q[3], nv[3];
+    double q[3], nv[3], s[3];
     to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
     nv[0] = (double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2];
     nv[1] = (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2];
     nv[2] = (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2];
-    *light = shade(nv);
+    t->light = shade(nv);
     /* the line of sight: the view axis (orthographic), from the eye at (0, 0, eye) (perspective) */
-    *facing = v->o.perspective ? nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye) : nv[2];
-    return to_screen(v, q, s);
+    t->facing = v->o.perspective ? nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye) : nv[2];
+    t->ok = (uint8_t)(to_screen(v, q, s) && fabs(s[0]) < VIEW_COORD_MAX && fabs(s[1]) < VIEW_COORD_MAX);
+    t->x = s[0], t->y = s[1], t->z = s[2];
+    /* the fixed point, rounded half away from zero (within VIEW_COORD_MAX: 2^28 units) */
+    double fx = s[0] * VIEW_SUBPIX, fy = s[1] * VIEW_SUBPIX;
+    t->X = t->ok ? (int32_t)(fx >= 0.0 ? fx + 0.5 : fx - 0.5) : 0;
+    t->Y = t->ok ? (int32_t)(fy >= 0.0 ? fy + 0.5 : fy - 0.5) : 0;
 }
 
 /*
@@ -508,8 +592,10 @@ static int vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, dou
  * viewer).  A side's crossing depends on its two corners alone, so the segments of neighbouring
  * triangles meet; a plane's corners share one normal and never cross.
  */
-static void silhouette(cm_view *v, const double s[3][3], const double d[3])
+static void silhouette(cm_view *v, const cm_view_vert *const c[3])
 {
+    const double s[3][3] = {{c[0]->x, c[0]->y, c[0]->z}, {c[1]->x, c[1]->y, c[1]->z}, {c[2]->x, c[2]->y, c[2]->z}};
+    const double d[3] = {c[0]->facing, c[1]->facing, c[2]->facing};
     double pt[2][3];
     int n = 0;
     for (int i = 0; i < 3 && n < 2; i++) {
@@ -559,29 +645,32 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         if (look == 0)
             continue;
         uint32_t rgb = look_rgb(v, F->has_color ? F->rgb : VIEW_DEFAULT_RGB, look);
+        /* a closed part's triangles whose corners all face away are behind its front (a mesh whose
+           faces are not all there, one the decoder left out, shows its back faces through the gap) */
+        int closed = v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces &&
+                     v->part_closed[face_part(v, F->source_face)];
         /* a face's vertices (each in about six triangles) projected and lit once, where they fit */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
         for (uint32_t i = 0; cached && i < F->nverts; i++)
-            v->fv_ok[i] = (uint8_t)vertex_screen(v, mesh, F->first_vert + i, v->fv[i], &v->fl[i], &v->fd[i]);
+            vertex_screen(v, mesh, F->first_vert + i, &v->fv[i]);
         for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
-            double s[3][3], l[3], d[3];
-            int ok = 1;
-            for (int i = 0; i < 3 && ok; i++) {
+            cm_view_vert own[3];
+            const cm_view_vert *t[3];
+            for (int i = 0; i < 3; i++) {
                 uint32_t vi = cm_mesh_idx(mesh, F->first_index + k + (uint32_t)i), j = vi - F->first_vert;
                 if (cached && vi >= F->first_vert && j < F->nverts) {
-                    ok = v->fv_ok[j];
-                    s[i][0] = v->fv[j][0], s[i][1] = v->fv[j][1], s[i][2] = v->fv[j][2];
-                    l[i] = v->fl[j];
-                    d[i] = v->fd[j];
+                    t[i] = &v->fv[j];
                 } else {
-                    ok = vertex_screen(v, mesh, vi, s[i], &l[i], &d[i]);
+                    vertex_screen(v, mesh, vi, &own[i]);
+                    t[i] = &own[i];
                 }
             }
-            if (!ok)
+            if (!t[0]->ok || !t[1]->ok || !t[2]->ok ||
+                (closed && t[0]->facing > 0.0 && t[1]->facing > 0.0 && t[2]->facing > 0.0))
                 continue;
-            fill_triangle(v, s, l, rgb);
+            fill_triangle(v, t, rgb);
             if (v->o.edges)
-                silhouette(v, s, d);
+                silhouette(v, t);
         }
     }
 }
@@ -731,14 +820,19 @@ static void draw_line(cm_view *v, const double a[3], const double b[3])
     if (!(len < 1e5))
         return; /* off in the distance (perspective near the eye): not a line worth drawing */
     int n = (int)len + 1;
+    /* nearer by a few pixels' worth of depth: enough for the faces' own boundary (their triangles
+       meet the edge at its samples, and may lie up to the tessellation's tolerance off between),
+       not enough to see a back edge through a plate a few pixels thick.  The shift is linear in the
+       depth (perspective: a pixel spans more depth farther away), so the ends are shifted and the
+       points between interpolated, one multiplication a pixel where each took a division */
+    double k = VIEW_EDGE_BIAS_PX / v->scale;
+    double za = v->o.perspective ? a[2] - k * (a[2] - v->eye) : a[2] - k;
+    double zb = v->o.perspective ? b[2] - k * (b[2] - v->eye) : b[2] - k;
+    double inv = 1.0 / (double)n;
     for (int i = 0; i <= n; i++) {
-        double t = (double)i / (double)n;
-        double z = a[2] + (b[2] - a[2]) * t;
+        double t = (double)i * inv;
+        double z = za + (zb - za) * t;
         double x = a[0] + dx * t, y = a[1] + dy * t;
-        /* nearer by a few pixels' worth of depth: enough for the faces' own boundary (their triangles
-           meet the edge at its samples, and may lie up to the tessellation's tolerance off between),
-           not enough to see a back edge through a plate a few pixels thick */
-        z -= VIEW_EDGE_BIAS_PX * (v->o.perspective ? (z - v->eye) / v->scale : 1.0 / v->scale);
         if (!(x >= 0.0 && y >= 0.0 && x < (double)v->o.width && y < (double)v->o.height))
             continue;
         size_t at = (size_t)(int)y * (size_t)v->o.width + (size_t)(int)x;

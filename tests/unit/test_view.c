@@ -251,6 +251,99 @@ static void test_silhouette(void **state)
     assert_int_equal(view.silhouette_segments, 0);
 }
 
+/* the fill rule: the front square's two triangles drawn one at a time cover 88 x 88 pixels between
+   them, each pixel once: the diagonal they share runs through 88 pixel centres (x + y = 100 at
+   the centres of a square from 6 to 94), and the top-left rule gives each to one triangle (a
+   tolerance on the weights gave them to both, a cut one to neither) */
+static void test_fill_rule(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    size_t covered[2];
+    for (int half = 0; half < 2; half++) {
+        cm_mesh m = front_square();
+        m.faces[0].first_index += half ? 3u : 0u;
+        m.faces[0].nindex = 3;
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        cm_view_mesh(&view, &m);
+        covered[half] = count_not(&view, o.background);
+        assert_true(covered[half] >= 88 * 87 / 2);
+    }
+    assert_int_equal(covered[0] + covered[1], 88 * 88);
+}
+
+/* a closed part's back faces: a tetrahedron whose four faces, one triangle each, face outwards and
+   run each edge opposite ways (a closed part, cm_view_parts) is drawn to the same pixels with its two
+   faces turned away from the iso view skipped; with one edge run the same way by both its faces the
+   part is open and every triangle is drawn */
+static cm_model g_tet;
+static void tetrahedron(cm_mesh *m, int open)
+{
+    static const float P[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    static const int tri[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    static const float N[4][3] = {{0, 0, -1}, {0, -1, 0}, {-1, 0, 0}, {0.57735027f, 0.57735027f, 0.57735027f}};
+    /* edges 0-1, 0-2, 0-3, 1-2, 1-3, 2-3; each face's uses in its loop's order (rev: runs v1 -> v0) */
+    static const uint32_t edge[4][3] = {{1, 3, 0}, {0, 4, 2}, {2, 5, 1}, {3, 5, 4}};
+    static const uint8_t rev[4][3] = {{0, 1, 1}, {0, 0, 1}, {0, 1, 1}, {0, 0, 1}};
+    memset(&g_tet, 0, sizeof g_tet);
+    g_tet.nfaces = 4;
+    g_tet.nedges = 6;
+    g_tet.nloops = 4;
+    g_tet.nuses = 12;
+    *m = mesh_storage();
+    for (uint32_t f = 0; f < 4; f++) {
+        g_tet.faces[f].loop0 = f;
+        g_tet.faces[f].nloops = 1;
+        g_tet.loops[f].use0 = 3 * f;
+        g_tet.loops[f].nuse = 3;
+        cm_mesh_face *F = &m->faces[m->nfaces++];
+        memset(F, 0, sizeof *F);
+        F->source_face = f;
+        F->first_vert = m->nverts;
+        F->first_index = m->nindex;
+        F->nverts = F->nindex = 3;
+        for (int i = 0; i < 3; i++) {
+            g_tet.uses[3 * f + (uint32_t)i].edge = edge[f][i];
+            g_tet.uses[3 * f + (uint32_t)i].rev = rev[f][i];
+            memcpy(m->pos[m->nverts], P[tri[f][i]], sizeof(float[3]));
+            memcpy(m->nrm[m->nverts], N[f], sizeof(float[3]));
+            m->idx[m->nindex++] = m->nverts++;
+        }
+    }
+    if (open)
+        g_tet.uses[3 * 3 + 1].rev = 1; /* edge 2-3 run 3 -> 2 by both its faces */
+}
+
+static void test_back_faces(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64 || CM_MAX_FACES < 4 || CM_MAX_MODEL_USES < 12)
+        skip();
+    cm_view_opts o = square_opts(64, CM_VIEW_ISO, 0);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    cm_mesh m;
+    uint64_t drawn[3];
+    for (int k = 0; k < 3; k++) {
+        tetrahedron(&m, k == 2);
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        if (k > 0)
+            assert_int_equal(cm_view_parts(&view, &g_tet), 1);
+        cm_view_mesh(&view, &m);
+        drawn[k] = view.triangles;
+        if (k == 0)
+            memcpy(g_frame, view.rgb, sizeof g_frame);
+        else
+            assert_memory_equal(view.rgb, g_frame, sizeof g_frame);
+    }
+    assert_int_equal(view.part_closed[1], 0);
+    assert_true(drawn[1] < drawn[0]); /* closed: the turned-away faces skipped */
+    assert_int_equal(drawn[1], 2);
+    assert_int_equal(drawn[2], drawn[0]); /* open: all drawn */
+}
+
 static void test_refuses_large_frame(void **state)
 {
     (void)state;
@@ -412,6 +505,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_front_box),   cmocka_unit_test(test_depth_order), cmocka_unit_test(test_refuses_large_frame),
         cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
+        cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

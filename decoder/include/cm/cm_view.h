@@ -13,9 +13,14 @@
  * so they stay crisp at any zoom.  Placed copies (format 4.3) get their
  * placement's edges too.
  *
- * Deterministic: only + - * / sqrt in double, in a fixed order, with
- * -ffp-contract=off: the same model and view give the same pixels on
- * x86-64, aarch64 and armhf (check-view-cross compares).
+ * Triangles are rasterised with exact integer edge functions on corners
+ * rounded to 1/256 pixel (the top-left rule: a pixel centre on a side two
+ * triangles share is filled once); a closed part's triangles facing away
+ * are skipped (cm_view_parts).
+ *
+ * Deterministic: integers, and only + - * / sqrt in double, in a fixed
+ * order, with -ffp-contract=off: the same model and view give the same
+ * pixels on x86-64, aarch64 and armhf (check-view-cross compares).
  *
  * Contract: no heap, no recursion; work bounded by the mesh, the model and
  * the frame's size.
@@ -65,6 +70,16 @@ typedef struct cm_view_opts {
 /** Defaults: 800 x 480 (within the build's frame), iso, unturned, orthographic, white, edges on. */
 void cm_view_opts_default(cm_view_opts *o);
 
+/** A mesh vertex on the screen (cm_view.c's): pixels (x right, y down), view-space depth, its
+    brightness, its normal along the line of sight (the silhouette where it is 0, positive facing
+    away), the position in the rasteriser's fixed point, and whether it can be drawn at all (in
+    front of the eye, within the fixed point's reach). */
+typedef struct cm_view_vert {
+    double x, y, z, light, facing;
+    int32_t X, Y;
+    uint8_t ok;
+} cm_view_vert;
+
 typedef struct cm_view {
     cm_view_opts o;
     /* the camera: a point of view space is ((p - c).r, (p - c).u, (p - c).f), f into the screen */
@@ -77,15 +92,13 @@ typedef struct cm_view {
        are part nbase_parts + 1 + k */
     uint32_t nparts, nbase_parts;
     uint32_t part_of_face[CM_MAX_FACES];
+    uint8_t part_closed[CM_MAX_FACES + 1]; /* base part p's faces close it (see cm_view_parts) */
+    uint32_t parts_nfaces;                 /* the faces cm_view_parts numbered */
     int32_t edge_head[CM_MAX_EDGES];       /* (scratch: each edge's uses in a list, ... */
     int32_t use_next[CM_MAX_MODEL_USES];   /* ... the next use of the same edge, -1 at the end, */
     uint32_t use_face[CM_MAX_MODEL_USES];  /* ... and the face of each use) */
-    /* a face's vertices on the screen (x, y, depth), their brightness and whether they are in front
-       of the eye: a vertex is in about six triangles */
-    double fv[CM_VIEW_FACE_VERTS][3];
-    double fl[CM_VIEW_FACE_VERTS];
-    double fd[CM_VIEW_FACE_VERTS]; /* the normal along the line of sight: the silhouette where it is 0 */
-    uint8_t fv_ok[CM_VIEW_FACE_VERTS];
+    /* a face's vertices on the screen, lit: a vertex is in about six triangles */
+    cm_view_vert fv[CM_VIEW_FACE_VERTS];
     uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
     float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
 } cm_view;
@@ -111,12 +124,15 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh);
  * assembly, each face is joined to the nearest one in file order that runs the edge the other
  * way), in the order of their first face, then each placement's
  * copies (format 4.3: an IGES subfigure instance, a STEP occurrence) one part each, in file order.
- * Until it is called every face is part 1.  Returns the number of parts.
+ * Until it is called every face is part 1.  Also marks the parts that are closed (each edge of their
+ * faces used twice, in opposite directions: the encoder faced them outwards), whose back faces
+ * cm_view_mesh skips.  Returns the number of parts.
  */
 uint32_t cm_view_parts(cm_view *v, const cm_model *m);
 
 /**
- * Fill every triangle of the mesh (faces coloured by their rgb when they have one), and with
+ * Fill every triangle of the mesh (faces coloured by their rgb when they have one; of a closed part,
+ * cm_view_parts', only those with a corner facing the viewer: the rest are behind), and with
  * opts.edges the silhouettes of curved faces: where the mesh's normals turn from facing the viewer
  * to facing away, the line on which their component along the line of sight, interpolated across
  * each triangle, is zero (drawn like an edge: depth-tested, a little in front).
