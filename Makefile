@@ -299,7 +299,7 @@ $(STACK_CHECK): tests/tools/check_stack.c
 	$(Q)$(HOSTCC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
 .PHONY: check check-run check-noheap check-stack check-cross check-clang check-fuzz-replay check-fuzz-decode-replay \
-	check-corpus-roundtrip check-decode-cross check-view check-view-cross check-corpus-occt check-step-occt check-step-roundtrip deps
+	check-corpus-roundtrip check-decode-cross check-view check-view-cross check-three check-corpus-occt check-step-occt check-step-roundtrip deps
 # `make check` on a fresh machine: install what is missing, then test.
 # The builds run on every core (CHECK_JOBS); the suites and gates still run one at a time, but their
 # own builds (clang, cross, -O0) share the job slots.
@@ -340,6 +340,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:cross:$(MAKE) --no-print-directory -s check-cross" \
 		"gate:decode-cross:$(MAKE) --no-print-directory -s check-decode-cross" \
 		"gate:view-cross:$(MAKE) --no-print-directory -s check-view-cross" \
+		"gate:view-vs-three.js:$(MAKE) --no-print-directory -s check-three" \
 		"gate:usb-build:$(MAKE) --no-print-directory -s check-usb-build" \
 		"gate:link-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-link-replay" \
 		"gate:leave-out:$(MAKE) --no-print-directory -s check-leave-out" \
@@ -595,6 +596,12 @@ check-view-cross: $(CMZ) $(call bdir,terminal)/cmz-view
 		PKG_CONFIG=aarch64-linux-gnu-pkg-config $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-view
 	$(Q)tests/tools/check_view.sh $(CMZ) $(call bdir,terminal)/cmz-view $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-view
 
+# what the terminal shows against an independent renderer (issue 17): the GLB `cmz decode` writes,
+# drawn by three.js in headless Chromium with cmz-view's camera: silhouettes (IoU >= 0.98) and each
+# face's colour (tests/tools/three_check.py), with an upside-down control that must fail
+check-three: $(CMZ) $(call bdir,terminal)/cmz-view
+	$(Q)tests/tools/check_three.sh $(CMZ) $(call bdir,terminal)/cmz-view $(SHARED_MODELS)
+
 # unit tests of the ARM builds under qemu-user, and bit-identical kernel values against this machine
 check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 	$(Q)for x in $(CROSS_TARGETS); do \
@@ -606,8 +613,9 @@ check-cross: $(call bdir,host)/tests/unit/kernel_vectors
 # ---- Debian packages ----
 # Host tools, tests, cross toolchains and the foreign-architecture libraries the cross tests link;
 # libusb and libgpiod (1.6) for the terminal, also for arm64; the test VM of check-hw (qemu, the
-# Debian kernel's headers for gpio-sim, busybox for the initramfs).  armhf builds the terminal
-# without USB and GPIO (no :armhf libusb/libgpiod here: Multi-Arch versions, hw-testing NOTES 10).
+# Debian kernel's headers for gpio-sim, busybox for the initramfs); Chromium and three.js for
+# check-three.  armhf builds the terminal without USB and GPIO (no :armhf libusb/libgpiod here:
+# Multi-Arch versions, hw-testing NOTES 10).
 DEPS_ARCHS := arm64 armhf
 DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzzer-14-dev \
 	libtinygltf-dev nlohmann-json3-dev \
@@ -615,7 +623,8 @@ DEPS_PKGS := gcc g++ make pkgconf libcmocka-dev clang libclang-rt-14-dev libfuzz
 	gcc-aarch64-linux-gnu gcc-arm-linux-gnueabihf libc6-dev-arm64-cross libc6-dev-armhf-cross qemu-user \
 	pkgconf:arm64 pkgconf:armhf libcmocka-dev:arm64 libcmocka-dev:armhf \
 	libusb-1.0-0-dev libgpiod-dev libusb-1.0-0-dev:arm64 libgpiod-dev:arm64 \
-	qemu-system-x86 busybox-static cpio kmod xz-utils linux-headers-amd64 usbutils gpiod strace python3
+	qemu-system-x86 busybox-static cpio kmod xz-utils linux-headers-amd64 usbutils gpiod strace python3 \
+	chromium libjs-three
 deps:
 	$(Q)DEPS_ARCHS="$(DEPS_ARCHS)" tests/tools/deps.sh $(DEPS_PKGS)
 

@@ -55,12 +55,20 @@ static void report(FILE *f, const char *level, const char *in, const cm_status *
     cm_report_status(f, "cmz-view", subject, st);
 }
 
+/* --camera: the view's camera, one line (before the summary; with -q alone) */
+static void print_camera(void)
+{
+    printf("camera %d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+           view.o.width, view.o.height, view.scale, view.eye, view.c[0], view.c[1], view.c[2], view.r[0], view.r[1],
+           view.r[2], view.u[0], view.u[1], view.u[2], view.f[0], view.f[1], view.f[2]);
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR] [--turn N]\n"
             "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
-            "                [--status TEXT] [-q]\n"
+            "                [--status TEXT] [--camera] [-q]\n"
             "                [--gpio-rotate SPEC] [--gpio-next SPEC] [--gpio-prev SPEC] [--gpio-reset SPEC]\n"
             "                [--turntable SECONDS] [--idle SECONDS]\n"
             "       cmz-view --fb DEV --status TEXT\n"
@@ -85,7 +93,12 @@ static void usage(FILE *f)
             "tolerance in mm (default: the file's recommendation).  The PNG is uncompressed\n"
             "(stored deflate) and appears whole or not at all.  --status: a status line of\n"
             "TEXT across the bottom (without a model: drawn alone on the screen's last rows,\n"
-            "the rest of the screen untouched).  -q: no summary line.\n"
+            "the rest of the screen untouched).  --camera: a line 'camera W H SCALE EYE\n"
+            "CX CY CZ RX RY RZ UX UY UZ FX FY FZ' before the summary: the frame's size, pixels\n"
+            "per mm (perspective: the focal length in pixels), the eye's depth (perspective;\n"
+            "else 0), the point the frame is centred on and the screen's right, up and\n"
+            "into-the-screen axes in CAD millimetres, so that another renderer can match the\n"
+            "view (tests/tools/check_three.sh).  -q: no summary line.\n"
             "\n"
             "The operator's buttons (with --fb; the viewer then stays, drawing again on each\n"
             "press, until SIGTERM or SIGINT): --gpio-rotate turns the model one step, --gpio-next\n"
@@ -323,7 +336,7 @@ int main(int argc, char **argv)
     static const char *const button_opt[CM_GPIO_NBUTTON] = {"--gpio-rotate", "--gpio-next", "--gpio-prev",
                                                             "--gpio-reset"};
     int64_t tick_ms = 0, idle_ms = 30000;
-    int sized = 0, quiet = 0;
+    int sized = 0, quiet = 0, camera = 0;
     double tol = 0;
     cm_view_opts vo;
     cm_view_opts_default(&vo);
@@ -343,6 +356,8 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--version") == 0) {
             printf("cmz-view 0.1.0 (profile %s)\n", cm_profile_name);
             return 0;
+        } else if (strcmp(a, "--camera") == 0) {
+            camera = 1;
         } else if (strcmp(a, "--png") == 0 && more) {
             out = argv[++i];
         } else if (strcmp(a, "--fb") == 0 && more) {
@@ -503,6 +518,8 @@ int main(int argc, char **argv)
         return rc;
     }
     cm_decode_spill_close();
+    if (camera)
+        print_camera();
     if (quiet)
         return 0;
     printf("%s -> %s%s%s: %dx%d, %s%s, %u faces, %u parts", in, out ? out : "", out && fb ? " and " : "", fb ? fb : "",
