@@ -97,7 +97,9 @@ static inline const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, u
     return sp->page[s][k] + (size_t)(i - first) * es;
 }
 
-void cm_mesh_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3])
+/* (not inlined into cm_mesh_pos and cm_mesh_nrm: two copies of the page logic cost the board's
+   cmz-terminal 256 bytes of its text budget) */
+__attribute__((noinline)) void cm_mesh_vec(const cm_mesh *m, unsigned s, uint32_t i, float out[3])
 {
     if (i >= m->win_vert)
         memcpy(out, (s == CM_SPILL_NRM ? m->nrm : m->pos)[i - m->win_vert], 12u);
@@ -116,6 +118,41 @@ uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k)
         return m->idx[k - m->win_index];
     memcpy(&v, spilled(m, CM_SPILL_IDX, k, 4u), 4u);
     return v;
+}
+
+/* n elements of stream s (es bytes each) from element i into out: the spilled ones a cached page at
+   a time, then the window's (win_first on, in win) in one copy */
+static void read_run(const cm_mesh *m, unsigned s, uint32_t i, uint32_t n, uint32_t es, uint32_t win_first,
+                     const uint8_t *win, uint8_t *out)
+{
+    while (n > 0 && i < win_first) {
+        const uint8_t *p = spilled(m, s, i, es);
+        /* the run within p's page (a failed read gives one element of zeros at a time) */
+        uint32_t run = 1;
+        if (m->spill && !m->spill->failed) {
+            const uint32_t per = CM_SPILL_PAGE_BYTES / es, k = (i / per) % CM_SPILL_PAGES;
+            run = m->spill->page_first[s][k] + m->spill->page_n[s][k] - i;
+        }
+        run = run < n ? run : n;
+        run = run < win_first - i ? run : win_first - i;
+        memcpy(out, p, (size_t)run * es);
+        out += (size_t)run * es;
+        i += run;
+        n -= run;
+    }
+    if (n > 0)
+        memcpy(out, win + (size_t)(i - win_first) * es, (size_t)n * es);
+}
+
+void cm_mesh_vecs(const cm_mesh *m, unsigned s, uint32_t first, uint32_t n, float (*out)[3])
+{
+    read_run(m, s, first, n, 12u, m->win_vert, (const uint8_t *)(s == CM_SPILL_NRM ? m->nrm : m->pos),
+             (uint8_t *)out);
+}
+
+void cm_mesh_idxs(const cm_mesh *m, uint32_t k, uint32_t n, uint32_t *out)
+{
+    read_run(m, CM_SPILL_IDX, k, n, 4u, m->win_index, (const uint8_t *)m->idx, (uint8_t *)out);
 }
 
 cm_mesh_mark cm_mesh_save(const cm_mesh *m)

@@ -565,11 +565,8 @@ static void draw_line(cm_view *v, const double a[3], const double b[3]);
 
 /* vertex vi of the mesh on the screen (x, y, depth), its brightness and its normal's component
    along the line of sight (positive: facing away); 0 when behind the eye */
-static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm_view_vert *t)
+static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3], cm_view_vert *t)
 {
-    float p[3], n[3];
-    cm_mesh_pos(mesh, vi, p);
-    cm_mesh_nrm(mesh, vi, n);
     double q[3], nv[3], s[3];
     to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
     nv[0] = (double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2];
@@ -584,6 +581,15 @@ static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm
     double fx = s[0] * VIEW_SUBPIX, fy = s[1] * VIEW_SUBPIX;
     t->X = t->ok ? (int32_t)(fx >= 0.0 ? fx + 0.5 : fx - 0.5) : 0;
     t->Y = t->ok ? (int32_t)(fy >= 0.0 ? fy + 0.5 : fy - 0.5) : 0;
+}
+
+/* the same for vertex vi of the mesh, read on its own */
+static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm_view_vert *t)
+{
+    float p[3], n[3];
+    cm_mesh_pos(mesh, vi, p);
+    cm_mesh_nrm(mesh, vi, n);
+    vertex_screen_at(v, p, n, t);
 }
 
 /*
@@ -651,13 +657,25 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
                      v->part_closed[face_part(v, F->source_face)];
         /* a face's vertices (each in about six triangles) projected and lit once, where they fit */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
-        for (uint32_t i = 0; cached && i < F->nverts; i++)
-            vertex_screen(v, mesh, F->first_vert + i, &v->fv[i]);
+        for (uint32_t i0 = 0; cached && i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
+            /* read back a run at a time (from the spill a page at a time): a call per value was a
+               sixth of a large model's frame */
+            uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
+            cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
+            cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
+            for (uint32_t i = 0; i < n; i++)
+                vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
+        }
         for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
             cm_view_vert own[3];
             const cm_view_vert *t[3];
+            uint32_t r = k % (3u * CM_VIEW_READ_RUN);
+            if (r == 0) {
+                uint32_t n = F->nindex - k < 3u * CM_VIEW_READ_RUN ? F->nindex - k : 3u * CM_VIEW_READ_RUN;
+                cm_mesh_idxs(mesh, F->first_index + k, n, v->run_idx);
+            }
             for (int i = 0; i < 3; i++) {
-                uint32_t vi = cm_mesh_idx(mesh, F->first_index + k + (uint32_t)i), j = vi - F->first_vert;
+                uint32_t vi = v->run_idx[r + (uint32_t)i], j = vi - F->first_vert;
                 if (cached && vi >= F->first_vert && j < F->nverts) {
                     t[i] = &v->fv[j];
                 } else {

@@ -186,6 +186,37 @@ static void test_same_bytes_as_whole(void **state)
     assert_memory_equal(hi, hi2, sizeof hi);
 }
 
+/* runs read back at once (cm_mesh_vecs, cm_mesh_idxs: the viewer's reads) give what one read per
+   value gives, for runs across pages, and across the spill's end into the window */
+static void test_runs_read_back(void **state)
+{
+    (void)state;
+    cm_mesh m = spilled_mesh();
+    for (uint32_t f = 0; f < NFACES; f++)
+        assert_ok(add_face(&m, f));
+    assert_true(m.win_vert > 0 && m.win_index > 0);
+    static float run[WHOLE_V][3], one[3];
+    static uint32_t irun[WHOLE_I];
+    uint32_t starts[] = {0, 1, m.win_vert - 5u, m.win_vert, m.nverts - 3u};
+    for (unsigned s = 0; s < 2; s++)
+        for (size_t k = 0; k < sizeof starts / sizeof starts[0]; k++) {
+            uint32_t first = starts[k], n = m.nverts - first;
+            cm_mesh_vecs(&m, s == 0 ? CM_SPILL_POS : CM_SPILL_NRM, first, n, run);
+            for (uint32_t i = 0; i < n; i++) {
+                cm_mesh_vec(&m, s == 0 ? CM_SPILL_POS : CM_SPILL_NRM, first + i, one);
+                assert_memory_equal(run[i], one, sizeof one);
+            }
+        }
+    uint32_t istarts[] = {0, 2, m.win_index - 7u, m.win_index, m.nindex - 1u};
+    for (size_t k = 0; k < sizeof istarts / sizeof istarts[0]; k++) {
+        uint32_t first = istarts[k], n = m.nindex - first;
+        cm_mesh_idxs(&m, first, n, irun);
+        for (uint32_t i = 0; i < n; i++)
+            assert_int_equal(irun[i], cm_mesh_idx(&m, first + i));
+    }
+    assert_false(cm_mesh_spill_failed(&m));
+}
+
 /* faces rolled back past the window's start (the window flushed while they were added) are gone */
 static void test_rollback_past_window(void **state)
 {
@@ -349,7 +380,7 @@ int main(void)
         cmocka_unit_test(test_same_bytes_as_whole), cmocka_unit_test(test_rollback_past_window),
         cmocka_unit_test(test_write_fails),         cmocka_unit_test(test_read_fails),
         cmocka_unit_test(test_face_larger_than_window), cmocka_unit_test(test_no_spill),
-        cmocka_unit_test(test_place_face_over_window),
+        cmocka_unit_test(test_place_face_over_window), cmocka_unit_test(test_runs_read_back),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

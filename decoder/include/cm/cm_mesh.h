@@ -98,6 +98,12 @@ void cm_mesh_pos(const cm_mesh *m, uint32_t i, float out[3]);
 void cm_mesh_nrm(const cm_mesh *m, uint32_t i, float out[3]);
 uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k);
 
+/** n consecutive vectors of stream s from vertex `first`, and n indices from index k, copied out:
+    the same values as one call each, a cached page or the window at a time (the viewer reads a
+    face's vertices and triangles so, each frame). */
+void cm_mesh_vecs(const cm_mesh *m, unsigned s, uint32_t first, uint32_t n, float (*out)[3]);
+void cm_mesh_idxs(const cm_mesh *m, uint32_t k, uint32_t n, uint32_t *out);
+
 /** 1 when a spill's io failed (the mesh, or what was written of it, is not to be trusted). */
 static inline int cm_mesh_spill_failed(const cm_mesh *m) { return m->spill != NULL && m->spill->failed; }
 

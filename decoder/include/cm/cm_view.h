@@ -74,6 +74,9 @@ void cm_view_opts_default(cm_view_opts *o);
     brightness, its normal along the line of sight (the silhouette where it is 0, positive facing
     away), the position in the rasteriser's fixed point, and whether it can be drawn at all (in
     front of the eye, within the fixed point's reach). */
+/** Vertices (and triangles) read back from the mesh at a time by cm_view_mesh. */
+#define CM_VIEW_READ_RUN 256
+
 typedef struct cm_view_vert {
     double x, y, z, light, facing;
     int32_t X, Y;
@@ -99,6 +102,9 @@ typedef struct cm_view {
     uint32_t use_face[CM_MAX_MODEL_USES];  /* ... and the face of each use) */
     /* a face's vertices on the screen, lit: a vertex is in about six triangles */
     cm_view_vert fv[CM_VIEW_FACE_VERTS];
+    /* a run of the mesh's positions, normals and indices, read back together */
+    float run_pos[CM_VIEW_READ_RUN][3], run_nrm[CM_VIEW_READ_RUN][3];
+    uint32_t run_idx[3 * CM_VIEW_READ_RUN];
     uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
     float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
 } cm_view;
