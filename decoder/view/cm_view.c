@@ -323,14 +323,17 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
     for (uint32_t e = 0; e < ne; e++)
         v->edge_head[e] = -1;
     /* each edge's uses in a list (face of each use) */
+    int skipped = 0;
     for (uint32_t f = 0; f < nf; f++) {
         const cm_face *F = &m->faces[f];
         for (uint32_t l = 0; l < F->nloops; l++) {
             const cm_loop *L = &m->loops[F->loop0 + l];
             for (uint32_t k = 0; k < L->nuse; k++) {
                 uint32_t u = L->use0 + k, e = m->uses[u].edge;
-                if (u >= CM_MAX_MODEL_USES || e >= ne)
+                if (u >= CM_MAX_MODEL_USES || e >= ne) {
+                    skipped = 1;
                     continue;
+                }
                 v->use_face[u] = f;
                 v->use_next[u] = v->edge_head[e];
                 v->edge_head[e] = (int32_t)u;
@@ -372,20 +375,14 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
        signed volume), so none of its back faces can show (cm_view_mesh skips them); one edge used
        once, or three times, or twice the same way, and the part is drawn whole */
     for (uint32_t p = 0; p <= n; p++)
-        v->part_closed[p] = 1;
+        v->part_closed[p] = (uint8_t)!skipped;
     v->part_closed[0] = 0;
-    for (uint32_t f = 0; f < nf; f++) {
-        const cm_face *F = &m->faces[f];
-        for (uint32_t l = 0; l < F->nloops; l++) {
-            const cm_loop *L = &m->loops[F->loop0 + l];
-            for (uint32_t k = 0; k < L->nuse; k++) {
-                uint32_t u = L->use0 + k, e = m->uses[u].edge;
-                int32_t first = u < CM_MAX_MODEL_USES && e < ne ? v->edge_head[e] : -1;
-                int32_t second = first >= 0 ? v->use_next[first] : -1;
-                if (second < 0 || v->use_next[second] >= 0 || m->uses[first].rev == m->uses[second].rev)
-                    v->part_closed[up[f]] = 0;
-            }
-        }
+    for (uint32_t e = 0; e < ne; e++) {
+        int32_t first = v->edge_head[e], second = first >= 0 ? v->use_next[first] : -1;
+        if (first < 0 || (second >= 0 && v->use_next[second] < 0 && m->uses[first].rev != m->uses[second].rev))
+            continue;
+        for (int32_t u = first; u >= 0; u = v->use_next[u])
+            v->part_closed[up[v->use_face[u]]] = 0;
     }
     v->parts_nfaces = nf;
     return v->nparts;
