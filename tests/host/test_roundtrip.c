@@ -574,6 +574,99 @@ static void test_kept_strips(void **state)
     }
 }
 
+/* ---- format 4.10: a GREGORY patch's plane of triangulation scaled by its boundary's lengths ----
+   The exact half cylinder (two half circles of radius 5 and two lines), short (12) and long (60:
+   the patch's u and v speeds far apart, so the scale shapes the triangles), tessellated as format
+   4.9 (25 interior evaluations, the model's refine_410 off) and as 4.10: both keep every vertex on
+   the cylinder and every triangle's centre within the tolerance of it, with triangle counts within
+   a quarter of each other */
+static void test_patch_scale_410(void **state)
+{
+    (void)state;
+    static float keep_pos[MESH_TRIS + 1024][3];
+    const double R = 5, lengths[2] = {12, 60};
+    for (int k = 0; k < 2; k++) {
+        igw w;
+        igw_init(&w);
+        igw_half_cylinder_120(&w, R, lengths[k]);
+        loaded_model lm;
+        encode_result r;
+        encode_igw(&w, &lm, &r);
+        igw_free(&w);
+        assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 1);
+        cm_status st;
+        assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+        assert_true(dec.model.refine_410); /* the default writer's format */
+        double q = dec.model.q, tol = dec.model.tess_tol;
+        cm_mesh mesh;
+        uint32_t tris[2];
+        for (int v410 = 0; v410 < 2; v410++) {
+            dec.model.refine_410 = v410;
+            tessellate_all(&mesh);
+            tris[v410] = mesh.nindex / 3;
+            if (!cylinder_mesh_ok(&mesh, R, q, tol))
+                fail_msg("length %g, format 4.%d: the mesh leaves the cylinder by more than the tolerance %.3g",
+                         lengths[k], v410 ? 10 : 9, tol);
+        }
+        print_message("# half cylinder of length %g: 4.9 %u triangles, 4.10 %u\n", lengths[k], tris[0], tris[1]);
+        if (!(4 * tris[1] <= 5 * tris[0] && 4 * tris[0] <= 5 * tris[1]))
+            fail_msg("length %g: 4.9 %u triangles, 4.10 %u", lengths[k], tris[0], tris[1]);
+        encode_result_free(&r);
+        model_free(&lm);
+    }
+    /* (a ruled patch's boundary lengths are its mean speeds: the cylinders mesh the same both ways)
+       the half band on the paraboloid z = 5 (1 - r^2 / 400), 5 <= r <= 15 (GREGORY-EXACT): the
+       interior bulges, and 4.10's scale makes another mesh of about the same triangles, on the
+       surface as closely (vertices within the face's rebuild tolerance of it, 1e-3 of the model's
+       diagonal: 0.05 here with the grid, triangle centres within the chordal tolerance more) */
+    static uint32_t keep_idx[3 * MESH_TRIS];
+    igw w;
+    igw_init(&w);
+    igw_half_dome_band_144(&w, 5, 15);
+    loaded_model lm;
+    encode_result r;
+    encode_igw(&w, &lm, &r);
+    igw_free(&w);
+    assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY_EXACT], 1);
+    cm_status st;
+    assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+    double tol = dec.model.tess_tol, slack = 0.05;
+    cm_mesh mesh;
+    uint32_t tris[2];
+    for (int v410 = 0; v410 < 2; v410++) {
+        dec.model.refine_410 = v410;
+        tessellate_all(&mesh);
+        tris[v410] = mesh.nindex / 3;
+        for (uint32_t i = 0; i < mesh.nverts; i++) {
+            double x = pos[i][0], y = pos[i][1], z = pos[i][2];
+            if (!(fabs(z - 5 * (1 - (x * x + y * y) / 400)) <= slack))
+                fail_msg("format 4.%d: vertex %u off the paraboloid by %.3g", v410 ? 10 : 9, i,
+                         fabs(z - 5 * (1 - (x * x + y * y) / 400)));
+        }
+        for (uint32_t t = 0; t < mesh.nindex / 3; t++) {
+            double c[3];
+            tri_centre(t, c);
+            double under = 5 * (1 - (c[0] * c[0] + c[1] * c[1]) / 400) - c[2];
+            if (!(under >= -slack && under <= tol + slack))
+                fail_msg("format 4.%d: triangle %u's centre %.3g under the paraboloid (tolerance %.3g)", v410 ? 10 : 9,
+                         t, under, tol);
+        }
+        if (v410 == 0) {
+            memcpy(keep_pos, pos, sizeof(float[3]) * mesh.nverts);
+            memcpy(keep_idx, idx, sizeof(uint32_t) * mesh.nindex);
+        }
+    }
+    print_message("# half dome band: 4.9 %u triangles, 4.10 %u\n", tris[0], tris[1]);
+    if (!(20 * tris[1] <= 21 * tris[0] && 20 * tris[0] <= 21 * tris[1]))
+        fail_msg("half dome band: 4.9 %u triangles, 4.10 %u", tris[0], tris[1]);
+    if (tris[0] == tris[1] && memcmp(keep_pos, pos, sizeof(float[3]) * mesh.nverts) == 0 &&
+        memcmp(keep_idx, idx, sizeof(uint32_t) * mesh.nindex) == 0)
+        fail_msg("half dome band: 4.10 made 4.9's mesh (the patch's scale not in force?)");
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
+
 /* ---- the refinement spares tests of pieces that passed the round before, and (format 4.8) of
    pieces its corners' normals predict flat, and gives the same mesh ----
    Each model (a KEEP B-spline net, an exact Gregory face over two half circles, a GREGORY-FIT bump)
@@ -1030,6 +1123,7 @@ int main(void)
         cmocka_unit_test(test_bicubic_net),
         cmocka_unit_test(test_refine_skips_passed_pieces),
         cmocka_unit_test(test_kept_strips),
+        cmocka_unit_test(test_patch_scale_410),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good45, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good3, teardown_good),

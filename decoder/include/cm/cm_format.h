@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 9     /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 10    /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -103,6 +103,8 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_RULED_MINOR 9u          /* 4.9: the bytes of 4.8; a kept face is triangulated in a plane squeezed
                                           along its flatter direction, a ruled one (degree 1) in strips
                                           along its rulings (cm_model.refine_49) */
+#define CM_FMT_PATCH_SCALE_MINOR 10u   /* 4.10: the bytes of 4.9; a GREGORY patch's plane of triangulation is
+                                          scaled by its boundary's lengths (cm_model.refine_410) */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -302,6 +304,9 @@ typedef struct cm_model {
                              direction whose grid cells are longer (by at most 4; a ruled direction,
                              degree 1, without limit and with a grid column per knot span), so that
                              its triangles run along the flatter direction (cm_tessellate.c) */
+    int refine_410;       /* format 4.10 on: a GREGORY patch is triangulated in (u,v) scaled by the
+                             lengths of its boundary's sides, not by its mean speeds at 5 x 5 interior
+                             points (cm_tessellate.c); the encoder measured the needs that way */
     /* what the header declares the tessellation at tess_tol needs (0: not declared): points of one
        face (MAX_TESS_POINTS), samples of one edge (MAX_EDGE_SAMPLES) and triangles of the whole
        model (MAX_TRIS).  The tessellation's work on a face, and on the model, is bounded by these

@@ -57,6 +57,7 @@ typedef struct cm_tess_ws {
                                               likewise */
     int refine_48;                         /* ... and of format 4.8 (cm_model.refine_48) */
     int refine_49;                         /* ... and of format 4.9 (cm_model.refine_49) */
+    int refine_410;                        /* ... and of format 4.10 (cm_model.refine_410) */
     int test_every_piece;                  /* tests: 1 turns format 4.8's predicted passes off (on
                                               smooth models the mesh must not change) */
 } cm_tess_ws;
