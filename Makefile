@@ -98,10 +98,12 @@ CM_PLATFORM_OPT := -Os
 # 5.1, the rest 2.2), room in the budget for the evaluator's per-degree fast paths; the methods
 # 0.9 KB more, room for cmz-terminal --display; the range decoder (the file's symbols, a few
 # thousand per model) 0.9 KB more, room for format 4.9's kept-face plane (cmz-terminal 262 566 ->
-# 261 670 bytes)
+# 261 670 bytes); a GREGORY face's corner normals and the choice of its edges' cubics (cm_corner.c,
+# once per face: the K7 fits themselves stay -O2), room for format 4.10's patch scale (262 214 ->
+# 261 526 bytes; +0.1 to +0.3 % terminal instructions on Tightening_screw, asmo, C1G0B0O)
 CM_COLD_SRC := decoder/src/cm_decode.c decoder/src/cm_format.c decoder/src/cm_sections.c decoder/src/cm_limits.c \
                decoder/src/cm_error.c decoder/src/cm_arith.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c \
-               $(wildcard decoder/methods/*.c)
+               decoder/src/cm_corner.c $(wildcard decoder/methods/*.c)
 endif
 CM_WARN := -Wall -Wextra -Wundef -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wcast-align \
            -Wformat=2 -Wvla -Walloca -Wdouble-promotion -Werror

@@ -640,7 +640,7 @@ static void test_patch_scale_410(void **state)
         tessellate_all(&mesh);
         tris[v410] = mesh.nindex / 3;
         for (uint32_t i = 0; i < mesh.nverts; i++) {
-            double x = pos[i][0], y = pos[i][1], z = pos[i][2];
+            double x = (double)pos[i][0], y = (double)pos[i][1], z = (double)pos[i][2];
             if (!(fabs(z - 5 * (1 - (x * x + y * y) / 400)) <= slack))
                 fail_msg("format 4.%d: vertex %u off the paraboloid by %.3g", v410 ? 10 : 9, i,
                          fabs(z - 5 * (1 - (x * x + y * y) / 400)));
