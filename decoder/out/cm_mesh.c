@@ -76,11 +76,14 @@ cm_err cm_mesh_make_room(cm_mesh *m, uint32_t nv, uint32_t ni, cm_status *st)
 /* the page of stream s holding spilled element i (es bytes each), loaded when not cached.  Inlined
    with es a constant at each caller, so that the page arithmetic needs no division: the writers
    call this for every vertex and index they read back (4 % of a 35 000-triangle decode when it
-   divided by a variable) */
-static inline const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, uint32_t es)
+   divided by a variable).  *avail (if not NULL) gets how many elements from i on the returned
+   memory holds: the rest of the page, or 1 (the zeros of a failed read) */
+static inline const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, uint32_t es, uint32_t *avail)
 {
     static const uint8_t zeros[12];
     cm_mesh_spill *sp = m->spill;
+    if (avail)
+        *avail = 1;
     if (sp == NULL)
         return zeros;
     const uint32_t per = CM_SPILL_PAGE_BYTES / es, end = s == CM_SPILL_IDX ? m->win_index : m->win_vert;
@@ -94,6 +97,8 @@ static inline const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, u
         sp->page_first[s][k] = first;
         sp->page_n[s][k] = n;
     }
+    if (avail)
+        *avail = sp->page_n[s][k] - (i - first);
     return sp->page[s][k] + (size_t)(i - first) * es;
 }
 
@@ -104,7 +109,7 @@ __attribute__((noinline)) void cm_mesh_vec(const cm_mesh *m, unsigned s, uint32_
     if (i >= m->win_vert)
         memcpy(out, (s == CM_SPILL_NRM ? m->nrm : m->pos)[i - m->win_vert], 12u);
     else
-        memcpy(out, spilled(m, s, i, 12u), 12u);
+        memcpy(out, spilled(m, s, i, 12u, NULL), 12u);
 }
 
 void cm_mesh_pos(const cm_mesh *m, uint32_t i, float out[3]) { cm_mesh_vec(m, CM_SPILL_POS, i, out); }
@@ -116,7 +121,7 @@ uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k)
     uint32_t v;
     if (k >= m->win_index)
         return m->idx[k - m->win_index];
-    memcpy(&v, spilled(m, CM_SPILL_IDX, k, 4u), 4u);
+    memcpy(&v, spilled(m, CM_SPILL_IDX, k, 4u, NULL), 4u);
     return v;
 }
 
@@ -126,13 +131,8 @@ static void read_run(const cm_mesh *m, unsigned s, uint32_t i, uint32_t n, uint3
                      const uint8_t *win, uint8_t *out)
 {
     while (n > 0 && i < win_first) {
-        const uint8_t *p = spilled(m, s, i, es);
-        /* the run within p's page (a failed read gives one element of zeros at a time) */
-        uint32_t run = 1;
-        if (m->spill && !m->spill->failed) {
-            const uint32_t per = CM_SPILL_PAGE_BYTES / es, k = (i / per) % CM_SPILL_PAGES;
-            run = m->spill->page_first[s][k] + m->spill->page_n[s][k] - i;
-        }
+        uint32_t run;
+        const uint8_t *p = spilled(m, s, i, es, &run);
         run = run < n ? run : n;
         run = run < win_first - i ? run : win_first - i;
         memcpy(out, p, (size_t)run * es);

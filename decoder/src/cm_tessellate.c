@@ -946,9 +946,10 @@ static cm_err add_use(cm_tess_ws *ws, int *k, int use, int a, int b, double u0, 
  * v, measured on the boundary's points (the curve mesh's samples, already there).  Before, the mean
  * of |Su| and |Sv| at 5 x 5 interior points: 25 evaluations of the patch with derivatives before
  * its first triangle, a third of the Gregory evaluations of a model of small faces
- * (Tightening_screw: 2306 of 7443) for a scale that only shapes the triangles.  Over the corpus at
- * the bench's deflections the same triangle counts and Open CASCADE's deviation the same, the
- * terminal's instructions -5 % to -12 % on models of many GREGORY faces (ovt__asmo 162.2 -> 143.4 M).
+ * (Tightening_screw: 2306 of 7443) for a scale that only shapes the triangles.  Over the 34 corpus
+ * models at the bench's deflections the same triangle counts (but occ22470's 3118 -> 3114) and Open
+ * CASCADE's deviation the same, the terminal's instructions -18 % to 0 % (Shelt_channel_5 287.6 ->
+ * 237.0 M, ovt__asmo 162.2 -> 143.4 M; none saved without a GREGORY face).
  * A side collapsed to a point (layout 2) counts 0: half the other.
  */
 static void patch_scale(const cm_tess_ws *ws, int npts, double *su, double *sv)

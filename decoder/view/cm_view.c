@@ -458,15 +458,16 @@ static view_side side_fn(int64_t Xp, int64_t Yp, int64_t Xq, int64_t Yq)
 }
 
 /*
- * Fill the triangle of screen points s[3] (x, y, depth) with brightnesses l[3] and colour rgb.
- * The corners are rounded to 1/VIEW_SUBPIX of a pixel and the three edge functions stepped in
- * 64-bit integers from pixel centre to pixel centre, with the top-left rule: exact, so shared sides
- * neither crack nor fill twice, and a pixel's coverage is the same on every machine; depth and
- * brightness step along a row from their values at its first pixel (doubles, then the brightness
- * in fixed point).  A triangle covering no pixel centre costs its box; a row's span comes from
- * the edge functions' values at its start and their steps, exactly (a division per slanted side).  (Until 2026-12-07 each pixel's three barycentric weights were
- * doubles with a hair's tolerance, each row's span found by three divisions, and each channel
- * rounded from a double: 3.1 k instructions a triangle on C1G0B0O's frame.)
+ * Fill the triangle of screen vertices t[3] (their fixed-point corners, depths and brightnesses)
+ * in colour rgb.  The corners were rounded to 1/VIEW_SUBPIX of a pixel (vertex_screen_at) and the
+ * three edge functions step in 64-bit integers from pixel centre to pixel centre, with the top-left
+ * rule: exact, so shared sides neither crack nor fill twice, and a pixel's coverage is the same on
+ * every machine; depth and brightness step along a row from their values at its first pixel
+ * (doubles, then the brightness in fixed point).  A triangle covering no pixel centre costs its
+ * box; a row's span comes from the edge functions' values at its start and their steps, exactly (a
+ * division per slanted side).  (Until 2026-12-07 each pixel's three barycentric weights were doubles
+ * with a hair's tolerance, each row's span found by three divisions, and each channel rounded from a
+ * double: 3.1 k instructions a triangle on C1G0B0O's frame.)
  */
 static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t rgb)
 {
