@@ -1074,6 +1074,7 @@ static cm_err read_placements(reader *r, cm_face_ctx *ctx)
             return rfail(r, CM_E_RANGE, "placement's faces");
         P->first = (uint32_t)first;
         P->count = (uint32_t)count;
+        P->part = 0;
         const char *fault = cm_fmt_placement_fault(P->m);
         if (fault)
             return rfail(r, CM_E_RANGE, fault);
@@ -1173,6 +1174,7 @@ static cm_err sec_face(reader *r)
             return rfail(r, CM_E_UNSUPPORTED, "GREGORY layout 3 (joined sides) in a file older than format 2.3");
         F->flip = (uint8_t)cm_ac_dec_bit(&r->ac, &ctx.flip);
         F->color = 0;
+        F->part = 0;
         if (M->kept_surface) {
             if (snext >= m->nsurfs)
                 return rfail(r, CM_E_RANGE, "kept surface");
@@ -1252,11 +1254,48 @@ static cm_err sec_face(reader *r)
     return CM_OK;
 }
 
+/*
+ * Format 4.11: the parts (the order of the terminal's assembly steps), after the colours: their count
+ * (0: none), then each face's part and each copy's, as the previous one's again, the next after the
+ * highest so far, or by number.
+ */
+static cm_err read_parts(reader *r, cm_colr_ctx *ctx)
+{
+    cm_model *m = &r->d->model;
+    const uint32_t n = m->nfaces + m->nplacements;
+    uint64_t np = cm_ac_dec_uint(&r->ac, &ctx->nparts);
+    if (np > n) /* (a part has a face or a copy) */
+        return rfail(r, CM_E_RANGE, "part count");
+    m->nparts = (uint32_t)np;
+    uint32_t prev = 0, top = 0;
+    for (uint32_t i = 0; i < n && np > 0; i++) {
+        uint32_t p;
+        if (i > 0 && cm_ac_dec_bit(&r->ac, &ctx->part_same))
+            p = prev;
+        else if (cm_ac_dec_bit(&r->ac, &ctx->part_next))
+            p = top + 1u;
+        else {
+            uint64_t k = cm_ac_dec_uint(&r->ac, &ctx->part);
+            p = k < np ? (uint32_t)k + 1u : 0u;
+        }
+        if (p == 0 || p > np)
+            return rfail(r, CM_E_RANGE, "part");
+        top = p > top ? p : top;
+        prev = p;
+        if (i < m->nfaces)
+            m->faces[i].part = p;
+        else
+            m->placements[i - m->nfaces].part = p;
+    }
+    return r->ac.overrun ? rfail(r, CM_E_TRUNCATED, "parts") : CM_OK;
+}
+
 static cm_err sec_colr(reader *r)
 {
     cm_model *m = &r->d->model;
     cm_colr_ctx ctx;
     cm_colr_ctx_init(&ctx);
+    m->nparts = 0;
     uint64_t np = cm_ac_dec_uint(&r->ac, &ctx.count);
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, "palette");
@@ -1266,9 +1305,7 @@ static cm_err sec_colr(reader *r)
     m->palette[0] = 0;
     for (uint32_t i = 1; i <= m->npalette; i++)
         m->palette[i] = cm_ac_dec_direct(&r->ac, 24);
-    if (m->npalette == 0)
-        return r->ac.overrun ? rfail(r, CM_E_TRUNCATED, "palette") : CM_OK;
-    for (uint32_t f = 0; f < m->nfaces; f++) {
+    for (uint32_t f = 0; f < m->nfaces && m->npalette > 0; f++) {
         r->face = f;
         uint64_t c = cm_ac_dec_uint(&r->ac, &ctx.index);
         if (c > m->npalette)
@@ -1277,8 +1314,8 @@ static cm_err sec_colr(reader *r)
     }
     r->face = CM_NO_FACE_INDEX;
     if (r->ac.overrun)
-        return rfail(r, CM_E_TRUNCATED, "face colours");
-    return CM_OK;
+        return rfail(r, CM_E_TRUNCATED, m->npalette > 0 ? "face colours" : "palette");
+    return at_least_4(r, CM_FMT_PARTS_MINOR) ? read_parts(r, &ctx) : CM_OK;
 }
 
 /* cm_ac_fill for a file longer than the window: the stream's bytes from pos on, read again */

@@ -97,4 +97,8 @@ void cm_colr_ctx_init(cm_colr_ctx *c)
 {
     cm_ac_int_init(&c->count);
     cm_ac_int_init(&c->index);
+    cm_ac_int_init(&c->nparts);
+    cm_ac_int_init(&c->part);
+    cm_ac_prob_init(&c->part_same);
+    cm_ac_prob_init(&c->part_next);
 }

@@ -203,6 +203,7 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
     v->o = *o;
     v->triangles = v->edge_segments = v->silhouette_segments = 0;
     v->nparts = v->nbase_parts = 0;
+    v->named_parts = 0;
     camera_axes(v, o->dir);
     camera_turn(v, o->turn);
     for (int i = 0; i < 3; i++)
@@ -384,8 +385,26 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
         for (int32_t u = first; u >= 0; u = v->use_next[u])
             v->part_closed[up[v->use_face[u]]] = 0;
     }
+    for (uint32_t f = 0; f < nf; f++)
+        v->face_closed[f] = v->part_closed[up[f]];
+    /* the parts the workstation named (format 4.11: what the CAD system made one, in the order of
+       its steps) replace the connected pieces as steps; what is closed stays the pieces' */
+    v->named_parts = m->nparts > 0 && nf > 0;
+    if (v->named_parts) {
+        for (uint32_t f = 0; f < nf; f++)
+            up[f] = m->faces[f].part;
+        for (uint32_t k = 0; k < m->nplacements && k < CM_MAX_PLACEMENTS; k++)
+            v->place_part[k] = m->placements[k].part;
+        v->nparts = m->nparts;
+    }
     v->parts_nfaces = nf;
     return v->nparts;
+}
+
+/* part of placement k's copies */
+static uint32_t place_part(const cm_view *v, uint32_t k)
+{
+    return v->named_parts && k < CM_MAX_PLACEMENTS ? v->place_part[k] : v->nbase_parts + 1u + k;
 }
 
 /* part of model face f (1 when the parts were not numbered) */
@@ -644,7 +663,7 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
                 placement = (int64_t)mesh->nplace - 1; /* (a mesh not made by cm_mesh_place) */
         }
         last_source = F->source_face;
-        uint32_t part = placement < 0 ? face_part(v, F->source_face) : v->nbase_parts + 1u + (uint32_t)placement;
+        uint32_t part = placement < 0 ? face_part(v, F->source_face) : place_part(v, (uint32_t)placement);
         int look = part_look(v, part);
         if (look == 0)
             continue;
@@ -652,7 +671,7 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         /* a closed part's triangles whose corners all face away are behind its front (a mesh whose
            faces are not all there, one the decoder left out, shows its back faces through the gap) */
         int closed = v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces &&
-                     v->part_closed[face_part(v, F->source_face)];
+                     F->source_face < v->parts_nfaces && v->face_closed[F->source_face];
         /* a face's vertices (each in about six triangles) projected and lit once, where they fit */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
         for (uint32_t i0 = 0; cached && i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
@@ -925,7 +944,7 @@ static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a
    faces [first, first + count)?  Through the edge's uses where cm_view_parts listed them */
 static int edge_shows(const cm_view *v, const cm_model *m, uint32_t e, int64_t k, uint32_t first, uint32_t count)
 {
-    uint32_t part = k < 0 ? 0 : v->nbase_parts + 1u + (uint32_t)k;
+    uint32_t part = k < 0 ? 0 : place_part(v, (uint32_t)k);
     if (v->nbase_parts > 0 && e < CM_MAX_EDGES) {
         for (int32_t u = v->edge_head[e]; u >= 0; u = v->use_next[u]) {
             uint32_t f = v->use_face[u];

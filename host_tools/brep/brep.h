@@ -43,6 +43,12 @@ typedef struct brep_face {
     int surf_type;        /* IGES type of its base surface (128, 120, 190, ...) */
     int shell;            /* index of its shell (186/514), -1 if none */
     int instance;         /* outermost subfigure instance (408) placing it, 0 for none */
+    /* its part, for the terminal's assembly steps (host_tools/encode/parts.c): */
+    int top;              /* the import's ordinal of the top-level entity that placed it (parts in
+                             file order) */
+    int owner;            /* the entity that names its part: IGES the outermost 408 instance, else
+                             the 186 solid or 514 shell, else a 402 group listing the face (DEs);
+                             STEP the solid's or shell's #n; 0: none (a loose face) */
 } brep_face;
 
 /* an outermost subfigure instance (IGES 408) as imported: its faces carry its id */
@@ -58,6 +64,7 @@ typedef struct brep_placement {
     int proto;   /* the instance id (brep_face.instance) of the faces placed */
     int nfaces;  /* how many faces the copy had */
     haffine xf;
+    int top, owner; /* its own instance's (brep_face.top, .owner of the faces it had) */
 } brep_placement;
 
 typedef struct brep_model {

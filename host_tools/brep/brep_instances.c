@@ -144,6 +144,8 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
         pl[npl].proto = m->instances[proto].id;
         pl[npl].nfaces = n;
         pl[npl].xf = x;
+        pl[npl].top = m->faces[first].top;
+        pl[npl].owner = m->faces[first].owner;
         npl++;
         nface += n;
     }

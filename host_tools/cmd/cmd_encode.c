@@ -207,6 +207,9 @@ int cmd_encode(int argc, char **argv)
             o.nfill = 0;
         } else if (strcmp(a, "--no-g1fit") == 0) {
             o.g1fit = 0;
+        } else if (strcmp(a, "--steps") == 0 && v) {
+            o.steps = v;
+            i++;
         } else if (strcmp(a, "--no-instances") == 0) {
             o.instances = 0;
         } else if (strcmp(a, "--no-turning-basis") == 0) {
@@ -374,11 +377,17 @@ int cmd_encode(int argc, char **argv)
         if (r.placements > 0)
             snprintf(placed, sizeof placed, "; %d sent, %u as %u placed copies of parts", lm.mesh.nfaces,
                      r.placed_faces, r.placements);
+        /* format 4.11: the parts the terminal steps through */
+        char parts[96] = "";
+        if (r.parts > 0 && o.steps)
+            snprintf(parts, sizeof parts, "; %d parts, %d in the order of %s", r.parts, r.parts_stepped, o.steps);
+        else if (r.parts > 0)
+            snprintf(parts, sizeof parts, "; %d parts", r.parts);
         char arcs[32] = "";
         if (r.edges_arcs > 0)
             snprintf(arcs, sizeof arcs, ", %d arcs", r.edges_arcs);
-        printf("%s -> %s: %d faces (%s%s%s), %d edges (%d lines%s), %zu bytes, %.1fx smaller than the %s (%ld bytes)\n",
-               path, out, lm.mesh.nfaces + (int)r.placed_faces, methods, left, placed,
+        printf("%s -> %s: %d faces (%s%s%s%s), %d edges (%d lines%s), %zu bytes, %.1fx smaller than the %s (%ld bytes)\n",
+               path, out, lm.mesh.nfaces + (int)r.placed_faces, methods, left, placed, parts,
                r.edges_line + r.edges_curve, r.edges_line, arcs, r.len, r.len ? (double)isize / (double)r.len : 0.0,
                lm.is_step ? "STEP" : "IGES", isize);
         if (r.edges_refit + r.surfs_refit > 0)

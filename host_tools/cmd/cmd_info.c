@@ -12,6 +12,8 @@
 #include <string.h>
 #include <strings.h>
 
+#include "encode/encode.h"
+
 /* ---- JSON helpers (strings from files may hold any byte: escaped as Latin-1) ---- */
 
 static void json_str(FILE *f, const char *s)
@@ -145,20 +147,55 @@ typedef struct solid_info {
     int faces, free_edges, seams;
 } solid_info;
 
+/* `cmz info MODEL --parts`: the parts `cmz encode` names (format 4.11), one per line in file order,
+   as a steps file names them: the number, the faces, the names */
+static int list_parts(const char *path)
+{
+    cmd_fold_instances = 1; /* as `cmz encode` loads it: each placed copy a part */
+    loaded_model lm;
+    int loaded = cmd_load(path, &lm);
+    if (loaded != EXIT_OK)
+        return loaded;
+    enc_parts p;
+    char why[256];
+    cm_status st;
+    cm_status_init(&st);
+    if (enc_parts_build(&lm, NULL, &p, why, sizeof why, &st) != CM_OK) {
+        model_free(&lm);
+        fprintf(stderr, "%s: out of memory\n", cmd_prog);
+        return EXIT_NOMEM;
+    }
+    for (int k = 1; k <= p.nparts; k++) {
+        char names[2][80];
+        int nfaces, n = enc_part_names(&lm, &p, k, names, &nfaces);
+        printf("#%d\t%d faces", k, nfaces);
+        for (int i = 0; i < n; i++)
+            printf("\t%s", names[i]);
+        printf("\n");
+    }
+    enc_parts_free(&p);
+    model_free(&lm);
+    return EXIT_OK;
+}
+
 int cmd_info(int argc, char **argv)
 {
     const char *path = NULL;
-    int json = 0;
+    int json = 0, parts = 0;
     for (int i = 0; i < argc; i++) {
         if (strcmp(argv[i], "--json") == 0)
             json = 1;
+        else if (strcmp(argv[i], "--parts") == 0)
+            parts = 1;
         else if (cmd_common_arg("info", argv[i], &path))
             return EXIT_USAGE;
     }
     if (!path) {
-        fprintf(stderr, "%s info: which model? usage: cmz info MODEL.igs|MODEL.stp [--json]\n", cmd_prog);
+        fprintf(stderr, "%s info: which model? usage: cmz info MODEL.igs|MODEL.stp [--json] [--parts]\n", cmd_prog);
         return EXIT_USAGE;
     }
+    if (parts)
+        return list_parts(path);
     loaded_model lm;
     int loaded = cmd_load(path, &lm);
     if (loaded != EXIT_OK)

@@ -32,9 +32,14 @@ cm_err enc_decode_back(enc_work *w, const encode_result *r, cm_status *st)
        the header it wrote so far says (a declared 0 would cap every face at the slack) */
     w->dec.model.need_tess_points = w->dec.model.need_edge_samples = w->dec.model.need_tris = 0;
     if (e != CM_OK && st && e != CM_E_NOMEM) {
-        /* a byte of a file the user never sees names nothing: the fault is the encoder's */
+        /* a byte of a file the user never sees names nothing: the fault is the encoder's; what the
+           terminal's reader refused goes into the report (a process encodes one model at a time:
+           its workers are processes) */
+        static char why[320];
+        snprintf(why, sizeof why, "the encoder's check of its own file, whose %s the terminal's reader refused (an "
+                 "encoder bug: please report it with the model)", st->where ? st->where : "?");
         st->offset = CM_NO_OFFSET;
-        st->where = "the encoder's check of its own file (an encoder bug: please report it with the model)";
+        st->where = why;
     }
     return e;
 }

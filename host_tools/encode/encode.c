@@ -45,6 +45,8 @@ void encode_opts_default(encode_opts *o)
     o->quant_rel = 1e-6;  /* grid step: 1e-6 of the diagonal, far below any rebuild tolerance */
     o->tess_rel = 5e-4;   /* chordal tolerance for viewers: 0.05 % of the diagonal */
     o->target = NULL;
+    o->steps = NULL;
+    o->test_parts = NULL;
     o->target_name = NULL;
     o->gregory = 1;
     o->gregory_exact = 1;
@@ -293,6 +295,14 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
         memset(r, 0, sizeof *r);
         return cm_fail(st, CM_E_ARG, "a model loaded with its placed copies folded out needs format 4.3");
     }
+    if (o->steps) { /* a steps file that names no part fails before the long work, not after */
+        memset(r, 0, sizeof *r);
+        enc_parts p;
+        cm_err pe = enc_parts_build(lm, o->steps, &p, r->refusal, sizeof r->refusal, st);
+        if (pe != CM_OK)
+            return pe;
+        enc_parts_free(&p);
+    }
     int nb = lm->brep.nfaces;
     unsigned char *keep_only = calloc((size_t)nb + 1, 1), *flip0 = malloc((size_t)nb + 1);
     unsigned char *net_whole = calloc((size_t)nb + 1, 1);
@@ -384,6 +394,18 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     }
     r->faces_left_out = left_out;
     r->nets_whole = nets_whole;
+    if (e == CM_OK && enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_PARTS_MINOR) {
+        /* what write_parts sent (the same numbering on the same faces) */
+        enc_parts p;
+        char why[256];
+        cm_status pst;
+        cm_status_init(&pst);
+        if (enc_parts_build(lm, o->steps, &p, why, sizeof why, &pst) == CM_OK) {
+            r->parts = p.nparts >= 2 && (p.held > 0 || o->steps) ? p.nparts : 0;
+            r->parts_stepped = r->parts ? p.stepped : 0;
+            enc_parts_free(&p);
+        }
+    }
     free(keep_only);
     free(net_whole);
     free(flip0);

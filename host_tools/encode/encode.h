@@ -31,6 +31,8 @@
 #include "cm/cm_limits_info.h"
 #include "model_load.h"
 
+struct enc_parts;
+
 typedef struct encode_opts {
     double rel_tol;    /* rebuild tolerance, fraction of a face's bounding box (spec §1: 0.01) */
     double quant_rel;  /* coordinate grid step, fraction of the model diagonal (rounded down to 2^k mm) */
@@ -72,6 +74,10 @@ typedef struct encode_opts {
                                     so a threaded caller keeps it at 1 */
     int jobs_die_after;          /* tests only: each worker dies after taking this many faces, its last
                                     unanswered (0: never), to show that the encoder takes them over */
+    const char *steps;           /* a file naming parts one per line: the terminal's assembly steps in
+                                    that order (parts.c; NULL: file order) */
+    void (*test_parts)(struct enc_parts *p); /* tests only: rewrites the parts before they are written
+                                    (a broken writer's records; NULL: none) */
 } encode_opts;
 
 void encode_opts_default(encode_opts *o);
@@ -132,7 +138,28 @@ typedef struct encode_result {
     size_t section_bytes[6];
     face_report *faces; /* one per face (malloc'd) */
     char refusal[512]; /* non-empty: the target profile cannot load the file (why) */
+    int parts, parts_stepped; /* format 4.11: parts sent (0: none), of them in the order of opts.steps */
 } encode_result;
+
+/* The model's parts in the order of the terminal's assembly steps (parts.c, format 4.11): what the
+   CAD system made one (an outermost instance or occurrence, a solid or shell, an IGES associativity
+   group), loose faces joined by their edges, each placed copy one; in file order, or those `steps`
+   (a file: names or "#N", one per line) names first.  face_part[f] (the cmesh's faces) and
+   place_part[k] (lm->brep.placements) are 1..nparts. */
+struct enc_parts {
+    int nparts, stepped; /* parts; of them ordered by steps */
+    int held;            /* faces and copies the CAD system put in a part (not loose) */
+    int *face_part, *place_part;
+};
+typedef struct enc_parts enc_parts;
+
+/** Number the parts; CM_E_ARG / CM_E_IO with why (whylen bytes) saying what is wrong with steps. */
+CM_NODISCARD cm_err enc_parts_build(const loaded_model *lm, const char *steps, enc_parts *p, char *why,
+                                    size_t whylen, cm_status *st);
+void enc_parts_free(enc_parts *p);
+
+/** The names part (1..nparts) answers to in a steps file (0 to 2 of them, into names); its faces in *nfaces. */
+int enc_part_names(const loaded_model *lm, const enc_parts *p, int part, char names[2][80], int *nfaces);
 
 void encode_result_free(encode_result *r);
 

@@ -595,18 +595,62 @@ static int sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     return 0;
 }
 
+/* one face's or copy's part (read_parts in cm_decode.c): the previous one's, the next new one, or by number */
+static void write_part(cm_ac_enc *e, cm_colr_ctx *ctx, int i, int part, int *prev, int *top)
+{
+    if (i > 0)
+        cm_ac_enc_bit(e, &ctx->part_same, part == *prev);
+    if (i == 0 || part != *prev) {
+        cm_ac_enc_bit(e, &ctx->part_next, part == *top + 1);
+        if (part != *top + 1)
+            cm_ac_enc_uint(e, &ctx->part, (uint64_t)(part - 1));
+    }
+    *prev = part;
+    *top = part > *top ? part : *top;
+}
+
+/* format 4.11: the parts in the order of the terminal's assembly steps (parts.c), after the colours:
+   their count (0 for a model of one part), each face's, each copy's */
+static int write_parts(const tx *t, cm_ac_enc *e, const loaded_model *lm, cm_colr_ctx *ctx)
+{
+    enc_parts p;
+    char why[256];
+    cm_status st;
+    cm_status_init(&st);
+    /* (encode_model read the steps file before anything was chosen: it is not read wrong here) */
+    if (enc_parts_build(lm, t->o->steps, &p, why, sizeof why, &st) != CM_OK &&
+        enc_parts_build(lm, NULL, &p, why, sizeof why, &st) != CM_OK)
+        return -1;
+    /* a model whose faces are all loose gets no parts unless steps order them: the viewer joins its
+       faces itself (across edges of three faces too, which this does not) */
+    int send = p.nparts >= 2 && lm->mesh.nfaces == t->nfaces && (p.held > 0 || t->o->steps);
+    if (t->o->test_parts) {
+        t->o->test_parts(&p);
+        send = p.nparts > 0;
+    }
+    cm_ac_enc_uint(e, &ctx->nparts, send ? (uint64_t)p.nparts : 0u);
+    int i = 0, prev = 0, top = 0;
+    uint32_t first, count;
+    for (int f = 0; send && f < t->nfaces; f++)
+        write_part(e, ctx, i++, p.face_part[f], &prev, &top);
+    for (int k = 0; send && k < lm->brep.nplacements; k++)
+        if (placement_faces(t, lm, k, &first, &count) > 0)
+            write_part(e, ctx, i++, p.place_part[k], &prev, &top);
+    enc_parts_free(&p);
+    return 0;
+}
+
 static int sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)
 {
-    (void)lm;
     cm_colr_ctx ctx;
     cm_colr_ctx_init(&ctx);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->npalette);
     for (int i = 1; i <= t->npalette; i++)
         cm_ac_enc_direct(e, t->palette[i], 24);
-    if (t->npalette == 0)
-        return 0;
-    for (int f = 0; f < t->nfaces; f++)
+    for (int f = 0; f < t->nfaces && t->npalette > 0; f++)
         cm_ac_enc_uint(e, &ctx.index, (uint64_t)t->color[f]);
+    if (enc_compact_header(t->o) && t->o->compact_minor >= (int)CM_FMT_PARTS_MINOR)
+        return write_parts(t, e, lm, &ctx);
     return 0;
 }
 

@@ -45,6 +45,8 @@ typedef struct importer {
     char first_fail[400];
     int include_blanked;  /* import blanked (hidden) entities too (--include-blanked) */
     long long placed_faces; /* faces the top-level entities place (check_face_budget) */
+    int top;              /* the top-level entity being imported (its index): brep_face.top */
+    int owner;            /* the entity naming the faces' part (brep_face.owner), 0 while none does */
 } importer;
 
 /*
@@ -401,6 +403,8 @@ static cm_err add_face(importer *im, const iges_entity *fe, int surf_de, const h
     face.flip = flip;
     face.shell = shell;
     face.instance = im->instance;
+    face.top = im->top;
+    face.owner = im->owner;
     face.natural = natural;
     face.first_loop = m->nloops;
     uint32_t rgb;
@@ -852,6 +856,8 @@ static cm_err shell_514(importer *im, const iges_entity *e, const haffine *paren
                cm_fail(im->st, CM_E_IGES, "514");
     map = haffine_compose(parent, &map);
     int shell = im->m->nshells++;
+    int saved_owner = im->owner;
+    im->owner = saved_owner ? saved_owner : e->de; /* a shell of its own is a part; a solid's is the solid's */
     for (int i = 0; i < n; i++) {
         int fde, of;
         if (iges_ptr(f, e, 1 + 2 * i, 0, &fde)) {
@@ -872,9 +878,12 @@ static cm_err shell_514(importer *im, const iges_entity *e, const haffine *paren
         }
         /* face normal = surface normal when OF = 1; a reversed shell flips every face */
         cm_err err = import_face(im, fe, &map, shell, (of == 0) != (reversed != 0));
-        if (err != CM_OK)
+        if (err != CM_OK) {
+            im->owner = saved_owner;
             return err;
+        }
     }
+    im->owner = saved_owner;
     f->ents[ent_index(f, e)].used = 1;
     return CM_OK;
 }
@@ -894,6 +903,8 @@ static cm_err solid_186(importer *im, const iges_entity *e, const haffine *paren
     const iges_entity *s = iges_by_de(f, shell);
     if (s->type != 514 || s->bad)
         return iges_entity_error(f, e, "its shell DE %d is not a readable 514", shell), cm_fail(im->st, CM_E_IGES, "186");
+    int saved_owner = im->owner;
+    im->owner = saved_owner ? saved_owner : e->de; /* the solid is the part (inside an instance, the instance) */
     cm_err err = shell_514(im, s, &map, sof == 0);
     for (int i = 0; i < nv && err == CM_OK; i++) {
         int vde;
@@ -907,6 +918,7 @@ static cm_err solid_186(importer *im, const iges_entity *e, const haffine *paren
         if (vs->type == 514 && !vs->bad)
             err = shell_514(im, vs, &map, iges_int_or(e, 4 + 2 * i, 1) == 0);
     }
+    im->owner = saved_owner;
     if (err == CM_OK)
         f->ents[ent_index(f, e)].used = 1;
     return err;
@@ -947,11 +959,12 @@ static cm_err instance_408(importer *im, const iges_entity *e, const haffine *pa
                cm_fail(im->st, CM_E_IGES, "308");
     /* faces remember the outermost placement: a part may be assembled from nested
      * subfigures (and even one shell per face), which together form one body */
-    int saved = im->instance;
+    int saved = im->instance, saved_owner = im->owner;
     im->stats->instances++;
     cm_err err = CM_OK;
     if (depth == 0) {
         im->instance = im->stats->instances;
+        im->owner = e->de; /* an outermost instance is one part, whatever solids it holds */
         /* what brep_fold_instances needs to send a part placed several times once */
         brep_instance bi = {im->instance, def, m};
         err = brep_add_instance(im->m, &bi, im->st);
@@ -965,6 +978,7 @@ static cm_err instance_408(importer *im, const iges_entity *e, const haffine *pa
         err = import_entity(im, iges_by_de(f, mde), &m, depth + 1);
     }
     im->instance = saved;
+    im->owner = saved_owner;
     if (err == CM_OK) {
         f->ents[ent_index(f, e)].used = 1;
         f->ents[ent_index(f, d)].used = 1;
@@ -1208,6 +1222,41 @@ static cm_err drop_far_faces(importer *im)
     return err;
 }
 
+/*
+ * Faces that no solid, shell or instance placed (trimmed surfaces at the top level) take as their
+ * part's owner the first associativity group (402 forms 1, 7, 14, 15: an exporter's solids, OCCT's
+ * among them, written as a group of their faces) that lists them directly.  Groups only annotate:
+ * a face in none stays loose (the encoder joins loose faces by their edges, parts.c).
+ */
+static cm_err group_loose_faces(importer *im)
+{
+    iges_file *f = im->f;
+    int *group = calloc((size_t)(f->nents ? f->nents : 1), sizeof *group);
+    if (!group)
+        return iges_nomem(f, 0, "grouping %d entities", f->nents), cm_fail(im->st, CM_E_NOMEM, "out of memory");
+    for (int k = 0; k < f->nents; k++) {
+        const iges_entity *e = &f->ents[k];
+        if (e->type != 402 || e->bad || !(e->form == 1 || e->form == 7 || e->form == 14 || e->form == 15))
+            continue;
+        int n = iges_count_or0(e, 0);
+        for (int i = 0; i < n && 1 + i < e->nparams; i++) {
+            const iges_param *p = &e->params[1 + i];
+            int de = p->kind == IGES_P_NUM ? iges_to_int(p->num, 1, 99999999, 0) : 0;
+            const iges_entity *t = de > 0 ? iges_by_de(f, de) : NULL;
+            if (t && group[ent_index(f, t)] == 0)
+                group[ent_index(f, t)] = e->de;
+        }
+    }
+    for (int i = 0; i < im->m->nfaces; i++) {
+        brep_face *F = &im->m->faces[i];
+        const iges_entity *t = F->owner == 0 && F->instance == 0 ? iges_by_de(f, F->src_de) : NULL;
+        if (t)
+            F->owner = group[ent_index(f, t)];
+    }
+    free(group);
+    return CM_OK;
+}
+
 cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, int include_blanked, cm_status *st)
 {
     importer im;
@@ -1244,6 +1293,8 @@ cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, int i
         if (im.ref[k])
             continue; /* owned by another entity: imported through it */
         int nsurfs = m->nsurfs, nfaces = m->nfaces, nloops = m->nloops, nsegs = m->nsegs, nshells = m->nshells;
+        im.top = k;
+        im.owner = 0;
         err = import_entity(&im, e, &to_mm, 0);
         if (err != CM_OK && err != CM_E_NOMEM && err != CM_E_LIMIT && err != CM_E_IO) {
             /* one malformed solid, shell or instance never sinks the model: what it had added is
@@ -1263,6 +1314,8 @@ cm_err iges_to_brep(iges_file *f, brep_model *m, brep_import_stats *stats, int i
             err = CM_OK;
         }
     }
+    if (err == CM_OK)
+        err = group_loose_faces(&im);
     if (err == CM_OK)
         err = drop_far_faces(&im);
     if (err == CM_E_NOMEM && k > 0 && k <= f->nents) /* say where the import was (the input is not to blame) */

@@ -88,6 +88,7 @@ typedef struct importer {
     int nplaced, capplaced;
     long long ctrl_built; /* control points of the curves and surfaces built so far (STEP_MAX_MODEL_CTRL) */
     int face_ordinal;
+    int top;            /* solids and shell models reached so far (brep_face.top of their faces) */
     int first_fail_line;
     char first_fail[480];
 } importer;
@@ -1093,6 +1094,9 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
         face.flip = ((!bool_of(im, step_item(p, 3), 1)) != (flip != 0)) != (kind == SURF_REVOLUTION);
         face.shell = im->shell;
         face.instance = im->instance;
+        face.top = im->top;
+        /* the part (assembly steps): the solid or shell model; a face placed on its own is loose */
+        face.owner = im->solid_id != fe->id ? im->solid_id : 0;
         face.first_loop = m->nloops;
         uint32_t rgb;
         if (colour_for(im, fe->id, &rgb) || (im->shell_id && colour_for(im, im->shell_id, &rgb)) ||
@@ -1287,6 +1291,7 @@ static cm_err import_item(importer *im, const step_entity *it)
     if (placed_before(im, k, &err))
         return err;
     im->solid_id = it->id;
+    im->top++;
     if ((p = step_params(f, it, "MANIFOLD_SOLID_BREP")) || (p = step_params(f, it, "FACETED_BREP"))) {
         im->stats->solids += !(im->done[k] & 2);
         err = import_shell(im, it, step_item(p, 1), 0);

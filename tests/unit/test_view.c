@@ -338,7 +338,7 @@ static void test_back_faces(void **state)
         else
             assert_memory_equal(view.rgb, g_frame, sizeof g_frame);
     }
-    assert_int_equal(view.part_closed[1], 0);
+    assert_int_equal(view.face_closed[0], 0);
     assert_true(drawn[1] < drawn[0]); /* closed: the turned-away faces skipped */
     assert_int_equal(drawn[1], 2);
     assert_int_equal(drawn[2], drawn[0]); /* open: all drawn */

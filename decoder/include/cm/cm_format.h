@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 10    /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 11    /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -105,6 +105,8 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
                                           along its rulings (cm_model.refine_49) */
 #define CM_FMT_PATCH_SCALE_MINOR 10u   /* 4.10: the bytes of 4.9; a GREGORY patch's plane of triangulation is
                                           scaled by its boundary's lengths (cm_model.refine_410) */
+#define CM_FMT_PARTS_MINOR 11u         /* 4.11: the COLR section ends with the model's parts, in the order of
+                                          the terminal's assembly steps (cm_face.part, cm_placement.part) */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -263,6 +265,8 @@ typedef struct cm_face {
     uint32_t checksum;    /* GREGORY: FNV-1a of the encoder's rebuilt patches (spec §2 rule 6) */
     uint32_t rec_off;     /* byte offset in the file where the face's record starts (the range
                              coder's read position then): errors about the face name it */
+    uint32_t part;        /* format 4.11: its part, 1..cm_model.nparts, the assembly step that adds
+                             it; 0 when the file names no parts */
 } cm_face;
 
 static inline uint8_t cm_face_fit_pack(unsigned m, unsigned patches) { return (uint8_t)((m & 7u) | (patches << 3)); }
@@ -280,6 +284,7 @@ static inline unsigned cm_face_fit_patches(const cm_face *F) { return (unsigned)
 typedef struct cm_placement {
     uint32_t first, count;
     double m[12];
+    uint32_t part;        /* format 4.11: the copy's part (as cm_face.part) */
 } cm_placement;
 
 /** The decoded model: everything the reconstruction reads (spec §2 rule 5). */
@@ -328,6 +333,8 @@ typedef struct cm_model {
     double knots[CM_MAX_MODEL_KNOTS];
     uint32_t palette[CM_FMT_MAX_PALETTE + 1];
     uint32_t nplacements; /* format 4.3 */
+    uint32_t nparts;      /* format 4.11: the parts the workstation named (0: none; the viewer then takes
+                             the faces' connected pieces, cm_view_parts) */
     cm_placement placements[CM_MAX_PLACEMENTS > 0 ? CM_MAX_PLACEMENTS : 1];
 } cm_model;
 

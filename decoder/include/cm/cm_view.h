@@ -90,12 +90,16 @@ typedef struct cm_view {
     double scale;          /* orthographic: pixels per mm; perspective: the focal length in pixels */
     double eye;            /* perspective: the eye's depth in view space (negative) */
     uint64_t triangles, edge_segments, silhouette_segments; /* drawn (for tests and --verbose) */
-    /* the model's parts (cm_view_parts): a face's part among its own faces' connected components
-       (faces joined by their edges, see there), numbered from 1 in face order; placement k's copies
-       are part nbase_parts + 1 + k */
+    /* the model's parts (cm_view_parts): those the file names (format 4.11: cm_face.part,
+       cm_placement.part), else a face's part among its own faces' connected components (faces joined
+       by their edges, see there), numbered from 1 in face order, and placement k's copies part
+       nbase_parts + 1 + k */
     uint32_t nparts, nbase_parts;
+    int named_parts;                       /* the parts are the file's */
     uint32_t part_of_face[CM_MAX_FACES];
-    uint8_t part_closed[CM_MAX_FACES + 1]; /* base part p's faces close it (see cm_view_parts) */
+    uint32_t place_part[CM_MAX_PLACEMENTS > 0 ? CM_MAX_PLACEMENTS : 1]; /* (named parts) */
+    uint8_t part_closed[CM_MAX_FACES + 1]; /* (scratch: connected component p's faces close it) */
+    uint8_t face_closed[CM_MAX_FACES];     /* face f's connected component is closed (see cm_view_parts) */
     uint32_t parts_nfaces;                 /* the faces cm_view_parts numbered */
     int32_t edge_head[CM_MAX_EDGES];       /* (scratch: each edge's uses in a list, ... */
     int32_t use_next[CM_MAX_MODEL_USES];   /* ... the next use of the same edge, -1 at the end, */
@@ -125,7 +129,8 @@ CM_NODISCARD cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float
 void cm_view_fit(cm_view *v, const cm_mesh *mesh);
 
 /**
- * Number the model's parts for assembly steps (opts.step): the connected components of its own faces
+ * Number the model's parts for assembly steps (opts.step): those the file names (format 4.11, the
+ * workstation's parts in the order of its steps), else the connected components of its own faces
  * (an edge used by two faces joins them; where three or more meet, touching parts of a flattened
  * assembly, each face is joined to the nearest one in file order that runs the edge the other
  * way), in the order of their first face, then each placement's

@@ -63,6 +63,8 @@ typedef struct cm_face_ctx {
 /* COLR: palette size, then a palette index per face */
 typedef struct cm_colr_ctx {
     cm_ac_int count, index;
+    cm_ac_int nparts, part;     /* format 4.11: the parts */
+    cm_ac_prob part_same, part_next;
 } cm_colr_ctx;
 
 void cm_vert_ctx_init(cm_vert_ctx *c);
