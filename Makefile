@@ -100,10 +100,11 @@ CM_PLATFORM_OPT := -Os
 # thousand per model) 0.9 KB more, room for format 4.9's kept-face plane (cmz-terminal 262 566 ->
 # 261 670 bytes); a GREGORY face's corner normals and the choice of its edges' cubics (cm_corner.c,
 # once per face: the K7 fits themselves stay -O2), room for format 4.10's patch scale (262 214 ->
-# 261 526 bytes; +0.1 to +0.3 % terminal instructions on Tightening_screw, asmo, C1G0B0O)
+# 261 526 bytes; +0.1 to +0.3 % terminal instructions on Tightening_screw, asmo, C1G0B0O); cmz-view's
+# glTF reader (cm_glb_read.c, once per file: cmz-view 229 436 -> 243 980 bytes, 245 788 at -O2)
 CM_COLD_SRC := decoder/src/cm_decode.c decoder/src/cm_format.c decoder/src/cm_sections.c decoder/src/cm_limits.c \
                decoder/src/cm_error.c decoder/src/cm_arith.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c \
-               decoder/src/cm_corner.c $(wildcard decoder/methods/*.c)
+               decoder/src/cm_corner.c decoder/view/cm_glb_read.c $(wildcard decoder/methods/*.c)
 endif
 CM_WARN := -Wall -Wextra -Wundef -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wcast-align \
            -Wformat=2 -Wvla -Walloca -Wdouble-promotion -Werror
@@ -508,6 +509,21 @@ fuzz-tess:
 	$(Q)mkdir -p $(BUILD_ROOT)/fuzz-tess/corpus && cp tests/fuzz/corpus_tess/* $(BUILD_ROOT)/fuzz-tess/corpus/
 	FUZZ_TESS_STRICT=1 $(BUILD_ROOT)/fuzz-tess/fuzz_tess $(FUZZ_ARGS) -max_len=2048 -timeout=10 \
 		-artifact_prefix=$(BUILD_ROOT)/fuzz-tess/ $(BUILD_ROOT)/fuzz-tess/corpus
+
+# libFuzzer on the viewer's glTF input (not part of check): make fuzz-glb FUZZ_SECONDS=600 (its own
+# build, as fuzz-tess: the library's coverage only)
+.PHONY: fuzz-glb
+fuzz-glb:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/fuzz-glb CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="-O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fsanitize-coverage=inline-8bit-counters,pc-table" \
+		$(BUILD_ROOT)/fuzz-glb/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a
+	$(Q)clang -O1 -g -std=c11 -ffp-contract=off -fsanitize=address,undefined -fno-sanitize-recover=all $(CM_INC) \
+		-DCM_PROFILE='"profiles/terminal.h"' -c tests/fuzz/fuzz_glb.c -o $(BUILD_ROOT)/fuzz-glb/fuzz_glb.o
+	$(Q)clang -fsanitize=fuzzer,address,undefined -o $(BUILD_ROOT)/fuzz-glb/fuzz_glb $(BUILD_ROOT)/fuzz-glb/fuzz_glb.o \
+		$(BUILD_ROOT)/fuzz-glb/$(FUZZ_TRIPLET)-terminal/libcmdecoder.a -lm
+	$(Q)mkdir -p $(BUILD_ROOT)/fuzz-glb/corpus && cp tests/fuzz/corpus_glb/* $(BUILD_ROOT)/fuzz-glb/corpus/
+	$(BUILD_ROOT)/fuzz-glb/fuzz_glb $(FUZZ_ARGS) -max_len=16384 -timeout=10 \
+		-artifact_prefix=$(BUILD_ROOT)/fuzz-glb/ $(BUILD_ROOT)/fuzz-glb/corpus
 
 # libFuzzer on the decoder (not part of check): make fuzz-decode FUZZ_SECONDS=600
 # (built without CRC checks, in build/fuzz only, so that mutations reach the section decoders)

@@ -184,6 +184,28 @@
 #  define CM_VIEW_EDGE_SEGMENTS 32
 #endif
 
+/* The viewer's glTF input (cmz-view MODEL.glb, cm_glb_read.h): accessors, primitives (each mesh's
+ * list counted again for every mesh), nodes and materials a .glb may have.  `cmz decode`'s own GLB of
+ * a model of CM_MAX_FACES faces has three accessors a face and each face a primitive of the model's
+ * mesh and at most once more of a placed copies' mesh, a node per placement.  Over them the file is
+ * refused by name (CM_E_LIMIT, what it needs and what the build has).  Each accessor takes 16
+ * bytes, a primitive 20, a node 176.  Units: items.  Not limits of the format. */
+#ifndef CM_GLB_MAX_ACCESSORS
+#  define CM_GLB_MAX_ACCESSORS (3 * CM_MAX_FACES + 16)
+#endif
+#ifndef CM_GLB_MAX_PRIMS
+#  define CM_GLB_MAX_PRIMS (2 * CM_MAX_FACES)
+#endif
+#ifndef CM_GLB_MAX_NODES
+#  define CM_GLB_MAX_NODES (CM_MAX_PLACEMENTS + 64)
+#endif
+#ifndef CM_GLB_MAX_MATERIALS
+#  define CM_GLB_MAX_MATERIALS 256
+#endif
+#ifndef CM_GLB_MAX_VIEWS
+#  define CM_GLB_MAX_VIEWS 64
+#endif
+
 /* Bytes of each cached page (CM_SPILL_PAGES for each of positions, normals, indices) through
  * which a streaming terminal reads its spilled output mesh back (cm_mesh.h): a page is a read
  * call.  Unit: bytes, at least 12.  Not a limit of the format (cm-limits does not list it). */

@@ -1,8 +1,9 @@
 /*
  * cmz-view - what the terminal shows, as a picture: a .cmz decoded and drawn
- * by the terminal's own software viewer (cm_view.h) into a PNG.
+ * by the terminal's own software viewer (cm_view.h) into a PNG; or a .glb
+ * (cm_glb_read.h) drawn the same way.
  *
- *   cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view iso|front|back|left|right|top|bottom]
+ *   cmz-view MODEL.cmz|MODEL.glb --png OUT.png|--fb DEV [--size WxH] [--view iso|front|back|left|right|top|bottom]
  *            [--turn N] [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]
  *            [--status TEXT]
  *            [--gpio-rotate|--gpio-next|--gpio-prev|--gpio-reset SPEC] [--turntable S] [--idle S]
@@ -32,6 +33,7 @@
 #include <unistd.h>
 
 #include "cm/cm_decode_state.h"
+#include "cm/cm_glb_read.h"
 #include "cm/cm_limits_info.h"
 #include "cm/cm_png.h"
 #include "cm/cm_view.h"
@@ -44,6 +46,7 @@
 /* everything big is static: the decode and draw paths never touch the heap */
 static cm_decode_state state;
 static cm_view view;
+static cm_glb_reader glb; /* MODEL.glb's accessors, primitives and nodes */
 static cm_gpio gpio;
 static volatile sig_atomic_t stop_signal;
 
@@ -66,7 +69,7 @@ static void print_camera(void)
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: cmz-view MODEL.cmz --png OUT.png|--fb DEV [--size WxH] [--view DIR] [--turn N]\n"
+            "usage: cmz-view MODEL.cmz|MODEL.glb --png OUT.png|--fb DEV [--size WxH] [--view DIR] [--turn N]\n"
             "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
             "                [--status TEXT] [--camera] [-q]\n"
             "                [--gpio-rotate SPEC] [--gpio-next SPEC] [--gpio-prev SPEC] [--gpio-reset SPEC]\n"
@@ -78,6 +81,10 @@ static void usage(FILE *f)
             "triangles with the decoder's normals, in the faces' colours, and the model's\n"
             "exact edges on top; the camera fitted to the model.  DIR: iso (default), front,\n"
             "back, left, right, top, bottom (CAD axes, Z up; front looks along +Y).\n"
+            "MODEL.glb (a binary glTF 2.0, known by its first bytes: what `cmz decode` writes,\n"
+            "or another tool's) is drawn the same way, turned from glTF's metres with Y up\n"
+            "into millimetres with Z up, without edges (a GLB has no curve mesh; silhouettes\n"
+            "are drawn), each node with a mesh one part; points and lines are left out.\n"
             "--png: write the picture as a PNG file; --fb: show it on the Linux framebuffer\n"
             "DEV (/dev/fb0: 16, 24 or 32-bit, centred, the rest of the screen background).\n"
             "--size: pixels, default 800x480 (with --fb alone: the screen's), at most %dx%d\n"
@@ -229,6 +236,45 @@ static int show_frame(const char *fb, const cm_view_opts *vo)
 
 static void on_stop(int sig) { stop_signal = sig; }
 
+static int glb_pread(void *ctx, uint64_t off, void *buf, size_t n)
+{
+    int fd = *(int *)ctx;
+    uint8_t *p = buf;
+    while (n > 0) {
+        ssize_t k = pread(fd, p, n, (off_t)off);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return -1;
+        p += k;
+        off += (uint64_t)k;
+        n -= (size_t)k;
+    }
+    return 0;
+}
+
+/* a .glb (by its first bytes, whatever its name) read into the mesh and the model's parts (*is_glb
+   1); anything else left to the .cmz decoder (*is_glb 0) */
+static cm_err read_glb(const char *in, cm_mesh *mesh, int *is_glb, cm_status *st)
+{
+    int fd = open(in, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        *is_glb = 0;
+        return CM_OK; /* (the .cmz path says why it cannot be opened) */
+    }
+    uint8_t head[4] = {0, 0, 0, 0};
+    off_t len = lseek(fd, 0, SEEK_END);
+    *is_glb = len >= 4 && glb_pread(&fd, 0, head, 4) == 0 && cm_glb_sniff(head);
+    cm_err e = CM_OK;
+    if (*is_glb) {
+        e = cm_glb_read(&glb, glb_pread, &fd, (uint64_t)len, mesh, &state.dec.model, st);
+        if (e == CM_E_IO && st->sys_errno == 0)
+            st->sys_errno = errno;
+    }
+    close(fd);
+    return e;
+}
+
 /*
  * The operator's buttons and the turntable (issue 17): draw again on each press or tick until
  * SIGTERM or SIGINT.  A press drains its line's queued edges (a bouncing contact is one press); a
@@ -351,6 +397,7 @@ int main(int argc, char **argv)
             cm_report_limits(stdout);
             const cm_ram_part own[] = {
                 {"  frame", "the viewer's RGB frame and depth buffer (CM_VIEW_MAX_W x CM_VIEW_MAX_H)", sizeof view},
+                {"  glTF input", "MODEL.glb's accessors, primitives and nodes (CM_GLB_MAX_*)", sizeof glb},
                 {"  I/O chunks", "the reader's chunk, the mesh spill's files", cm_decode_file_read_static_bytes()}};
             cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
             return 0;
@@ -492,10 +539,20 @@ int main(int argc, char **argv)
     const char *tmpdir = getenv("TMPDIR");
     cm_mesh mesh = cm_decode_stream_mesh(&state, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1);
     cm_decode_summary sum;
-    if (cm_decode_read(in, &state.dec, &st) != CM_OK ||
-        cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK) {
+    memset(&sum, 0, sizeof sum);
+    int is_glb = 0;
+    if (read_glb(in, &mesh, &is_glb, &st) != CM_OK ||
+        (!is_glb && (cm_decode_read(in, &state.dec, &st) != CM_OK ||
+                     cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK))) {
         report(stderr, "", in, &st);
         return st.code == CM_E_IO ? 3 : 1;
+    }
+    if (is_glb) {
+        sum.faces = state.dec.model.nfaces;
+        sum.triangles = mesh.nindex / 3u;
+        if (glb.skipped_prims > 0)
+            fprintf(stderr, "cmz-view: %s: warning: %u primitives that are not triangles (points, lines, strips, "
+                            "fans) left out\n", in, glb.skipped_prims);
     }
     for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++)
         report(stderr, "warning: ", in, &sum.left_out[i]);

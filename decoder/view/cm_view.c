@@ -375,9 +375,12 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
        ways: the encoder turned such a part's faces outwards (host_tools/encode/orient.c, by its
        signed volume), so none of its back faces can show (cm_view_mesh skips them); one edge used
        once, or three times, or twice the same way, and the part is drawn whole */
+    /* (a piece without edge uses, a mesh's faces without their curve mesh (a GLB), closes nothing) */
     for (uint32_t p = 0; p <= n; p++)
-        v->part_closed[p] = (uint8_t)!skipped;
-    v->part_closed[0] = 0;
+        v->part_closed[p] = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        if (m->faces[f].nloops > 0)
+            v->part_closed[up[f]] = (uint8_t)!skipped;
     for (uint32_t e = 0; e < ne; e++) {
         int32_t first = v->edge_head[e], second = first >= 0 ? v->use_next[first] : -1;
         if (first < 0 || (second >= 0 && v->use_next[second] < 0 && m->uses[first].rev != m->uses[second].rev))

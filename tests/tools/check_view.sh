@@ -6,6 +6,7 @@
 # model inside the frame's margin (the fitted camera leaves a 6 % border empty) and, orthographic,
 # with its outline spanning the room across or down (the fit), and come out the same twice.  With
 # ARM_CMZ_VIEW (the aarch64 build, run under qemu-user), the same pixels on ARM, byte for byte.
+# The GLB `cmz decode` writes draws the .cmz's pixels without the edges (cmz-view MODEL.glb).
 # A frame beyond the build's is refused with exit 2 and the limit named, and nothing is written.
 # One TAP line per check; "N passed, N failed" last.
 set -u
@@ -122,6 +123,45 @@ for m in tests/data/*.igs; do
         ok "$b steps: step $((parts + 1)) refused: $(cat "$tmp/err")"
     else
         bad "$b steps: step $((parts + 1)): exit $st, $(cat "$tmp/err")"
+    fi
+done
+
+# the GLB `cmz decode` writes of each bundled model draws as its .cmz does without the curve mesh's
+# edges (--no-edges: a GLB has none), pixel for pixel, from three directions and in perspective (on
+# aarch64 too); a GLB cut short is refused, nothing written
+for m in tests/data/*.igs; do
+    b=$(basename "${m%.*}")
+    if ! "$cmz" decode "$tmp/$b.cmz" -o "$tmp/$b.glb" > /dev/null 2> "$tmp/err"; then
+        bad "$b glb: cmz decode failed: $(tail -n 1 "$tmp/err")"
+        continue
+    fi
+    for v in iso front top iso-p; do
+        args=(--view "${v%-p}" --size 320x200 --no-edges)
+        [ "$v" = iso-p ] && args+=(--perspective)
+        "$view" "$tmp/$b.cmz" --png "$tmp/c.png" "${args[@]}" > /dev/null 2>&1
+        if ! "$view" "$tmp/$b.glb" --png "$tmp/g.png" "${args[@]}" > "$tmp/out" 2> "$tmp/err"; then
+            bad "$b glb $v: cmz-view failed: $(cat "$tmp/err")"
+        elif cmp -s "$tmp/c.png" "$tmp/g.png"; then
+            ok "$b glb $v: the GLB draws the .cmz's pixels ($(sed -n 's/.*: \(.*\)/\1/p' "$tmp/out"))"
+        else
+            bad "$b glb $v: the GLB draws other pixels than the .cmz"
+        fi
+        if [ -n "$arm" ] && [ "$v" = iso ]; then
+            if "${qemu[@]}" "$arm" "$tmp/$b.glb" --png "$tmp/a.png" "${args[@]}" > /dev/null 2> "$tmp/err" &&
+                cmp -s "$tmp/g.png" "$tmp/a.png"; then
+                ok "$b glb $v: the same pixels on aarch64"
+            else
+                bad "$b glb $v: aarch64: $(cat "$tmp/err")"
+            fi
+        fi
+    done
+    head -c 5000 "$tmp/$b.glb" > "$tmp/cut.glb"
+    "$view" "$tmp/cut.glb" --png "$tmp/cutg.png" > /dev/null 2> "$tmp/err"
+    st=$?
+    if [ $st -eq 1 ] && [ ! -e "$tmp/cutg.png" ] && grep -q "glTF\|GLB" "$tmp/err"; then
+        ok "$b glb: a GLB cut short is refused: $(head -c 200 "$tmp/err")"
+    else
+        bad "$b glb: a GLB cut short: exit $st, $(cat "$tmp/err")"
     fi
 done
 
