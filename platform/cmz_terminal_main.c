@@ -28,6 +28,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -119,9 +121,11 @@ static void usage(FILE *f)
             "  --gpio-error SPEC      output, active after a refused or failed model until the next good one\n"
             "  --gpio-request SPEC    input (button), a rising edge asks the workstation to send again\n"
             "  --ready-pulse-ms N     length of the ready pulse (default 500)\n"
-            "  --display DEV          show each model and a status line on the framebuffer DEV with\n"
-            "                         --viewer PROG (cmz-view); options after -- go to the viewer of\n"
-            "                         each model (its buttons, e.g. -- --gpio-next gpiochip0:5)\n"
+            "  --display DEV          show each model and a status line on the framebuffer DEV\n"
+            "                         (/dev/fb0) or DRM device (/dev/dri/card0: one viewer for the\n"
+            "                         whole run, cmz-view --serve) with --viewer PROG (cmz-view);\n"
+            "                         options after -- go to the viewer (its buttons, e.g.\n"
+            "                         -- --gpio-next gpiochip0:5)\n"
             "  --config FILE          read 'key = value' lines (the long options without --) first\n"
             "  --once                 exit after the first model (status 0 decoded, 1 not)\n"
             "  -q                     only warnings and errors\n"
@@ -339,6 +343,17 @@ static void nap_ms(int ms)
 /* the viewer drawing the model on the display (issue 17): a program of its own (cmz-view), so that
    the daemon's code and RAM stay within their budgets; 0 when none runs */
 static pid_t viewer_pid;
+/* a DRM display (/dev/dri/cardN): its screen shows a buffer only while the process that made it
+   holds the device, and one process at a time, so one viewer serves the whole run (cmz-view
+   --serve), told what to show through a pipe (viewer_in, -1 when none runs); a framebuffer (fbdev)
+   keeps its pixels, and gets a viewer per picture */
+static int display_drm, viewer_in = -1;
+
+static int is_drm_device(const char *dev)
+{
+    struct stat s;
+    return stat(dev, &s) == 0 && S_ISCHR(s.st_mode) && major(s.st_rdev) == 226;
+}
 
 /* reap the viewers that have finished (wait: block until every one has: a status line still being
    drawn must not land over a newer picture), logging a failure */
@@ -349,8 +364,73 @@ static void viewer_reap(int wait)
     while ((p = waitpid(-1, &status, wait ? 0 : WNOHANG)) > 0) {
         if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
             logline("warn", "display", "status=%d", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-        if (p == viewer_pid)
+        if (p == viewer_pid) {
             viewer_pid = 0;
+            if (viewer_in >= 0) /* (the serving viewer went: the next picture starts another) */
+                close(viewer_in);
+            viewer_in = -1;
+        }
+    }
+}
+
+/* start the serving viewer of a DRM display (its buttons from the options after --) */
+static void serve_start(const config *c)
+{
+    const char *prog = c->viewer[0] ? c->viewer : "cmz-view";
+    int fds[2];
+    if (pipe(fds) != 0) {
+        logline("warn", "display", "why=pipe");
+        return;
+    }
+    pid_t pid = fork();
+    if (pid == 0) {
+        dup2(fds[0], 0);
+        close(fds[0]);
+        close(fds[1]);
+        const char *av[VIEW_ARGS_MAX + 8] = {prog, "--fb", c->display, "--serve"};
+        int k = 4;
+        for (int i = 0; i < c->nview_args; i++)
+            av[k++] = c->view_args[i];
+        av[k] = NULL;
+        execvp(prog, (char *const *)av);
+        _exit(127);
+    }
+    close(fds[0]);
+    if (pid < 0) {
+        close(fds[1]);
+        logline("warn", "display", "why=fork");
+        return;
+    }
+    (void)fcntl(fds[1], F_SETFD, FD_CLOEXEC);
+    viewer_pid = pid;
+    viewer_in = fds[1];
+}
+
+/* a command line to the serving viewer (started when none runs; once more when it has gone) */
+static void serve_send(const config *c, const char *line)
+{
+    for (int attempt = 0; attempt < 2; attempt++) {
+        if (viewer_in < 0)
+            serve_start(c);
+        if (viewer_in < 0)
+            return;
+        size_t n = strlen(line), done = 0;
+        while (done < n) {
+            ssize_t k = write(viewer_in, line + done, n - done);
+            if (k < 0 && errno == EINTR)
+                continue;
+            if (k <= 0)
+                break;
+            done += (size_t)k;
+        }
+        if (done == n)
+            return;
+        logline("warn", "display", "why=viewer-gone");
+        close(viewer_in); /* (EPIPE: the viewer ended; reaped by viewer_reap) */
+        viewer_in = -1;
+        if (viewer_pid > 0)
+            kill(viewer_pid, SIGTERM);
+        viewer_reap(1);
     }
 }
 
@@ -384,6 +464,15 @@ static void show_current(const config *c, const char *text)
 {
     if (!c->display[0])
         return;
+    if (display_drm) { /* the serving viewer keeps the old picture until the new one is drawn */
+        char line[CM_TERM_PATH + CM_LINK_MAX_TEXT + 64];
+        snprintf(line, sizeof line, "model %s/current/model.cmz\t%s\n", c->out, text);
+        char path[CM_TERM_PATH + 32];
+        snprintf(path, sizeof path, "%s/current/model.cmz", c->out);
+        if (access(path, R_OK) == 0)
+            serve_send(c, line);
+        return;
+    }
     if (viewer_pid > 0)
         kill(viewer_pid, SIGTERM);
     viewer_reap(1);
@@ -400,6 +489,12 @@ static void show_status(const config *c, const char *name, const char *what)
         return;
     char text[CM_LINK_MAX_TEXT + CM_LINK_MAX_NAME + 8];
     snprintf(text, sizeof text, "%s: %s", name, what);
+    if (display_drm) {
+        char line[sizeof text + 16];
+        snprintf(line, sizeof line, "status %s\n", text);
+        serve_send(c, line);
+        return;
+    }
     (void)viewer_run(c, NULL, text);
 }
 
@@ -497,6 +592,7 @@ int main(int argc, char **argv)
     }
     if (!c.name[0] && gethostname(c.name, sizeof c.name - 1) != 0)
         snprintf(c.name, sizeof c.name, "terminal");
+    display_drm = c.display[0] && is_drm_device(c.display);
 
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
@@ -669,7 +765,11 @@ int main(int argc, char **argv)
         logline("info", "stop", "signal=%d", (int)stop_signal);
     if (ready_off_at)
         nap_ms((int)(ready_off_at - cm_clock_ms() > 0 ? ready_off_at - cm_clock_ms() : 0));
-    if (c.nview_args && viewer_pid > 0) /* a viewer waiting for its buttons goes with the daemon */
+    if (viewer_in >= 0) { /* the serving viewer of a DRM display goes with the daemon (so does its picture) */
+        close(viewer_in);
+        viewer_in = -1;
+    }
+    if ((c.nview_args || display_drm) && viewer_pid > 0) /* a viewer waiting for its buttons goes with the daemon */
         kill(viewer_pid, SIGTERM);
     viewer_reap(1); /* (the picture it draws stays on the screen) */
     cm_link_term_close(&term);

@@ -39,6 +39,7 @@
 #include "cm/cm_view.h"
 #include "cm_clock.h"
 #include "cm_decode_file.h"
+#include "cm_drm.h"
 #include "cm_fb.h"
 #include "cm_gpio.h"
 #include "cm_report.h"
@@ -47,6 +48,7 @@
 static cm_decode_state state;
 static cm_view view;
 static cm_glb_reader glb; /* MODEL.glb's accessors, primitives and nodes */
+static cm_drm drm = {.fd = -1}; /* --fb /dev/dri/cardN: the DRM screen this process holds (drm.map) */
 static cm_gpio gpio;
 static volatile sig_atomic_t stop_signal;
 
@@ -75,6 +77,7 @@ static void usage(FILE *f)
             "                [--gpio-rotate SPEC] [--gpio-next SPEC] [--gpio-prev SPEC] [--gpio-reset SPEC]\n"
             "                [--turntable SECONDS] [--idle SECONDS]\n"
             "       cmz-view --fb DEV --status TEXT\n"
+            "       cmz-view --fb DEV --serve [BUTTONS]\n"
             "       cmz-view --limits | --version | --help\n"
             "\n"
             "Rebuild a curvemesh model and draw it as the terminal's viewer does: shaded\n"
@@ -86,7 +89,13 @@ static void usage(FILE *f)
             "into millimetres with Z up, without edges (a GLB has no curve mesh; silhouettes\n"
             "are drawn), each node with a mesh one part; points and lines are left out.\n"
             "--png: write the picture as a PNG file; --fb: show it on the Linux framebuffer\n"
-            "DEV (/dev/fb0: 16, 24 or 32-bit, centred, the rest of the screen background).\n"
+            "DEV (/dev/fb0: 16, 24 or 32-bit, centred, the rest of the screen background), or\n"
+            "on a DRM/KMS device (/dev/dri/card0: the first connected screen at its preferred\n"
+            "mode; the screen shows the picture while cmz-view runs: it stays until SIGTERM\n"
+            "or SIGINT).  --serve (with --fb, no MODEL): one viewer for a terminal's whole\n"
+            "run, told on its standard input what to show, a command a line: 'status TEXT',\n"
+            "'model PATH<tab>TEXT' (the old picture stays until the new one is drawn); it\n"
+            "ends at the end of its input (cmz-terminal --display on a DRM device).\n"
             "--size: pixels, default 800x480 (with --fb alone: the screen's), at most %dx%d\n"
             "in this build (profile %s).\n"
             "--turn N: the model turned N x %d degrees about its vertical axis, counter-clockwise\n"
@@ -228,6 +237,10 @@ static int show_frame(const char *fb, const cm_view_opts *vo)
 {
     cm_status st;
     cm_status_init(&st);
+    if (drm.map) { /* the DRM screen's buffer, mapped: the frame goes straight into it */
+        cm_fb_compose(&drm.fmt, drm.map, view.rgb, (uint32_t)vo->width, (uint32_t)vo->height, vo->background);
+        return 0;
+    }
     if (cm_fb_show(fb, view.rgb, (uint32_t)vo->width, (uint32_t)vo->height, vo->background, &st) == 0)
         return 0;
     report(stderr, "", fb, &st);
@@ -235,6 +248,27 @@ static int show_frame(const char *fb, const cm_view_opts *vo)
 }
 
 static void on_stop(int sig) { stop_signal = sig; }
+
+static void catch_stop(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop; /* no SA_RESTART: poll returns EINTR */
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+}
+
+/* a DRM screen shows this process's buffer while the process holds the device: stay until SIGTERM or
+   SIGINT (0) */
+static int hold_screen(void)
+{
+    catch_stop();
+    while (!stop_signal)
+        poll(NULL, 0, -1);
+    cm_drm_close(&drm);
+    return 0;
+}
 
 static int glb_pread(void *ctx, uint64_t off, void *buf, size_t n)
 {
@@ -295,12 +329,7 @@ static int interact(const char *fb, const char *const button[CM_GPIO_NBUTTON], i
     if (!quiet) /* (once the lines are held: a press from now on is seen) */
         printf("%s -> %s: %u parts, waiting for the buttons\n", in, fb, parts);
     fflush(stdout);
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_stop; /* no SA_RESTART: poll returns EINTR */
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGINT, &sa, NULL);
+    catch_stop();
     const cm_view_opts start = vo;
     int64_t last_press = cm_clock_ms(), next_tick = last_press + idle_ms;
     int rc = 0;
@@ -376,6 +405,197 @@ static int parse_seconds(const char *opt, const char *s, int64_t *ms)
     return 1;
 }
 
+/* decode (or read: a GLB) `in` into *mesh, its spill beside `spill` (a file; is_dir: in that directory):
+   0, or the exit status after saying why */
+static int load_model(const char *in, const char *spill, int is_dir, double tol, cm_mesh *mesh, cm_decode_summary *sum,
+                      float lo[3], float hi[3])
+{
+    cm_status st;
+    cm_status_init(&st);
+    *mesh = cm_decode_stream_mesh(&state, spill, is_dir);
+    memset(sum, 0, sizeof *sum);
+    int is_glb = 0;
+    if (read_glb(in, mesh, &is_glb, &st) != CM_OK ||
+        (!is_glb && (cm_decode_read(in, &state.dec, &st) != CM_OK ||
+                     cm_decode_mesh(&state.dec, tol, mesh, &state.tess, sum, &st) != CM_OK))) {
+        report(stderr, "", in, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
+    if (is_glb) {
+        sum->faces = state.dec.model.nfaces;
+        sum->triangles = mesh->nindex / 3u;
+        if (glb.skipped_prims > 0)
+            fprintf(stderr, "cmz-view: %s: warning: %u primitives that are not triangles (points, lines, strips, "
+                            "fans) left out\n", in, glb.skipped_prims);
+    }
+    for (uint32_t i = 0; i < sum->faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++)
+        report(stderr, "warning: ", in, &sum->left_out[i]);
+    if (!cm_mesh_bounds(mesh, lo, hi)) {
+        fprintf(stderr, "cmz-view: %s: nothing to show (no triangles)\n", in);
+        return 1;
+    }
+    return 0;
+}
+
+/* the status line alone on the screen's last rows, over what it shows: 0, or the exit status */
+static int bar_alone(const char *fb, const cm_view_opts *vo, const char *text)
+{
+    cm_status st;
+    cm_status_init(&st);
+    const float zero[3] = {0, 0, 0};
+    if (cm_view_begin(&view, vo, zero, zero, &st) != CM_OK) {
+        report(stderr, "", fb, &st);
+        return 1;
+    }
+    cm_view_status(&view, text);
+    int h = cm_view_status_height(&view);
+    h = h < vo->height ? h : vo->height;
+    const uint8_t *rows = view.rgb + (size_t)(vo->height - h) * (size_t)vo->width * 3;
+    if (drm.map) {
+        cm_fb_compose_bottom(&drm.fmt, drm.map, rows, (uint32_t)vo->width, (uint32_t)h);
+        return 0;
+    }
+    if (cm_fb_show_bottom(fb, rows, (uint32_t)vo->width, (uint32_t)h, &st) != 0) {
+        report(stderr, "", fb, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
+    return 0;
+}
+
+/*
+ * --serve: one viewer for a terminal's whole run, told what to show on its standard input, a line a
+ * command (cmz-terminal on a DRM screen, which one process holds while it shows anything):
+ *   status TEXT           the status line, over what is on the screen
+ *   model PATH<tab>TEXT   PATH decoded and drawn with the status line TEXT; the picture on the
+ *                         screen stays until the new one is ready (a file that does not decode
+ *                         leaves it, and is said on stderr)
+ * The buttons and the turntable act on the model on show.  Ends at the end of the input, SIGTERM or
+ * SIGINT (0).
+ */
+static int serve(const char *fb, const char *const button[CM_GPIO_NBUTTON], int64_t tick_ms, int64_t idle_ms,
+                 cm_view_opts vo, double tol)
+{
+    int buttons = 0;
+    for (int b = 0; b < CM_GPIO_NBUTTON; b++)
+        buttons |= button[b] != NULL;
+    cm_gpio_config gc = {.consumer = "cmz-view"};
+    for (int b = 0; b < CM_GPIO_NBUTTON; b++)
+        gc.button[b] = button[b];
+    if (buttons && cm_gpio_open(&gpio, &gc) != 0) {
+        fprintf(stderr, "cmz-view: %s\n", gpio.err);
+        return 4;
+    }
+    catch_stop();
+    signal(SIGPIPE, SIG_IGN);
+    const char *tmpdir = getenv("TMPDIR");
+    const char *dir = tmpdir && tmpdir[0] ? tmpdir : "/tmp";
+    static char line[8192], status[1024], path[4096];
+    size_t used = 0;
+    int skipping = 0, loaded = 0, rc = 0, input = 1;
+    static cm_mesh mesh;
+    cm_decode_summary sum;
+    float lo[3], hi[3];
+    uint32_t parts = 0;
+    const cm_view_opts start = vo;
+    int64_t next_tick = cm_clock_ms() + idle_ms;
+    while (!stop_signal && input && rc == 0) {
+        struct pollfd pfd[1 + CM_GPIO_NBUTTON];
+        nfds_t n = 0;
+        pfd[n++] = (struct pollfd){.fd = 0, .events = POLLIN};
+        for (int b = 0; buttons && b < CM_GPIO_NBUTTON; b++) {
+            int fd = cm_gpio_button_fd(&gpio, (cm_gpio_button)b);
+            if (fd >= 0)
+                pfd[n++] = (struct pollfd){.fd = fd, .events = POLLIN};
+        }
+        int timeout = -1;
+        if (tick_ms > 0 && loaded) {
+            int64_t wait = next_tick - cm_clock_ms();
+            timeout = wait <= 0 ? 0 : wait > 3600000 ? 3600000 : (int)wait;
+        }
+        int r = poll(pfd, n, timeout);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0) {
+            fprintf(stderr, "cmz-view: waiting for commands: %s\n", strerror(errno));
+            rc = 3;
+            break;
+        }
+        int redraw = 0;
+        if (pfd[0].revents) { /* commands, a line at a time (a line longer than the buffer is skipped) */
+            ssize_t k = read(0, line + used, sizeof line - 1 - used);
+            if (k < 0 && errno == EINTR)
+                continue;
+            if (k <= 0) {
+                input = 0;
+                break;
+            }
+            used += (size_t)k;
+            char *nl;
+            while ((nl = memchr(line, '\n', used)) != NULL) {
+                *nl = '\0';
+                size_t len = (size_t)(nl - line) + 1;
+                if (!skipping && strncmp(line, "status ", 7) == 0) {
+                    snprintf(status, sizeof status, "%.1023s", line + 7);
+                    if (loaded)
+                        redraw = 1;
+                    else
+                        rc = bar_alone(fb, &vo, status);
+                } else if (!skipping && strncmp(line, "model ", 6) == 0) {
+                    char *tab = strchr(line + 6, '\t');
+                    if (tab)
+                        *tab = '\0';
+                    snprintf(path, sizeof path, "%.4095s", line + 6);
+                    snprintf(status, sizeof status, "%.1023s", tab ? tab + 1 : "");
+                    /* (a file that does not decode took the old mesh with it: the old picture
+                       stays on the screen, the buttons wait for the next model) */
+                    loaded = load_model(path, dir, 1, tol, &mesh, &sum, lo, hi) == 0;
+                    vo = start;
+                    redraw = loaded;
+                } else if (!skipping && line[0]) {
+                    fprintf(stderr, "cmz-view: --serve: a command it does not know: %.60s\n", line);
+                }
+                skipping = 0;
+                memmove(line, line + len, used - len);
+                used -= len;
+            }
+            if (used == sizeof line - 1) { /* no end of line in the whole buffer */
+                used = 0;
+                skipping = 1;
+            }
+        }
+        for (int b = 0; buttons && b < CM_GPIO_NBUTTON && rc == 0; b++) {
+            int p = cm_gpio_button_pressed(&gpio, (cm_gpio_button)b);
+            if (p < 0) {
+                fprintf(stderr, "cmz-view: %s\n", gpio.err);
+                rc = 4;
+            } else if (p > 0 && loaded) {
+                redraw = 1;
+                next_tick = cm_clock_ms() + idle_ms;
+                if (b == CM_GPIO_ROTATE)
+                    vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
+                else if (b == CM_GPIO_NEXT)
+                    vo.step = vo.step >= parts ? 0 : vo.step + 1;
+                else if (b == CM_GPIO_PREV)
+                    vo.step = vo.step == 0 ? parts : vo.step - 1;
+                else
+                    vo = start;
+            }
+        }
+        if (!redraw && tick_ms > 0 && loaded && cm_clock_ms() >= next_tick) {
+            vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
+            next_tick = cm_clock_ms() + tick_ms;
+            redraw = 1;
+        }
+        if (redraw && rc == 0 && (rc = draw(&vo, lo, hi, &mesh, status, buttons || tick_ms > 0, path, &parts)) == 0)
+            rc = show_frame(fb, &vo);
+    }
+    if (buttons)
+        cm_gpio_close(&gpio);
+    cm_decode_spill_close();
+    cm_drm_close(&drm);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL, *fb = NULL, *status = NULL;
@@ -383,7 +603,7 @@ int main(int argc, char **argv)
     static const char *const button_opt[CM_GPIO_NBUTTON] = {"--gpio-rotate", "--gpio-next", "--gpio-prev",
                                                             "--gpio-reset"};
     int64_t tick_ms = 0, idle_ms = 30000;
-    int sized = 0, quiet = 0, camera = 0;
+    int sized = 0, quiet = 0, camera = 0, serving = 0;
     double tol = 0;
     cm_view_opts vo;
     cm_view_opts_default(&vo);
@@ -406,6 +626,8 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(a, "--camera") == 0) {
             camera = 1;
+        } else if (strcmp(a, "--serve") == 0) {
+            serving = 1;
         } else if (strcmp(a, "--png") == 0 && more) {
             out = argv[++i];
         } else if (strcmp(a, "--fb") == 0 && more) {
@@ -496,7 +718,7 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if ((!in && !(status && fb)) || (in && !out && !fb)) {
+    if (serving ? (!fb || in || out) : ((!in && !(status && fb)) || (in && !out && !fb))) {
         usage(stderr);
         return 2;
     }
@@ -510,57 +732,33 @@ int main(int argc, char **argv)
     int interactive = stays && in;
     cm_status st;
     cm_status_init(&st);
+    if (fb && cm_drm_is_drm(fb) && cm_drm_open(&drm, fb, vo.background, &st) != 0) {
+        report(stderr, "", fb, &st);
+        return st.code == CM_E_IO ? 3 : 1;
+    }
     if (fb && (!sized || !in)) { /* the screen's size, within the build's frame */
-        cm_fb_format ff;
-        if (cm_fb_query(fb, &ff, &st) != 0) {
+        cm_fb_format ff = drm.fmt;
+        if (!drm.map && cm_fb_query(fb, &ff, &st) != 0) {
             report(stderr, "", fb, &st);
             return st.code == CM_E_IO ? 3 : 1;
         }
         vo.width = ff.width < CM_VIEW_MAX_W ? (int)ff.width : CM_VIEW_MAX_W;
         vo.height = ff.height < CM_VIEW_MAX_H ? (int)ff.height : CM_VIEW_MAX_H;
     }
+    if (serving)
+        return serve(fb, button, tick_ms, idle_ms, vo, tol);
     if (!in) { /* the status line alone, over what the screen shows */
-        const float zero[3] = {0, 0, 0};
-        if (cm_view_begin(&view, &vo, zero, zero, &st) != CM_OK) {
-            report(stderr, "", fb, &st);
-            return 1;
-        }
-        cm_view_status(&view, status);
-        int h = cm_view_status_height(&view);
-        h = h < vo.height ? h : vo.height;
-        const uint8_t *rows = view.rgb + (size_t)(vo.height - h) * (size_t)vo.width * 3;
-        if (cm_fb_show_bottom(fb, rows, (uint32_t)vo.width, (uint32_t)h, &st) != 0) {
-            report(stderr, "", fb, &st);
-            return st.code == CM_E_IO ? 3 : 1;
-        }
-        return 0;
+        int rc = bar_alone(fb, &vo, status);
+        return rc == 0 && drm.map ? hold_screen() : rc;
     }
     /* the mesh spills beside the PNG, or in $TMPDIR (/tmp) */
     const char *tmpdir = getenv("TMPDIR");
-    cm_mesh mesh = cm_decode_stream_mesh(&state, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1);
+    static cm_mesh mesh;
     cm_decode_summary sum;
-    memset(&sum, 0, sizeof sum);
-    int is_glb = 0;
-    if (read_glb(in, &mesh, &is_glb, &st) != CM_OK ||
-        (!is_glb && (cm_decode_read(in, &state.dec, &st) != CM_OK ||
-                     cm_decode_mesh(&state.dec, tol, &mesh, &state.tess, &sum, &st) != CM_OK))) {
-        report(stderr, "", in, &st);
-        return st.code == CM_E_IO ? 3 : 1;
-    }
-    if (is_glb) {
-        sum.faces = state.dec.model.nfaces;
-        sum.triangles = mesh.nindex / 3u;
-        if (glb.skipped_prims > 0)
-            fprintf(stderr, "cmz-view: %s: warning: %u primitives that are not triangles (points, lines, strips, "
-                            "fans) left out\n", in, glb.skipped_prims);
-    }
-    for (uint32_t i = 0; i < sum.faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++)
-        report(stderr, "warning: ", in, &sum.left_out[i]);
     float lo[3], hi[3];
-    if (!cm_mesh_bounds(&mesh, lo, hi)) {
-        fprintf(stderr, "cmz-view: %s: nothing to show (no triangles)\n", in);
-        return 1;
-    }
+    int lrc = load_model(in, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1, tol, &mesh, &sum, lo, hi);
+    if (lrc != 0)
+        return lrc;
     uint32_t parts = 0;
     int rc = draw(&vo, lo, hi, &mesh, status, interactive, in, &parts);
     if (rc != 0)
@@ -573,13 +771,14 @@ int main(int argc, char **argv)
     if (interactive) { /* the buttons (the mesh stays in its spill files for the next pictures) */
         rc = interact(fb, button, tick_ms, idle_ms, vo, lo, hi, &mesh, parts, status, in, quiet);
         cm_decode_spill_close();
+        cm_drm_close(&drm);
         return rc;
     }
     cm_decode_spill_close();
     if (camera)
         print_camera();
     if (quiet)
-        return 0;
+        return drm.map ? hold_screen() : 0;
     printf("%s -> %s%s%s: %dx%d, %s%s, %u faces, %u parts", in, out ? out : "", out && fb ? " and " : "", fb ? fb : "",
            vo.width, vo.height, cm_view_dir_name(vo.dir),
            vo.perspective ? " perspective" : "", sum.faces, parts);
@@ -588,6 +787,7 @@ int main(int argc, char **argv)
     printf(", %u triangles (%llu drawn)", sum.triangles, (unsigned long long)view.triangles);
     if (sum.faces_left_out > 0)
         printf(", %lu faces left out", (unsigned long)sum.faces_left_out);
-    printf("\n");
-    return 0;
+    printf("%s\n", drm.map ? "; on the screen until SIGTERM" : "");
+    fflush(stdout);
+    return drm.map ? hold_screen() : 0;
 }

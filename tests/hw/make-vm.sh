@@ -93,14 +93,20 @@ fetch() {  # fetch PACKAGE=VERSION into debs/ unless a .deb of it is there
 
 # ---- 3. the kernel and its modules ----
 KR="$B/kroot"
-if [ ! -f "$KR/boot/vmlinuz-$K" ]; then
+if [ ! -f "$KR/boot/vmlinuz-$K" ] || [ ! -f "$KR/.keeps-kms" ]; then
     fetch "linux-image-$K=$V"
     rm -rf "$KR"
     dpkg-deb -x "$B/debs/linux-image-${K}_"*.deb "$KR"
     # Trees no test of a terminal's devices will load (graphics, sound, media, radios, network
-    # cards, storage fabrics): about half of the 400 MB of modules.
+    # cards, storage fabrics): about half of the 400 MB of modules.  Of the graphics drivers only
+    # the DRM core and bochs stay: the KMS driver of qemu's bochs-display, the screen
+    # tests/hw/vm-drm.sh draws on (Debian's kernel has no vkms).
     M="$KR/lib/modules/$K/kernel"
-    rm -rf "$M/drivers/gpu" "$M/drivers/media" "$M/drivers/net/wireless" "$M/drivers/net/ethernet" \
+    find "$M/drivers/gpu" -name '*.ko*' ! -name 'bochs.ko*' ! -name 'drm.ko*' ! -name 'drm_kms_helper.ko*' \
+        ! -name 'drm_vram_helper.ko*' ! -name 'drm_ttm_helper.ko*' ! -name 'ttm.ko*' \
+        ! -name 'drm_panel_orientation_quirks.ko*' -delete 2> /dev/null
+    : > "$KR/.keeps-kms"
+    rm -rf "$M/drivers/media" "$M/drivers/net/wireless" "$M/drivers/net/ethernet" \
         "$M/drivers/infiniband" "$M/drivers/staging" "$M/sound" "$M/drivers/bluetooth" \
         "$M/net/wireless" "$M/net/mac80211" "$M/net/bluetooth" "$M/drivers/iio" "$M/drivers/isdn" \
         "$M/drivers/scsi/qla2xxx" "$M/drivers/scsi/lpfc" "$M/drivers/scsi/bfa" "$M/drivers/scsi/mpt3sas" \

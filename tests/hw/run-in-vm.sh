@@ -68,9 +68,11 @@ for d in ${VM_RW:-}; do
 done
 
 start=$(date +%s.%N)
-# --foreground: qemu keeps the terminal's signals; -k: a qemu that ignores SIGTERM gets SIGKILL
+# --foreground: qemu keeps the terminal's signals; -k: a qemu that ignores SIGTERM gets SIGKILL;
+# bochs-display: a PCI display a KMS driver (bochs) drives, for tests/hw/vm-drm.sh (nothing shows it:
+# -display none; the guest loads its driver only when a test asks)
 timeout --foreground -k 5 "$timeout_s" qemu-system-x86_64 "${accel[@]}" -smp 1 -m "$mem" \
-    -nodefaults -no-user-config -no-reboot -display none -monitor none -serial stdio \
+    -nodefaults -no-user-config -no-reboot -display none -monitor none -serial stdio -device bochs-display \
     -kernel "$kernel" -initrd "$B/initrd.gz" \
     -append "console=ttyS0 quiet loglevel=3 panic=-1 HW_GUEST=$HERE/guest HW_VMB=$B HW_SHARE=$run" \
     -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
