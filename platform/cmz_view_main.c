@@ -270,21 +270,10 @@ static int hold_screen(void)
     return 0;
 }
 
+/* the GLB's bytes, as the decoder's (a GLB of 4 GiB or more is read no further than that) */
 static int glb_pread(void *ctx, uint64_t off, void *buf, size_t n)
 {
-    int fd = *(int *)ctx;
-    uint8_t *p = buf;
-    while (n > 0) {
-        ssize_t k = pread(fd, p, n, (off_t)off);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k <= 0)
-            return -1;
-        p += k;
-        off += (uint64_t)k;
-        n -= (size_t)k;
-    }
-    return 0;
+    return off > UINT32_MAX - n ? -1 : cm_decode_pread(ctx, (uint32_t)off, buf, n);
 }
 
 /* a .glb (by its first bytes, whatever its name) read into the mesh and the model's parts (*is_glb
@@ -307,90 +296,6 @@ static cm_err read_glb(const char *in, cm_mesh *mesh, int *is_glb, cm_status *st
     }
     close(fd);
     return e;
-}
-
-/*
- * The operator's buttons and the turntable (issue 17): draw again on each press or tick until
- * SIGTERM or SIGINT.  A press drains its line's queued edges (a bouncing contact is one press); a
- * turntable tick comes every `tick_ms` once `idle_ms` have passed since the last press.  Returns the
- * exit status.
- */
-static int interact(const char *fb, const char *const button[CM_GPIO_NBUTTON], int64_t tick_ms, int64_t idle_ms,
-                    cm_view_opts vo, const float lo[3], const float hi[3], const cm_mesh *mesh, uint32_t parts,
-                    const char *status, const char *in, int quiet)
-{
-    cm_gpio_config gc = {.consumer = "cmz-view"};
-    for (int b = 0; b < CM_GPIO_NBUTTON; b++)
-        gc.button[b] = button[b];
-    if (cm_gpio_open(&gpio, &gc) != 0) {
-        fprintf(stderr, "cmz-view: %s\n", gpio.err);
-        return 4;
-    }
-    if (!quiet) /* (once the lines are held: a press from now on is seen) */
-        printf("%s -> %s: %u parts, waiting for the buttons\n", in, fb, parts);
-    fflush(stdout);
-    catch_stop();
-    const cm_view_opts start = vo;
-    int64_t last_press = cm_clock_ms(), next_tick = last_press + idle_ms;
-    int rc = 0;
-    while (!stop_signal) {
-        struct pollfd pfd[CM_GPIO_NBUTTON];
-        nfds_t n = 0;
-        for (int b = 0; b < CM_GPIO_NBUTTON; b++) {
-            int fd = cm_gpio_button_fd(&gpio, (cm_gpio_button)b);
-            if (fd >= 0)
-                pfd[n++] = (struct pollfd){.fd = fd, .events = POLLIN};
-        }
-        int timeout = -1;
-        if (tick_ms > 0) {
-            int64_t wait = next_tick - cm_clock_ms();
-            timeout = wait <= 0 ? 0 : wait > 3600000 ? 3600000 : (int)wait;
-        }
-        int r = poll(pfd, n, timeout);
-        if (r < 0 && errno == EINTR)
-            continue;
-        if (r < 0) {
-            fprintf(stderr, "cmz-view: waiting for the buttons: %s\n", strerror(errno));
-            rc = 3;
-            break;
-        }
-        int changed = 0;
-        for (int b = 0; b < CM_GPIO_NBUTTON && rc == 0; b++) {
-            int p = cm_gpio_button_pressed(&gpio, (cm_gpio_button)b);
-            if (p < 0) {
-                fprintf(stderr, "cmz-view: %s\n", gpio.err);
-                rc = 4;
-            } else if (p > 0) {
-                changed = 1;
-                if (b == CM_GPIO_ROTATE)
-                    vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
-                else if (b == CM_GPIO_NEXT) /* the whole model (0), 1, ..., parts, and round */
-                    vo.step = vo.step >= parts ? 0 : vo.step + 1;
-                else if (b == CM_GPIO_PREV)
-                    vo.step = vo.step == 0 ? parts : vo.step - 1;
-                else
-                    vo = start;
-            }
-        }
-        if (rc != 0)
-            break;
-        int64_t now = cm_clock_ms();
-        if (changed) {
-            last_press = now;
-            next_tick = last_press + idle_ms;
-        } else if (tick_ms > 0 && now >= next_tick) {
-            vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
-            next_tick = now + tick_ms;
-            changed = 1;
-        }
-        if (!changed)
-            continue;
-        uint32_t nparts;
-        if ((rc = draw(&vo, lo, hi, mesh, status, 1, in, &nparts)) != 0 || (rc = show_frame(fb, &vo)) != 0)
-            break;
-    }
-    cm_gpio_close(&gpio);
-    return rc;
 }
 
 static int parse_seconds(const char *opt, const char *s, int64_t *ms)
@@ -462,18 +367,32 @@ static int bar_alone(const char *fb, const cm_view_opts *vo, const char *text)
     return 0;
 }
 
+/* the model on show in a viewer that stays (buttons, turntable, --serve) */
+static struct {
+    int loaded;
+    cm_mesh mesh;
+    float lo[3], hi[3];
+    uint32_t parts;
+    int has_status;
+    char status[1024];
+    char path[4096];
+} cur;
+
 /*
- * --serve: one viewer for a terminal's whole run, told what to show on its standard input, a line a
- * command (cmz-terminal on a DRM screen, which one process holds while it shows anything):
+ * The viewer that stays on the screen (issue 17), until SIGTERM or SIGINT: the operator's buttons
+ * and the turntable act on the model on show (cur), drawing it again.  A press drains its line's
+ * queued edges (a bouncing contact is one press); a turntable tick comes every `tick_ms` once
+ * `idle_ms` have passed since the last press.  With `commands` (--serve: one viewer for a
+ * terminal's whole run, cmz-terminal on a DRM screen, which one process holds while it shows
+ * anything) it is also told what to show on its standard input, a command a line:
  *   status TEXT           the status line, over what is on the screen
  *   model PATH<tab>TEXT   PATH decoded and drawn with the status line TEXT; the picture on the
  *                         screen stays until the new one is ready (a file that does not decode
  *                         leaves it, and is said on stderr)
- * The buttons and the turntable act on the model on show.  Ends at the end of the input, SIGTERM or
- * SIGINT (0).
+ * and ends at the end of its input.  Returns the exit status.
  */
-static int serve(const char *fb, const char *const button[CM_GPIO_NBUTTON], int64_t tick_ms, int64_t idle_ms,
-                 cm_view_opts vo, double tol)
+static int screen_loop(const char *fb, const char *const button[CM_GPIO_NBUTTON], int64_t tick_ms, int64_t idle_ms,
+                       cm_view_opts vo, double tol, int commands, int quiet)
 {
     int buttons = 0;
     for (int b = 0; b < CM_GPIO_NBUTTON; b++)
@@ -485,30 +404,32 @@ static int serve(const char *fb, const char *const button[CM_GPIO_NBUTTON], int6
         fprintf(stderr, "cmz-view: %s\n", gpio.err);
         return 4;
     }
+    if (!commands && !quiet) /* (once the lines are held: a press from now on is seen) */
+        printf("%s -> %s: %u parts, waiting for the buttons\n", cur.path, fb, cur.parts);
+    fflush(stdout);
     catch_stop();
-    signal(SIGPIPE, SIG_IGN);
+    if (commands)
+        signal(SIGPIPE, SIG_IGN);
     const char *tmpdir = getenv("TMPDIR");
     const char *dir = tmpdir && tmpdir[0] ? tmpdir : "/tmp";
-    static char line[8192], status[1024], path[4096];
+    static char line[8192];
     size_t used = 0;
-    int skipping = 0, loaded = 0, rc = 0, input = 1;
-    static cm_mesh mesh;
+    int skipping = 0, rc = 0, input = commands;
     cm_decode_summary sum;
-    float lo[3], hi[3];
-    uint32_t parts = 0;
     const cm_view_opts start = vo;
     int64_t next_tick = cm_clock_ms() + idle_ms;
-    while (!stop_signal && input && rc == 0) {
+    while (!stop_signal && rc == 0 && (input || !commands)) {
         struct pollfd pfd[1 + CM_GPIO_NBUTTON];
         nfds_t n = 0;
-        pfd[n++] = (struct pollfd){.fd = 0, .events = POLLIN};
+        if (commands)
+            pfd[n++] = (struct pollfd){.fd = 0, .events = POLLIN};
         for (int b = 0; buttons && b < CM_GPIO_NBUTTON; b++) {
             int fd = cm_gpio_button_fd(&gpio, (cm_gpio_button)b);
             if (fd >= 0)
                 pfd[n++] = (struct pollfd){.fd = fd, .events = POLLIN};
         }
         int timeout = -1;
-        if (tick_ms > 0 && loaded) {
+        if (tick_ms > 0 && cur.loaded) {
             int64_t wait = next_tick - cm_clock_ms();
             timeout = wait <= 0 ? 0 : wait > 3600000 ? 3600000 : (int)wait;
         }
@@ -516,12 +437,12 @@ static int serve(const char *fb, const char *const button[CM_GPIO_NBUTTON], int6
         if (r < 0 && errno == EINTR)
             continue;
         if (r < 0) {
-            fprintf(stderr, "cmz-view: waiting for commands: %s\n", strerror(errno));
+            fprintf(stderr, "cmz-view: waiting for the buttons%s: %s\n", commands ? " and commands" : "", strerror(errno));
             rc = 3;
             break;
         }
         int redraw = 0;
-        if (pfd[0].revents) { /* commands, a line at a time (a line longer than the buffer is skipped) */
+        if (commands && pfd[0].revents) { /* a line at a time (a line longer than the buffer is skipped) */
             ssize_t k = read(0, line + used, sizeof line - 1 - used);
             if (k < 0 && errno == EINTR)
                 continue;
@@ -535,22 +456,24 @@ static int serve(const char *fb, const char *const button[CM_GPIO_NBUTTON], int6
                 *nl = '\0';
                 size_t len = (size_t)(nl - line) + 1;
                 if (!skipping && strncmp(line, "status ", 7) == 0) {
-                    snprintf(status, sizeof status, "%.1023s", line + 7);
-                    if (loaded)
+                    snprintf(cur.status, sizeof cur.status, "%.1023s", line + 7);
+                    cur.has_status = 1;
+                    if (cur.loaded)
                         redraw = 1;
                     else
-                        rc = bar_alone(fb, &vo, status);
+                        rc = bar_alone(fb, &vo, cur.status);
                 } else if (!skipping && strncmp(line, "model ", 6) == 0) {
                     char *tab = strchr(line + 6, '\t');
                     if (tab)
                         *tab = '\0';
-                    snprintf(path, sizeof path, "%.4095s", line + 6);
-                    snprintf(status, sizeof status, "%.1023s", tab ? tab + 1 : "");
-                    /* (a file that does not decode took the old mesh with it: the old picture
-                       stays on the screen, the buttons wait for the next model) */
-                    loaded = load_model(path, dir, 1, tol, &mesh, &sum, lo, hi) == 0;
+                    snprintf(cur.path, sizeof cur.path, "%.4095s", line + 6);
+                    snprintf(cur.status, sizeof cur.status, "%.1023s", tab ? tab + 1 : "");
+                    cur.has_status = 1;
+                    /* (a file that does not decode took the old mesh with it: the old picture stays
+                       on the screen, the buttons wait for the next model) */
+                    cur.loaded = load_model(cur.path, dir, 1, tol, &cur.mesh, &sum, cur.lo, cur.hi) == 0;
                     vo = start;
-                    redraw = loaded;
+                    redraw = cur.loaded;
                 } else if (!skipping && line[0]) {
                     fprintf(stderr, "cmz-view: --serve: a command it does not know: %.60s\n", line);
                 }
@@ -568,25 +491,33 @@ static int serve(const char *fb, const char *const button[CM_GPIO_NBUTTON], int6
             if (p < 0) {
                 fprintf(stderr, "cmz-view: %s\n", gpio.err);
                 rc = 4;
-            } else if (p > 0 && loaded) {
+            } else if (p > 0 && cur.loaded) {
                 redraw = 1;
                 next_tick = cm_clock_ms() + idle_ms;
                 if (b == CM_GPIO_ROTATE)
                     vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
-                else if (b == CM_GPIO_NEXT)
-                    vo.step = vo.step >= parts ? 0 : vo.step + 1;
+                else if (b == CM_GPIO_NEXT) /* the whole model (0), 1, ..., parts, and round */
+                    vo.step = vo.step >= cur.parts ? 0 : vo.step + 1;
                 else if (b == CM_GPIO_PREV)
-                    vo.step = vo.step == 0 ? parts : vo.step - 1;
+                    vo.step = vo.step == 0 ? cur.parts : vo.step - 1;
                 else
                     vo = start;
             }
         }
-        if (!redraw && tick_ms > 0 && loaded && cm_clock_ms() >= next_tick) {
+        if (!redraw && rc == 0 && tick_ms > 0 && cur.loaded && cm_clock_ms() >= next_tick) {
             vo.turn = (vo.turn + 1) % CM_VIEW_TURNS;
             next_tick = cm_clock_ms() + tick_ms;
             redraw = 1;
         }
-        if (redraw && rc == 0 && (rc = draw(&vo, lo, hi, &mesh, status, buttons || tick_ms > 0, path, &parts)) == 0)
+        if (!redraw || rc != 0)
+            continue;
+        const char *status = cur.has_status ? cur.status : NULL;
+        rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, buttons || tick_ms > 0, cur.path, &cur.parts);
+        if (rc == 2 && commands) { /* (a --step beyond a new model's parts: the whole model) */
+            vo.step = 0;
+            rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, buttons || tick_ms > 0, cur.path, &cur.parts);
+        }
+        if (rc == 0)
             rc = show_frame(fb, &vo);
     }
     if (buttons)
@@ -746,21 +677,20 @@ int main(int argc, char **argv)
         vo.height = ff.height < CM_VIEW_MAX_H ? (int)ff.height : CM_VIEW_MAX_H;
     }
     if (serving)
-        return serve(fb, button, tick_ms, idle_ms, vo, tol);
+        return screen_loop(fb, button, tick_ms, idle_ms, vo, tol, 1, quiet);
     if (!in) { /* the status line alone, over what the screen shows */
         int rc = bar_alone(fb, &vo, status);
         return rc == 0 && drm.map ? hold_screen() : rc;
     }
     /* the mesh spills beside the PNG, or in $TMPDIR (/tmp) */
     const char *tmpdir = getenv("TMPDIR");
-    static cm_mesh mesh;
     cm_decode_summary sum;
-    float lo[3], hi[3];
-    int lrc = load_model(in, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1, tol, &mesh, &sum, lo, hi);
+    int lrc = load_model(in, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1, tol, &cur.mesh, &sum,
+                         cur.lo, cur.hi);
     if (lrc != 0)
         return lrc;
     uint32_t parts = 0;
-    int rc = draw(&vo, lo, hi, &mesh, status, interactive, in, &parts);
+    int rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, interactive, in, &parts);
     if (rc != 0)
         return rc;
     rc = out ? write_png(out) : 0;
@@ -769,10 +699,12 @@ int main(int argc, char **argv)
     if (rc != 0)
         return rc;
     if (interactive) { /* the buttons (the mesh stays in its spill files for the next pictures) */
-        rc = interact(fb, button, tick_ms, idle_ms, vo, lo, hi, &mesh, parts, status, in, quiet);
-        cm_decode_spill_close();
-        cm_drm_close(&drm);
-        return rc;
+        cur.loaded = 1;
+        cur.parts = parts;
+        cur.has_status = status != NULL;
+        snprintf(cur.status, sizeof cur.status, "%s", status ? status : "");
+        snprintf(cur.path, sizeof cur.path, "%s", in);
+        return screen_loop(fb, button, tick_ms, idle_ms, vo, tol, 0, quiet);
     }
     cm_decode_spill_close();
     if (camera)
