@@ -571,109 +571,174 @@ static const cm_glb_accessor *accessor_for(cm_glb_reader *g, int32_t i, unsigned
 
 static cm_err read_fail(cm_status *st) { return cm_fail(st, CM_E_IO, "glTF BIN: reading the file"); }
 
-/* primitive q placed by w (glTF metres, Y up) as face f of the mesh, in CAD millimetres, Z up */
-static cm_err emit_prim(cm_glb_reader *g, const cm_glb_prim *q, const double *w, uint32_t part, cm_mesh *mesh,
-                        cm_model *model, cm_status *st)
+/* where a primitive's data lie, and how it is placed */
+typedef struct prim_src {
+    uint64_t pat, nat, iat; /* first POSITION, NORMAL, index */
+    uint32_t ps, ns, is;    /* their strides */
+    unsigned isize;         /* bytes an index (0: none, the vertices in order) */
+    int normals;
+    double w[16];           /* the node's matrix to the model (glTF's units and axes) */
+    double cf[9];           /* its linear part's cofactors (normals), signed to keep them outwards */
+    int mirror;             /* w turns the triangles */
+} prim_src;
+
+/* vertex i's position and normal (unit; (0,0,0) without NORMAL), placed, in CAD millimetres, Z up */
+static int read_vertex(cm_glb_reader *g, const prim_src *ps, uint32_t i, float P[3], float Q[3])
 {
-    uint64_t pat, nat = 0, iat = 0;
-    uint32_t ps, ns = 0, is = 0;
-    const cm_glb_accessor *A = accessor_for(g, q->pos, 3, 5126, &pat, &ps, "glTF primitive's POSITION (float VEC3)", st);
-    const cm_glb_accessor *N = q->nrm < 0 ? NULL : accessor_for(g, q->nrm, 3, 5126, &nat, &ns, "glTF primitive's NORMAL (float VEC3)", st);
-    const cm_glb_accessor *I = q->idx < 0 ? NULL : accessor_for(g, q->idx, 1, 0, &iat, &is, "glTF primitive's indices (unsigned SCALAR)", st);
-    if (!A || (q->nrm >= 0 && !N) || (q->idx >= 0 && !I))
-        return st ? st->code : CM_E_FORMAT;
-    if (N && N->count < A->count)
-        return cm_fail(st, CM_E_RANGE, "glTF primitive's NORMAL: fewer than its positions");
-    uint32_t nv = A->count, ni = I ? I->count - I->count % 3u : nv - nv % 3u;
-    if (nv == 0 || ni == 0)
-        return CM_OK; /* nothing to draw */
+    uint8_t b[12];
+    if (bytes_at(g, ps->pat + (uint64_t)i * ps->ps, b, 12) != 0)
+        return -1;
+    double x = (double)lef32(b), y = (double)lef32(b + 4), z = (double)lef32(b + 8), o[3];
+    for (int r = 0; r < 3; r++)
+        o[r] = ps->w[r] * x + ps->w[4 + r] * y + ps->w[8 + r] * z + ps->w[12 + r];
+    P[0] = (float)(1000.0 * o[0]), P[1] = (float)(-1000.0 * o[2]), P[2] = (float)(1000.0 * o[1]);
+    Q[0] = Q[1] = Q[2] = 0.0f;
+    if (!ps->normals)
+        return 0;
+    if (bytes_at(g, ps->nat + (uint64_t)i * ps->ns, b, 12) != 0)
+        return -1;
+    x = (double)lef32(b), y = (double)lef32(b + 4), z = (double)lef32(b + 8);
+    for (int r = 0; r < 3; r++)
+        o[r] = ps->cf[r] * x + ps->cf[3 + r] * y + ps->cf[6 + r] * z;
+    double len = sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+    if (len > 0.0 && isfinite(len))
+        Q[0] = (float)(o[0] / len), Q[1] = (float)(-o[2] / len), Q[2] = (float)(o[1] / len);
+    else
+        Q[2] = 1.0f;
+    return 0;
+}
+
+/* index k of the primitive (k itself without indices), in *v: 0, -1 (read failed) */
+static int read_index(cm_glb_reader *g, const prim_src *ps, uint32_t k, uint32_t *v)
+{
+    uint8_t b[4];
+    if (ps->isize == 0) {
+        *v = k;
+        return 0;
+    }
+    if (bytes_at(g, ps->iat + (uint64_t)k * ps->is, b, ps->isize) != 0)
+        return -1;
+    *v = ps->isize == 1 ? b[0] : ps->isize == 2 ? (uint32_t)(b[0] | (b[1] << 8)) : le32(b);
+    return 0;
+}
+
+/* the normals of vertices [first, first + nv) from the triangles of indices [firsti, firsti + ni)
+   (each vertex the sum of its triangles', each its area's weight), made unit */
+static void normals_from_triangles(cm_mesh *mesh, uint32_t first, uint32_t nv, uint32_t firsti, uint32_t ni)
+{
+    for (uint32_t k = 0; k < ni; k += 3) {
+        uint32_t t[3] = {*cm_mesh_widx(mesh, firsti + k), *cm_mesh_widx(mesh, firsti + k + 1),
+                         *cm_mesh_widx(mesh, firsti + k + 2)};
+        const float *a = cm_mesh_wpos(mesh, t[0]), *p1 = cm_mesh_wpos(mesh, t[1]), *p2 = cm_mesh_wpos(mesh, t[2]);
+        double u1[3] = {(double)p1[0] - (double)a[0], (double)p1[1] - (double)a[1], (double)p1[2] - (double)a[2]};
+        double u2[3] = {(double)p2[0] - (double)a[0], (double)p2[1] - (double)a[1], (double)p2[2] - (double)a[2]};
+        double n[3] = {u1[1] * u2[2] - u1[2] * u2[1], u1[2] * u2[0] - u1[0] * u2[2], u1[0] * u2[1] - u1[1] * u2[0]};
+        for (int j = 0; j < 3; j++) {
+            float *Q = cm_mesh_wnrm(mesh, t[j]);
+            Q[0] = (float)((double)Q[0] + n[0]), Q[1] = (float)((double)Q[1] + n[1]), Q[2] = (float)((double)Q[2] + n[2]);
+        }
+    }
+    for (uint32_t i = 0; i < nv; i++) {
+        float *Q = cm_mesh_wnrm(mesh, first + i);
+        double x = (double)Q[0], y = (double)Q[1], z = (double)Q[2], len = sqrt(x * x + y * y + z * z);
+        if (len > 0.0 && isfinite(len))
+            Q[0] = (float)(x / len), Q[1] = (float)(y / len), Q[2] = (float)(z / len);
+        else
+            Q[0] = Q[1] = 0.0f, Q[2] = 1.0f;
+    }
+}
+
+/* a face of the mesh and of the model for what was appended from (first, firsti) on */
+static cm_err add_face(cm_glb_reader *g, const cm_glb_prim *q, uint32_t part, uint32_t first, uint32_t firsti,
+                       cm_mesh *mesh, cm_model *model, cm_status *st)
+{
     if (model->nfaces >= CM_MAX_FACES)
         return cm_fail_limit(st, CM_LIMIT_MAX_FACES, (uint64_t)model->nfaces + 1, CM_MAX_FACES, "glTF primitives placed");
     if (mesh->nfaces >= mesh->cap_faces)
         return cm_fail_limit(st, CM_LIMIT_MAX_FACES, (uint64_t)mesh->nfaces + 1, mesh->cap_faces, "glTF primitives placed");
-    if (nv > mesh->cap_verts - mesh->nverts || ni > mesh->cap_index - mesh->nindex)
-        return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, ((uint64_t)mesh->nindex + ni) / 3u, mesh->cap_index / 3u,
-                             "glTF mesh (its triangles and vertices)");
-    cm_err e = cm_mesh_make_room(mesh, nv, ni, st);
-    if (e != CM_OK)
-        return e;
-    /* normals by the cofactors of w's linear part, so that they stay normal under a scale; the
-       triangles turned where w mirrors */
-    double cf[9];
+    cm_mesh_face *F = &mesh->faces[mesh->nfaces++];
+    int coloured = q->material >= 0 && (uint32_t)q->material < g->nmaterials && g->material_color[q->material];
+    *F = (cm_mesh_face){first, mesh->nverts - first, firsti, mesh->nindex - firsti,
+                        coloured ? g->material_rgb[q->material] : 0u, (uint8_t)coloured, model->nfaces};
+    memset(&model->faces[model->nfaces], 0, sizeof model->faces[0]);
+    model->faces[model->nfaces++].part = part;
+    return CM_OK;
+}
+
+/*
+ * Primitive q placed by w (glTF metres, Y up) as a face of the mesh, in CAD millimetres, Z up.  One
+ * larger than the mesh's window (a streaming terminal holds one face's tessellation in memory: 3072
+ * points) goes as faces of its triangles in runs that fit, each triangle with corners of its own
+ * (the same positions and normals; without NORMAL, each triangle's own normal).
+ */
+static cm_err emit_prim(cm_glb_reader *g, const cm_glb_prim *q, const double *w, uint32_t part, cm_mesh *mesh,
+                        cm_model *model, cm_status *st)
+{
+    prim_src ps;
+    memset(&ps, 0, sizeof ps);
+    const cm_glb_accessor *A = accessor_for(g, q->pos, 3, 5126, &ps.pat, &ps.ps, "glTF primitive's POSITION (float VEC3)", st);
+    const cm_glb_accessor *N = q->nrm < 0 ? NULL : accessor_for(g, q->nrm, 3, 5126, &ps.nat, &ps.ns, "glTF primitive's NORMAL (float VEC3)", st);
+    const cm_glb_accessor *I = q->idx < 0 ? NULL : accessor_for(g, q->idx, 1, 0, &ps.iat, &ps.is, "glTF primitive's indices (unsigned SCALAR)", st);
+    if (!A || (q->nrm >= 0 && !N) || (q->idx >= 0 && !I))
+        return st ? st->code : CM_E_FORMAT;
+    if (N && N->count < A->count)
+        return cm_fail(st, CM_E_RANGE, "glTF primitive's NORMAL: fewer than its positions");
+    ps.normals = N != NULL;
+    ps.isize = !I ? 0u : I->ctype == 5121 ? 1u : I->ctype == 5123 ? 2u : 4u;
+    uint32_t nv = A->count, ni = I ? I->count - I->count % 3u : nv - nv % 3u;
+    if (nv == 0 || ni == 0)
+        return CM_OK; /* nothing to draw */
+    /* normals by the cofactors of w's linear part (its inverse transpose times det), so that they
+       stay normal under a scale, signed so that a mirror keeps them outwards; the triangles turned
+       where w mirrors */
+    memcpy(ps.w, w, sizeof ps.w);
     for (int col = 0; col < 3; col++)
         for (int row = 0; row < 3; row++) {
             int r1 = (row + 1) % 3, r2 = (row + 2) % 3, c1 = (col + 1) % 3, c2 = (col + 2) % 3;
-            cf[3 * col + row] = w[4 * c1 + r1] * w[4 * c2 + r2] - w[4 * c2 + r1] * w[4 * c1 + r2];
+            ps.cf[3 * col + row] = w[4 * c1 + r1] * w[4 * c2 + r2] - w[4 * c2 + r1] * w[4 * c1 + r2];
         }
-    double det = w[0] * cf[0] + w[1] * cf[1] + w[2] * cf[2];
-    const uint32_t first = mesh->nverts, firsti = mesh->nindex;
-    uint8_t b[12];
-    for (uint32_t i = 0; i < nv; i++) {
-        if (bytes_at(g, pat + (uint64_t)i * ps, b, 12) != 0)
-            return read_fail(st);
-        double x = (double)lef32(b), y = (double)lef32(b + 4), z = (double)lef32(b + 8), o[3];
-        for (int r = 0; r < 3; r++)
-            o[r] = w[r] * x + w[4 + r] * y + w[8 + r] * z + w[12 + r];
-        float *P = cm_mesh_wpos(mesh, first + i), *Q = cm_mesh_wnrm(mesh, first + i);
-        P[0] = (float)(1000.0 * o[0]), P[1] = (float)(-1000.0 * o[2]), P[2] = (float)(1000.0 * o[1]);
-        Q[0] = Q[1] = Q[2] = 0.0f;
-        if (!N)
-            continue;
-        if (bytes_at(g, nat + (uint64_t)i * ns, b, 12) != 0)
-            return read_fail(st);
-        x = (double)lef32(b), y = (double)lef32(b + 4), z = (double)lef32(b + 8);
-        for (int r = 0; r < 3; r++) /* (the cofactor matrix is w's inverse transpose times det) */
-            o[r] = (cf[r] * x + cf[3 + r] * y + cf[6 + r] * z) * (det < 0.0 ? -1.0 : 1.0);
-        double len = sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
-        if (len > 0.0 && isfinite(len))
-            Q[0] = (float)(o[0] / len), Q[1] = (float)(-o[2] / len), Q[2] = (float)(o[1] / len);
-        else
-            Q[2] = 1.0f;
-    }
-    for (uint32_t k = 0; k < ni; k++) {
-        uint32_t v = k;
-        if (I) {
-            unsigned size = I->ctype == 5121 ? 1u : I->ctype == 5123 ? 2u : 4u;
-            if (bytes_at(g, iat + (uint64_t)k * is, b, size) != 0)
+    double det = w[0] * ps.cf[0] + w[1] * ps.cf[1] + w[2] * ps.cf[2];
+    ps.mirror = det < 0.0;
+    for (int k = 0; k < 9 && ps.mirror; k++)
+        ps.cf[k] = -ps.cf[k];
+    const uint32_t room_v = mesh->spill ? mesh->win_cap_verts : mesh->cap_verts - mesh->nverts;
+    const uint32_t room_i = mesh->spill ? mesh->win_cap_index : mesh->cap_index - mesh->nindex;
+    const int whole = nv <= room_v && ni <= room_i;
+    const uint32_t run = whole ? ni : (room_v < room_i ? room_v : room_i) / 3u * 3u; /* indices of one face */
+    if (run == 0 || (!whole && !mesh->spill))
+        return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, ((uint64_t)mesh->nindex + ni) / 3u, mesh->cap_index / 3u,
+                             "glTF mesh (its triangles and vertices)");
+    for (uint32_t k0 = 0; k0 < ni; k0 += run) {
+        uint32_t nk = ni - k0 < run ? ni - k0 : run, vk = whole ? nv : nk;
+        if (vk > mesh->cap_verts - mesh->nverts || nk > mesh->cap_index - mesh->nindex)
+            return cm_fail_limit(st, CM_LIMIT_MAX_TRIS, ((uint64_t)mesh->nindex + nk) / 3u, mesh->cap_index / 3u,
+                                 "glTF mesh (its triangles and vertices)");
+        cm_err e = cm_mesh_make_room(mesh, vk, nk, st);
+        if (e != CM_OK)
+            return e;
+        const uint32_t first = mesh->nverts, firsti = mesh->nindex;
+        for (uint32_t i = 0; whole && i < nv; i++)
+            if (read_vertex(g, &ps, i, cm_mesh_wpos(mesh, first + i), cm_mesh_wnrm(mesh, first + i)) != 0)
                 return read_fail(st);
-            v = size == 1 ? b[0] : size == 2 ? (uint32_t)(b[0] | (b[1] << 8)) : le32(b);
+        for (uint32_t k = 0; k < nk; k++) {
+            uint32_t v;
+            if (read_index(g, &ps, k0 + k, &v) != 0)
+                return read_fail(st);
+            if (v >= nv)
+                return cm_fail(st, CM_E_RANGE, "glTF primitive's indices: beyond its positions");
+            /* a mirroring placement turns each triangle (its second and third corners swapped) */
+            uint32_t slot = ps.mirror && k % 3u != 0 ? k - k % 3u + 3u - k % 3u : k;
+            if (!whole && read_vertex(g, &ps, v, cm_mesh_wpos(mesh, first + slot), cm_mesh_wnrm(mesh, first + slot)) != 0)
+                return read_fail(st);
+            *cm_mesh_widx(mesh, firsti + slot) = whole ? first + v : first + slot;
         }
-        if (v >= nv)
-            return cm_fail(st, CM_E_RANGE, "glTF primitive's indices: beyond its positions");
-        /* a mirroring placement turns each triangle (its second and third corners swapped) */
-        uint32_t slot = det < 0.0 && k % 3u != 0 ? k - k % 3u + 3u - k % 3u : k;
-        *cm_mesh_widx(mesh, firsti + slot) = first + v;
+        if (!N)
+            normals_from_triangles(mesh, first, vk, firsti, nk);
+        mesh->nverts += vk;
+        mesh->nindex += nk;
+        if ((e = add_face(g, q, part, first, firsti, mesh, model, st)) != CM_OK)
+            return e;
     }
-    if (!N) { /* each vertex the sum of its triangles' normals (each its area's weight) */
-        for (uint32_t k = 0; k < ni; k += 3) {
-            uint32_t t[3] = {*cm_mesh_widx(mesh, firsti + k), *cm_mesh_widx(mesh, firsti + k + 1),
-                             *cm_mesh_widx(mesh, firsti + k + 2)};
-            const float *a = cm_mesh_wpos(mesh, t[0]), *p1 = cm_mesh_wpos(mesh, t[1]), *p2 = cm_mesh_wpos(mesh, t[2]);
-            double u1[3] = {(double)p1[0] - (double)a[0], (double)p1[1] - (double)a[1], (double)p1[2] - (double)a[2]};
-            double u2[3] = {(double)p2[0] - (double)a[0], (double)p2[1] - (double)a[1], (double)p2[2] - (double)a[2]};
-            double n[3] = {u1[1] * u2[2] - u1[2] * u2[1], u1[2] * u2[0] - u1[0] * u2[2], u1[0] * u2[1] - u1[1] * u2[0]};
-            for (int j = 0; j < 3; j++) {
-                float *Q = cm_mesh_wnrm(mesh, t[j]);
-                Q[0] = (float)((double)Q[0] + n[0]), Q[1] = (float)((double)Q[1] + n[1]), Q[2] = (float)((double)Q[2] + n[2]);
-            }
-        }
-        for (uint32_t i = 0; i < nv; i++) {
-            float *Q = cm_mesh_wnrm(mesh, first + i);
-            double x = (double)Q[0], y = (double)Q[1], z = (double)Q[2], len = sqrt(x * x + y * y + z * z);
-            if (len > 0.0 && isfinite(len))
-                Q[0] = (float)(x / len), Q[1] = (float)(y / len), Q[2] = (float)(z / len);
-            else
-                Q[0] = Q[1] = 0.0f, Q[2] = 1.0f;
-        }
-    }
-    mesh->nverts += nv;
-    mesh->nindex += ni;
-    cm_mesh_face *F = &mesh->faces[mesh->nfaces++];
-    int coloured = q->material >= 0 && (uint32_t)q->material < g->nmaterials && g->material_color[q->material];
-    *F = (cm_mesh_face){first, nv, firsti, ni, coloured ? g->material_rgb[q->material] : 0u, (uint8_t)coloured,
-                        model->nfaces};
-    memset(&model->faces[model->nfaces], 0, sizeof model->faces[0]);
-    model->faces[model->nfaces++].part = part;
     return CM_OK;
 }
 

@@ -155,6 +155,57 @@ for m in tests/data/*.igs; do
             fi
         fi
     done
+    # the same model as one primitive of all its triangles (as other tools write a part), larger than
+    # the terminal's mesh window: drawn in runs of triangles, the same pixels
+    python3 - "$tmp/$b.glb" "$tmp/one.glb" <<'PY'
+import json, struct, sys
+d = open(sys.argv[1], 'rb').read()
+jl = struct.unpack_from('<I', d, 12)[0]
+j = json.loads(d[20:20 + jl])
+bin_ = d[20 + jl + 8:]
+def acc(i):
+    a = j['accessors'][i]
+    v = j['bufferViews'][a['bufferView']]
+    off, n = v.get('byteOffset', 0) + a.get('byteOffset', 0), a['count']
+    if a['type'] == 'VEC3':
+        st = v.get('byteStride', 12)
+        return [struct.unpack_from('<3f', bin_, off + k * st) for k in range(n)]
+    return list(struct.unpack_from('<%dI' % n, bin_, off))
+pos, nrm, idx = [], [], []
+for p in j['meshes'][0]['primitives']:
+    base = len(pos)
+    pos += acc(p['attributes']['POSITION'])
+    nrm += acc(p['attributes']['NORMAL'])
+    idx += [base + k for k in acc(p['indices'])]
+blob = b''.join(struct.pack('<3f', *v) for v in pos) + b''.join(struct.pack('<3f', *v) for v in nrm) + \
+    struct.pack('<%dI' % len(idx), *idx)
+n = len(pos)
+out = {'asset': {'version': '2.0'}, 'scene': 0, 'scenes': [{'nodes': [0]}],
+       'nodes': [{'mesh': 0, 'matrix': j['nodes'][0]['matrix']}],
+       'meshes': [{'primitives': [{'attributes': {'POSITION': 0, 'NORMAL': 1}, 'indices': 2}]}],
+       'buffers': [{'byteLength': len(blob)}],
+       'bufferViews': [{'buffer': 0, 'byteOffset': 0, 'byteLength': 12 * n},
+                       {'buffer': 0, 'byteOffset': 12 * n, 'byteLength': 12 * n},
+                       {'buffer': 0, 'byteOffset': 24 * n, 'byteLength': 4 * len(idx)}],
+       'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': n, 'type': 'VEC3'},
+                     {'bufferView': 1, 'componentType': 5126, 'count': n, 'type': 'VEC3'},
+                     {'bufferView': 2, 'componentType': 5125, 'count': len(idx), 'type': 'SCALAR'}]}
+js = json.dumps(out).encode()
+js += b' ' * (-len(js) % 4)
+blob += b'\0' * (-len(blob) % 4)
+g = struct.pack('<4sII', b'glTF', 2, 12 + 8 + len(js) + 8 + len(blob)) + struct.pack('<I4s', len(js), b'JSON') + js + \
+    struct.pack('<I4s', len(blob), b'BIN\0') + blob
+open(sys.argv[2], 'wb').write(g)
+print(n, len(idx) // 3)
+PY
+    "$view" "$tmp/$b.cmz" --png "$tmp/c.png" --size 320x200 --no-edges > /dev/null 2>&1
+    if ! "$view" "$tmp/one.glb" --png "$tmp/o.png" --size 320x200 --no-edges > "$tmp/out" 2> "$tmp/err"; then
+        bad "$b glb as one primitive: cmz-view failed: $(cat "$tmp/err")"
+    elif cmp -s "$tmp/c.png" "$tmp/o.png"; then
+        ok "$b glb as one primitive: the .cmz's pixels ($(sed -n 's/.*: \(.*\)/\1/p' "$tmp/out"))"
+    else
+        bad "$b glb as one primitive: other pixels than the .cmz"
+    fi
     head -c 5000 "$tmp/$b.glb" > "$tmp/cut.glb"
     "$view" "$tmp/cut.glb" --png "$tmp/cutg.png" > /dev/null 2> "$tmp/err"
     st=$?
