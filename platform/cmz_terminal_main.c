@@ -465,6 +465,10 @@ static void show_current(const config *c, const char *text)
     if (!c->display[0])
         return;
     if (display_drm) { /* the serving viewer keeps the old picture until the new one is drawn */
+        if (strpbrk(c->out, "\t\n")) {
+            logline("warn", "display", "why=\"the output directory's name holds a tab or a newline\"");
+            return;
+        }
         char line[CM_TERM_PATH + CM_LINK_MAX_TEXT + 64];
         snprintf(line, sizeof line, "model %s/current/model.cmz\t%s\n", c->out, text);
         char path[CM_TERM_PATH + 32];
@@ -490,6 +494,11 @@ static void show_status(const config *c, const char *name, const char *what)
     char text[CM_LINK_MAX_TEXT + CM_LINK_MAX_NAME + 8];
     snprintf(text, sizeof text, "%s: %s", name, what);
     if (display_drm) {
+        /* one command a line: the sender's name may hold any byte, a newline included, which would
+           start a command of its own (show another file): control bytes go as '?' */
+        for (char *p = text; *p; p++)
+            if ((unsigned char)*p < 32 || *p == 127)
+                *p = '?';
         char line[sizeof text + 16];
         snprintf(line, sizeof line, "status %s\n", text);
         serve_send(c, line);
