@@ -123,7 +123,8 @@ static void usage(FILE *f)
             "  --ready-pulse-ms N     length of the ready pulse (default 500)\n"
             "  --display DEV          show each model and a status line on the framebuffer DEV\n"
             "                         (/dev/fb0) or DRM device (/dev/dri/card0: one viewer for the\n"
-            "                         whole run, cmz-view --serve) with --viewer PROG (cmz-view);\n"
+            "                         whole run, cmz-view --serve; auto: a DRM screen, else fb0)\n"
+            "                         with --viewer PROG (cmz-view);\n"
             "                         options after -- go to the viewer (its buttons, e.g.\n"
             "                         -- --gpio-next gpiochip0:5)\n"
             "  --config FILE          read 'key = value' lines (the long options without --) first\n"
@@ -601,7 +602,8 @@ int main(int argc, char **argv)
     }
     if (!c.name[0] && gethostname(c.name, sizeof c.name - 1) != 0)
         snprintf(c.name, sizeof c.name, "terminal");
-    display_drm = c.display[0] && is_drm_device(c.display);
+    /* (auto: the viewer picks a DRM device, else the framebuffer; served either way) */
+    display_drm = c.display[0] && (strcmp(c.display, "auto") == 0 || is_drm_device(c.display));
 
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);

@@ -92,7 +92,8 @@ static void usage(FILE *f)
             "DEV (/dev/fb0: 16, 24 or 32-bit, centred, the rest of the screen background), or\n"
             "on a DRM/KMS device (/dev/dri/card0: the first connected screen at its preferred\n"
             "mode; the screen shows the picture while cmz-view runs: it stays until SIGTERM\n"
-            "or SIGINT).  --serve (with --fb, no MODEL): one viewer for a terminal's whole\n"
+            "or SIGINT); --fb auto: the first DRM device with a connected screen, else\n"
+            "/dev/fb0.  --serve (with --fb, no MODEL): one viewer for a terminal's whole\n"
             "run, told on its standard input what to show, a command a line: 'status TEXT',\n"
             "'model PATH<tab>TEXT' (the old picture stays until the new one is drawn); it\n"
             "ends at the end of its input (cmz-terminal --display on a DRM device).\n"
@@ -663,7 +664,19 @@ int main(int argc, char **argv)
     int interactive = stays && in;
     cm_status st;
     cm_status_init(&st);
-    if (fb && cm_drm_is_drm(fb) && cm_drm_open(&drm, fb, vo.background, &st) != 0) {
+    static char probed[32];
+    if (fb && strcmp(fb, "auto") == 0) { /* the first DRM device with a screen, else the framebuffer */
+        for (int k = 0; k < 8 && !drm.map; k++) {
+            snprintf(probed, sizeof probed, "/dev/dri/card%d", k);
+            cm_status_init(&st);
+            if (cm_drm_is_drm(probed) && cm_drm_open(&drm, probed, vo.background, &st) == 0)
+                fb = probed;
+        }
+        cm_status_init(&st);
+        if (!drm.map)
+            fb = "/dev/fb0";
+    }
+    if (fb && !drm.map && cm_drm_is_drm(fb) && cm_drm_open(&drm, fb, vo.background, &st) != 0) {
         report(stderr, "", fb, &st);
         return st.code == CM_E_IO ? 3 : 1;
     }

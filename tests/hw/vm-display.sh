@@ -117,6 +117,19 @@ for bpp in 32 16; do
     else
         fail "$bpp-bit: the screen holds the frame's pixels" "$res"
     fi
+    # 2b. --fb auto, with no DRM device about: the framebuffer
+    if [ "$bpp" = 32 ]; then
+        if out=$("$view" "$model" --fb auto --png "$T/auto.png" 2> "$T/err") && [[ $out == *"and /dev/fb0:"* ]]; then
+            dd if=/dev/fb0 of="$T/fb" bs=$((320 * bpp / 8)) count=200 2> /dev/null
+            if res=$(compare "$T/fb" "$bpp" "$T/auto.png" 0 0 ffffff); then
+                pass "$bpp-bit: --fb auto without a DRM device takes /dev/fb0 ($res)"
+            else
+                fail "$bpp-bit: --fb auto takes /dev/fb0" "$res"
+            fi
+        else
+            fail "$bpp-bit: --fb auto without a DRM device" "${out:-} $(cat "$T/err")"
+        fi
+    fi
     # 3. a smaller frame, centred on a dark background
     if "$view" "$model" --fb /dev/fb0 --png "$T/b.png" --size 200x100 --background 203040 > /dev/null 2> "$T/err"; then
         dd if=/dev/fb0 of="$T/fb" bs=$((320 * bpp / 8)) count=200 2> /dev/null
