@@ -93,6 +93,13 @@ static int part_names(const loaded_model *lm, int owner, char names[2][80])
     return n;
 }
 
+/* the entity that names a part (its first face's owner; a copy's, its instance's) */
+static int key_owner(const loaded_model *lm, const part_key *k)
+{
+    return k->key >> 40 == 4 ? lm->brep.placements[k->key & 0xffffffffffLL].owner
+                             : lm->brep.faces[lm->mesh.faces[k->first].brep_face].owner;
+}
+
 void enc_parts_free(enc_parts *p)
 {
     free(p->face_part);
@@ -152,12 +159,12 @@ static cm_err apply_steps(const loaded_model *lm, const char *path, const part_k
         } else { /* a name: the first part in file order that answers to it and is no step yet */
             for (int i = 0; i < nparts && !found; i++) {
                 int p = order[i];
+                if (taken[p])
+                    continue;
                 char names[2][80];
-                int nn = part_names(lm, first_of[p].key >> 40 == 4 ? lm->brep.placements[first_of[p].key & 0xffffffffffLL].owner
-                                                                     : lm->brep.faces[lm->mesh.faces[first_of[p].first].brep_face].owner,
-                                    names);
+                int nn = part_names(lm, key_owner(lm, &first_of[p]), names);
                 for (int k = 0; k < nn && !found; k++)
-                    if (!taken[p] && strcmp(names[k], s) == 0)
+                    if (strcmp(names[k], s) == 0)
                         found = p;
             }
             if (!found) {
