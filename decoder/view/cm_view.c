@@ -18,10 +18,17 @@
    corner VIEW_COORD_MAX pixels or more off the frame's corner is not filled, so that its edge
    functions fit 64 bits (2^28 units each way; a fitted camera keeps every corner near the frame) */
 #define VIEW_SUBPIX 256
+/* boxes narrower than this (pixels) are filled pixel by pixel, wider ones span by span */
+#define VIEW_NARROW_PX 4
+/* cm_view_vert.flags */
+#define VIEW_VERT_OK 1u
+#define VIEW_VERT_AWAY 2u
 #define VIEW_COORD_MAX 1048576.0
 /* brightness across a row in 8.24 fixed point (at most 1: ambient, head and fill light add to 1) */
 #define VIEW_LIGHT_ONE 16777216.0
-#define VIEW_LIGHT_MAX 33554431 /* (below 2: a rounding's overshoot is clamped by the channel) */
+/* the brightest a pixel gets: 1 (the lights' sum, full colour), and room for a slope's rounding
+   along a row (2^-9: 255 x it still rounds to 255, so a channel needs no clamp) */
+#define VIEW_LIGHT_MAX 16809984
 /* a curved edge is drawn in straight pieces of about this many pixels */
 #define VIEW_EDGE_PIECE_PX 6.0
 /* edges are drawn this many pixels' worth of depth in front of the faces */
@@ -236,7 +243,8 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         v->eye = -dist;
         v->scale = room / VIEW_TAN_HALF_FOV; /* a point at x = tan(fov/2) z lands on the room's edge */
     }
-    /* the first row pixel by pixel, the others copies of it; the depth as far as a float goes */
+    /* the first row pixel by pixel, the others copies of it; the depth far (bytes 0x7f: 3.39e38,
+       a float near its largest, set as bytes: a loop of floats was a fiftieth of a frame) */
     size_t w = (size_t)o->width, npix = w * (size_t)o->height;
     for (size_t i = 0; i < w; i++) {
         v->rgb[3 * i] = (uint8_t)(o->background >> 16);
@@ -245,8 +253,7 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
     }
     for (size_t y = 1; y < (size_t)o->height; y++)
         memcpy(&v->rgb[3 * w * y], v->rgb, 3 * w);
-    for (size_t i = 0; i < npix; i++)
-        v->depth[i] = 3.0e38f;
+    memset(v->depth, 0x7f, npix * sizeof v->depth[0]);
     return CM_OK;
 }
 
@@ -254,20 +261,25 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
 {
     if (v->o.perspective || mesh->nverts == 0)
         return;
+    /* the outline across and up the screen (the vertices read back a run at a time: one at a time
+       was a twentieth of a large model's frame) */
     double xlo = 0, xhi = 0, ylo = 0, yhi = 0;
-    for (uint32_t i = 0; i < mesh->nverts; i++) {
-        float p[3];
-        double q[3];
-        cm_mesh_pos(mesh, i, p);
-        to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
-        if (i == 0 || q[0] < xlo)
-            xlo = q[0];
-        if (i == 0 || q[0] > xhi)
-            xhi = q[0];
-        if (i == 0 || q[1] < ylo)
-            ylo = q[1];
-        if (i == 0 || q[1] > yhi)
-            yhi = q[1];
+    for (uint32_t i0 = 0; i0 < mesh->nverts; i0 += CM_VIEW_READ_RUN) {
+        uint32_t n = mesh->nverts - i0 < CM_VIEW_READ_RUN ? mesh->nverts - i0 : CM_VIEW_READ_RUN;
+        cm_mesh_vecs(mesh, CM_SPILL_POS, i0, n, v->run_pos);
+        for (uint32_t i = 0; i < n; i++) {
+            double d[3] = {(double)v->run_pos[i][0] - v->c[0], (double)v->run_pos[i][1] - v->c[1],
+                           (double)v->run_pos[i][2] - v->c[2]};
+            double x = dot3(d, v->r), y = dot3(d, v->u);
+            if (i0 + i == 0) {
+                xlo = xhi = x;
+                ylo = yhi = y;
+            }
+            xlo = x < xlo ? x : xlo;
+            xhi = x > xhi ? x : xhi;
+            ylo = y < ylo ? y : ylo;
+            yhi = y > yhi ? y : yhi;
+        }
     }
     double mx = 0.5 * (xlo + xhi), my = 0.5 * (ylo + yhi);
     for (int k = 0; k < 3; k++)
@@ -450,18 +462,19 @@ static double shade(const double n[3])
     return VIEW_AMBIENT + VIEW_HEAD * head + VIEW_FILL * fl;
 }
 
-/* a colour channel (0..255) at a brightness in 8.24 fixed point (>= 0), rounded: 32-bit products */
+/* a colour channel (0..255) at a brightness in 8.24 fixed point (0..VIEW_LIGHT_MAX), rounded:
+   32-bit products, at most 255 */
 static uint8_t channel(uint32_t base, uint32_t light)
 {
-    uint32_t c = (base * (light >> 8) + 0x8000u) >> 16;
-    return (uint8_t)(c > 255u ? 255u : c);
+    return (uint8_t)((base * (light >> 8) + 0x8000u) >> 16);
 }
 
-/* floor(a / b), b > 0 */
-static int64_t floor_div(int64_t a, int64_t b)
+/* floor(a / VIEW_SUBPIX) for a > -2^40: a shift of an unsigned value (C leaves >> of a negative
+   one to the compiler), the offset a whole number of pixels */
+#define VIEW_FLOOR_OFFSET ((int64_t)1 << 40)
+static int64_t floor_px(int64_t a)
 {
-    int64_t q = a / b;
-    return a % b != 0 && a < 0 ? q - 1 : q;
+    return (int64_t)((uint64_t)(a + VIEW_FLOOR_OFFSET) / VIEW_SUBPIX) - VIEW_FLOOR_OFFSET / VIEW_SUBPIX;
 }
 
 /* one side p -> q of a triangle as an edge function E(P) = A (Px - Xp) + B (Py - Yp), in the fixed
@@ -479,22 +492,39 @@ static view_side side_fn(int64_t Xp, int64_t Yp, int64_t Xq, int64_t Yq)
     return e;
 }
 
+/* brightness in 8.24 fixed point, clamped to [0, VIEW_LIGHT_MAX] (not a number: 0) */
+static int64_t light_fx(double l)
+{
+    double f = l * VIEW_LIGHT_ONE;
+    return f > 0.0 ? (f < (double)VIEW_LIGHT_MAX ? (int64_t)(f + 0.5) : VIEW_LIGHT_MAX) : 0;
+}
+
+/* a pixel in colour base (three channels) at brightness light (8.24, 0..VIEW_LIGHT_MAX) */
+static void put_lit(uint8_t *px, const uint32_t base[3], int64_t light)
+{
+    px[0] = channel(base[0], (uint32_t)light);
+    px[1] = channel(base[1], (uint32_t)light);
+    px[2] = channel(base[2], (uint32_t)light);
+}
+
 /*
  * Fill the triangle of screen vertices t[3] (their fixed-point corners, depths and brightnesses)
  * in colour rgb.  The corners were rounded to 1/VIEW_SUBPIX of a pixel (vertex_screen_at) and the
- * three edge functions step in 64-bit integers from pixel centre to pixel centre, with the top-left
- * rule: exact, so shared sides neither crack nor fill twice, and a pixel's coverage is the same on
- * every machine; depth and brightness step along a row from their values at its first pixel
- * (doubles, then the brightness in fixed point).  A triangle covering no pixel centre costs its
- * box; a row's span comes from the edge functions' values at its start and their steps, exactly (a
- * division per slanted side).  (Until 2026-12-07 each pixel's three barycentric weights were doubles
- * with a hair's tolerance, each row's span found by three divisions, and each channel rounded from a
- * double: 3.1 k instructions a triangle on C1G0B0O's frame.)
+ * three edge functions are exact 64-bit integers at the pixel centres, with the top-left rule:
+ * shared sides neither crack nor fill twice, and a pixel's coverage is the same on every machine.
+ * A row's span is where all three are >= 0: a level side passes or stops whole rows (the rows
+ * are cut to them once), each slanted side bounds the span from the left or the right, at the
+ * quotient of its value by its step along the row, walked down the rows (view_walk: no division
+ * a row).  Depth and brightness step along a row from their values at its first pixel (doubles,
+ * then the brightness in fixed point).  A triangle covering no pixel centre costs its box.
+ * (Until 2026-12-07 each pixel's three barycentric weights were doubles with a hair's tolerance,
+ * each row's span found by three divisions, and each channel rounded from a double: 3.1 k
+ * instructions a triangle on C1G0B0O's frame; then, until 2026-12-08, each row's span by a
+ * division per slanted side and each pixel's brightness clamped.)
  */
 static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t rgb)
 {
     const int64_t X[3] = {t[0]->X, t[1]->X, t[2]->X}, Y[3] = {t[0]->Y, t[1]->Y, t[2]->Y};
-    const double z[3] = {t[0]->z, t[1]->z, t[2]->z}, l[3] = {t[0]->light, t[1]->light, t[2]->light};
     int a = 0, b = 1, c = 2;
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
     if (area == 0)
@@ -512,8 +542,8 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
         ymax = Y[i] > ymax ? Y[i] : ymax;
     }
     const int64_t half = VIEW_SUBPIX / 2;
-    int64_t x0 = floor_div(xmin - half + VIEW_SUBPIX - 1, VIEW_SUBPIX), x1 = floor_div(xmax - half, VIEW_SUBPIX);
-    int64_t y0 = floor_div(ymin - half + VIEW_SUBPIX - 1, VIEW_SUBPIX), y1 = floor_div(ymax - half, VIEW_SUBPIX);
+    int64_t x0 = floor_px(xmin - half + VIEW_SUBPIX - 1), x1 = floor_px(xmax - half);
+    int64_t y0 = floor_px(ymin - half + VIEW_SUBPIX - 1), y1 = floor_px(ymax - half);
     x0 = x0 < 0 ? 0 : x0;
     y0 = y0 < 0 ? 0 : y0;
     x1 = x1 > v->o.width - 1 ? v->o.width - 1 : x1;
@@ -523,58 +553,88 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     /* e[0] is corner a's weight (the side b -> c) times the area, e[1] b's, e[2] c's */
     view_side e[3] = {side_fn(X[b], Y[b], X[c], Y[c]), side_fn(X[c], Y[c], X[a], Y[a]), side_fn(X[a], Y[a], X[b], Y[b])};
     const int from[3] = {b, c, a};
+    /* each side's value at (x0, y0) */
+    const int64_t px = x0 * VIEW_SUBPIX + half, py = y0 * VIEW_SUBPIX + half;
+    int64_t w0[3];
+    for (int i = 0; i < 3; i++)
+        w0[i] = e[i].A * (px - X[from[i]]) + e[i].B * (py - Y[from[i]]) + e[i].bias;
     /* depth and brightness: the corner a's plus the other two weights' shares of the differences */
+    const double z[3] = {t[0]->z, t[1]->z, t[2]->z}, l[3] = {t[0]->light, t[1]->light, t[2]->light};
     double inv = 1.0 / (double)area;
     double dzb = z[b] - z[a], dzc = z[c] - z[a], dlb = l[b] - l[a], dlc = l[c] - l[a];
     double zx = ((double)e[1].A * dzb + (double)e[2].A * dzc) * VIEW_SUBPIX * inv;
     double lx = ((double)e[1].A * dlb + (double)e[2].A * dlc) * VIEW_SUBPIX * inv;
-    int64_t lx_fx = (int64_t)floor(lx * VIEW_LIGHT_ONE + 0.5);
-    const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
-    int64_t step[3] = {e[0].A * VIEW_SUBPIX, e[1].A * VIEW_SUBPIX, e[2].A * VIEW_SUBPIX};
-    int drawn = 0;
-    /* the edge functions, depth and brightness at (x0, y0), each stepped down a row */
-    int64_t px = x0 * VIEW_SUBPIX + half, py = y0 * VIEW_SUBPIX + half, wr[3], down[3];
-    for (int i = 0; i < 3; i++) {
-        wr[i] = e[i].A * (px - X[from[i]]) + e[i].B * (py - Y[from[i]]) + e[i].bias;
-        down[i] = e[i].B * VIEW_SUBPIX;
-    }
-    double zr = z[a] + ((double)(wr[1] - e[1].bias) * dzb + (double)(wr[2] - e[2].bias) * dzc) * inv;
-    double lr = l[a] + ((double)(wr[1] - e[1].bias) * dlb + (double)(wr[2] - e[2].bias) * dlc) * inv;
     double zy = ((double)e[1].B * dzb + (double)e[2].B * dzc) * VIEW_SUBPIX * inv;
     double ly = ((double)e[1].B * dlb + (double)e[2].B * dlc) * VIEW_SUBPIX * inv;
-    for (int64_t y = y0; y <= y1; y++, zr += zy, lr += ly) {
-        /* the row's span [lo, hi] (pixels from x0): where all three biased edge functions are >= 0,
-           exactly, from their values at x0 and their steps (one division per slanted side) */
-        int64_t lo = 0, hi = x1 - x0;
-        for (int i = 0; i < 3; i++) {
-            int64_t wb = wr[i];
-            wr[i] += down[i];
-            if (step[i] > 0) {
-                if (wb < 0) {
-                    int64_t k0 = (-wb + step[i] - 1) / step[i];
-                    lo = k0 > lo ? k0 : lo;
-                }
-            } else if (wb < 0) {
-                hi = -1;
-            } else if (step[i] < 0) {
-                int64_t k1 = wb / -step[i];
-                hi = k1 < hi ? k1 : hi;
-            }
-        }
-        if (lo > hi)
-            continue;
-        double zp = zr + (double)lo * zx, lstart = (lr + (double)lo * lx) * VIEW_LIGHT_ONE;
-        int64_t lfx = lstart > 0.0 ? (int64_t)(lstart + 0.5) : 0; /* (the span's corners are >= 0: so is it) */
-        size_t at = (size_t)y * (size_t)v->o.width + (size_t)(x0 + lo);
-        for (int64_t x = lo; x <= hi; x++, at++, zp += zx, lfx += lx_fx) {
-            float zf = (float)zp;
-            if (!(zf < v->depth[at]))
+    /* at (x0, y0) */
+    double zr = z[a] + ((double)(w0[1] - e[1].bias) * dzb + (double)(w0[2] - e[2].bias) * dzc) * inv;
+    double lr = l[a] + ((double)(w0[1] - e[1].bias) * dlb + (double)(w0[2] - e[2].bias) * dlc) * inv;
+    /* the box in lines along its longer side, rows or columns (a sliver costs its few lines, not
+       its many): along a line the side values step by s, the depth by zs, the brightness by ls and
+       the frame by stride pixels; a line on by d, zd, ld and dstride */
+    const int cols = y1 - y0 > x1 - x0;
+    const int64_t n = cols ? y1 - y0 : x1 - x0, nlines = cols ? x1 - x0 : y1 - y0;
+    const size_t W = (size_t)v->o.width, stride = cols ? W : 1, dstride = cols ? 1 : W;
+    const int64_t s0 = (cols ? e[0].B : e[0].A) * VIEW_SUBPIX, s1 = (cols ? e[1].B : e[1].A) * VIEW_SUBPIX,
+                  s2 = (cols ? e[2].B : e[2].A) * VIEW_SUBPIX;
+    const int64_t d0 = (cols ? e[0].A : e[0].B) * VIEW_SUBPIX, d1 = (cols ? e[1].A : e[1].B) * VIEW_SUBPIX,
+                  d2 = (cols ? e[2].A : e[2].B) * VIEW_SUBPIX;
+    const double zs = cols ? zy : zx, zd = cols ? zx : zy, ls = cols ? ly : lx, ld = cols ? lx : ly;
+    /* (two pixel centres a line apart in the triangle differ by ls, within the corners' [0, 1]: a
+       steeper slope is a sliver's, one pixel a line, and is cut where it cannot overflow; rounded
+       half up, floor() written out) */
+    double lsc = (ls > 4.0 ? 4.0 : (ls < -4.0 ? -4.0 : ls)) * VIEW_LIGHT_ONE + 0.5;
+    int64_t ls_fx = (int64_t)lsc;
+    ls_fx -= (double)ls_fx > lsc;
+    const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
+    int drawn = 0;
+    int64_t r0 = w0[0], r1 = w0[1], r2 = w0[2];
+    size_t line_at = (size_t)y0 * W + (size_t)x0;
+    for (int64_t j = 0; j <= nlines; j++, r0 += d0, r1 += d1, r2 += d2, zr += zd, lr += ld, line_at += dstride) {
+        /* the line's span [lo, hi] (pixels from its start), where all three are >= 0 */
+        int64_t lo = 0, hi = n;
+        if (n < VIEW_NARROW_PX) {
+            /* a narrow box: pixel by pixel into the triangle and out (it is convex) */
+            int64_t a0 = r0, a1 = r1, a2 = r2;
+            while (lo <= n && (a0 | a1 | a2) < 0)
+                a0 += s0, a1 += s1, a2 += s2, lo++;
+            if (lo > n)
                 continue;
-            v->depth[at] = zf;
-            uint32_t light = lfx <= 0 ? 0u : (lfx >= VIEW_LIGHT_MAX ? (uint32_t)VIEW_LIGHT_MAX : (uint32_t)lfx);
-            v->rgb[3 * at] = channel(base[0], light);
-            v->rgb[3 * at + 1] = channel(base[1], light);
-            v->rgb[3 * at + 2] = channel(base[2], light);
+            for (hi = lo; hi < n && ((a0 + s0) | (a1 + s1) | (a2 + s2)) >= 0; hi++)
+                a0 += s0, a1 += s1, a2 += s2;
+        } else {
+            /* a slanted side bounds it from the start (a positive step) or the end, at the quotient
+               of its value by its step (one division); a side along the line passes or stops it */
+            const int64_t r[3] = {r0, r1, r2}, st[3] = {s0, s1, s2};
+            for (int i = 0; i < 3; i++) {
+                if (st[i] > 0) {
+                    if (r[i] < 0) {
+                        int64_t k0 = (-r[i] + st[i] - 1) / st[i];
+                        lo = k0 > lo ? k0 : lo;
+                    }
+                } else if (r[i] < 0) {
+                    hi = -1;
+                } else if (st[i] < 0) {
+                    int64_t k1 = r[i] / -st[i];
+                    hi = k1 < hi ? k1 : hi;
+                }
+            }
+            if (lo > hi)
+                continue;
+        }
+        /* the span from its first pixel (depth in double, brightness in fixed point, stepped) */
+        double zp = zr + (double)lo * zs;
+        int64_t lfx = light_fx(lr + (double)lo * ls), lend = lfx + (hi - lo) * ls_fx;
+        size_t at = line_at + (size_t)lo * stride;
+        float *d = &v->depth[at];
+        uint8_t *pix = &v->rgb[3 * at];
+        const int clamp = !(lend >= 0 && lend <= VIEW_LIGHT_MAX); /* (both ends within: all between) */
+        for (int64_t k = lo; k <= hi; k++, d += stride, pix += 3 * stride, zp += zs, lfx += ls_fx) {
+            float zf = (float)zp;
+            if (!(zf < *d))
+                continue;
+            *d = zf;
+            put_lit(pix, base, clamp ? (lfx <= 0 ? 0 : (lfx >= VIEW_LIGHT_MAX ? VIEW_LIGHT_MAX : lfx)) : lfx);
             drawn = 1;
         }
     }
@@ -584,23 +644,38 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
 static void draw_line(cm_view *v, const double a[3], const double b[3]);
 
 /* vertex vi of the mesh on the screen (x, y, depth), its brightness and its normal's component
-   along the line of sight (positive: facing away); 0 when behind the eye */
+   along the line of sight (positive: facing away); flags: VIEW_VERT_OK where it can be drawn (in
+   front of the eye, within the fixed point's reach), VIEW_VERT_AWAY where it faces away.  (The
+   camera's arithmetic written out, in to_view's and to_screen's order: through them it was a
+   tenth of a large model's frame) */
 static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3], cm_view_vert *t)
 {
-    double q[3], nv[3], s[3];
-    to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
-    nv[0] = (double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2];
-    nv[1] = (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2];
-    nv[2] = (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2];
-    t->light = shade(nv);
+    const double d[3] = {(double)p[0] - v->c[0], (double)p[1] - v->c[1], (double)p[2] - v->c[2]};
+    const double q[3] = {dot3(d, v->r), dot3(d, v->u), dot3(d, v->f)};
+    const double nv[3] = {(double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2],
+                          (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2],
+                          (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2]};
+    double light = shade(nv); /* (within [0, 1] whatever the normal, not a number 0: fill_triangle's
+                                 slopes stay finite) */
+    t->light = light > 0.0 ? (light < 1.0 ? light : 1.0) : 0.0;
     /* the line of sight: the view axis (orthographic), from the eye at (0, 0, eye) (perspective) */
     t->facing = v->o.perspective ? nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye) : nv[2];
-    t->ok = (uint8_t)(to_screen(v, q, s) && fabs(s[0]) < VIEW_COORD_MAX && fabs(s[1]) < VIEW_COORD_MAX);
-    t->x = s[0], t->y = s[1], t->z = s[2];
+    double k = v->scale;
+    int ok = 1;
+    if (v->o.perspective) {
+        double ze = q[2] - v->eye;
+        ok = ze > 1e-9 * (-v->eye);
+        k = ok ? v->scale / ze : 0.0;
+    }
+    t->x = 0.5 * (double)v->o.width + q[0] * k;
+    t->y = 0.5 * (double)v->o.height - q[1] * k;
+    t->z = q[2];
+    ok = ok && fabs(t->x) < VIEW_COORD_MAX && fabs(t->y) < VIEW_COORD_MAX;
+    t->flags = (uint8_t)((ok ? VIEW_VERT_OK : 0) | (t->facing > 0.0 ? VIEW_VERT_AWAY : 0));
     /* the fixed point, rounded half away from zero (within VIEW_COORD_MAX: 2^28 units) */
-    double fx = s[0] * VIEW_SUBPIX, fy = s[1] * VIEW_SUBPIX;
-    t->X = t->ok ? (int32_t)(fx >= 0.0 ? fx + 0.5 : fx - 0.5) : 0;
-    t->Y = t->ok ? (int32_t)(fy >= 0.0 ? fy + 0.5 : fy - 0.5) : 0;
+    double fx = t->x * VIEW_SUBPIX, fy = t->y * VIEW_SUBPIX;
+    t->X = ok ? (int32_t)(fx >= 0.0 ? fx + 0.5 : fx - 0.5) : 0;
+    t->Y = ok ? (int32_t)(fy >= 0.0 ? fy + 0.5 : fy - 0.5) : 0;
 }
 
 /* the same for vertex vi of the mesh, read on its own */
@@ -695,19 +770,20 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
                 cm_mesh_idxs(mesh, F->first_index + k, n, v->run_idx);
             }
             for (int i = 0; i < 3; i++) {
-                uint32_t vi = v->run_idx[r + (uint32_t)i], j = vi - F->first_vert;
-                if (cached && vi >= F->first_vert && j < F->nverts) {
+                uint32_t vi = v->run_idx[r + (uint32_t)i], j = vi - F->first_vert; /* (unsigned: below wraps) */
+                if (cached && j < F->nverts) {
                     t[i] = &v->fv[j];
                 } else {
                     vertex_screen(v, mesh, vi, &own[i]);
                     t[i] = &own[i];
                 }
             }
-            if (!t[0]->ok || !t[1]->ok || !t[2]->ok ||
-                (closed && t[0]->facing > 0.0 && t[1]->facing > 0.0 && t[2]->facing > 0.0))
+            unsigned all = t[0]->flags & t[1]->flags & t[2]->flags;
+            if (!(all & VIEW_VERT_OK) || (closed && (all & VIEW_VERT_AWAY)))
                 continue;
             fill_triangle(v, t, rgb);
-            if (v->o.edges)
+            /* a silhouette crosses it where its corners face different ways */
+            if (v->o.edges && ((t[0]->flags ^ t[1]->flags) | (t[0]->flags ^ t[2]->flags)) & VIEW_VERT_AWAY)
                 silhouette(v, t);
         }
     }
