@@ -18,8 +18,6 @@
    corner VIEW_COORD_MAX pixels or more off the frame's corner is not filled, so that its edge
    functions fit 64 bits (2^28 units each way; a fitted camera keeps every corner near the frame) */
 #define VIEW_SUBPIX 256
-/* boxes narrower than this (pixels) are filled pixel by pixel, wider ones span by span */
-#define VIEW_NARROW_PX 4
 /* cm_view_vert.flags */
 #define VIEW_VERT_OK 1u
 #define VIEW_VERT_AWAY 2u
@@ -243,17 +241,19 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         v->eye = -dist;
         v->scale = room / VIEW_TAN_HALF_FOV; /* a point at x = tan(fov/2) z lands on the room's edge */
     }
-    /* the first row pixel by pixel, the others copies of it; the depth far (bytes 0x7f: 3.39e38,
-       a float near its largest, set as bytes: a loop of floats was a fiftieth of a frame) */
-    size_t w = (size_t)o->width, npix = w * (size_t)o->height;
+    /* the first row pixel by pixel, the others copies of it (a fill of the whole frame was a
+       thirtieth of a large model's frame); the depth as far as a float goes */
+    size_t w = (size_t)o->width;
     for (size_t i = 0; i < w; i++) {
         v->rgb[3 * i] = (uint8_t)(o->background >> 16);
         v->rgb[3 * i + 1] = (uint8_t)(o->background >> 8);
         v->rgb[3 * i + 2] = (uint8_t)o->background;
+        v->depth[i] = 3.0e38f;
     }
-    for (size_t y = 1; y < (size_t)o->height; y++)
+    for (size_t y = 1; y < (size_t)o->height; y++) {
         memcpy(&v->rgb[3 * w * y], v->rgb, 3 * w);
-    memset(v->depth, 0x7f, npix * sizeof v->depth[0]);
+        memcpy(&v->depth[w * y], v->depth, w * sizeof v->depth[0]);
+    }
     return CM_OK;
 }
 
@@ -452,14 +452,33 @@ static uint32_t look_rgb(const cm_view *v, uint32_t rgb, int look)
     return out;
 }
 
-/* brightness of a surface whose unit normal is n (view space), lit from both sides */
-static double shade(const double n[3])
+/* the head light along the view (towards the viewer: -z), the fill light from the upper left */
+static const double view_fill[3] = {-0.40824829046386302, 0.81649658092772603, -0.40824829046386302};
+
+/* brightness of a surface from its unit normal's components along the view (head) and the fill
+   light (fill), lit from both sides: within [0, 1] (not a number: 0) */
+static double shade(double head, double fill)
 {
-    /* the head light along the view (towards the viewer: -z), the fill light from the upper left */
-    static const double fill[3] = {-0.40824829046386302, 0.81649658092772603, -0.40824829046386302};
-    double head = fabs(n[2]);
-    double fl = fabs(dot3(n, fill));
-    return VIEW_AMBIENT + VIEW_HEAD * head + VIEW_FILL * fl;
+    double light = VIEW_AMBIENT + VIEW_HEAD * fabs(head) + VIEW_FILL * fabs(fill);
+    return light > 0.0 ? (light < 1.0 ? light : 1.0) : 0.0;
+}
+
+/* an orthographic camera as five model-space rows (cm_view.ortho): screen x and y in pixels,
+   depth, a normal along the view and along the fill light */
+static void ortho_rows(cm_view *v)
+{
+    const double k = v->scale;
+    for (int i = 0; i < 3; i++) {
+        v->ortho[0][i] = k * v->r[i];
+        v->ortho[1][i] = -k * v->u[i];
+        v->ortho[2][i] = v->f[i];
+        v->ortho[3][i] = v->f[i];
+        v->ortho[4][i] = view_fill[0] * v->r[i] + view_fill[1] * v->u[i] + view_fill[2] * v->f[i];
+    }
+    v->ortho[0][3] = 0.5 * (double)v->o.width - k * dot3(v->c, v->r);
+    v->ortho[1][3] = 0.5 * (double)v->o.height + k * dot3(v->c, v->u);
+    v->ortho[2][3] = -dot3(v->c, v->f);
+    v->ortho[3][3] = v->ortho[4][3] = 0.0;
 }
 
 /* a colour channel (0..255) at a brightness in 8.24 fixed point (0..VIEW_LIGHT_MAX), rounded:
@@ -525,15 +544,8 @@ static void put_lit(uint8_t *px, const uint32_t base[3], int64_t light)
 static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t rgb)
 {
     const int64_t X[3] = {t[0]->X, t[1]->X, t[2]->X}, Y[3] = {t[0]->Y, t[1]->Y, t[2]->Y};
-    int a = 0, b = 1, c = 2;
-    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
-    if (area == 0)
-        return; /* edge-on or a point: nothing covered */
-    if (area < 0) {
-        b = 2, c = 1;
-        area = -area;
-    }
-    /* the pixels whose centres (256 x + 128 in the fixed point) lie in the box, within the frame */
+    /* the pixels whose centres (256 x + 128 in the fixed point) lie in the box, within the frame:
+       none, for most triangles of a finely meshed model */
     int64_t xmin = X[0], xmax = X[0], ymin = Y[0], ymax = Y[0];
     for (int i = 1; i < 3; i++) {
         xmin = X[i] < xmin ? X[i] : xmin;
@@ -550,6 +562,14 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     y1 = y1 > v->o.height - 1 ? v->o.height - 1 : y1;
     if (x0 > x1 || y0 > y1)
         return;
+    int a = 0, b = 1, c = 2;
+    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
+    if (area == 0)
+        return; /* edge-on or a point: nothing covered */
+    if (area < 0) {
+        b = 2, c = 1;
+        area = -area;
+    }
     /* e[0] is corner a's weight (the side b -> c) times the area, e[1] b's, e[2] c's */
     view_side e[3] = {side_fn(X[b], Y[b], X[c], Y[c]), side_fn(X[c], Y[c], X[a], Y[a]), side_fn(X[a], Y[a], X[b], Y[b])};
     const int from[3] = {b, c, a};
@@ -562,6 +582,21 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     const double z[3] = {t[0]->z, t[1]->z, t[2]->z}, l[3] = {t[0]->light, t[1]->light, t[2]->light};
     double inv = 1.0 / (double)area;
     double dzb = z[b] - z[a], dzc = z[c] - z[a], dlb = l[b] - l[a], dlc = l[c] - l[a];
+    if (x0 == x1 && y0 == y1) {
+        /* one pixel centre in the box (a small triangle's usual case): it alone, without slopes */
+        if ((w0[0] | w0[1] | w0[2]) < 0)
+            return;
+        size_t at = (size_t)y0 * (size_t)v->o.width + (size_t)x0;
+        float zf = (float)(z[a] + ((double)(w0[1] - e[1].bias) * dzb + (double)(w0[2] - e[2].bias) * dzc) * inv);
+        if (!(zf < v->depth[at]))
+            return;
+        v->depth[at] = zf;
+        const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
+        put_lit(&v->rgb[3 * at], base,
+                light_fx(l[a] + ((double)(w0[1] - e[1].bias) * dlb + (double)(w0[2] - e[2].bias) * dlc) * inv));
+        v->triangles++;
+        return;
+    }
     double zx = ((double)e[1].A * dzb + (double)e[2].A * dzc) * VIEW_SUBPIX * inv;
     double lx = ((double)e[1].A * dlb + (double)e[2].A * dlc) * VIEW_SUBPIX * inv;
     double zy = ((double)e[1].B * dzb + (double)e[2].B * dzc) * VIEW_SUBPIX * inv;
@@ -588,40 +623,40 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     ls_fx -= (double)ls_fx > lsc;
     const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
     int drawn = 0;
-    int64_t r0 = w0[0], r1 = w0[1], r2 = w0[2];
-    size_t line_at = (size_t)y0 * W + (size_t)x0;
-    for (int64_t j = 0; j <= nlines; j++, r0 += d0, r1 += d1, r2 += d2, zr += zd, lr += ld, line_at += dstride) {
-        /* the line's span [lo, hi] (pixels from its start), where all three are >= 0 */
-        int64_t lo = 0, hi = n;
-        if (n < VIEW_NARROW_PX) {
-            /* a narrow box: pixel by pixel into the triangle and out (it is convex) */
-            int64_t a0 = r0, a1 = r1, a2 = r2;
-            while (lo <= n && (a0 | a1 | a2) < 0)
-                a0 += s0, a1 += s1, a2 += s2, lo++;
-            if (lo > n)
-                continue;
-            for (hi = lo; hi < n && ((a0 + s0) | (a1 + s1) | (a2 + s2)) >= 0; hi++)
-                a0 += s0, a1 += s1, a2 += s2;
+    /* each side bounds a line's span from its start (a positive step along it: the first pixel at
+       or past its zero, a rounded-up quotient) or its end (the last, a rounded-down one), two of
+       each kind, a side missing one that never binds; a side along the lines (no step) passes or
+       stops whole lines, from the first line or up to a last (jlo, jhi) */
+    const int64_t st[3] = {s0, s1, s2}, dn[3] = {d0, d1, d2}, far = INT64_MAX / 4;
+    int64_t sr[2] = {far, far}, ss[2] = {1, 1}, sd[2] = {0, 0}, er[2] = {far, far}, em[2] = {1, 1}, ed[2] = {0, 0};
+    int64_t jlo = 0, jhi = nlines;
+    for (int i = 0, ns = 0, ne = 0; i < 3; i++) {
+        if (st[i] > 0) {
+            sr[ns] = w0[i], ss[ns] = st[i], sd[ns] = dn[i], ns++;
+        } else if (st[i] < 0) {
+            er[ne] = w0[i], em[ne] = -st[i], ed[ne] = dn[i], ne++;
+        } else if (dn[i] > 0) { /* (not both 0: the corners are apart) */
+            jlo = w0[i] < 0 ? (-w0[i] + dn[i] - 1) / dn[i] : 0;
+        } else if (w0[i] < 0) {
+            return;
         } else {
-            /* a slanted side bounds it from the start (a positive step) or the end, at the quotient
-               of its value by its step (one division); a side along the line passes or stops it */
-            const int64_t r[3] = {r0, r1, r2}, st[3] = {s0, s1, s2};
-            for (int i = 0; i < 3; i++) {
-                if (st[i] > 0) {
-                    if (r[i] < 0) {
-                        int64_t k0 = (-r[i] + st[i] - 1) / st[i];
-                        lo = k0 > lo ? k0 : lo;
-                    }
-                } else if (r[i] < 0) {
-                    hi = -1;
-                } else if (st[i] < 0) {
-                    int64_t k1 = r[i] / -st[i];
-                    hi = k1 < hi ? k1 : hi;
-                }
-            }
-            if (lo > hi)
-                continue;
+            int64_t last = w0[i] / -dn[i];
+            jhi = last < jhi ? last : jhi;
         }
+    }
+    size_t line_at = (size_t)y0 * W + (size_t)x0;
+    for (int64_t j = 0; j <= jhi; j++, zr += zd, lr += ld, line_at += dstride) {
+        /* the line's span [lo, hi] (pixels from its start), where all three are >= 0 */
+        int64_t lo0 = (-sr[0] + ss[0] - 1) / ss[0], lo1 = (-sr[1] + ss[1] - 1) / ss[1];
+        /* (floor: a negative value less its divisor's rounding) */
+        int64_t e0 = er[0] < 0 ? er[0] - em[0] + 1 : er[0], e1 = er[1] < 0 ? er[1] - em[1] + 1 : er[1];
+        int64_t hi0 = e0 / em[0], hi1 = e1 / em[1];
+        int64_t lo = lo0 > lo1 ? lo0 : lo1, hi = hi0 < hi1 ? hi0 : hi1;
+        lo = lo > 0 ? lo : 0;
+        hi = hi < n ? hi : n;
+        sr[0] += sd[0], sr[1] += sd[1], er[0] += ed[0], er[1] += ed[1];
+        if (lo > hi || j < jlo)
+            continue;
         /* the span from its first pixel (depth in double, brightness in fixed point, stepped) */
         double zp = zr + (double)lo * zs;
         int64_t lfx = light_fx(lr + (double)lo * ls), lend = lfx + (hi - lo) * ls_fx;
@@ -646,30 +681,36 @@ static void draw_line(cm_view *v, const double a[3], const double b[3]);
 /* vertex vi of the mesh on the screen (x, y, depth), its brightness and its normal's component
    along the line of sight (positive: facing away); flags: VIEW_VERT_OK where it can be drawn (in
    front of the eye, within the fixed point's reach), VIEW_VERT_AWAY where it faces away.  (The
-   camera's arithmetic written out, in to_view's and to_screen's order: through them it was a
-   tenth of a large model's frame) */
+   camera's arithmetic written out, orthographic as five dot products: through to_view and
+   to_screen it was a tenth of a large model's frame) */
 static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3], cm_view_vert *t)
 {
-    const double d[3] = {(double)p[0] - v->c[0], (double)p[1] - v->c[1], (double)p[2] - v->c[2]};
-    const double q[3] = {dot3(d, v->r), dot3(d, v->u), dot3(d, v->f)};
-    const double nv[3] = {(double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2],
-                          (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2],
-                          (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2]};
-    double light = shade(nv); /* (within [0, 1] whatever the normal, not a number 0: fill_triangle's
-                                 slopes stay finite) */
-    t->light = light > 0.0 ? (light < 1.0 ? light : 1.0) : 0.0;
-    /* the line of sight: the view axis (orthographic), from the eye at (0, 0, eye) (perspective) */
-    t->facing = v->o.perspective ? nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye) : nv[2];
-    double k = v->scale;
     int ok = 1;
-    if (v->o.perspective) {
+    if (!v->o.perspective) {
+        /* five dot products (ortho_rows) */
+        const double P[3] = {(double)p[0], (double)p[1], (double)p[2]}, N[3] = {(double)n[0], (double)n[1], (double)n[2]};
+        const double(*o)[4] = v->ortho;
+        t->x = P[0] * o[0][0] + P[1] * o[0][1] + P[2] * o[0][2] + o[0][3];
+        t->y = P[0] * o[1][0] + P[1] * o[1][1] + P[2] * o[1][2] + o[1][3];
+        t->z = P[0] * o[2][0] + P[1] * o[2][1] + P[2] * o[2][2] + o[2][3];
+        t->facing = N[0] * o[3][0] + N[1] * o[3][1] + N[2] * o[3][2];
+        t->light = shade(t->facing, N[0] * o[4][0] + N[1] * o[4][1] + N[2] * o[4][2]);
+    } else {
+        const double d[3] = {(double)p[0] - v->c[0], (double)p[1] - v->c[1], (double)p[2] - v->c[2]};
+        const double q[3] = {dot3(d, v->r), dot3(d, v->u), dot3(d, v->f)};
+        const double nv[3] = {(double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2],
+                              (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2],
+                              (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2]};
+        t->light = shade(nv[2], dot3(nv, view_fill));
+        /* the line of sight from the eye at (0, 0, eye) */
+        t->facing = nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye);
         double ze = q[2] - v->eye;
         ok = ze > 1e-9 * (-v->eye);
-        k = ok ? v->scale / ze : 0.0;
+        double k = ok ? v->scale / ze : 0.0;
+        t->x = 0.5 * (double)v->o.width + q[0] * k;
+        t->y = 0.5 * (double)v->o.height - q[1] * k;
+        t->z = q[2];
     }
-    t->x = 0.5 * (double)v->o.width + q[0] * k;
-    t->y = 0.5 * (double)v->o.height - q[1] * k;
-    t->z = q[2];
     ok = ok && fabs(t->x) < VIEW_COORD_MAX && fabs(t->y) < VIEW_COORD_MAX;
     t->flags = (uint8_t)((ok ? VIEW_VERT_OK : 0) | (t->facing > 0.0 ? VIEW_VERT_AWAY : 0));
     /* the fixed point, rounded half away from zero (within VIEW_COORD_MAX: 2^28 units) */
@@ -722,6 +763,7 @@ static void silhouette(cm_view *v, const cm_view_vert *const c[3])
 
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
+    ortho_rows(v);
     /* placed copies follow the model's own faces, placement by placement, each in source order
        (cm_mesh_place): a copy whose source face does not come after the last one's, or lies beyond
        its placement's faces, starts the next placement that holds it */
@@ -769,13 +811,20 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
                 uint32_t n = F->nindex - k < 3u * CM_VIEW_READ_RUN ? F->nindex - k : 3u * CM_VIEW_READ_RUN;
                 cm_mesh_idxs(mesh, F->first_index + k, n, v->run_idx);
             }
-            for (int i = 0; i < 3; i++) {
-                uint32_t vi = v->run_idx[r + (uint32_t)i], j = vi - F->first_vert; /* (unsigned: below wraps) */
-                if (cached && j < F->nverts) {
-                    t[i] = &v->fv[j];
-                } else {
-                    vertex_screen(v, mesh, vi, &own[i]);
-                    t[i] = &own[i];
+            const uint32_t *ix = &v->run_idx[r];
+            /* (unsigned: an index below the face's wraps beyond it) */
+            uint32_t j0 = ix[0] - F->first_vert, j1 = ix[1] - F->first_vert, j2 = ix[2] - F->first_vert;
+            if (cached && j0 < F->nverts && j1 < F->nverts && j2 < F->nverts) {
+                t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
+            } else {
+                for (int i = 0; i < 3; i++) {
+                    uint32_t j = ix[i] - F->first_vert;
+                    if (cached && j < F->nverts) {
+                        t[i] = &v->fv[j];
+                    } else {
+                        vertex_screen(v, mesh, ix[i], &own[i]);
+                        t[i] = &own[i];
+                    }
                 }
             }
             unsigned all = t[0]->flags & t[1]->flags & t[2]->flags;

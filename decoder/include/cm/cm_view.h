@@ -89,6 +89,10 @@ typedef struct cm_view {
     double c[3], r[3], u[3], f[3];
     double scale;          /* orthographic: pixels per mm; perspective: the focal length in pixels */
     double eye;            /* perspective: the eye's depth in view space (negative) */
+    /* orthographic, set by cm_view_mesh from the above: a point's screen x, y and depth and a
+       normal's component along the view and along the fill light, each a dot product with a
+       model-space row (and a constant) */
+    double ortho[5][4];
     uint64_t triangles, edge_segments, silhouette_segments; /* drawn (for tests and --verbose) */
     /* the model's parts (cm_view_parts): those the file names (format 4.11: cm_face.part,
        cm_placement.part), else a face's part among its own faces' connected components (faces joined
