@@ -991,17 +991,19 @@ static void draw_line(cm_view *v, const double a[3], const double b[3])
     double k = VIEW_EDGE_BIAS_PX / v->scale;
     double za = v->o.perspective ? a[2] - k * (a[2] - v->eye) : a[2] - k;
     double zb = v->o.perspective ? b[2] - k * (b[2] - v->eye) : b[2] - k;
-    double inv = 1.0 / (double)n;
-    for (int i = 0; i <= n; i++) {
-        double t = (double)i * inv;
-        double z = za + (zb - za) * t;
-        double x = a[0] + dx * t, y = a[1] + dy * t;
-        if (!(x >= 0.0 && y >= 0.0 && x < (double)v->o.width && y < (double)v->o.height))
+    /* the points i = 0..n, each stepped from the last (the coordinates added to, not multiplied
+       out), those off the frame left out */
+    const double W = (double)v->o.width, H = (double)v->o.height, inv = 1.0 / (double)n;
+    const double sx = dx * inv, sy = dy * inv, sz = (zb - za) * inv;
+    double x = a[0], y = a[1], z = za;
+    for (int i = 0; i <= n; i++, x += sx, y += sy, z += sz) {
+        if (!(x >= 0.0 && y >= 0.0 && x < W && y < H))
             continue;
         size_t at = (size_t)(int)y * (size_t)v->o.width + (size_t)(int)x;
-        if (!((float)z <= v->depth[at]))
+        float zf = (float)z;
+        if (!(zf <= v->depth[at]))
             continue;
-        v->depth[at] = (float)z;
+        v->depth[at] = zf;
         v->rgb[3 * at] = (uint8_t)(VIEW_EDGE_RGB >> 16);
         v->rgb[3 * at + 1] = (uint8_t)(VIEW_EDGE_RGB >> 8);
         v->rgb[3 * at + 2] = (uint8_t)VIEW_EDGE_RGB;
