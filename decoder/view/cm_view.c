@@ -18,6 +18,8 @@
    corner VIEW_COORD_MAX pixels or more off the frame's corner is not filled, so that its edge
    functions fit 64 bits (2^28 units each way; a fitted camera keeps every corner near the frame) */
 #define VIEW_SUBPIX 256
+/* a triangle whose box holds at most this many pixel centres has each tested on its own */
+#define VIEW_SMALL_BOX 16
 /* cm_view_vert.flags */
 #define VIEW_VERT_OK 1u
 #define VIEW_VERT_AWAY 2u
@@ -582,19 +584,29 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     const double z[3] = {t[0]->z, t[1]->z, t[2]->z}, l[3] = {t[0]->light, t[1]->light, t[2]->light};
     double inv = 1.0 / (double)area;
     double dzb = z[b] - z[a], dzc = z[c] - z[a], dlb = l[b] - l[a], dlc = l[c] - l[a];
-    if (x0 == x1 && y0 == y1) {
-        /* one pixel centre in the box (a small triangle's usual case): it alone, without slopes */
-        if ((w0[0] | w0[1] | w0[2]) < 0)
-            return;
-        size_t at = (size_t)y0 * (size_t)v->o.width + (size_t)x0;
-        float zf = (float)(z[a] + ((double)(w0[1] - e[1].bias) * dzb + (double)(w0[2] - e[2].bias) * dzc) * inv);
-        if (!(zf < v->depth[at]))
-            return;
-        v->depth[at] = zf;
+    if ((x1 - x0 + 1) * (y1 - y0 + 1) <= VIEW_SMALL_BOX) {
+        /* a few pixel centres in the box (a small triangle's usual case): each tested, and where
+           covered its depth and brightness from the weights, without the slopes' set-up */
         const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
-        put_lit(&v->rgb[3 * at], base,
-                light_fx(l[a] + ((double)(w0[1] - e[1].bias) * dlb + (double)(w0[2] - e[2].bias) * dlc) * inv));
-        v->triangles++;
+        const int64_t s0 = e[0].A * VIEW_SUBPIX, s1 = e[1].A * VIEW_SUBPIX, s2 = e[2].A * VIEW_SUBPIX;
+        int drawn = 0;
+        for (int64_t y = y0; y <= y1; y++) {
+            int64_t dy = (y - y0) * VIEW_SUBPIX;
+            int64_t q0 = w0[0] + e[0].B * dy, q1 = w0[1] + e[1].B * dy, q2 = w0[2] + e[2].B * dy;
+            for (int64_t x = x0; x <= x1; x++, q0 += s0, q1 += s1, q2 += s2) {
+                if ((q0 | q1 | q2) < 0)
+                    continue;
+                size_t at = (size_t)y * (size_t)v->o.width + (size_t)x;
+                double wb = (double)(q1 - e[1].bias), wc = (double)(q2 - e[2].bias);
+                float zf = (float)(z[a] + (wb * dzb + wc * dzc) * inv);
+                if (!(zf < v->depth[at]))
+                    continue;
+                v->depth[at] = zf;
+                put_lit(&v->rgb[3 * at], base, light_fx(l[a] + (wb * dlb + wc * dlc) * inv));
+                drawn = 1;
+            }
+        }
+        v->triangles += (uint64_t)drawn;
         return;
     }
     double zx = ((double)e[1].A * dzb + (double)e[2].A * dzc) * VIEW_SUBPIX * inv;
