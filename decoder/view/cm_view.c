@@ -27,7 +27,7 @@
 /* brightness across a row in 8.24 fixed point (at most 1: ambient, head and fill light add to 1) */
 #define VIEW_LIGHT_ONE 16777216.0
 /* the brightest a pixel gets: 1 (the lights' sum, full colour), and room for a slope's rounding
-   along a row (2^-9: 255 x it still rounds to 255, so a channel needs no clamp) */
+   along a row (2^-9: 255 x it still rounds to 255, so a channel needs no clamp; put_lit) */
 #define VIEW_LIGHT_MAX 16809984
 /* a curved edge is drawn in straight pieces of about this many pixels */
 #define VIEW_EDGE_PIECE_PX 6.0
@@ -483,13 +483,6 @@ static void ortho_rows(cm_view *v)
     v->ortho[3][3] = v->ortho[4][3] = 0.0;
 }
 
-/* a colour channel (0..255) at a brightness in 8.24 fixed point (0..VIEW_LIGHT_MAX), rounded:
-   32-bit products, at most 255 */
-static uint8_t channel(uint32_t base, uint32_t light)
-{
-    return (uint8_t)((base * (light >> 8) + 0x8000u) >> 16);
-}
-
 /* floor(a / VIEW_SUBPIX) for a > -2^40: a shift of an unsigned value (C leaves >> of a negative
    one to the compiler), the offset a whole number of pixels */
 #define VIEW_FLOOR_OFFSET ((int64_t)1 << 40)
@@ -520,12 +513,22 @@ static int64_t light_fx(double l)
     return f > 0.0 ? (f < (double)VIEW_LIGHT_MAX ? (int64_t)(f + 0.5) : VIEW_LIGHT_MAX) : 0;
 }
 
-/* a pixel in colour base (three channels) at brightness light (8.24, 0..VIEW_LIGHT_MAX) */
-static void put_lit(uint8_t *px, const uint32_t base[3], int64_t light)
+/* a colour 0xRRGGBB as three 21-bit lanes of one integer: each times a brightness in 4.12 fixed
+   point (at most VIEW_LIGHT_MAX: below 2^9 x 2^12 / 2^8) stays within its lane */
+static uint64_t lanes(uint32_t rgb)
 {
-    px[0] = channel(base[0], (uint32_t)light);
-    px[1] = channel(base[1], (uint32_t)light);
-    px[2] = channel(base[2], (uint32_t)light);
+    return ((uint64_t)((rgb >> 16) & 0xffu) << 42) | ((uint64_t)((rgb >> 8) & 0xffu) << 21) | (uint64_t)(rgb & 0xffu);
+}
+
+/* a pixel in colour base (lanes()) at brightness light (8.24, 0..VIEW_LIGHT_MAX): the three
+   channels in one multiplication, each rounded, at most 255 (the brightness at most 1 and a hair) */
+static void put_lit(uint8_t *px, uint64_t base, int64_t light)
+{
+    const uint64_t half = ((uint64_t)1 << 11) * (((uint64_t)1 << 42) | ((uint64_t)1 << 21) | 1u);
+    uint64_t c = base * (uint64_t)(light >> 12) + half;
+    px[0] = (uint8_t)(c >> 54);
+    px[1] = (uint8_t)(c >> 33);
+    px[2] = (uint8_t)(c >> 12);
 }
 
 /*
@@ -587,7 +590,7 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     if ((x1 - x0 + 1) * (y1 - y0 + 1) <= VIEW_SMALL_BOX) {
         /* a few pixel centres in the box (a small triangle's usual case): each tested, and where
            covered its depth and brightness from the weights, without the slopes' set-up */
-        const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
+        const uint64_t base = lanes(rgb);
         const int64_t s0 = e[0].A * VIEW_SUBPIX, s1 = e[1].A * VIEW_SUBPIX, s2 = e[2].A * VIEW_SUBPIX;
         int drawn = 0;
         for (int64_t y = y0; y <= y1; y++) {
@@ -633,7 +636,7 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     double lsc = (ls > 4.0 ? 4.0 : (ls < -4.0 ? -4.0 : ls)) * VIEW_LIGHT_ONE + 0.5;
     int64_t ls_fx = (int64_t)lsc;
     ls_fx -= (double)ls_fx > lsc;
-    const uint32_t base[3] = {(rgb >> 16) & 0xffu, (rgb >> 8) & 0xffu, rgb & 0xffu};
+    const uint64_t base = lanes(rgb);
     int drawn = 0;
     /* each side bounds a line's span from its start (a positive step along it: the first pixel at
        or past its zero, a rounded-up quotient) or its end (the last, a rounded-down one), two of
@@ -698,12 +701,13 @@ static void draw_line(cm_view *v, const double a[3], const double b[3]);
 static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3], cm_view_vert *t)
 {
     int ok = 1;
+    double x, y;
     if (!v->o.perspective) {
         /* five dot products (ortho_rows) */
         const double P[3] = {(double)p[0], (double)p[1], (double)p[2]}, N[3] = {(double)n[0], (double)n[1], (double)n[2]};
         const double(*o)[4] = v->ortho;
-        t->x = P[0] * o[0][0] + P[1] * o[0][1] + P[2] * o[0][2] + o[0][3];
-        t->y = P[0] * o[1][0] + P[1] * o[1][1] + P[2] * o[1][2] + o[1][3];
+        x = P[0] * o[0][0] + P[1] * o[0][1] + P[2] * o[0][2] + o[0][3];
+        y = P[0] * o[1][0] + P[1] * o[1][1] + P[2] * o[1][2] + o[1][3];
         t->z = P[0] * o[2][0] + P[1] * o[2][1] + P[2] * o[2][2] + o[2][3];
         t->facing = N[0] * o[3][0] + N[1] * o[3][1] + N[2] * o[3][2];
         t->light = shade(t->facing, N[0] * o[4][0] + N[1] * o[4][1] + N[2] * o[4][2]);
@@ -719,14 +723,14 @@ static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3
         double ze = q[2] - v->eye;
         ok = ze > 1e-9 * (-v->eye);
         double k = ok ? v->scale / ze : 0.0;
-        t->x = 0.5 * (double)v->o.width + q[0] * k;
-        t->y = 0.5 * (double)v->o.height - q[1] * k;
+        x = 0.5 * (double)v->o.width + q[0] * k;
+        y = 0.5 * (double)v->o.height - q[1] * k;
         t->z = q[2];
     }
-    ok = ok && fabs(t->x) < VIEW_COORD_MAX && fabs(t->y) < VIEW_COORD_MAX;
+    ok = ok && fabs(x) < VIEW_COORD_MAX && fabs(y) < VIEW_COORD_MAX;
     t->flags = (uint8_t)((ok ? VIEW_VERT_OK : 0) | (t->facing > 0.0 ? VIEW_VERT_AWAY : 0));
     /* the fixed point, rounded half away from zero (within VIEW_COORD_MAX: 2^28 units) */
-    double fx = t->x * VIEW_SUBPIX, fy = t->y * VIEW_SUBPIX;
+    double fx = x * VIEW_SUBPIX, fy = y * VIEW_SUBPIX;
     t->X = ok ? (int32_t)(fx >= 0.0 ? fx + 0.5 : fx - 0.5) : 0;
     t->Y = ok ? (int32_t)(fy >= 0.0 ? fy + 0.5 : fy - 0.5) : 0;
 }
@@ -748,7 +752,11 @@ static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm
  */
 static void silhouette(cm_view *v, const cm_view_vert *const c[3])
 {
-    const double s[3][3] = {{c[0]->x, c[0]->y, c[0]->z}, {c[1]->x, c[1]->y, c[1]->z}, {c[2]->x, c[2]->y, c[2]->z}};
+    /* (the corners where the rasteriser has them, to 1/VIEW_SUBPIX of a pixel) */
+    const double px = 1.0 / VIEW_SUBPIX;
+    const double s[3][3] = {{c[0]->X * px, c[0]->Y * px, c[0]->z},
+                            {c[1]->X * px, c[1]->Y * px, c[1]->z},
+                            {c[2]->X * px, c[2]->Y * px, c[2]->z}};
     const double d[3] = {c[0]->facing, c[1]->facing, c[2]->facing};
     double pt[2][3];
     int n = 0;

@@ -73,12 +73,12 @@ void cm_view_opts_default(cm_view_opts *o);
 /** Vertices (and triangles) read back from the mesh at a time by cm_view_mesh. */
 #define CM_VIEW_READ_RUN 256
 
-/** A mesh vertex on the screen (cm_view.c's): pixels (x right, y down), view-space depth, its
-    brightness, its normal along the line of sight (the silhouette where it is 0, positive facing
-    away), the position in the rasteriser's fixed point, and flags: whether it can be drawn at all
-    (in front of the eye, within the fixed point's reach), whether it faces away. */
+/** A mesh vertex on the screen (cm_view.c's): view-space depth, its brightness, its normal along
+    the line of sight (the silhouette where it is 0, positive facing away), the position in the
+    rasteriser's fixed point (pixels x right, y down, times 256), and flags: whether it can be
+    drawn at all (in front of the eye, within the fixed point's reach), whether it faces away. */
 typedef struct cm_view_vert {
-    double x, y, z, light, facing;
+    double z, light, facing;
     int32_t X, Y;
     uint8_t flags;
 } cm_view_vert;
