@@ -502,7 +502,7 @@ static view_side side_fn(int64_t Xp, int64_t Yp, int64_t Xq, int64_t Yq)
 {
     view_side e = {Yp - Yq, Xq - Xp, 0};
     /* the inside lies towards (A, B): a left side has it to its right, a top side (level) below */
-    e.bias = e.A > 0 || (e.A == 0 && e.B > 0) ? 0 : -1;
+    e.bias = -(int64_t)(e.A < 0 || (e.A == 0 && e.B <= 0));
     return e;
 }
 
@@ -823,37 +823,39 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
             for (uint32_t i = 0; i < n; i++)
                 vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
         }
-        for (uint32_t k = 0; k + 2 < F->nindex; k += 3) {
-            cm_view_vert own[3];
-            const cm_view_vert *t[3];
-            uint32_t r = k % (3u * CM_VIEW_READ_RUN);
-            if (r == 0) {
-                uint32_t n = F->nindex - k < 3u * CM_VIEW_READ_RUN ? F->nindex - k : 3u * CM_VIEW_READ_RUN;
-                cm_mesh_idxs(mesh, F->first_index + k, n, v->run_idx);
-            }
-            const uint32_t *ix = &v->run_idx[r];
-            /* (unsigned: an index below the face's wraps beyond it) */
-            uint32_t j0 = ix[0] - F->first_vert, j1 = ix[1] - F->first_vert, j2 = ix[2] - F->first_vert;
-            if (cached && j0 < F->nverts && j1 < F->nverts && j2 < F->nverts) {
-                t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
-            } else {
-                for (int i = 0; i < 3; i++) {
-                    uint32_t j = ix[i] - F->first_vert;
-                    if (cached && j < F->nverts) {
-                        t[i] = &v->fv[j];
-                    } else {
-                        vertex_screen(v, mesh, ix[i], &own[i]);
-                        t[i] = &own[i];
+        /* the triangles a run of indices at a time; the face's numbers held here (a pixel written
+           through a byte pointer could be anything to the compiler: they would be read again) */
+        const uint32_t first = F->first_vert, nverts = cached ? F->nverts : 0, ntri = F->nindex / 3;
+        const unsigned silhouettes = v->o.edges ? VIEW_VERT_AWAY : 0u, cull = closed ? VIEW_VERT_AWAY : 0u;
+        for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
+            const uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
+            cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
+            for (const uint32_t *ix = v->run_idx, *const end = ix + 3u * n; ix < end; ix += 3) {
+                cm_view_vert own[3];
+                const cm_view_vert *t[3];
+                /* (unsigned: an index below the face's wraps beyond it) */
+                uint32_t j0 = ix[0] - first, j1 = ix[1] - first, j2 = ix[2] - first;
+                if (j0 < nverts && j1 < nverts && j2 < nverts) {
+                    t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
+                } else {
+                    for (int i = 0; i < 3; i++) {
+                        uint32_t j = ix[i] - first;
+                        if (j < nverts) {
+                            t[i] = &v->fv[j];
+                        } else {
+                            vertex_screen(v, mesh, ix[i], &own[i]);
+                            t[i] = &own[i];
+                        }
                     }
                 }
+                const unsigned f0 = t[0]->flags, f1 = t[1]->flags, f2 = t[2]->flags, all = f0 & f1 & f2;
+                if (!(all & VIEW_VERT_OK) || (all & cull))
+                    continue;
+                fill_triangle(v, t, rgb);
+                /* a silhouette crosses it where its corners face different ways */
+                if (((f0 | f1 | f2) ^ all) & silhouettes)
+                    silhouette(v, t);
             }
-            unsigned all = t[0]->flags & t[1]->flags & t[2]->flags;
-            if (!(all & VIEW_VERT_OK) || (closed && (all & VIEW_VERT_AWAY)))
-                continue;
-            fill_triangle(v, t, rgb);
-            /* a silhouette crosses it where its corners face different ways */
-            if (v->o.edges && ((t[0]->flags ^ t[1]->flags) | (t[0]->flags ^ t[2]->flags)) & VIEW_VERT_AWAY)
-                silhouette(v, t);
         }
     }
 }
