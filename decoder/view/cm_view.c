@@ -536,15 +536,17 @@ static void put_lit(uint8_t *px, uint64_t base, int64_t light)
  * in colour rgb.  The corners were rounded to 1/VIEW_SUBPIX of a pixel (vertex_screen_at) and the
  * three edge functions are exact 64-bit integers at the pixel centres, with the top-left rule:
  * shared sides neither crack nor fill twice, and a pixel's coverage is the same on every machine.
- * A row's span is where all three are >= 0: a level side passes or stops whole rows (the rows
- * are cut to them once), each slanted side bounds the span from the left or the right, at the
- * quotient of its value by its step along the row, walked down the rows (view_walk: no division
- * a row).  Depth and brightness step along a row from their values at its first pixel (doubles,
- * then the brightness in fixed point).  A triangle covering no pixel centre costs its box.
+ * A triangle covering no pixel centre costs its box.  One whose box holds a few pixel centres
+ * (VIEW_SMALL_BOX: most triangles of a finely meshed model) has each tested, and a covered one's
+ * depth and brightness made from its weights.  A larger one is drawn in lines along its box's
+ * longer side (rows, or columns: a sliver costs its few lines, not its many pixels' worth), each
+ * line's span where all three edge functions are >= 0, found exactly by a division per side, depth
+ * and brightness stepped along it (doubles, then the brightness in fixed point).
  * (Until 2026-12-07 each pixel's three barycentric weights were doubles with a hair's tolerance,
  * each row's span found by three divisions, and each channel rounded from a double: 3.1 k
- * instructions a triangle on C1G0B0O's frame; then, until 2026-12-08, each row's span by a
- * division per slanted side and each pixel's brightness clamped.)
+ * instructions a triangle on C1G0B0O's frame; that day's first integer filling sent small
+ * triangles through the spans' set-up and slivers row by row, and made a pixel's three channels
+ * by three multiplications and clamps: 1.5 k.)
  */
 static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t rgb)
 {
@@ -744,6 +746,25 @@ static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm
     vertex_screen_at(v, p, n, t);
 }
 
+/* vertex j (from the face's first) of face F, a face of more vertices than fv holds: from fv where
+   it is still there, else read with the run that follows it (a patch's triangles use its own
+   vertices, in order) and projected into the slots they map to */
+static const cm_view_vert *window_vertex(cm_view *v, const cm_mesh *mesh, const cm_mesh_face *F, uint32_t j)
+{
+    uint32_t s = j % CM_VIEW_FACE_VERTS;
+    if (v->fv_tag[s] != j) {
+        uint32_t n = F->nverts - j < CM_VIEW_READ_RUN ? F->nverts - j : CM_VIEW_READ_RUN;
+        cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + j, n, v->run_pos);
+        cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + j, n, v->run_nrm);
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t si = (j + i) % CM_VIEW_FACE_VERTS;
+            vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[si]);
+            v->fv_tag[si] = j + i;
+        }
+    }
+    return &v->fv[s];
+}
+
 /*
  * The silhouette across one triangle (screen corners s, facing values d): where d, linear across
  * it, is zero, a segment between the two sides whose ends differ in sign (0 counts as facing the
@@ -812,8 +833,11 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
            faces are not all there, one the decoder left out, shows its back faces through the gap) */
         int closed = v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces &&
                      F->source_face < v->parts_nfaces && v->face_closed[F->source_face];
-        /* a face's vertices (each in about six triangles) projected and lit once, where they fit */
+        /* a face's vertices (each in about six triangles) projected and lit once, where they fit
+           (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
+        for (uint32_t s = 0; !cached && s < CM_VIEW_FACE_VERTS; s++)
+            v->fv_tag[s] = UINT32_MAX;
         for (uint32_t i0 = 0; cached && i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
             /* read back a run at a time (from the spill a page at a time): a call per value was a
                sixth of a large model's frame */
@@ -838,14 +862,17 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
                 if (j0 < nverts && j1 < nverts && j2 < nverts) {
                     t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
                 } else {
+                    /* (a large face's corners copied out of the window: a later corner's run may
+                       replace an earlier one's slot) */
                     for (int i = 0; i < 3; i++) {
                         uint32_t j = ix[i] - first;
-                        if (j < nverts) {
-                            t[i] = &v->fv[j];
-                        } else {
-                            vertex_screen(v, mesh, ix[i], &own[i]);
-                            t[i] = &own[i];
-                        }
+                        if (j < nverts)
+                            own[i] = v->fv[j];
+                        else if (j < F->nverts)
+                            own[i] = *window_vertex(v, mesh, F, j);
+                        else
+                            vertex_screen(v, mesh, ix[i], &own[i]); /* (not the face's own: not made so) */
+                        t[i] = &own[i];
                     }
                 }
                 const unsigned f0 = t[0]->flags, f1 = t[1]->flags, f2 = t[2]->flags, all = f0 & f1 & f2;

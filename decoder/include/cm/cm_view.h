@@ -108,8 +108,11 @@ typedef struct cm_view {
     int32_t edge_head[CM_MAX_EDGES];       /* (scratch: each edge's uses in a list, ... */
     int32_t use_next[CM_MAX_MODEL_USES];   /* ... the next use of the same edge, -1 at the end, */
     uint32_t use_face[CM_MAX_MODEL_USES];  /* ... and the face of each use) */
-    /* a face's vertices on the screen, lit: a vertex is in about six triangles */
+    /* a face's vertices on the screen, lit: a vertex is in about six triangles; a face of more
+       (GREGORY faces are meshed patch by patch) keeps its vertex j in fv[j % CM_VIEW_FACE_VERTS],
+       fv_tag saying which j is there */
     cm_view_vert fv[CM_VIEW_FACE_VERTS];
+    uint32_t fv_tag[CM_VIEW_FACE_VERTS];
     /* a run of the mesh's positions, normals and indices, read back together */
     float run_pos[CM_VIEW_READ_RUN][3], run_nrm[CM_VIEW_READ_RUN][3];
     uint32_t run_idx[3 * CM_VIEW_READ_RUN];
