@@ -753,7 +753,9 @@ static const cm_view_vert *window_vertex(cm_view *v, const cm_mesh *mesh, const 
 {
     uint32_t s = j % CM_VIEW_FACE_VERTS;
     if (v->fv_tag[s] != j) {
-        uint32_t n = F->nverts - j < CM_VIEW_READ_RUN ? F->nverts - j : CM_VIEW_READ_RUN;
+        /* (a run no longer than the window: it would replace its own first vertex) */
+        const uint32_t run = CM_VIEW_READ_RUN < CM_VIEW_FACE_VERTS ? CM_VIEW_READ_RUN : CM_VIEW_FACE_VERTS;
+        uint32_t n = F->nverts - j < run ? F->nverts - j : run;
         cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + j, n, v->run_pos);
         cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + j, n, v->run_nrm);
         for (uint32_t i = 0; i < n; i++) {

@@ -275,6 +275,122 @@ static void test_fill_rule(void **state)
     assert_int_equal(covered[0] + covered[1], 88 * 88);
 }
 
+/* a big mesh of its own: the unit square's front (y = 0, normal -y) in many triangles */
+#define BIG_CELLS (CM_VIEW_FACE_VERTS / 2 + 8) /* a strip of these: more vertices than the cache */
+#define GRID_CELLS 120                         /* a grid of these a side: cells of 0.73 px */
+#define BIG_VERTS (2 * (BIG_CELLS + 1) > GRID_CELLS * 2 * (GRID_CELLS + 1) ? 2 * (BIG_CELLS + 1) : GRID_CELLS * 2 * (GRID_CELLS + 1))
+#define BIG_INDEX (6 * (BIG_CELLS > GRID_CELLS * GRID_CELLS ? BIG_CELLS : GRID_CELLS * GRID_CELLS))
+static float b_pos[2 * BIG_VERTS][3], b_nrm[2 * BIG_VERTS][3];
+static uint32_t b_idx[BIG_INDEX];
+static cm_mesh_face b_faces[BIG_CELLS + GRID_CELLS];
+static uint8_t b_frame[3][100 * 100 * 3];
+
+static cm_mesh big_storage(void)
+{
+    cm_mesh m;
+    memset(&m, 0, sizeof m);
+    m.pos = b_pos;
+    m.nrm = b_nrm;
+    m.idx = b_idx;
+    m.faces = b_faces;
+    m.cap_verts = 2 * BIG_VERTS;
+    m.cap_index = BIG_INDEX;
+    m.cap_faces = BIG_CELLS + GRID_CELLS;
+    return m;
+}
+
+/* a face of cells [c0, c1) of a row of `across` cells at height [z0, z1]: its own vertices, bottom
+   and top by turns; its triangles each cell's lower-left (which & 1) and upper-right (which & 2),
+   in reverse order where asked */
+static void add_row(cm_mesh *m, int c0, int c1, int across, double z0, double z1, int which, int reverse)
+{
+    cm_mesh_face *f = &m->faces[m->nfaces++];
+    memset(f, 0, sizeof *f);
+    f->first_vert = m->nverts;
+    f->first_index = m->nindex;
+    f->rgb = 0x808080u;
+    f->has_color = 1;
+    for (int c = c0; c <= c1; c++)
+        for (int k = 0; k < 2; k++) {
+            float *p = m->pos[m->nverts], *n = m->nrm[m->nverts];
+            p[0] = (float)((double)c / across), p[1] = 0.0f, p[2] = (float)(k ? z1 : z0);
+            n[0] = 0.0f, n[1] = -1.0f, n[2] = 0.0f;
+            m->nverts++;
+        }
+    for (int i = 0; i < c1 - c0; i++) {
+        int c = reverse ? c1 - c0 - 1 - i : i;
+        uint32_t b0 = f->first_vert + 2u * (uint32_t)c, t0 = b0 + 1, b1 = b0 + 2, t1 = b0 + 3;
+        const uint32_t tri[2][3] = {{b0, b1, t0}, {b1, t1, t0}};
+        for (int h = 0; h < 2; h++)
+            if (which & (1 << h))
+                for (int k = 0; k < 3; k++)
+                    m->idx[m->nindex++] = tri[h][k];
+    }
+    f->nverts = m->nverts - f->first_vert;
+    f->nindex = m->nindex - f->first_index;
+}
+
+/* a face of more vertices than the viewer's vertex cache (CM_VIEW_FACE_VERTS: a GREGORY face meshed
+   patch by patch) is drawn through a window on it: the same pixels as the strip cut into faces that
+   fit, its triangles in order or in reverse; the strip's slivers (a fifteenth of a pixel across)
+   cover the square exactly */
+static void test_large_face(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    for (int variant = 0; variant < 3; variant++) {
+        cm_mesh m = big_storage();
+        if (variant < 2) {
+            add_row(&m, 0, BIG_CELLS, BIG_CELLS, 0.0, 1.0, 3, variant == 1);
+            assert_true(m.faces[0].nverts > CM_VIEW_FACE_VERTS);
+        } else {
+            for (int c = 0; c < BIG_CELLS; c += CM_VIEW_FACE_VERTS / 4)
+                add_row(&m, c, c + CM_VIEW_FACE_VERTS / 4 < BIG_CELLS ? c + CM_VIEW_FACE_VERTS / 4 : BIG_CELLS,
+                        BIG_CELLS, 0.0, 1.0, 3, 0);
+            assert_true(m.nfaces > 1 && m.faces[0].nverts <= CM_VIEW_FACE_VERTS);
+        }
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        cm_view_mesh(&view, &m);
+        assert_int_equal(count_not(&view, o.background), 88 * 88);
+        memcpy(b_frame[variant], view.rgb, sizeof b_frame[variant]);
+    }
+    assert_memory_equal(b_frame[0], b_frame[2], sizeof b_frame[0]);
+    assert_memory_equal(b_frame[1], b_frame[2], sizeof b_frame[0]);
+}
+
+/* a square in triangles smaller than a pixel (each pixel centre tested on its own, no slopes):
+   the lower-left halves of the cells and the upper-right halves drawn apart cover the square's
+   88 x 88 pixels once between them, and together exactly the square the two large triangles cover */
+static void test_small_triangles(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    size_t covered[3];
+    for (int which = 1; which <= 3; which++) {
+        cm_mesh m = big_storage();
+        for (int r = 0; r < GRID_CELLS; r++)
+            add_row(&m, 0, GRID_CELLS, GRID_CELLS, (double)r / GRID_CELLS, (double)(r + 1) / GRID_CELLS, which, 0);
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        cm_view_mesh(&view, &m);
+        covered[which - 1] = count_not(&view, o.background);
+        memcpy(b_frame[0], view.rgb, sizeof b_frame[0]);
+    }
+    assert_true(covered[0] > 88 * 88 / 3 && covered[1] > 88 * 88 / 3);
+    assert_int_equal(covered[0] + covered[1], 88 * 88);
+    assert_int_equal(covered[2], 88 * 88);
+    cm_mesh sq = front_square();
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_mesh(&view, &sq);
+    for (size_t i = 0; i < 100 * 100; i++)
+        assert_int_equal(view.rgb[3 * i] == (uint8_t)(o.background >> 16), b_frame[0][3 * i] == (uint8_t)(o.background >> 16));
+}
+
 /* a closed part's back faces: a tetrahedron whose four faces, one triangle each, face outwards and
    run each edge opposite ways (a closed part, cm_view_parts) is drawn to the same pixels with its two
    faces turned away from the iso view skipped; with one edge run the same way by both its faces the
@@ -505,7 +621,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_front_box),   cmocka_unit_test(test_depth_order), cmocka_unit_test(test_refuses_large_frame),
         cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
-        cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces),
+        cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
+        cmocka_unit_test(test_small_triangles),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
