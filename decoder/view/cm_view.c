@@ -20,6 +20,8 @@
 #define VIEW_SUBPIX 256
 /* a triangle whose box holds at most this many pixel centres has each tested on its own */
 #define VIEW_SMALL_BOX 16
+/* cm_view.face_closed: closed at edges it shares with other parts, outwards still to be measured */
+#define VIEW_CLOSED_SHARED 2
 /* cm_view_vert.flags */
 #define VIEW_VERT_OK 1u
 #define VIEW_VERT_AWAY 2u
@@ -228,6 +230,7 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
     double room_x, room_y;
     frame_room(v, &room_x, &room_y);
     double radius = sqrt(diag2);
+    v->diag = 2.0 * radius;
     if (!(radius > 0.0))
         radius = 1.0; /* a point: any scale shows it */
     if (!o->perspective) {
@@ -388,7 +391,10 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
     /* a part is closed when each edge of its faces is used twice, the two uses running it opposite
        ways: the encoder turned such a part's faces outwards (host_tools/encode/orient.c, by its
        signed volume), so none of its back faces can show (cm_view_mesh skips them); one edge used
-       once, or three times, or twice the same way, and the part is drawn whole */
+       once, or twice the same way, and the part is drawn whole.  At an edge of three or more uses
+       (solids touching) each part's own uses must run it as often one way as the other: then each
+       is closed, but the encoder measured the touching solids together, and cm_view_mesh measures
+       each part (VIEW_CLOSED_SHARED).  (as1_pe_203's 24 solids, drawn whole, were two thirds of its frame.) */
     /* (a piece without edge uses, a mesh's faces without their curve mesh (a GLB), closes nothing) */
     for (uint32_t p = 0; p <= n; p++)
         v->part_closed[p] = 0;
@@ -399,11 +405,22 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
         int32_t first = v->edge_head[e], second = first >= 0 ? v->use_next[first] : -1;
         if (first < 0 || (second >= 0 && v->use_next[second] < 0 && m->uses[first].rev != m->uses[second].rev))
             continue;
-        for (int32_t u = first; u >= 0; u = v->use_next[u])
-            v->part_closed[up[v->use_face[u]]] = 0;
+        int many = second >= 0 && v->use_next[second] >= 0, n_uses = 0;
+        for (int32_t u = first; u >= 0; u = v->use_next[u]) {
+            /* (three or more: the part's own uses of the edge run it as often one way as the other) */
+            int balance = 0;
+            for (int32_t w = first; w >= 0 && many && ++n_uses <= VIEW_MAX_PAIRED_USES * VIEW_MAX_PAIRED_USES;
+                 w = v->use_next[w])
+                if (up[v->use_face[w]] == up[v->use_face[u]])
+                    balance += m->uses[w].rev ? -1 : 1;
+            uint8_t *c = &v->part_closed[up[v->use_face[u]]];
+            *c = many && n_uses <= VIEW_MAX_PAIRED_USES * VIEW_MAX_PAIRED_USES && balance == 0 && *c ? VIEW_CLOSED_SHARED : 0;
+        }
     }
-    for (uint32_t f = 0; f < nf; f++)
+    for (uint32_t f = 0; f < nf; f++) {
         v->face_closed[f] = v->part_closed[up[f]];
+        v->piece_of_face[f] = up[f];
+    }
     /* the parts the workstation named (format 4.11: what the CAD system made one, in the order of
        its steps) replace the connected pieces as steps; what is closed stays the pieces' */
     v->named_parts = m->nparts > 0 && nf > 0;
@@ -746,6 +763,23 @@ static void vertex_screen(const cm_view *v, const cm_mesh *mesh, uint32_t vi, cm
     vertex_screen_at(v, p, n, t);
 }
 
+/* orthographic: do all of face F's vertex normals face away from the viewer (n . f > 0, as
+   vertex_screen_at has it)?  The normals alone, a run at a time */
+static int face_turned_away(cm_view *v, const cm_mesh *mesh, const cm_mesh_face *F)
+{
+    const double *f = v->ortho[3];
+    for (uint32_t i0 = 0; i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
+        uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
+        cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
+        for (uint32_t i = 0; i < n; i++) {
+            const float *N = v->run_nrm[i];
+            if (!((double)N[0] * f[0] + (double)N[1] * f[1] + (double)N[2] * f[2] > 0.0))
+                return 0;
+        }
+    }
+    return F->nverts > 0;
+}
+
 /* vertex j (from the face's first) of face F, a face of more vertices than fv holds: from fv where
    it is still there, else read with the run that follows it (a patch's triangles use its own
    vertices, in order) and projected into the slots they map to */
@@ -804,9 +838,77 @@ static void silhouette(cm_view *v, const cm_view_vert *const c[3])
     }
 }
 
+/*
+ * The parts closed at edges they share with others (VIEW_CLOSED_SHARED): each one's volume, by the
+ * divergence theorem over its triangles (each turned the way its vertex normals point, whatever its
+ * winding), must be clearly positive: its normals face outwards and its back faces can be skipped
+ * (face_closed 1); else, or where it cannot be measured (a face beyond face_pos), it is drawn whole
+ * (0).  As the encoder judges a solid thinner than a millionth of its diagonal (orient.c).
+ */
+static void measure_shared_parts(cm_view *v, const cm_mesh *mesh)
+{
+    const float centre[3] = {(float)v->c[0], (float)v->c[1], (float)v->c[2]};
+    uint32_t nf = v->parts_nfaces, nbase = mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces;
+    int any = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        if (v->face_closed[f] == VIEW_CLOSED_SHARED) {
+            v->piece_volume[v->piece_of_face[f]] = v->piece_area[v->piece_of_face[f]] = 0.0;
+            any = 1;
+        }
+    for (uint32_t fi = 0; any && fi < nbase && fi < mesh->nfaces; fi++) {
+        const cm_mesh_face *F = &mesh->faces[fi];
+        if (F->source_face >= nf || v->face_closed[F->source_face] != VIEW_CLOSED_SHARED)
+            continue;
+        uint32_t p = v->piece_of_face[F->source_face];
+        if (F->nverts > CM_VIEW_FACE_VERTS) {
+            v->piece_area[p] = -1.0; /* (not measured: drawn whole) */
+            continue;
+        }
+        for (uint32_t i0 = 0; i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
+            uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
+            cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, &v->face_pos[i0]);
+            cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, &v->face_nrm[i0]);
+        }
+        double vol = 0.0, area = 0.0;
+        uint32_t ntri = F->nindex / 3;
+        for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
+            uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
+            cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
+            for (const uint32_t *ix = v->run_idx, *const end = ix + 3u * n; ix < end; ix += 3) {
+                const uint32_t j0 = ix[0] - F->first_vert, j1 = ix[1] - F->first_vert, j2 = ix[2] - F->first_vert;
+                if (j0 >= F->nverts || j1 >= F->nverts || j2 >= F->nverts)
+                    continue; /* (not the face's own vertices: not made so) */
+                /* (in float, each triangle's share summed in double: its sign is what is asked, and
+                   the threshold is a millionth; doubles throughout were a sixth of the frame) */
+                const float *p0 = v->face_pos[j0], *p1 = v->face_pos[j1], *p2 = v->face_pos[j2];
+                const float ax = p1[0] - p0[0], ay = p1[1] - p0[1], az = p1[2] - p0[2];
+                const float bx = p2[0] - p0[0], by = p2[1] - p0[1], bz = p2[2] - p0[2];
+                const float cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
+                const float *n0 = v->face_nrm[j0], *n1 = v->face_nrm[j1], *n2 = v->face_nrm[j2];
+                const float along = cx * (n0[0] + n1[0] + n2[0]) + cy * (n0[1] + n1[1] + n2[1]) + cz * (n0[2] + n1[2] + n2[2]);
+                const float six_v = cx * (p0[0] - centre[0]) + cy * (p0[1] - centre[1]) + cz * (p0[2] - centre[2]);
+                vol += (double)(along < 0.0f ? -six_v : six_v);
+                area += (double)(fabsf(cx) + fabsf(cy) + fabsf(cz));
+            }
+        }
+        if (v->piece_area[p] >= 0.0) {
+            v->piece_volume[p] += vol;
+            v->piece_area[p] += area;
+        }
+    }
+    /* (vol is 6 V and area at most 2 sqrt(3) A: V / 3 > 1e-6 diag A / 2 asked with room) */
+    for (uint32_t f = 0; f < nf; f++)
+        if (v->face_closed[f] == VIEW_CLOSED_SHARED) {
+            uint32_t p = v->piece_of_face[f];
+            v->face_closed[f] = (uint8_t)(v->piece_area[p] > 0.0 && v->piece_volume[p] > 1e-6 * v->diag * v->piece_area[p]);
+        }
+}
+
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
     ortho_rows(v);
+    if (v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces)
+        measure_shared_parts(v, mesh);
     /* placed copies follow the model's own faces, placement by placement, each in source order
        (cm_mesh_place): a copy whose source face does not come after the last one's, or lies beyond
        its placement's faces, starts the next placement that holds it */
@@ -838,21 +940,29 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         /* a face's vertices (each in about six triangles) projected and lit once, where they fit
            (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
+        if (closed && !v->o.perspective && face_turned_away(v, mesh, F))
+            continue; /* (every triangle's corners face away: a third of a closed model's frame) */
         for (uint32_t s = 0; !cached && s < CM_VIEW_FACE_VERTS; s++)
             v->fv_tag[s] = UINT32_MAX;
+        unsigned face_all = VIEW_VERT_OK | VIEW_VERT_AWAY, face_any = 0; /* (its vertices' flags) */
         for (uint32_t i0 = 0; cached && i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
             /* read back a run at a time (from the spill a page at a time): a call per value was a
                sixth of a large model's frame */
             uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
             cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
             cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
-            for (uint32_t i = 0; i < n; i++)
+            for (uint32_t i = 0; i < n; i++) {
                 vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
+                face_all &= v->fv[i0 + i].flags;
+                face_any |= v->fv[i0 + i].flags;
+            }
         }
+        /* a face whose vertices all face one way has no silhouette across it */
+        const int mixed = !cached || ((face_all ^ face_any) & VIEW_VERT_AWAY);
         /* the triangles a run of indices at a time; the face's numbers held here (a pixel written
            through a byte pointer could be anything to the compiler: they would be read again) */
         const uint32_t first = F->first_vert, nverts = cached ? F->nverts : 0, ntri = F->nindex / 3;
-        const unsigned silhouettes = v->o.edges ? VIEW_VERT_AWAY : 0u, cull = closed ? VIEW_VERT_AWAY : 0u;
+        const unsigned silhouettes = v->o.edges && mixed ? VIEW_VERT_AWAY : 0u, cull = closed ? VIEW_VERT_AWAY : 0u;
         for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
             const uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
             cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);

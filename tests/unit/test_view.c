@@ -460,6 +460,81 @@ static void test_back_faces(void **state)
     assert_int_equal(drawn[2], drawn[0]); /* open: all drawn */
 }
 
+/* two closed tetrahedra touching along an edge (the second the first turned half round the x axis:
+   edge 0-1 used four times, twice by each): each is closed by its own uses, and the viewer measures
+   which way its normals face (the encoder measured the touching solids together).  Outwards: both
+   drawn without their turned-away faces, the same pixels; the second's normals turned inwards: it
+   is drawn whole (skipping its "turned-away" faces would lose its front), the same pixels again */
+static void touching_tetrahedra(cm_mesh *m, int inward)
+{
+    static const float P[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    static const int tri[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    static const float N[4][3] = {{0, 0, -1}, {0, -1, 0}, {-1, 0, 0}, {0.57735027f, 0.57735027f, 0.57735027f}};
+    static const uint32_t edge[4][3] = {{1, 3, 0}, {0, 4, 2}, {2, 5, 1}, {3, 5, 4}};
+    static const uint8_t rev[4][3] = {{0, 1, 1}, {0, 0, 1}, {0, 1, 1}, {0, 0, 1}};
+    memset(&g_tet, 0, sizeof g_tet);
+    g_tet.nfaces = 8;
+    g_tet.nedges = 11;
+    g_tet.nloops = 8;
+    g_tet.nuses = 24;
+    *m = mesh_storage();
+    for (uint32_t f = 0; f < 8; f++) {
+        uint32_t t = f % 4;
+        int second = f >= 4;
+        float flip = second && inward ? -1.0f : 1.0f;
+        g_tet.faces[f].loop0 = f;
+        g_tet.faces[f].nloops = 1;
+        g_tet.loops[f].use0 = 3 * f;
+        g_tet.loops[f].nuse = 3;
+        cm_mesh_face *F = &m->faces[m->nfaces++];
+        memset(F, 0, sizeof *F);
+        F->source_face = f;
+        F->first_vert = m->nverts;
+        F->first_index = m->nindex;
+        F->nverts = F->nindex = 3;
+        for (int i = 0; i < 3; i++) {
+            const float *q = P[tri[t][i]];
+            /* the second: (x, y, z) -> (x, -y, -z), its edges but 0-1 its own (6..10) */
+            const float pos[3] = {q[0], second ? -q[1] : q[1], second ? -q[2] : q[2]};
+            const float nrm[3] = {flip * N[t][0], flip * (second ? -N[t][1] : N[t][1]), flip * (second ? -N[t][2] : N[t][2])};
+            g_tet.uses[3 * f + (uint32_t)i].edge = second && edge[t][i] != 0 ? edge[t][i] + 5 : edge[t][i];
+            g_tet.uses[3 * f + (uint32_t)i].rev = rev[t][i];
+            memcpy(m->pos[m->nverts], pos, sizeof pos);
+            memcpy(m->nrm[m->nverts], nrm, sizeof nrm);
+            m->idx[m->nindex++] = m->nverts++;
+        }
+    }
+}
+
+static void test_touching_solids(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64 || CM_MAX_FACES < 8 || CM_MAX_EDGES < 11 || CM_MAX_MODEL_USES < 24)
+        skip();
+    cm_view_opts o = square_opts(64, CM_VIEW_ISO, 0);
+    const float lo[3] = {0, -1, -1}, hi[3] = {1, 1, 1};
+    cm_mesh m;
+    uint64_t drawn[3];
+    for (int k = 0; k < 3; k++) {
+        touching_tetrahedra(&m, k == 2);
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        if (k > 0)
+            assert_int_equal(cm_view_parts(&view, &g_tet), 2);
+        cm_view_mesh(&view, &m);
+        drawn[k] = view.triangles;
+        if (k == 0)
+            memcpy(g_frame, view.rgb, sizeof g_frame);
+        else
+            assert_memory_equal(view.rgb, g_frame, sizeof g_frame);
+        if (k > 0) {
+            assert_int_equal(view.face_closed[0], 1);
+            assert_int_equal(view.face_closed[4], k == 1);
+        }
+    }
+    assert_true(drawn[1] < drawn[0]);
+    assert_true(drawn[2] > drawn[1] && drawn[2] < drawn[0]);
+}
+
 static void test_refuses_large_frame(void **state)
 {
     (void)state;
@@ -622,7 +697,7 @@ int main(void)
         cmocka_unit_test(test_front_box),   cmocka_unit_test(test_depth_order), cmocka_unit_test(test_refuses_large_frame),
         cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
-        cmocka_unit_test(test_small_triangles),
+        cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -88,6 +88,7 @@ typedef struct cm_view {
     /* the camera: a point of view space is ((p - c).r, (p - c).u, (p - c).f), f into the screen */
     double c[3], r[3], u[3], f[3];
     double scale;          /* orthographic: pixels per mm; perspective: the focal length in pixels */
+    double diag;           /* the model's box's diagonal (mm) */
     double eye;            /* perspective: the eye's depth in view space (negative) */
     /* orthographic, set by cm_view_mesh from the above: a point's screen x, y and depth and a
        normal's component along the view and along the fill light, each a dot product with a
@@ -103,7 +104,13 @@ typedef struct cm_view {
     uint32_t part_of_face[CM_MAX_FACES];
     uint32_t place_part[CM_MAX_PLACEMENTS > 0 ? CM_MAX_PLACEMENTS : 1]; /* (named parts) */
     uint8_t part_closed[CM_MAX_FACES + 1]; /* (scratch: connected component p's faces close it) */
-    uint8_t face_closed[CM_MAX_FACES];     /* face f's connected component is closed (see cm_view_parts) */
+    uint8_t face_closed[CM_MAX_FACES];     /* face f's connected component is closed (see cm_view_parts;
+                                              VIEW_CLOSED_SHARED: to be measured by cm_view_mesh) */
+    uint32_t piece_of_face[CM_MAX_FACES];  /* face f's connected component (from 1) */
+    /* (scratch, cm_view_mesh: a component's signed volume, about its area, and a face's vertices in
+       model space, to tell whether its normals face outwards) */
+    double piece_volume[CM_MAX_FACES + 1], piece_area[CM_MAX_FACES + 1];
+    float face_pos[CM_VIEW_FACE_VERTS][3], face_nrm[CM_VIEW_FACE_VERTS][3];
     uint32_t parts_nfaces;                 /* the faces cm_view_parts numbered */
     int32_t edge_head[CM_MAX_EDGES];       /* (scratch: each edge's uses in a list, ... */
     int32_t use_next[CM_MAX_MODEL_USES];   /* ... the next use of the same edge, -1 at the end, */
