@@ -420,6 +420,7 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m)
     for (uint32_t f = 0; f < nf; f++) {
         v->face_closed[f] = v->part_closed[up[f]];
         v->piece_of_face[f] = up[f];
+        v->face_away[f] = 0; /* (until cm_view_mesh has looked) */
     }
     /* the parts the workstation named (format 4.11: what the CAD system made one, in the order of
        its steps) replace the connected pieces as steps; what is closed stays the pieces' */
@@ -907,6 +908,9 @@ static void measure_shared_parts(cm_view *v, const cm_mesh *mesh)
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
     ortho_rows(v);
+    const uint32_t nbase = mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces;
+    for (uint32_t f = 0; f < v->parts_nfaces; f++)
+        v->face_away[f] = 0;
     if (v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces)
         measure_shared_parts(v, mesh);
     /* placed copies follow the model's own faces, placement by placement, each in source order
@@ -940,7 +944,10 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         /* a face's vertices (each in about six triangles) projected and lit once, where they fit
            (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
-        if (closed && !v->o.perspective && face_turned_away(v, mesh, F))
+        int away = closed && !v->o.perspective && face_turned_away(v, mesh, F);
+        if (fi < nbase && F->source_face < v->parts_nfaces)
+            v->face_away[F->source_face] = (uint8_t)away;
+        if (away)
             continue; /* (every triangle's corners face away: a third of a closed model's frame) */
         for (uint32_t s = 0; !cached && s < CM_VIEW_FACE_VERTS; s++)
             v->fv_tag[s] = UINT32_MAX;
@@ -1237,12 +1244,16 @@ static int edge_shows(const cm_view *v, const cm_model *m, uint32_t e, int64_t k
 {
     uint32_t part = k < 0 ? 0 : place_part(v, (uint32_t)k);
     if (v->nbase_parts > 0 && e < CM_MAX_EDGES) {
+        /* (the model's own edge between faces of closed parts all turned away is behind them:
+           not worth its curve, cm_view_mesh's face_away) */
+        int shows = 0, behind = k < 0;
         for (int32_t u = v->edge_head[e]; u >= 0; u = v->use_next[u]) {
             uint32_t f = v->use_face[u];
             if (f >= first && f - first < count && part_look(v, k < 0 ? face_part(v, f) : part) != 0)
-                return 1;
+                shows = 1;
+            behind = behind && f < v->parts_nfaces && v->face_away[f];
         }
-        return 0;
+        return shows && !behind;
     }
     for (int i = 0; i < 2; i++) {
         int32_t f = m->edge_face[e][i];

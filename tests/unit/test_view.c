@@ -535,6 +535,45 @@ static void test_touching_solids(void **state)
     assert_true(drawn[2] > drawn[1] && drawn[2] < drawn[0]);
 }
 
+/* the model's own edges, as lines: a closed tetrahedron seen from iso has two faces turned away,
+   and the edge between them (0-2) is behind them: not drawn (nor a dashed line where the faces in
+   front are nearer than its bias); open, all six are drawn */
+static void test_back_edges(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64 || CM_MAX_FACES < 4 || CM_MAX_MODEL_USES < 12 ||
+        CM_MAX_MODEL_CTRL < 12 || CM_MAX_MODEL_KNOTS < 24)
+        skip();
+    static const int ends[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    static const float P[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    cm_view_opts o = square_opts(64, CM_VIEW_ISO, 1);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    uint64_t lines[2];
+    for (int open = 0; open < 2; open++) {
+        cm_mesh m;
+        tetrahedron(&m, open);
+        for (uint32_t e = 0; e < 6; e++) {
+            cm_edge *E = &g_tet.edges[e];
+            E->v0 = ends[e][0], E->v1 = ends[e][1];
+            E->p = 1, E->nctrl = 2, E->ctrl0 = 2 * e, E->knot0 = 4 * e;
+            for (int i = 0; i < 2; i++)
+                g_tet.ctrl[2 * e + (uint32_t)i] = cm_v3(P[ends[e][i]][0], P[ends[e][i]][1], P[ends[e][i]][2]);
+            for (int i = 0; i < 4; i++)
+                g_tet.knots[4 * e + (uint32_t)i] = i < 2 ? 0.0 : 1.0;
+        }
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        assert_int_equal(cm_view_parts(&view, &g_tet), 1);
+        cm_view_mesh(&view, &m);
+        uint64_t before = view.edge_segments;
+        cm_view_edges(&view, &g_tet);
+        lines[open] = view.edge_segments - before;
+        assert_int_equal(view.face_away[0], !open);
+        assert_int_equal(view.face_away[2], !open);
+    }
+    assert_int_equal(lines[0], 5);
+    assert_int_equal(lines[1], 6);
+}
+
 static void test_refuses_large_frame(void **state)
 {
     (void)state;
@@ -698,6 +737,7 @@ int main(void)
         cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
         cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
+        cmocka_unit_test(test_back_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -107,6 +107,8 @@ typedef struct cm_view {
     uint8_t face_closed[CM_MAX_FACES];     /* face f's connected component is closed (see cm_view_parts;
                                               VIEW_CLOSED_SHARED: to be measured by cm_view_mesh) */
     uint32_t piece_of_face[CM_MAX_FACES];  /* face f's connected component (from 1) */
+    uint8_t face_away[CM_MAX_FACES];       /* (cm_view_mesh, for cm_view_edges: face f is closed and
+                                              all its vertices face away: its edges are behind it) */
     /* (scratch, cm_view_mesh: a component's signed volume, about its area, and a face's vertices in
        model space, to tell whether its normals face outwards) */
     double piece_volume[CM_MAX_FACES + 1], piece_area[CM_MAX_FACES + 1];
