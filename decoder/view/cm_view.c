@@ -210,8 +210,9 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         if (!isfinite(lo[i]) || !isfinite(hi[i]) || !(lo[i] <= hi[i]))
             return cm_fail(st, CM_E_ARG, "view: the model's box");
     v->o = *o;
-    v->triangles = v->edge_segments = v->silhouette_segments = 0;
+    v->triangles = v->edge_segments = v->silhouette_segments = v->hidden_faces = 0;
     v->nparts = v->nbase_parts = 0;
+    v->boxes_nfaces = 0; /* (until cm_view_fit boxes this frame's faces) */
     v->named_parts = 0;
     camera_axes(v, o->dir);
     camera_turn(v, o->turn);
@@ -264,31 +265,61 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
 
 void cm_view_fit(cm_view *v, const cm_mesh *mesh)
 {
+    v->boxes_nfaces = 0;
     if (v->o.perspective || mesh->nverts == 0)
         return;
-    /* the outline across and up the screen (the vertices read back a run at a time: one at a time
-       was a twentieth of a large model's frame) */
-    double xlo = 0, xhi = 0, ylo = 0, yhi = 0;
-    for (uint32_t i0 = 0; i0 < mesh->nverts; i0 += CM_VIEW_READ_RUN) {
-        uint32_t n = mesh->nverts - i0 < CM_VIEW_READ_RUN ? mesh->nverts - i0 : CM_VIEW_READ_RUN;
-        cm_mesh_vecs(mesh, CM_SPILL_POS, i0, n, v->run_pos);
-        for (uint32_t i = 0; i < n; i++) {
-            double d[3] = {(double)v->run_pos[i][0] - v->c[0], (double)v->run_pos[i][1] - v->c[1],
-                           (double)v->run_pos[i][2] - v->c[2]};
-            double x = dot3(d, v->r), y = dot3(d, v->u);
-            if (i0 + i == 0) {
-                xlo = xhi = x;
-                ylo = yhi = y;
-            }
-            xlo = x < xlo ? x : xlo;
-            xhi = x > xhi ? x : xhi;
-            ylo = y < ylo ? y : ylo;
-            yhi = y > yhi ? y : yhi;
-        }
+    /* the outline across and up the screen, face by face (each face's box and nearest depth kept
+       for cm_view_mesh's order), where the faces hold every vertex once; else vertex by vertex
+       (the vertices read back a run at a time: one at a time was a twentieth of a large model's
+       frame) */
+    uint64_t held = 0;
+    uint32_t nf = mesh->nfaces <= CM_MAX_FACES ? mesh->nfaces : 0, next = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        held += mesh->faces[f].nverts;
+        nf = mesh->faces[f].first_vert == next ? nf : 0; /* (one after another from 0) */
+        next = mesh->faces[f].first_vert + mesh->faces[f].nverts;
     }
+    nf = held == mesh->nverts ? nf : 0;
+    double xlo = 0, xhi = 0, ylo = 0, yhi = 0;
+    int first = 1;
+    for (uint32_t f = 0; f < (nf ? nf : 1); f++) {
+        uint32_t v0 = nf ? mesh->faces[f].first_vert : 0, nv = nf ? mesh->faces[f].nverts : mesh->nverts;
+        double fxlo = 1e300, fxhi = -1e300, fylo = 1e300, fyhi = -1e300, fz = 1e300;
+        for (uint32_t i0 = 0; i0 < nv; i0 += CM_VIEW_READ_RUN) {
+            uint32_t n = nv - i0 < CM_VIEW_READ_RUN ? nv - i0 : CM_VIEW_READ_RUN;
+            cm_mesh_vecs(mesh, CM_SPILL_POS, v0 + i0, n, v->run_pos);
+            for (uint32_t i = 0; i < n; i++) {
+                double d[3] = {(double)v->run_pos[i][0] - v->c[0], (double)v->run_pos[i][1] - v->c[1],
+                               (double)v->run_pos[i][2] - v->c[2]};
+                double x = dot3(d, v->r), y = dot3(d, v->u), z = dot3(d, v->f);
+                fxlo = x < fxlo ? x : fxlo;
+                fxhi = x > fxhi ? x : fxhi;
+                fylo = y < fylo ? y : fylo;
+                fyhi = y > fyhi ? y : fyhi;
+                fz = z < fz ? z : fz;
+            }
+        }
+        if (nf) {
+            v->face_box[f][0] = (float)fxlo, v->face_box[f][1] = (float)fxhi;
+            v->face_box[f][2] = (float)fylo, v->face_box[f][3] = (float)fyhi;
+            v->face_near[f] = fz;
+        }
+        if (nv == 0)
+            continue;
+        if (first) {
+            xlo = fxlo, xhi = fxhi, ylo = fylo, yhi = fyhi;
+            first = 0;
+        }
+        xlo = fxlo < xlo ? fxlo : xlo;
+        xhi = fxhi > xhi ? fxhi : xhi;
+        ylo = fylo < ylo ? fylo : ylo;
+        yhi = fyhi > yhi ? fyhi : yhi;
+    }
+    v->boxes_nfaces = nf;
     double mx = 0.5 * (xlo + xhi), my = 0.5 * (ylo + yhi);
     for (int k = 0; k < 3; k++)
         v->c[k] += mx * v->r[k] + my * v->u[k];
+    v->fit_x = mx, v->fit_y = my;
     double room_x, room_y;
     frame_room(v, &room_x, &room_y);
     double ex = 0.5 * (xhi - xlo), ey = 0.5 * (yhi - ylo);
@@ -549,6 +580,12 @@ static void put_lit(uint8_t *px, uint64_t base, int64_t light)
     px[2] = (uint8_t)(c >> 12);
 }
 
+/* the coarse depth: pixel (x, y) was written (its tile's farthest may be nearer now) */
+static void tile_mark(cm_view *v, int64_t x, int64_t y)
+{
+    v->tile_written[(y / CM_VIEW_TILE) * v->tiles_w + x / CM_VIEW_TILE] = 1;
+}
+
 /*
  * Fill the triangle of screen vertices t[3] (their fixed-point corners, depths and brightnesses)
  * in colour rgb.  The corners were rounded to 1/VIEW_SUBPIX of a pixel (vertex_screen_at) and the
@@ -629,6 +666,9 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
                 drawn = 1;
             }
         }
+        if (drawn) /* (its first corner's tile: a mark makes the tile's bound tight again, a mark
+                      missed leaves it loose, never wrong) */
+            tile_mark(v, x0, y0);
         v->triangles += (uint64_t)drawn;
         return;
     }
@@ -699,12 +739,23 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
         float *d = &v->depth[at];
         uint8_t *pix = &v->rgb[3 * at];
         const int clamp = !(lend >= 0 && lend <= VIEW_LIGHT_MAX); /* (both ends within: all between) */
+        int wrote = 0;
         for (int64_t k = lo; k <= hi; k++, d += stride, pix += 3 * stride, zp += zs, lfx += ls_fx) {
             float zf = (float)zp;
             if (!(zf < *d))
                 continue;
             *d = zf;
             put_lit(pix, base, clamp ? (lfx <= 0 ? 0 : (lfx >= VIEW_LIGHT_MAX ? VIEW_LIGHT_MAX : lfx)) : lfx);
+            wrote = 1;
+        }
+        if (wrote) {
+            /* (the span's tiles: along a row one after another, down a column a row of tiles apart) */
+            const size_t along = cols ? (size_t)v->tiles_w : 1;
+            const uint64_t fx = (uint64_t)(cols ? x0 + j : x0 + lo), fy = (uint64_t)(cols ? y0 + lo : y0 + j);
+            uint8_t *tw = &v->tile_written[(fy / CM_VIEW_TILE) * (uint64_t)v->tiles_w + fx / CM_VIEW_TILE];
+            uint64_t first = (uint64_t)((cols ? y0 : x0) + lo) / CM_VIEW_TILE, last = (uint64_t)((cols ? y0 : x0) + hi) / CM_VIEW_TILE;
+            for (uint64_t q = first; q <= last; q++, tw += along)
+                *tw = 1;
             drawn = 1;
         }
     }
@@ -839,6 +890,63 @@ static void silhouette(cm_view *v, const cm_view_vert *const c[3])
     }
 }
 
+/* is mesh face fi, by its box and nearest depth (cm_view_fit), behind the farthest pixel of every
+   tile it touches, or off the frame?  A tile written since it was last looked at has its farthest
+   found again (else it stays an upper bound: a write only brings a pixel nearer) */
+static int face_hidden(cm_view *v, uint32_t fi)
+{
+    const float *b = v->face_box[fi];
+    const double k = v->scale, W = (double)v->o.width, H = (double)v->o.height;
+    /* (a pixel's margin: the corners are rounded to 1/256 of one, the box to a float) */
+    double x0 = 0.5 * W + k * ((double)b[0] - v->fit_x) - 1.0, x1 = 0.5 * W + k * ((double)b[1] - v->fit_x) + 1.0;
+    double y0 = 0.5 * H - k * ((double)b[3] - v->fit_y) - 1.0, y1 = 0.5 * H - k * ((double)b[2] - v->fit_y) + 1.0;
+    if (!(x1 >= 0.0 && y1 >= 0.0 && x0 < W && y0 < H))
+        return 1;
+    const int tw = v->tiles_w;
+    int tx0 = x0 > 0.0 ? (int)x0 / CM_VIEW_TILE : 0, tx1 = x1 < W ? (int)x1 / CM_VIEW_TILE : (v->o.width - 1) / CM_VIEW_TILE;
+    int ty0 = y0 > 0.0 ? (int)y0 / CM_VIEW_TILE : 0, ty1 = y1 < H ? (int)y1 / CM_VIEW_TILE : (v->o.height - 1) / CM_VIEW_TILE;
+    /* (a pixel's depth is a mix of its triangle's corners' in double, then a float: a millionth of
+       the model across is room for both roundings) */
+    const double near = v->face_near[fi] - 1e-5 * v->diag;
+    for (int ty = ty0; ty <= ty1; ty++)
+        for (int tx = tx0; tx <= tx1; tx++) {
+            int t = ty * tw + tx;
+            if (v->tile_written[t]) {
+                float far = -3.0e38f;
+                int px1 = (tx + 1) * CM_VIEW_TILE < v->o.width ? (tx + 1) * CM_VIEW_TILE : v->o.width;
+                int py1 = (ty + 1) * CM_VIEW_TILE < v->o.height ? (ty + 1) * CM_VIEW_TILE : v->o.height;
+                for (int py = ty * CM_VIEW_TILE; py < py1; py++) {
+                    const float *d = &v->depth[(size_t)py * (size_t)v->o.width];
+                    for (int px = tx * CM_VIEW_TILE; px < px1; px++)
+                        far = d[px] > far ? d[px] : far;
+                }
+                v->tile_far[t] = far;
+                v->tile_written[t] = 0;
+            }
+            if (!(near > (double)v->tile_far[t]))
+                return 0;
+        }
+    return 1;
+}
+
+/* the mesh's faces in order of their nearest depths (Shell's sort, Ciura's gaps: no recursion, no
+   scratch; equal depths in an order fixed by the input alone) */
+static void order_faces(cm_view *v, uint32_t n)
+{
+    static const uint32_t gaps[] = {1750, 701, 301, 132, 57, 23, 10, 4, 1};
+    for (uint32_t i = 0; i < n; i++)
+        v->face_order[i] = i;
+    for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
+        uint32_t gap = gaps[g];
+        for (uint32_t i = gap; i < n; i++) {
+            uint32_t f = v->face_order[i], j = i;
+            for (; j >= gap && v->face_near[v->face_order[j - gap]] > v->face_near[f]; j -= gap)
+                v->face_order[j] = v->face_order[j - gap];
+            v->face_order[j] = f;
+        }
+    }
+}
+
 /*
  * The parts closed at edges they share with others (VIEW_CLOSED_SHARED): each one's volume, by the
  * divergence theorem over its triangles (each turned the way its vertex normals point, whatever its
@@ -908,30 +1016,55 @@ static void measure_shared_parts(cm_view *v, const cm_mesh *mesh)
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
     ortho_rows(v);
+    v->tiles_w = (v->o.width + CM_VIEW_TILE - 1) / CM_VIEW_TILE;
     const uint32_t nbase = mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces;
     for (uint32_t f = 0; f < v->parts_nfaces; f++)
         v->face_away[f] = 0;
     if (v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces)
         measure_shared_parts(v, mesh);
+    /* orthographic, the faces boxed (cm_view_fit): nearest first, each behind what is drawn skipped
+       (a third of an assembly's triangles lie behind its other parts); else in file order */
+    const int front_to_back = !v->o.perspective && v->boxes_nfaces == mesh->nfaces && mesh->nfaces > 0 &&
+                              mesh->nfaces <= CM_MAX_FACES;
+    if (front_to_back) {
+        order_faces(v, mesh->nfaces);
+        int ntiles = v->tiles_w * ((v->o.height + CM_VIEW_TILE - 1) / CM_VIEW_TILE);
+        for (int t = 0; t < ntiles; t++) {
+            v->tile_far[t] = 3.0e38f; /* (the frame's clear depth) */
+            v->tile_written[t] = 0;
+        }
+    }
     /* placed copies follow the model's own faces, placement by placement, each in source order
        (cm_mesh_place): a copy whose source face does not come after the last one's, or lies beyond
-       its placement's faces, starts the next placement that holds it */
+       its placement's faces, starts the next placement that holds it (in file order, before the
+       faces are drawn in another) */
     int64_t placement = -1;
     uint32_t last_source = 0;
-    for (uint32_t fi = 0; fi < mesh->nfaces; fi++) {
+    const uint32_t steps = front_to_back ? 2 * mesh->nfaces : mesh->nfaces; /* (placements, then drawing) */
+    for (uint32_t k = 0; k < steps; k++) {
+        const int drawing = !front_to_back || k >= mesh->nfaces;
+        const uint32_t fi = !front_to_back ? k : (drawing ? v->face_order[k - mesh->nfaces] : k);
         const cm_mesh_face *F = &mesh->faces[fi];
-        if (fi >= mesh->nbase_faces && mesh->nplace > 0 && mesh->place) {
-            const cm_placement *P = placement >= 0 ? &mesh->place[placement] : NULL;
-            if (!P || F->source_face <= last_source || F->source_face >= P->first + P->count)
-                placement++;
-            while (placement + 1 < (int64_t)mesh->nplace &&
-                   !(F->source_face >= mesh->place[placement].first &&
-                     F->source_face < mesh->place[placement].first + mesh->place[placement].count))
-                placement++;
-            if (placement >= (int64_t)mesh->nplace)
-                placement = (int64_t)mesh->nplace - 1; /* (a mesh not made by cm_mesh_place) */
+        if (!(front_to_back && drawing)) {
+            if (fi >= mesh->nbase_faces && mesh->nplace > 0 && mesh->place) {
+                const cm_placement *P = placement >= 0 ? &mesh->place[placement] : NULL;
+                if (!P || F->source_face <= last_source || F->source_face >= P->first + P->count)
+                    placement++;
+                while (placement + 1 < (int64_t)mesh->nplace &&
+                       !(F->source_face >= mesh->place[placement].first &&
+                         F->source_face < mesh->place[placement].first + mesh->place[placement].count))
+                    placement++;
+                if (placement >= (int64_t)mesh->nplace)
+                    placement = (int64_t)mesh->nplace - 1; /* (a mesh not made by cm_mesh_place) */
+            }
+            last_source = F->source_face;
+            if (front_to_back)
+                v->face_place[fi] = (int32_t)placement;
         }
-        last_source = F->source_face;
+        if (!drawing)
+            continue;
+        if (front_to_back)
+            placement = v->face_place[fi];
         uint32_t part = placement < 0 ? face_part(v, F->source_face) : place_part(v, (uint32_t)placement);
         int look = part_look(v, part);
         if (look == 0)
@@ -945,6 +1078,10 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
            (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
         int away = closed && !v->o.perspective && face_turned_away(v, mesh, F);
+        if (!away && front_to_back && face_hidden(v, fi)) {
+            away = 1;
+            v->hidden_faces++;
+        }
         if (fi < nbase && F->source_face < v->parts_nfaces)
             v->face_away[F->source_face] = (uint8_t)away;
         if (away)

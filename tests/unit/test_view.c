@@ -574,6 +574,49 @@ static void test_back_edges(void **state)
     assert_int_equal(lines[1], 6);
 }
 
+/* front to back: a square half the size behind the unit square's front (y = 0.5), first in the
+   file, is drawn (two triangles) and then covered when the frame follows the file; with the fit's
+   boxes (cm_view_fit) the front square goes first and the one behind is skipped whole, the same
+   pixels; a square behind but larger shows round the front one and is drawn, and so is one whose
+   upper half is in front of a tilted front square (nearer at its lower edge: drawn first) */
+static void test_hidden_faces(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100 || CM_MAX_FACES < 2)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
+    const float ny[3] = {0, -1, 0};
+    for (int larger = 0; larger < 3; larger++) {
+        /* (2: the unit square tilted, its lower edge half a unit nearer and its upper half a unit
+           farther, the small square upright at y = 0: after it in depth, half of it in front) */
+        float lo_x = larger == 1 ? -0.25f : 0.25f, hi_x = larger == 1 ? 1.25f : 0.75f, yb = larger == 2 ? 0.0f : 0.5f;
+        const float back[4][3] = {{lo_x, yb, lo_x}, {hi_x, yb, lo_x}, {hi_x, yb, hi_x}, {lo_x, yb, hi_x}};
+        const float y0 = larger == 2 ? -0.5f : 0.0f, y1 = larger == 2 ? 0.5f : 0.0f;
+        const float front[4][3] = {{0, y0, 0}, {1, y0, 0}, {1, y1, 1}, {0, y1, 1}};
+        const float tilted[3] = {0, -0.7071068f, 0.7071068f};
+        const float lo[3] = {lo_x < 0 ? lo_x : 0, y0, lo_x < 0 ? lo_x : 0}, hi[3] = {hi_x > 1 ? hi_x : 1, 0.5f, hi_x > 1 ? hi_x : 1};
+        uint64_t drawn[2];
+        for (int fit = 0; fit < 2; fit++) {
+            cm_mesh m = mesh_storage();
+            add_quad(&m, back, ny, 0x2060a0u, 1);
+            add_quad(&m, front, larger == 2 ? tilted : ny, 0x808080u, 1);
+            assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+            if (fit)
+                cm_view_fit(&view, &m);
+            assert_int_equal(view.boxes_nfaces, fit ? 2 : 0);
+            cm_view_mesh(&view, &m);
+            drawn[fit] = view.triangles;
+            if (!fit)
+                memcpy(b_frame[0], view.rgb, sizeof b_frame[0]);
+            else
+                assert_memory_equal(view.rgb, b_frame[0], sizeof b_frame[0]);
+        }
+        assert_int_equal(drawn[0], 4);
+        assert_int_equal(drawn[1], larger ? 4 : 2);
+        assert_int_equal(view.hidden_faces, larger == 0);
+    }
+}
+
 static void test_refuses_large_frame(void **state)
 {
     (void)state;
@@ -737,7 +780,7 @@ int main(void)
         cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
         cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
-        cmocka_unit_test(test_back_edges),
+        cmocka_unit_test(test_back_edges), cmocka_unit_test(test_hidden_faces),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -70,6 +70,10 @@ typedef struct cm_view_opts {
 /** Defaults: 800 x 480 (within the build's frame), iso, unturned, orthographic, white, edges on. */
 void cm_view_opts_default(cm_view_opts *o);
 
+/** The coarse depth's tiles (cm_view_mesh): pixels a side, and how many the largest frame has. */
+#define CM_VIEW_TILE 8
+#define CM_VIEW_TILES (((CM_VIEW_MAX_W + CM_VIEW_TILE - 1) / CM_VIEW_TILE) * ((CM_VIEW_MAX_H + CM_VIEW_TILE - 1) / CM_VIEW_TILE))
+
 /** Vertices (and triangles) read back from the mesh at a time by cm_view_mesh. */
 #define CM_VIEW_READ_RUN 256
 
@@ -95,6 +99,7 @@ typedef struct cm_view {
        model-space row (and a constant) */
     double ortho[5][4];
     uint64_t triangles, edge_segments, silhouette_segments; /* drawn (for tests and --verbose) */
+    uint64_t hidden_faces;                                  /* skipped behind what was drawn */
     /* the model's parts (cm_view_parts): those the file names (format 4.11: cm_face.part,
        cm_placement.part), else a face's part among its own faces' connected components (faces joined
        by their edges, see there), numbered from 1 in face order, and placement k's copies part
@@ -121,6 +126,20 @@ typedef struct cm_view {
        (GREGORY faces are meshed patch by patch) keeps its vertex j in fv[j % CM_VIEW_FACE_VERTS],
        fv_tag saying which j is there */
     cm_view_vert fv[CM_VIEW_FACE_VERTS];
+    /* front to back (orthographic): cm_view_fit keeps each mesh face's box (view units across and
+       up, before the fit's centring, which it keeps in fit_x, fit_y) and nearest depth; cm_view_mesh
+       draws the faces nearest first, and skips a face whose box is behind the farthest pixel of
+       every tile it touches (tile_far: an upper bound, made the farthest again where written since,
+       tile_written) */
+    uint32_t boxes_nfaces;                 /* the faces boxed (0: none, draw in file order) */
+    int tiles_w;                           /* tiles across the frame */
+    double fit_x, fit_y;
+    float face_box[CM_MAX_FACES][4];       /* x low, x high, y low, y high */
+    double face_near[CM_MAX_FACES];
+    uint32_t face_order[CM_MAX_FACES];
+    int32_t face_place[CM_MAX_FACES];      /* a face's placement (-1: the model's own) */
+    float tile_far[CM_VIEW_TILES];
+    uint8_t tile_written[CM_VIEW_TILES];
     uint32_t fv_tag[CM_VIEW_FACE_VERTS];
     /* a run of the mesh's positions, normals and indices, read back together */
     float run_pos[CM_VIEW_READ_RUN][3], run_nrm[CM_VIEW_READ_RUN][3];
