@@ -4,15 +4,20 @@
  * bounds; on CM_OK every index names a vertex of its own face, every face's vertices and indices lie
  * within the mesh, and each face has its part (1..nparts).  The mesh is a small one, for half the
  * inputs with a spill in memory and a window of 64 vertices (a primitive larger than it goes in
- * runs of triangles).  Seeds: tests/fuzz/corpus_glb (`cmz decode`'s GLBs of
+ * runs of triangles).  Then it is drawn as `cmz-view MODEL.glb` draws it (cm_view.h: parts, the
+ * fit and its faces' boxes, nearest first with the coarse depth, the rasteriser's set-ups), in a
+ * small frame from a direction, turn, step and projection the input's first bytes choose: any
+ * vertices (huge, not numbers, behind the eye) must draw without a fault.  Seeds: tests/fuzz/corpus_glb (`cmz decode`'s GLBs of
  * three fuzz IGES seeds, one with placed copies as nodes).
  */
 #include <stdint.h>
 #include <string.h>
 
 #include "cm/cm_glb_read.h"
+#include "cm/cm_view.h"
 
 static cm_glb_reader g;
+static cm_view view;
 static cm_model model;
 static float pos[4096][3], nrm[4096][3];
 static uint32_t idx[12288];
@@ -89,5 +94,27 @@ int LLVMFuzzerTestOneInput(const uint8_t *d, size_t n)
         if (model.faces[f].part < 1 || model.faces[f].part > model.nparts)
             __builtin_trap();
     }
+    float lo[3], hi[3];
+    if (!cm_mesh_bounds(&mesh, lo, hi))
+        return 0;
+    cm_view_opts o;
+    cm_view_opts_default(&o);
+    uint8_t pick = n > 1 ? d[n - 2] : 0;
+    o.width = 96 + (pick & 7) * 9; /* (80-ish to 160 across: tiles cut short at the edges) */
+    o.height = 64 + (pick >> 3 & 3) * 7;
+    o.width = o.width <= CM_VIEW_MAX_W ? o.width : CM_VIEW_MAX_W;
+    o.height = o.height <= CM_VIEW_MAX_H ? o.height : CM_VIEW_MAX_H;
+    o.dir = (cm_view_dir)((pick >> 5) % CM_VIEW_DIR_COUNT);
+    o.perspective = n > 2 && (d[n - 3] & 1);
+    o.turn = n > 2 ? d[n - 3] >> 1 : 0;
+    cm_status_init(&st);
+    if (cm_view_begin(&view, &o, lo, hi, &st) != CM_OK)
+        return 0;
+    uint32_t parts = cm_view_parts(&view, &model);
+    o.step = parts > 0 && n > 3 ? d[n - 4] % (parts + 1) : 0;
+    view.o.step = o.step;
+    cm_view_fit(&view, &mesh);
+    cm_view_mesh(&view, &mesh);
+    cm_view_edges(&view, &model);
     return 0;
 }

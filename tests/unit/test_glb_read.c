@@ -9,6 +9,7 @@
  * name, never a crash.
  */
 #include "test_util.h"
+#include "test_mesh.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -65,14 +66,7 @@ static int mem_src(void *ctx, uint64_t off, void *buf, size_t n)
 
 static cm_err read_glb(cm_status *st)
 {
-    memset(&mesh, 0, sizeof mesh);
-    mesh.pos = g_pos;
-    mesh.nrm = g_nrm;
-    mesh.idx = g_idx;
-    mesh.faces = g_faces;
-    mesh.cap_verts = MAXV;
-    mesh.cap_index = MAXI;
-    mesh.cap_faces = 16;
+    mesh = test_mesh_on(g_pos, g_nrm, g_idx, g_faces, MAXV, MAXI, 16);
     cm_status_init(st);
     return cm_glb_read(&g, mem_src, NULL, flen, &mesh, &model, st);
 }

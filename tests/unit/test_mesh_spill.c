@@ -12,6 +12,7 @@
 #include <stdio.h>
 
 #include "test_util.h"
+#include "test_mesh.h"
 
 #include "cm/cm_mesh.h"
 #include "cm/cm_out.h"
@@ -62,16 +63,7 @@ static int mem_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, siz
 static cm_mesh mesh_over(float (*pos)[3], float (*nrm)[3], uint32_t *idx, cm_mesh_face *faces, uint32_t cap_v,
                          uint32_t cap_i)
 {
-    cm_mesh m;
-    memset(&m, 0, sizeof m);
-    m.pos = pos;
-    m.nrm = nrm;
-    m.idx = idx;
-    m.faces = faces;
-    m.cap_verts = cap_v;
-    m.cap_index = cap_i;
-    m.cap_faces = MANY_FACES;
-    return m;
+    return test_mesh_on(pos, nrm, idx, faces, cap_v, cap_i, MANY_FACES);
 }
 
 static cm_mesh whole_mesh(void) { return mesh_over(w_pos, w_nrm, w_idx, w_faces, WHOLE_V, WHOLE_I); }

@@ -17,6 +17,7 @@
 #include <sys/stat.h>
 
 #include "test_util.h"
+#include "test_mesh.h"
 
 #include "cm/cm_mesh.h"
 #include "cm/cm_numfmt.h"
@@ -32,19 +33,7 @@ static uint32_t g_idx[MAXI];
 static cm_mesh_face g_faces[MAXF];
 static uint8_t g_out[1 << 16], g_out2[1 << 16];
 
-static cm_mesh mesh_storage(void)
-{
-    cm_mesh m;
-    memset(&m, 0, sizeof m);
-    m.pos = g_pos;
-    m.nrm = g_nrm;
-    m.idx = g_idx;
-    m.faces = g_faces;
-    m.cap_verts = MAXV;
-    m.cap_index = MAXI;
-    m.cap_faces = MAXF;
-    return m;
-}
+static cm_mesh mesh_storage(void) { return test_mesh_on(g_pos, g_nrm, g_idx, g_faces, MAXV, MAXI, MAXF); }
 
 static void add_vertex(cm_mesh *m, const float p[3], const float n[3])
 {

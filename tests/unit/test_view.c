@@ -7,6 +7,7 @@
  * pixels are the frame's, and its size is the one announced.
  */
 #include "test_util.h"
+#include "test_mesh.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -23,19 +24,7 @@ static float g_pos[MAXV][3], g_nrm[MAXV][3];
 static uint32_t g_idx[MAXI];
 static cm_mesh_face g_faces[8];
 
-static cm_mesh mesh_storage(void)
-{
-    cm_mesh m;
-    memset(&m, 0, sizeof m);
-    m.pos = g_pos;
-    m.nrm = g_nrm;
-    m.idx = g_idx;
-    m.faces = g_faces;
-    m.cap_verts = MAXV;
-    m.cap_index = MAXI;
-    m.cap_faces = 8;
-    return m;
-}
+static cm_mesh mesh_storage(void) { return test_mesh_on(g_pos, g_nrm, g_idx, g_faces, MAXV, MAXI, 8); }
 
 /* a quad (a, b, c, d) with normal n as one face of two triangles */
 static void add_quad(cm_mesh *m, const float q[4][3], const float n[3], uint32_t rgb, int has_color)
@@ -287,16 +276,7 @@ static uint8_t b_frame[3][100 * 100 * 3];
 
 static cm_mesh big_storage(void)
 {
-    cm_mesh m;
-    memset(&m, 0, sizeof m);
-    m.pos = b_pos;
-    m.nrm = b_nrm;
-    m.idx = b_idx;
-    m.faces = b_faces;
-    m.cap_verts = 2 * BIG_VERTS;
-    m.cap_index = BIG_INDEX;
-    m.cap_faces = BIG_CELLS + GRID_CELLS;
-    return m;
+    return test_mesh_on(b_pos, b_nrm, b_idx, b_faces, 2 * BIG_VERTS, BIG_INDEX, BIG_CELLS + GRID_CELLS);
 }
 
 /* a face of cells [c0, c1) of a row of `across` cells at height [z0, z1]: its own vertices, bottom
@@ -396,7 +376,10 @@ static void test_small_triangles(void **state)
    faces turned away from the iso view skipped; with one edge run the same way by both its faces the
    part is open and every triangle is drawn */
 static cm_model g_tet;
-static void tetrahedron(cm_mesh *m, int open)
+/* `count` tetrahedra (the second the first turned half round the x axis: (x, y, z) -> (x, -y, -z),
+   touching it along edge 0-1, its other edges its own, 6..10); `inward`: the second's normals turned
+   inwards */
+static void tetrahedra(cm_mesh *m, uint32_t count, int inward)
 {
     static const float P[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     static const int tri[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
@@ -405,83 +388,14 @@ static void tetrahedron(cm_mesh *m, int open)
     static const uint32_t edge[4][3] = {{1, 3, 0}, {0, 4, 2}, {2, 5, 1}, {3, 5, 4}};
     static const uint8_t rev[4][3] = {{0, 1, 1}, {0, 0, 1}, {0, 1, 1}, {0, 0, 1}};
     memset(&g_tet, 0, sizeof g_tet);
-    g_tet.nfaces = 4;
-    g_tet.nedges = 6;
-    g_tet.nloops = 4;
-    g_tet.nuses = 12;
+    g_tet.nfaces = g_tet.nloops = 4 * count;
+    g_tet.nedges = count > 1 ? 11 : 6;
+    g_tet.nuses = 12 * count;
     *m = mesh_storage();
-    for (uint32_t f = 0; f < 4; f++) {
-        g_tet.faces[f].loop0 = f;
-        g_tet.faces[f].nloops = 1;
-        g_tet.loops[f].use0 = 3 * f;
-        g_tet.loops[f].nuse = 3;
-        cm_mesh_face *F = &m->faces[m->nfaces++];
-        memset(F, 0, sizeof *F);
-        F->source_face = f;
-        F->first_vert = m->nverts;
-        F->first_index = m->nindex;
-        F->nverts = F->nindex = 3;
-        for (int i = 0; i < 3; i++) {
-            g_tet.uses[3 * f + (uint32_t)i].edge = edge[f][i];
-            g_tet.uses[3 * f + (uint32_t)i].rev = rev[f][i];
-            memcpy(m->pos[m->nverts], P[tri[f][i]], sizeof(float[3]));
-            memcpy(m->nrm[m->nverts], N[f], sizeof(float[3]));
-            m->idx[m->nindex++] = m->nverts++;
-        }
-    }
-    if (open)
-        g_tet.uses[3 * 3 + 1].rev = 1; /* edge 2-3 run 3 -> 2 by both its faces */
-}
-
-static void test_back_faces(void **state)
-{
-    (void)state;
-    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64 || CM_MAX_FACES < 4 || CM_MAX_MODEL_USES < 12)
-        skip();
-    cm_view_opts o = square_opts(64, CM_VIEW_ISO, 0);
-    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
-    cm_mesh m;
-    uint64_t drawn[3];
-    for (int k = 0; k < 3; k++) {
-        tetrahedron(&m, k == 2);
-        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
-        if (k > 0)
-            assert_int_equal(cm_view_parts(&view, &g_tet), 1);
-        cm_view_mesh(&view, &m);
-        drawn[k] = view.triangles;
-        if (k == 0)
-            memcpy(g_frame, view.rgb, sizeof g_frame);
-        else
-            assert_memory_equal(view.rgb, g_frame, sizeof g_frame);
-    }
-    assert_int_equal(view.face_closed[0], 0);
-    assert_true(drawn[1] < drawn[0]); /* closed: the turned-away faces skipped */
-    assert_int_equal(drawn[1], 2);
-    assert_int_equal(drawn[2], drawn[0]); /* open: all drawn */
-}
-
-/* two closed tetrahedra touching along an edge (the second the first turned half round the x axis:
-   edge 0-1 used four times, twice by each): each is closed by its own uses, and the viewer measures
-   which way its normals face (the encoder measured the touching solids together).  Outwards: both
-   drawn without their turned-away faces, the same pixels; the second's normals turned inwards: it
-   is drawn whole (skipping its "turned-away" faces would lose its front), the same pixels again */
-static void touching_tetrahedra(cm_mesh *m, int inward)
-{
-    static const float P[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    static const int tri[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-    static const float N[4][3] = {{0, 0, -1}, {0, -1, 0}, {-1, 0, 0}, {0.57735027f, 0.57735027f, 0.57735027f}};
-    static const uint32_t edge[4][3] = {{1, 3, 0}, {0, 4, 2}, {2, 5, 1}, {3, 5, 4}};
-    static const uint8_t rev[4][3] = {{0, 1, 1}, {0, 0, 1}, {0, 1, 1}, {0, 0, 1}};
-    memset(&g_tet, 0, sizeof g_tet);
-    g_tet.nfaces = 8;
-    g_tet.nedges = 11;
-    g_tet.nloops = 8;
-    g_tet.nuses = 24;
-    *m = mesh_storage();
-    for (uint32_t f = 0; f < 8; f++) {
+    for (uint32_t f = 0; f < 4 * count; f++) {
         uint32_t t = f % 4;
         int second = f >= 4;
-        float flip = second && inward ? -1.0f : 1.0f;
+        float flip = second && inward ? -1.0f : 1.0f, turn = second ? -1.0f : 1.0f;
         g_tet.faces[f].loop0 = f;
         g_tet.faces[f].nloops = 1;
         g_tet.loops[f].use0 = 3 * f;
@@ -494,9 +408,8 @@ static void touching_tetrahedra(cm_mesh *m, int inward)
         F->nverts = F->nindex = 3;
         for (int i = 0; i < 3; i++) {
             const float *q = P[tri[t][i]];
-            /* the second: (x, y, z) -> (x, -y, -z), its edges but 0-1 its own (6..10) */
-            const float pos[3] = {q[0], second ? -q[1] : q[1], second ? -q[2] : q[2]};
-            const float nrm[3] = {flip * N[t][0], flip * (second ? -N[t][1] : N[t][1]), flip * (second ? -N[t][2] : N[t][2])};
+            const float pos[3] = {q[0], turn * q[1], turn * q[2]};
+            const float nrm[3] = {flip * N[t][0], flip * turn * N[t][1], flip * turn * N[t][2]};
             g_tet.uses[3 * f + (uint32_t)i].edge = second && edge[t][i] != 0 ? edge[t][i] + 5 : edge[t][i];
             g_tet.uses[3 * f + (uint32_t)i].rev = rev[t][i];
             memcpy(m->pos[m->nverts], pos, sizeof pos);
@@ -506,31 +419,74 @@ static void touching_tetrahedra(cm_mesh *m, int inward)
     }
 }
 
+/* a closed tetrahedron, or an open one (edge 2-3 run 3 -> 2 by both its faces) */
+static void tetrahedron(cm_mesh *m, int open)
+{
+    tetrahedra(m, 1, 0);
+    if (open)
+        g_tet.uses[3 * 3 + 1].rev = 1;
+}
+
+/* `count` tetrahedra (tetrahedra()) from iso: drawn as they are (k = 0, no parts: every triangle),
+   then with their parts numbered (k = 1) and once more changed (k = 2: one open, or the second's
+   normals inwards); the same pixels each time; the triangles drawn and (k > 0) the first and the
+   second solid's faces closed each time */
+static void draw_tetrahedra(uint32_t count, uint64_t drawn[3], uint8_t closed[3][2])
+{
+    cm_view_opts o = square_opts(64, CM_VIEW_ISO, 0);
+    const float lo[3] = {0, count > 1 ? -1.0f : 0.0f, count > 1 ? -1.0f : 0.0f}, hi[3] = {1, 1, 1};
+    for (int k = 0; k < 3; k++) {
+        cm_mesh m;
+        if (count > 1)
+            tetrahedra(&m, count, k == 2);
+        else
+            tetrahedron(&m, k == 2);
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        if (k > 0)
+            assert_int_equal(cm_view_parts(&view, &g_tet), count);
+        cm_view_mesh(&view, &m);
+        drawn[k] = view.triangles;
+        closed[k][0] = view.face_closed[0];
+        closed[k][1] = count > 1 ? view.face_closed[4] : 0;
+        if (k == 0)
+            memcpy(g_frame, view.rgb, sizeof g_frame);
+        else
+            assert_memory_equal(view.rgb, g_frame, sizeof g_frame);
+    }
+}
+
+static void test_back_faces(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64 || CM_MAX_FACES < 4 || CM_MAX_MODEL_USES < 12)
+        skip();
+    uint64_t drawn[3];
+    uint8_t closed[3][2];
+    draw_tetrahedra(1, drawn, closed);
+    assert_int_equal(closed[1][0], 1);
+    assert_int_equal(closed[2][0], 0);
+    assert_true(drawn[1] < drawn[0]); /* closed: the turned-away faces skipped */
+    assert_int_equal(drawn[1], 2);
+    assert_int_equal(drawn[2], drawn[0]); /* open: all drawn */
+}
+
+/* two closed tetrahedra touching along an edge (the second the first turned half round the x axis:
+   edge 0-1 used four times, twice by each): each is closed by its own uses, and the viewer measures
+   which way its normals face (the encoder measured the touching solids together).  Outwards: both
+   drawn without their turned-away faces, the same pixels; the second's normals turned inwards: it
+   is drawn whole (skipping its "turned-away" faces would lose its front), the same pixels again */
 static void test_touching_solids(void **state)
 {
     (void)state;
     if (CM_VIEW_MAX_W < 64 || CM_VIEW_MAX_H < 64 || CM_MAX_FACES < 8 || CM_MAX_EDGES < 11 || CM_MAX_MODEL_USES < 24)
         skip();
-    cm_view_opts o = square_opts(64, CM_VIEW_ISO, 0);
-    const float lo[3] = {0, -1, -1}, hi[3] = {1, 1, 1};
-    cm_mesh m;
     uint64_t drawn[3];
-    for (int k = 0; k < 3; k++) {
-        touching_tetrahedra(&m, k == 2);
-        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
-        if (k > 0)
-            assert_int_equal(cm_view_parts(&view, &g_tet), 2);
-        cm_view_mesh(&view, &m);
-        drawn[k] = view.triangles;
-        if (k == 0)
-            memcpy(g_frame, view.rgb, sizeof g_frame);
-        else
-            assert_memory_equal(view.rgb, g_frame, sizeof g_frame);
-        if (k > 0) {
-            assert_int_equal(view.face_closed[0], 1);
-            assert_int_equal(view.face_closed[4], k == 1);
-        }
-    }
+    uint8_t closed[3][2];
+    draw_tetrahedra(2, drawn, closed);
+    assert_int_equal(closed[1][0], 1);
+    assert_int_equal(closed[1][1], 1);
+    assert_int_equal(closed[2][0], 1);
+    assert_int_equal(closed[2][1], 0); /* (its normals inwards: measured so) */
     assert_true(drawn[1] < drawn[0]);
     assert_true(drawn[2] > drawn[1] && drawn[2] < drawn[0]);
 }
