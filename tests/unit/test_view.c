@@ -513,7 +513,8 @@ static void test_back_edges(void **state)
             E->v0 = ends[e][0], E->v1 = ends[e][1];
             E->p = 1, E->nctrl = 2, E->ctrl0 = 2 * e, E->knot0 = 4 * e;
             for (int i = 0; i < 2; i++)
-                g_tet.ctrl[2 * e + (uint32_t)i] = cm_v3(P[ends[e][i]][0], P[ends[e][i]][1], P[ends[e][i]][2]);
+                g_tet.ctrl[2 * e + (uint32_t)i] =
+                    cm_v3((double)P[ends[e][i]][0], (double)P[ends[e][i]][1], (double)P[ends[e][i]][2]);
             for (int i = 0; i < 4; i++)
                 g_tet.knots[4 * e + (uint32_t)i] = i < 2 ? 0.0 : 1.0;
         }
