@@ -263,6 +263,13 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
     return CM_OK;
 }
 
+/* a box's coordinate as a float, within the floats' range (beyond it the conversion is undefined;
+   an empty face's 1e300 stays as far) */
+static float box_float(double x)
+{
+    return x < 3.0e38 ? (x > -3.0e38 ? (float)x : -3.0e38f) : 3.0e38f;
+}
+
 void cm_view_fit(cm_view *v, const cm_mesh *mesh)
 {
     v->boxes_nfaces = 0;
@@ -300,8 +307,8 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
             }
         }
         if (nf) {
-            v->face_box[f][0] = (float)fxlo, v->face_box[f][1] = (float)fxhi;
-            v->face_box[f][2] = (float)fylo, v->face_box[f][3] = (float)fyhi;
+            v->face_box[f][0] = box_float(fxlo), v->face_box[f][1] = box_float(fxhi);
+            v->face_box[f][2] = box_float(fylo), v->face_box[f][3] = box_float(fyhi);
             v->face_near[f] = fz;
         }
         if (nv == 0)
@@ -666,22 +673,15 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
                 drawn = 1;
             }
         }
-        if (drawn) /* (its first corner's tile: a mark makes the tile's bound tight again, a mark
-                      missed leaves it loose, never wrong) */
+        if (drawn) /* (the tile of the box's first corner: a mark makes the tile's bound tight again, a
+                      mark missed leaves it loose, never wrong) */
             tile_mark(v, x0, y0);
         v->triangles += (uint64_t)drawn;
         return;
     }
-    double zx = ((double)e[1].A * dzb + (double)e[2].A * dzc) * VIEW_SUBPIX * inv;
-    double lx = ((double)e[1].A * dlb + (double)e[2].A * dlc) * VIEW_SUBPIX * inv;
-    double zy = ((double)e[1].B * dzb + (double)e[2].B * dzc) * VIEW_SUBPIX * inv;
-    double ly = ((double)e[1].B * dlb + (double)e[2].B * dlc) * VIEW_SUBPIX * inv;
-    /* at (x0, y0) */
-    double zr = z[a] + ((double)(w0[1] - e[1].bias) * dzb + (double)(w0[2] - e[2].bias) * dzc) * inv;
-    double lr = l[a] + ((double)(w0[1] - e[1].bias) * dlb + (double)(w0[2] - e[2].bias) * dlc) * inv;
     /* the box in lines along its longer side, rows or columns (a sliver costs its few lines, not
        its many): along a line the side values step by s, the depth by zs, the brightness by ls and
-       the frame by stride pixels; a line on by d, zd, ld and dstride */
+       the frame by stride pixels; a line on, the side values by d and the frame by dstride */
     const int cols = y1 - y0 > x1 - x0;
     const int64_t n = cols ? y1 - y0 : x1 - x0, nlines = cols ? x1 - x0 : y1 - y0;
     const size_t W = (size_t)v->o.width, stride = cols ? W : 1, dstride = cols ? 1 : W;
@@ -689,7 +689,7 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
                   s2 = (cols ? e[2].B : e[2].A) * VIEW_SUBPIX;
     const int64_t d0 = (cols ? e[0].A : e[0].B) * VIEW_SUBPIX, d1 = (cols ? e[1].A : e[1].B) * VIEW_SUBPIX,
                   d2 = (cols ? e[2].A : e[2].B) * VIEW_SUBPIX;
-    const double zs = cols ? zy : zx, zd = cols ? zx : zy, ls = cols ? ly : lx, ld = cols ? lx : ly;
+    const double zs = ((double)s1 * dzb + (double)s2 * dzc) * inv, ls = ((double)s1 * dlb + (double)s2 * dlc) * inv;
     /* (two pixel centres a line apart in the triangle differ by ls, within the corners' [0, 1]: a
        steeper slope is a sliver's, one pixel a line, and is cut where it cannot overflow; rounded
        half up, floor() written out) */
@@ -720,7 +720,8 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
         }
     }
     size_t line_at = (size_t)y0 * W + (size_t)x0;
-    for (int64_t j = 0; j <= jhi; j++, zr += zd, lr += ld, line_at += dstride) {
+    int64_t wl1 = w0[1] - e[1].bias, wl2 = w0[2] - e[2].bias; /* (the weights at each line's start) */
+    for (int64_t j = 0; j <= jhi; j++, line_at += dstride, wl1 += d1, wl2 += d2) {
         /* the line's span [lo, hi] (pixels from its start), where all three are >= 0 */
         int64_t lo0 = (-sr[0] + ss[0] - 1) / ss[0], lo1 = (-sr[1] + ss[1] - 1) / ss[1];
         /* (floor: a negative value less its divisor's rounding) */
@@ -732,9 +733,12 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
         sr[0] += sd[0], sr[1] += sd[1], er[0] += ed[0], er[1] += ed[1];
         if (lo > hi || j < jlo)
             continue;
-        /* the span from its first pixel (depth in double, brightness in fixed point, stepped) */
-        double zp = zr + (double)lo * zs;
-        int64_t lfx = light_fx(lr + (double)lo * ls), lend = lfx + (hi - lo) * ls_fx;
+        /* the span from its first pixel, its depth and brightness from that pixel's exact weights
+           (from the box's corner, a sliver's extrapolation lost more than face_hidden's margin),
+           then stepped (depth in double, brightness in fixed point) */
+        const double wb = (double)(wl1 + lo * s1), wc = (double)(wl2 + lo * s2);
+        double zp = z[a] + (wb * dzb + wc * dzc) * inv;
+        int64_t lfx = light_fx(l[a] + (wb * dlb + wc * dlc) * inv), lend = lfx + (hi - lo) * ls_fx;
         size_t at = line_at + (size_t)lo * stride;
         float *d = &v->depth[at];
         uint8_t *pix = &v->rgb[3 * at];
@@ -905,9 +909,10 @@ static int face_hidden(cm_view *v, uint32_t fi)
     const int tw = v->tiles_w;
     int tx0 = x0 > 0.0 ? (int)x0 / CM_VIEW_TILE : 0, tx1 = x1 < W ? (int)x1 / CM_VIEW_TILE : (v->o.width - 1) / CM_VIEW_TILE;
     int ty0 = y0 > 0.0 ? (int)y0 / CM_VIEW_TILE : 0, ty1 = y1 < H ? (int)y1 / CM_VIEW_TILE : (v->o.height - 1) / CM_VIEW_TILE;
-    /* (a pixel's depth is a mix of its triangle's corners' in double, then a float: a millionth of
-       the model across is room for both roundings) */
-    const double near = v->face_near[fi] - 1e-5 * v->diag;
+    /* behind by more than the lines' bias (a silhouette across the face, drawn that much nearer,
+       would not show either) and room for the roundings (a pixel's depth is a mix of its triangle's
+       corners' in double, then a float: a hundred-thousandth of the model across) */
+    const double near = v->face_near[fi] - VIEW_EDGE_BIAS_PX / v->scale - 1e-5 * v->diag;
     for (int ty = ty0; ty <= ty1; ty++)
         for (int tx = tx0; tx <= tx1; tx++) {
             int t = ty * tw + tx;
@@ -929,11 +934,12 @@ static int face_hidden(cm_view *v, uint32_t fi)
     return 1;
 }
 
-/* the mesh's faces in order of their nearest depths (Shell's sort, Ciura's gaps: no recursion, no
-   scratch; equal depths in an order fixed by the input alone) */
+/* the mesh's faces in order of their nearest depths (Shell's sort, Ciura's gaps and their usual
+   extension by 2.25: no recursion, no scratch; equal depths in an order fixed by the input alone) */
 static void order_faces(cm_view *v, uint32_t n)
 {
-    static const uint32_t gaps[] = {1750, 701, 301, 132, 57, 23, 10, 4, 1};
+    static const uint32_t gaps[] = {1149241, 510774, 227011, 100894, 44842, 19930, 8858, 3937,
+                                    1750,    701,    301,    132,    57,    23,    10,   4, 1};
     for (uint32_t i = 0; i < n; i++)
         v->face_order[i] = i;
     for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
@@ -1078,14 +1084,15 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
            (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
         int cached = F->nverts <= CM_VIEW_FACE_VERTS;
         int away = closed && !v->o.perspective && face_turned_away(v, mesh, F);
-        if (!away && front_to_back && face_hidden(v, fi)) {
-            away = 1;
-            v->hidden_faces++;
-        }
         if (fi < nbase && F->source_face < v->parts_nfaces)
             v->face_away[F->source_face] = (uint8_t)away;
         if (away)
             continue; /* (every triangle's corners face away: a third of a closed model's frame) */
+        if (front_to_back && face_hidden(v, fi)) {
+            v->hidden_faces++; /* (its edges still drawn: a curve may lie up to the tolerance off its
+                                  mesh, nearer than the face's nearest vertex) */
+            continue;
+        }
         for (uint32_t s = 0; !cached && s < CM_VIEW_FACE_VERTS; s++)
             v->fv_tag[s] = UINT32_MAX;
         unsigned face_all = VIEW_VERT_OK | VIEW_VERT_AWAY, face_any = 0; /* (its vertices' flags) */

@@ -574,6 +574,39 @@ static void test_hidden_faces(void **state)
     }
 }
 
+/* a sliver along the frame's diagonal, half a pixel across, its third corner behind the first
+   two: every pixel it writes lies within its corners' depths (each span's depth is made from its
+   first pixel's own weights: face_hidden counts on it) */
+static void test_sliver_depth(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, ny[3] = {0, -1, 0};
+    cm_mesh m = mesh_storage();
+    cm_mesh_face *f = &m.faces[m.nfaces++];
+    memset(f, 0, sizeof *f);
+    const float p[3][3] = {{0.0f, 0.3f, 0.003f}, {1.0f, 0.3f, 1.003f}, {0.0057f, 0.9f, 0.003f}};
+    for (int i = 0; i < 3; i++) {
+        memcpy(m.pos[i], p[i], sizeof p[i]);
+        memcpy(m.nrm[i], ny, sizeof ny);
+        m.idx[i] = (uint32_t)i;
+    }
+    m.nverts = m.nindex = f->nverts = f->nindex = 3;
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_mesh(&view, &m);
+    assert_true(view.triangles == 1);
+    /* (view depth: the model's y less the box's centre, 0.5) */
+    size_t written = 0;
+    for (size_t i = 0; i < 100 * 100; i++)
+        if (view.depth[i] < 1.0e30f) {
+            written++;
+            assert_true(view.depth[i] >= -0.2f - 1e-6f && view.depth[i] <= 0.4f + 1e-6f);
+        }
+    assert_true(written > 20);
+}
+
 static void test_refuses_large_frame(void **state)
 {
     (void)state;
@@ -738,6 +771,7 @@ int main(void)
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
         cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
         cmocka_unit_test(test_back_edges), cmocka_unit_test(test_hidden_faces),
+        cmocka_unit_test(test_sliver_depth),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

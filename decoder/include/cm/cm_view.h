@@ -113,7 +113,8 @@ typedef struct cm_view {
                                               VIEW_CLOSED_SHARED: to be measured by cm_view_mesh) */
     uint32_t piece_of_face[CM_MAX_FACES];  /* face f's connected component (from 1) */
     uint8_t face_away[CM_MAX_FACES];       /* (cm_view_mesh, for cm_view_edges: face f is closed and
-                                              all its vertices face away: its edges are behind it) */
+                                              all its vertices face away: its edges are behind it;
+                                              a face skipped as hidden keeps its edges) */
     /* (scratch, cm_view_mesh: a component's signed volume, about its area, and a face's vertices in
        model space, to tell whether its normals face outwards) */
     double piece_volume[CM_MAX_FACES + 1], piece_area[CM_MAX_FACES + 1];
@@ -170,9 +171,11 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh);
  * assembly, each face is joined to the nearest one in file order that runs the edge the other
  * way), in the order of their first face, then each placement's
  * copies (format 4.3: an IGES subfigure instance, a STEP occurrence) one part each, in file order.
- * Until it is called every face is part 1.  Also marks the parts that are closed (each edge of their
- * faces used twice, in opposite directions: the encoder faced them outwards), whose back faces
- * cm_view_mesh skips.  Returns the number of parts.
+ * Until it is called every face is part 1.  Also marks the connected pieces that are closed (each
+ * edge of their faces used twice, in opposite directions: the encoder faced them outwards; or, at an
+ * edge of three or more uses, the piece's own uses of it as often one way as the other, and then
+ * cm_view_mesh measures the piece's volume to see it faces outwards), whose back faces cm_view_mesh
+ * skips.  Returns the number of parts.
  */
 uint32_t cm_view_parts(cm_view *v, const cm_model *m);
 
@@ -181,7 +184,10 @@ uint32_t cm_view_parts(cm_view *v, const cm_model *m);
  * cm_view_parts', only those with a corner facing the viewer: the rest are behind), and with
  * opts.edges the silhouettes of curved faces: where the mesh's normals turn from facing the viewer
  * to facing away, the line on which their component along the line of sight, interpolated across
- * each triangle, is zero (drawn like an edge: depth-tested, a little in front).
+ * each triangle, is zero (drawn like an edge: depth-tested, a little in front).  Orthographic, after
+ * cm_view_fit: the faces nearest first, a face behind what is drawn (by more than a line's bias)
+ * skipped.  A face is judged by its own vertices: its indices must name them (as the decoder and
+ * cm_glb_read make them; an index beyond its face is drawn, but the face's box does not hold it).
  */
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh);
 
