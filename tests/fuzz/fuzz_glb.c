@@ -15,6 +15,7 @@
 
 #include "cm/cm_glb_read.h"
 #include "cm/cm_view.h"
+#include "../unit/test_mesh.h"
 
 static cm_glb_reader g;
 static cm_view view;
@@ -58,15 +59,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *d, size_t n)
 {
     data = d;
     len = n;
-    cm_mesh mesh;
-    memset(&mesh, 0, sizeof mesh);
-    mesh.pos = pos;
-    mesh.nrm = nrm;
-    mesh.idx = idx;
-    mesh.faces = faces;
-    mesh.cap_verts = 4096;
-    mesh.cap_index = 12288;
-    mesh.cap_faces = 256;
+    cm_mesh mesh = test_mesh_on(pos, nrm, idx, faces, 4096, 12288, 256);
     if (n > 0 && (d[n - 1] & 1)) { /* half the inputs through a spill with a window of 64 vertices */
         memset(&spill, 0, sizeof spill);
         spill.io = mem_spill;
