@@ -1361,16 +1361,25 @@ static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a
         n = n < c.n_ctrl - c.p ? c.n_ctrl - c.p : n;
     }
     n = n < 1 ? 1 : (n > CM_VIEW_EDGE_SEGMENTS && c.p > 1 ? CM_VIEW_EDGE_SEGMENTS : n);
+    const int polyline = c.p == 1 && n == c.n_ctrl - 1;
+    if (!polyline && !(v->edge_cache_e == e && v->edge_cache_n == n)) {
+        /* the curve's points, kept for the next copy of the same edge that wants as many
+           (cm_view_edges draws an edge's copies one after another: a copy's curve was evaluated
+           again, a tenth of a large assembly's frame) */
+        v->edge_cache_e = e, v->edge_cache_n = n, v->edge_cache_len = 0;
+        for (int k = 0; k <= n; k++) {
+            cm_vec3 d[CM_MAX_DERS + 1];
+            if (cm_curve_eval(&c, (double)k / (double)n, 0, d, NULL) != CM_OK)
+                break; /* (the points before it are drawn) */
+            v->edge_cache_pts[v->edge_cache_len++] = d[0];
+        }
+    }
+    const int npts = polyline ? n + 1 : v->edge_cache_len;
     double prev[3] = {0, 0, 0};
     int have = 0;
-    for (int k = 0; k <= n; k++) {
-        cm_vec3 d[CM_MAX_DERS + 1];
-        if (c.p == 1 && n == c.n_ctrl - 1)
-            d[0] = c.ctrl[k]; /* a polyline: its points */
-        else if (cm_curve_eval(&c, (double)k / (double)n, 0, d, NULL) != CM_OK)
-            return;
+    for (int k = 0; k < npts; k++) {
         double q[3], s[3];
-        placed_view(v, d[0], a, q);
+        placed_view(v, polyline ? c.ctrl[k] : v->edge_cache_pts[k], a, q);
         if (!to_screen(v, q, s)) {
             have = 0;
             continue;
@@ -1411,14 +1420,17 @@ void cm_view_edges(cm_view *v, const cm_model *m)
 {
     if (!v->o.edges)
         return;
-    /* each edge once (not once for each face that uses it), for the model and each placement */
-    for (uint32_t e = 0; e < m->nedges; e++)
+    /* each edge once (not once for each face that uses it), for the model and each placement; an
+       edge's copies one after another (its points evaluated once: draw_edge).  (An edge pixel is
+       the edges' colour whichever line reaches it first: the order shows nowhere) */
+    v->edge_cache_n = -1;
+    for (uint32_t e = 0; e < m->nedges; e++) {
         if (edge_shows(v, m, e, -1, 0, m->nfaces))
             draw_edge(v, m, e, NULL);
-    for (uint32_t k = 0; k < m->nplacements; k++) {
-        const cm_placement *P = &m->placements[k];
-        for (uint32_t e = 0; e < m->nedges; e++)
+        for (uint32_t k = 0; k < m->nplacements; k++) {
+            const cm_placement *P = &m->placements[k];
             if (edge_shows(v, m, e, k, P->first, P->count))
                 draw_edge(v, m, e, P->m);
+        }
     }
 }

@@ -607,6 +607,65 @@ static void test_sliver_depth(void **state)
     assert_true(written > 20);
 }
 
+/* a curved edge (a quadratic arc) placed three times: moved up, moved down (as many points as the
+   first copy: its points reused, cm_view_edges) and three times the size (more points: evaluated
+   again); the frame with all three is the union of three frames of one copy each (an edge pixel is
+   the edges' colour, whichever copy draws it) */
+static cm_model g_arc;
+static void arc_model(int only)
+{
+    static const double P[3][3] = {{0, 0, 0}, {0.5, 0, 0.6}, {1, 0, 0}};
+    static const double M[3][12] = {{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.3},
+                                    {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -0.3},
+                                    {3, 0, 0, -1, 0, 3, 0, 0, 0, 0, 3, -1}};
+    memset(&g_arc, 0, sizeof g_arc);
+    cm_edge *E = &g_arc.edges[0];
+    E->p = 2, E->nctrl = 3, E->ctrl0 = 0, E->knot0 = 0, E->v0 = -1, E->v1 = -1;
+    for (int i = 0; i < 3; i++)
+        g_arc.ctrl[i] = cm_v3(P[i][0], P[i][1], P[i][2]);
+    for (int i = 0; i < 6; i++)
+        g_arc.knots[i] = i < 3 ? 0.0 : 1.0;
+    /* (the edge's face is 1, beyond the model's own range [0, 1): only its copies are drawn) */
+    g_arc.edge_face[0][0] = 1, g_arc.edge_face[0][1] = CM_NO_FACE;
+    g_arc.nedges = 1;
+    g_arc.nfaces = 1;
+    for (int k = 0; k < 3; k++)
+        if (only < 0 || only == k) {
+            cm_placement *pl = &g_arc.placements[g_arc.nplacements++];
+            pl->first = 1, pl->count = 1;
+            memcpy(pl->m, M[k], sizeof M[k]);
+        }
+}
+
+static void test_edge_copies(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100 || CM_MAX_EDGES < 1 || CM_MAX_MODEL_CTRL < 3 ||
+        CM_MAX_MODEL_KNOTS < 6 || CM_MAX_PLACEMENTS < 3)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 1);
+    const float lo[3] = {-1, 0, -1}, hi[3] = {2, 0, 2};
+    static uint8_t one[3][100 * 100 * 3];
+    uint64_t lines = 0;
+    for (int only = 0; only < 3; only++) {
+        arc_model(only);
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        cm_view_edges(&view, &g_arc);
+        assert_true(view.edge_segments >= 4); /* (a curve in several pieces) */
+        lines += view.edge_segments;
+        memcpy(one[only], view.rgb, sizeof one[only]);
+    }
+    arc_model(-1);
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_edges(&view, &g_arc);
+    assert_int_equal(view.edge_segments, lines);
+    for (size_t i = 0; i < 100 * 100 * 3; i++) {
+        uint8_t bg = (uint8_t)(o.background >> (16 - 8 * (i % 3)));
+        uint8_t want = one[0][i] != bg ? one[0][i] : (one[1][i] != bg ? one[1][i] : one[2][i]);
+        assert_int_equal(view.rgb[i], want);
+    }
+}
+
 static void test_refuses_large_frame(void **state)
 {
     (void)state;
@@ -771,7 +830,7 @@ int main(void)
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
         cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
         cmocka_unit_test(test_back_edges), cmocka_unit_test(test_hidden_faces),
-        cmocka_unit_test(test_sliver_depth),
+        cmocka_unit_test(test_sliver_depth), cmocka_unit_test(test_edge_copies),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -145,6 +145,10 @@ typedef struct cm_view {
     /* a run of the mesh's positions, normals and indices, read back together */
     float run_pos[CM_VIEW_READ_RUN][3], run_nrm[CM_VIEW_READ_RUN][3];
     uint32_t run_idx[3 * CM_VIEW_READ_RUN];
+    /* an edge curve's points (model space), for its next copy wanting as many (cm_view_edges) */
+    uint32_t edge_cache_e;
+    int edge_cache_n, edge_cache_len;
+    cm_vec3 edge_cache_pts[CM_VIEW_EDGE_SEGMENTS + 1];
     uint8_t rgb[CM_VIEW_MAX_W * CM_VIEW_MAX_H * 3]; /* row by row from the top, width * 3 bytes a row */
     float depth[CM_VIEW_MAX_W * CM_VIEW_MAX_H];     /* view-space depth of what the pixel shows */
 } cm_view;
