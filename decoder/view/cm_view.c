@@ -787,20 +787,16 @@ static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3
         t->facing = N[0] * o[3][0] + N[1] * o[3][1] + N[2] * o[3][2];
         t->light = shade(t->facing, N[0] * o[4][0] + N[1] * o[4][1] + N[2] * o[4][2]);
     } else {
-        const double d[3] = {(double)p[0] - v->c[0], (double)p[1] - v->c[1], (double)p[2] - v->c[2]};
-        const double q[3] = {dot3(d, v->r), dot3(d, v->u), dot3(d, v->f)};
+        double q[3], s[3] = {0, 0, 0};
+        to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
         const double nv[3] = {(double)n[0] * v->r[0] + (double)n[1] * v->r[1] + (double)n[2] * v->r[2],
                               (double)n[0] * v->u[0] + (double)n[1] * v->u[1] + (double)n[2] * v->u[2],
                               (double)n[0] * v->f[0] + (double)n[1] * v->f[1] + (double)n[2] * v->f[2]};
         t->light = shade(nv[2], dot3(nv, view_fill));
         /* the line of sight from the eye at (0, 0, eye) */
         t->facing = nv[0] * q[0] + nv[1] * q[1] + nv[2] * (q[2] - v->eye);
-        double ze = q[2] - v->eye;
-        ok = ze > 1e-9 * (-v->eye);
-        double k = ok ? v->scale / ze : 0.0;
-        x = 0.5 * (double)v->o.width + q[0] * k;
-        y = 0.5 * (double)v->o.height - q[1] * k;
-        t->z = q[2];
+        ok = to_screen(v, q, s);
+        x = s[0], y = s[1], t->z = q[2];
     }
     ok = ok && fabs(x) < VIEW_COORD_MAX && fabs(y) < VIEW_COORD_MAX;
     t->flags = (uint8_t)((ok ? VIEW_VERT_OK : 0) | (t->facing > 0.0 ? VIEW_VERT_AWAY : 0));
@@ -1019,6 +1015,27 @@ static void measure_shared_parts(cm_view *v, const cm_mesh *mesh)
         }
 }
 
+/* the placement of mesh face fi, the one after faces up to fi - 1 were in placement (-1: the
+   model's own) and face fi - 1 came from last_source: placed copies follow the model's own faces,
+   placement by placement, each in source order (cm_mesh_place), so a copy whose source face does
+   not come after the last one's, or lies beyond its placement's faces, starts the next placement
+   that holds it */
+static int64_t face_placement(const cm_mesh *mesh, uint32_t fi, int64_t placement, uint32_t last_source)
+{
+    const cm_mesh_face *F = &mesh->faces[fi];
+    if (fi < mesh->nbase_faces || mesh->nplace == 0 || !mesh->place)
+        return placement;
+    const cm_placement *P = placement >= 0 ? &mesh->place[placement] : NULL;
+    if (!P || F->source_face <= last_source || F->source_face >= P->first + P->count)
+        placement++;
+    while (placement + 1 < (int64_t)mesh->nplace &&
+           !(F->source_face >= mesh->place[placement].first &&
+             F->source_face < mesh->place[placement].first + mesh->place[placement].count))
+        placement++;
+    return placement < (int64_t)mesh->nplace ? placement : (int64_t)mesh->nplace - 1; /* (a mesh not
+                                                                                      made by cm_mesh_place) */
+}
+
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
     ortho_rows(v);
@@ -1040,10 +1057,8 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
             v->tile_written[t] = 0;
         }
     }
-    /* placed copies follow the model's own faces, placement by placement, each in source order
-       (cm_mesh_place): a copy whose source face does not come after the last one's, or lies beyond
-       its placement's faces, starts the next placement that holds it (in file order, before the
-       faces are drawn in another) */
+    /* each face's placement (face_placement: found in file order, so before the faces are drawn in
+       another) */
     int64_t placement = -1;
     uint32_t last_source = 0;
     const uint32_t steps = front_to_back ? 2 * mesh->nfaces : mesh->nfaces; /* (placements, then drawing) */
@@ -1052,17 +1067,7 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         const uint32_t fi = !front_to_back ? k : (drawing ? v->face_order[k - mesh->nfaces] : k);
         const cm_mesh_face *F = &mesh->faces[fi];
         if (!(front_to_back && drawing)) {
-            if (fi >= mesh->nbase_faces && mesh->nplace > 0 && mesh->place) {
-                const cm_placement *P = placement >= 0 ? &mesh->place[placement] : NULL;
-                if (!P || F->source_face <= last_source || F->source_face >= P->first + P->count)
-                    placement++;
-                while (placement + 1 < (int64_t)mesh->nplace &&
-                       !(F->source_face >= mesh->place[placement].first &&
-                         F->source_face < mesh->place[placement].first + mesh->place[placement].count))
-                    placement++;
-                if (placement >= (int64_t)mesh->nplace)
-                    placement = (int64_t)mesh->nplace - 1; /* (a mesh not made by cm_mesh_place) */
-            }
+            placement = face_placement(mesh, fi, placement, last_source);
             last_source = F->source_face;
             if (front_to_back)
                 v->face_place[fi] = (int32_t)placement;
