@@ -20,6 +20,8 @@
 #define VIEW_SUBPIX 256
 /* a triangle whose box holds at most this many pixel centres has each tested on its own */
 #define VIEW_SMALL_BOX 16
+/* at most this many triangles drawn untested after a visible one (triangle_hidden) */
+#define VIEW_TEST_WAIT 32
 /* cm_view.face_closed: closed at edges it shares with other parts, outwards still to be measured */
 #define VIEW_CLOSED_SHARED 2
 /* cm_view_vert.flags */
@@ -210,7 +212,8 @@ cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float lo[3], const
         if (!isfinite(lo[i]) || !isfinite(hi[i]) || !(lo[i] <= hi[i]))
             return cm_fail(st, CM_E_ARG, "view: the model's box");
     v->o = *o;
-    v->triangles = v->edge_segments = v->silhouette_segments = v->hidden_faces = 0;
+    v->triangles = v->edge_segments = v->silhouette_segments = v->hidden_faces = v->hidden_triangles = 0;
+    v->tiles_live = 0;
     v->nparts = v->nbase_parts = 0;
     v->boxes_nfaces = 0; /* (until cm_view_fit boxes this frame's faces) */
     v->named_parts = 0;
@@ -590,7 +593,33 @@ static void put_lit(uint8_t *px, uint64_t base, int64_t light)
 /* the coarse depth: pixel (x, y) was written (its tile's farthest may be nearer now) */
 static void tile_mark(cm_view *v, int64_t x, int64_t y)
 {
-    v->tile_written[(y / CM_VIEW_TILE) * v->tiles_w + x / CM_VIEW_TILE] = 1;
+    v->tile_writer[(y / CM_VIEW_TILE) * v->tiles_w + x / CM_VIEW_TILE] = v->writer;
+}
+
+/* is the triangle of screen corners t, whose pixel centres lie in the box x0..x1, y0..y1, behind
+   the farthest pixel of every tile the box touches (cm_view_mesh drawing front to back)?  Then none
+   of its pixels would pass the depth test and it is not set up at all: most triangles of an
+   assembly's hidden parts and of an open sheet's far side.  A tile written by another face since it
+   was last looked at has its farthest found again; one written by this face keeps its bound, loose
+   now, never wrong (found again after each of its triangles, it cost more than it saved).
+   tri_margin covers a pixel's depth, a mix of the corners' in double rounded to a float.  Its
+   silhouette is still drawn (by the caller). */
+static void tile_refresh(cm_view *v, int t);
+static int triangle_hidden(cm_view *v, const cm_view_vert *const t[3], int64_t x0, int64_t y0, int64_t x1, int64_t y1)
+{
+    double z = t[0]->z < t[1]->z ? t[0]->z : t[1]->z;
+    z = (t[2]->z < z ? t[2]->z : z) - v->tri_margin;
+    /* (the box within the frame: not negative) */
+    const uint32_t tx0 = (uint32_t)x0 / CM_VIEW_TILE, tx1 = (uint32_t)x1 / CM_VIEW_TILE, ty1 = (uint32_t)y1 / CM_VIEW_TILE;
+    for (uint32_t ty = (uint32_t)y0 / CM_VIEW_TILE; ty <= ty1; ty++)
+        for (uint32_t tx = tx0; tx <= tx1; tx++) {
+            const int tile = (int)(ty * (uint32_t)v->tiles_w + tx);
+            if (v->tile_writer[tile] && v->tile_writer[tile] != v->writer)
+                tile_refresh(v, tile);
+            if (!(z > (double)v->tile_far[tile])) /* (not a number: drawn) */
+                return 0;
+        }
+    return 1;
 }
 
 /*
@@ -631,6 +660,20 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
     y1 = y1 > v->o.height - 1 ? v->o.height - 1 : y1;
     if (x0 > x1 || y0 > y1)
         return;
+    if (v->tiles_live) {
+        /* (tested again after a visible one only once as many triangles have passed as there were
+           visible ones in a row, up to VIEW_TEST_WAIT: a face in plain sight costs a few tests) */
+        if (v->tri_wait > 0) {
+            v->tri_wait--;
+        } else if (triangle_hidden(v, t, x0, y0, x1, y1)) {
+            v->tri_visible = 0;
+            v->hidden_triangles++;
+            return;
+        } else {
+            v->tri_visible = v->tri_visible < VIEW_TEST_WAIT ? v->tri_visible + 1 : VIEW_TEST_WAIT;
+            v->tri_wait = v->tri_visible;
+        }
+    }
     int a = 0, b = 1, c = 2;
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
     if (area == 0)
@@ -756,10 +799,10 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
             /* (the span's tiles: along a row one after another, down a column a row of tiles apart) */
             const size_t along = cols ? (size_t)v->tiles_w : 1;
             const uint64_t fx = (uint64_t)(cols ? x0 + j : x0 + lo), fy = (uint64_t)(cols ? y0 + lo : y0 + j);
-            uint8_t *tw = &v->tile_written[(fy / CM_VIEW_TILE) * (uint64_t)v->tiles_w + fx / CM_VIEW_TILE];
+            uint32_t *tw = &v->tile_writer[(fy / CM_VIEW_TILE) * (uint64_t)v->tiles_w + fx / CM_VIEW_TILE];
             uint64_t first = (uint64_t)((cols ? y0 : x0) + lo) / CM_VIEW_TILE, last = (uint64_t)((cols ? y0 : x0) + hi) / CM_VIEW_TILE;
             for (uint64_t q = first; q <= last; q++, tw += along)
-                *tw = 1;
+                *tw = v->writer;
             drawn = 1;
         }
     }
@@ -890,9 +933,25 @@ static void silhouette(cm_view *v, const cm_view_vert *const c[3])
     }
 }
 
+/* tile t's farthest pixel found again (tile_far), the tile clean */
+static void tile_refresh(cm_view *v, int t)
+{
+    const int tx = t % v->tiles_w, ty = t / v->tiles_w;
+    const int px1 = (tx + 1) * CM_VIEW_TILE < v->o.width ? (tx + 1) * CM_VIEW_TILE : v->o.width;
+    const int py1 = (ty + 1) * CM_VIEW_TILE < v->o.height ? (ty + 1) * CM_VIEW_TILE : v->o.height;
+    float far = -3.0e38f;
+    for (int py = ty * CM_VIEW_TILE; py < py1; py++) {
+        const float *d = &v->depth[(size_t)py * (size_t)v->o.width];
+        for (int px = tx * CM_VIEW_TILE; px < px1; px++)
+            far = d[px] > far ? d[px] : far;
+    }
+    v->tile_far[t] = far;
+    v->tile_writer[t] = 0;
+}
+
 /* is mesh face fi, by its box and nearest depth (cm_view_fit), behind the farthest pixel of every
-   tile it touches, or off the frame?  A tile written since it was last looked at has its farthest
-   found again (else it stays an upper bound: a write only brings a pixel nearer) */
+   tile it touches, or off the frame?  A tile of its box written since it was last looked at has its
+   farthest found again (else it stays an upper bound: a write only brings a pixel nearer) */
 static int face_hidden(cm_view *v, uint32_t fi)
 {
     const float *b = v->face_box[fi];
@@ -912,18 +971,8 @@ static int face_hidden(cm_view *v, uint32_t fi)
     for (int ty = ty0; ty <= ty1; ty++)
         for (int tx = tx0; tx <= tx1; tx++) {
             int t = ty * tw + tx;
-            if (v->tile_written[t]) {
-                float far = -3.0e38f;
-                int px1 = (tx + 1) * CM_VIEW_TILE < v->o.width ? (tx + 1) * CM_VIEW_TILE : v->o.width;
-                int py1 = (ty + 1) * CM_VIEW_TILE < v->o.height ? (ty + 1) * CM_VIEW_TILE : v->o.height;
-                for (int py = ty * CM_VIEW_TILE; py < py1; py++) {
-                    const float *d = &v->depth[(size_t)py * (size_t)v->o.width];
-                    for (int px = tx * CM_VIEW_TILE; px < px1; px++)
-                        far = d[px] > far ? d[px] : far;
-                }
-                v->tile_far[t] = far;
-                v->tile_written[t] = 0;
-            }
+            if (v->tile_writer[t])
+                tile_refresh(v, t);
             if (!(near > (double)v->tile_far[t]))
                 return 0;
         }
@@ -1036,11 +1085,96 @@ static int64_t face_placement(const cm_mesh *mesh, uint32_t fi, int64_t placemen
                                                                                       made by cm_mesh_place) */
 }
 
+/* draw mesh face fi, of placement (-1: the model's own); front_to_back: the faces drawn nearest
+   first (a face behind what is drawn skipped) */
+static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t placement, int front_to_back)
+{
+    const cm_mesh_face *F = &mesh->faces[fi];
+    const uint32_t nbase = mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces;
+    uint32_t part = placement < 0 ? face_part(v, F->source_face) : place_part(v, (uint32_t)placement);
+    int look = part_look(v, part);
+    if (look == 0)
+        return;
+    uint32_t rgb = look_rgb(v, F->has_color ? F->rgb : VIEW_DEFAULT_RGB, look);
+    /* a closed part's triangles whose corners all face away are behind its front (a mesh whose
+       faces are not all there, one the decoder left out, shows its back faces through the gap) */
+    int closed = v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces &&
+                 F->source_face < v->parts_nfaces && v->face_closed[F->source_face];
+    /* a face's vertices (each in about six triangles) projected and lit once, where they fit
+       (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
+    int cached = F->nverts <= CM_VIEW_FACE_VERTS;
+    int away = closed && !v->o.perspective && face_turned_away(v, mesh, F);
+    if (fi < nbase && F->source_face < v->parts_nfaces)
+        v->face_away[F->source_face] = (uint8_t)away;
+    if (away)
+        return; /* (every triangle's corners face away: a third of a closed model's frame) */
+    v->writer = fi + 1;
+    v->tri_wait = v->tri_visible = 0;
+    if (front_to_back && face_hidden(v, fi)) {
+        v->hidden_faces++; /* (its edges still drawn: a curve may lie up to the tolerance off its
+                              mesh, nearer than the face's nearest vertex) */
+        return;
+    }
+    for (uint32_t s = 0; !cached && s < CM_VIEW_FACE_VERTS; s++)
+        v->fv_tag[s] = UINT32_MAX;
+    unsigned face_all = VIEW_VERT_OK | VIEW_VERT_AWAY, face_any = 0; /* (its vertices' flags) */
+    for (uint32_t i0 = 0; cached && i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
+        /* read back a run at a time (from the spill a page at a time): a call per value was a
+           sixth of a large model's frame */
+        uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
+        cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
+        cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
+        for (uint32_t i = 0; i < n; i++) {
+            vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
+            face_all &= v->fv[i0 + i].flags;
+            face_any |= v->fv[i0 + i].flags;
+        }
+    }
+    /* a face whose vertices all face one way has no silhouette across it */
+    const int mixed = !cached || ((face_all ^ face_any) & VIEW_VERT_AWAY);
+    /* the triangles a run of indices at a time; the face's numbers held here (a pixel written
+       through a byte pointer could be anything to the compiler: they would be read again) */
+    const uint32_t first = F->first_vert, nverts = cached ? F->nverts : 0, ntri = F->nindex / 3;
+    const unsigned silhouettes = v->o.edges && mixed ? VIEW_VERT_AWAY : 0u, cull = closed ? VIEW_VERT_AWAY : 0u;
+    for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
+        const uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
+        cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
+        for (const uint32_t *ix = v->run_idx, *const end = ix + 3u * n; ix < end; ix += 3) {
+            cm_view_vert own[3];
+            const cm_view_vert *t[3];
+            /* (unsigned: an index below the face's wraps beyond it) */
+            uint32_t j0 = ix[0] - first, j1 = ix[1] - first, j2 = ix[2] - first;
+            if (j0 < nverts && j1 < nverts && j2 < nverts) {
+                t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
+            } else {
+                /* (a large face's corners copied out of the window: a later corner's run may
+                   replace an earlier one's slot) */
+                for (int i = 0; i < 3; i++) {
+                    uint32_t j = ix[i] - first;
+                    if (j < nverts)
+                        own[i] = v->fv[j];
+                    else if (j < F->nverts)
+                        own[i] = *window_vertex(v, mesh, F, j);
+                    else
+                        vertex_screen(v, mesh, ix[i], &own[i]); /* (not the face's own: not made so) */
+                    t[i] = &own[i];
+                }
+            }
+            const unsigned f0 = t[0]->flags, f1 = t[1]->flags, f2 = t[2]->flags, all = f0 & f1 & f2;
+            if (!(all & VIEW_VERT_OK) || (all & cull))
+                continue;
+            fill_triangle(v, t, rgb);
+            /* a silhouette crosses it where its corners face different ways */
+            if (((f0 | f1 | f2) ^ all) & silhouettes)
+                silhouette(v, t);
+        }
+    }
+}
+
 void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
 {
     ortho_rows(v);
     v->tiles_w = (v->o.width + CM_VIEW_TILE - 1) / CM_VIEW_TILE;
-    const uint32_t nbase = mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces;
     for (uint32_t f = 0; f < v->parts_nfaces; f++)
         v->face_away[f] = 0;
     if (v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces)
@@ -1049,110 +1183,32 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
        (a third of an assembly's triangles lie behind its other parts); else in file order */
     const int front_to_back = !v->o.perspective && v->boxes_nfaces == mesh->nfaces && mesh->nfaces > 0 &&
                               mesh->nfaces <= CM_MAX_FACES;
+    v->tiles_live = 0;
     if (front_to_back) {
         order_faces(v, mesh->nfaces);
         int ntiles = v->tiles_w * ((v->o.height + CM_VIEW_TILE - 1) / CM_VIEW_TILE);
+        v->tiles_live = 1;
+        v->tri_margin = 1e-5 * v->diag;
         for (int t = 0; t < ntiles; t++) {
             v->tile_far[t] = 3.0e38f; /* (the frame's clear depth) */
-            v->tile_written[t] = 0;
+            v->tile_writer[t] = 0;
         }
     }
     /* each face's placement (face_placement: found in file order, so before the faces are drawn in
        another) */
     int64_t placement = -1;
     uint32_t last_source = 0;
-    const uint32_t steps = front_to_back ? 2 * mesh->nfaces : mesh->nfaces; /* (placements, then drawing) */
-    for (uint32_t k = 0; k < steps; k++) {
-        const int drawing = !front_to_back || k >= mesh->nfaces;
-        const uint32_t fi = !front_to_back ? k : (drawing ? v->face_order[k - mesh->nfaces] : k);
-        const cm_mesh_face *F = &mesh->faces[fi];
-        if (!(front_to_back && drawing)) {
-            placement = face_placement(mesh, fi, placement, last_source);
-            last_source = F->source_face;
-            if (front_to_back)
-                v->face_place[fi] = (int32_t)placement;
-        }
-        if (!drawing)
-            continue;
+    for (uint32_t fi = 0; fi < mesh->nfaces; fi++) {
+        placement = face_placement(mesh, fi, placement, last_source);
+        last_source = mesh->faces[fi].source_face;
         if (front_to_back)
-            placement = v->face_place[fi];
-        uint32_t part = placement < 0 ? face_part(v, F->source_face) : place_part(v, (uint32_t)placement);
-        int look = part_look(v, part);
-        if (look == 0)
-            continue;
-        uint32_t rgb = look_rgb(v, F->has_color ? F->rgb : VIEW_DEFAULT_RGB, look);
-        /* a closed part's triangles whose corners all face away are behind its front (a mesh whose
-           faces are not all there, one the decoder left out, shows its back faces through the gap) */
-        int closed = v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces &&
-                     F->source_face < v->parts_nfaces && v->face_closed[F->source_face];
-        /* a face's vertices (each in about six triangles) projected and lit once, where they fit
-           (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
-        int cached = F->nverts <= CM_VIEW_FACE_VERTS;
-        int away = closed && !v->o.perspective && face_turned_away(v, mesh, F);
-        if (fi < nbase && F->source_face < v->parts_nfaces)
-            v->face_away[F->source_face] = (uint8_t)away;
-        if (away)
-            continue; /* (every triangle's corners face away: a third of a closed model's frame) */
-        if (front_to_back && face_hidden(v, fi)) {
-            v->hidden_faces++; /* (its edges still drawn: a curve may lie up to the tolerance off its
-                                  mesh, nearer than the face's nearest vertex) */
-            continue;
-        }
-        for (uint32_t s = 0; !cached && s < CM_VIEW_FACE_VERTS; s++)
-            v->fv_tag[s] = UINT32_MAX;
-        unsigned face_all = VIEW_VERT_OK | VIEW_VERT_AWAY, face_any = 0; /* (its vertices' flags) */
-        for (uint32_t i0 = 0; cached && i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
-            /* read back a run at a time (from the spill a page at a time): a call per value was a
-               sixth of a large model's frame */
-            uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
-            cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
-            cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
-            for (uint32_t i = 0; i < n; i++) {
-                vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
-                face_all &= v->fv[i0 + i].flags;
-                face_any |= v->fv[i0 + i].flags;
-            }
-        }
-        /* a face whose vertices all face one way has no silhouette across it */
-        const int mixed = !cached || ((face_all ^ face_any) & VIEW_VERT_AWAY);
-        /* the triangles a run of indices at a time; the face's numbers held here (a pixel written
-           through a byte pointer could be anything to the compiler: they would be read again) */
-        const uint32_t first = F->first_vert, nverts = cached ? F->nverts : 0, ntri = F->nindex / 3;
-        const unsigned silhouettes = v->o.edges && mixed ? VIEW_VERT_AWAY : 0u, cull = closed ? VIEW_VERT_AWAY : 0u;
-        for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
-            const uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
-            cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
-            for (const uint32_t *ix = v->run_idx, *const end = ix + 3u * n; ix < end; ix += 3) {
-                cm_view_vert own[3];
-                const cm_view_vert *t[3];
-                /* (unsigned: an index below the face's wraps beyond it) */
-                uint32_t j0 = ix[0] - first, j1 = ix[1] - first, j2 = ix[2] - first;
-                if (j0 < nverts && j1 < nverts && j2 < nverts) {
-                    t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
-                } else {
-                    /* (a large face's corners copied out of the window: a later corner's run may
-                       replace an earlier one's slot) */
-                    for (int i = 0; i < 3; i++) {
-                        uint32_t j = ix[i] - first;
-                        if (j < nverts)
-                            own[i] = v->fv[j];
-                        else if (j < F->nverts)
-                            own[i] = *window_vertex(v, mesh, F, j);
-                        else
-                            vertex_screen(v, mesh, ix[i], &own[i]); /* (not the face's own: not made so) */
-                        t[i] = &own[i];
-                    }
-                }
-                const unsigned f0 = t[0]->flags, f1 = t[1]->flags, f2 = t[2]->flags, all = f0 & f1 & f2;
-                if (!(all & VIEW_VERT_OK) || (all & cull))
-                    continue;
-                fill_triangle(v, t, rgb);
-                /* a silhouette crosses it where its corners face different ways */
-                if (((f0 | f1 | f2) ^ all) & silhouettes)
-                    silhouette(v, t);
-            }
-        }
+            v->face_place[fi] = (int32_t)placement;
+        else
+            draw_face(v, mesh, fi, placement, 0);
     }
+    for (uint32_t k = 0; front_to_back && k < mesh->nfaces; k++)
+        draw_face(v, mesh, v->face_order[k], v->face_place[v->face_order[k]], 1);
+    v->tiles_live = 0;
 }
 
 /* ---------------------------------------------------------------- the status line */

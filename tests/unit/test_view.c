@@ -574,6 +574,43 @@ static void test_hidden_faces(void **state)
     }
 }
 
+/* front to back, triangle by triangle: a square tilted back (y = z - 0.5, nearest at its lower
+   edge) and then one face of two squares upright at y = 0, one over the tilted square's lower half
+   (behind it) and one over its upper half (in front of it).  The face is not behind every tile it
+   touches, so it is drawn; its lower square's two triangles are skipped without being set up
+   (triangle_hidden), its upper square drawn: the same pixels as drawing the file's order */
+static void test_hidden_triangles(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100 || CM_MAX_FACES < 2)
+        skip();
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 0);
+    const float ny[3] = {0, -1, 0}, tilted[3] = {0, -0.7071068f, 0.7071068f}, lo[3] = {0, -0.5f, 0}, hi[3] = {1, 0.5f, 1};
+    const float lower[4][3] = {{0.25f, 0, 0.1f}, {0.75f, 0, 0.1f}, {0.75f, 0, 0.4f}, {0.25f, 0, 0.4f}};
+    const float upper[4][3] = {{0.25f, 0, 0.6f}, {0.75f, 0, 0.6f}, {0.75f, 0, 0.9f}, {0.25f, 0, 0.9f}};
+    const float back[4][3] = {{0, -0.5f, 0}, {1, -0.5f, 0}, {1, 0.5f, 1}, {0, 0.5f, 1}};
+    for (int fit = 0; fit < 2; fit++) {
+        cm_mesh m = mesh_storage();
+        add_quad(&m, lower, ny, 0x2060a0u, 1);
+        add_quad(&m, upper, ny, 0x2060a0u, 1);
+        m.nfaces--; /* (the two squares one face: their vertices and indices follow each other) */
+        m.faces[0].nverts += 4, m.faces[0].nindex += 6;
+        add_quad(&m, back, tilted, 0x808080u, 1);
+        assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+        if (fit)
+            cm_view_fit(&view, &m);
+        assert_int_equal(view.boxes_nfaces, fit ? 2 : 0);
+        cm_view_mesh(&view, &m);
+        assert_int_equal(view.hidden_faces, 0);
+        assert_int_equal(view.hidden_triangles, fit ? 2 : 0);
+        assert_int_equal(view.triangles, fit ? 4 : 6);
+        if (!fit)
+            memcpy(b_frame[0], view.rgb, sizeof b_frame[0]);
+        else
+            assert_memory_equal(view.rgb, b_frame[0], sizeof b_frame[0]);
+    }
+}
+
 /* a sliver along the frame's diagonal, half a pixel across, its third corner behind the first
    two: every pixel it writes lies within its corners' depths (each span's depth is made from its
    first pixel's own weights: face_hidden counts on it) */
@@ -829,7 +866,7 @@ int main(void)
         cmocka_unit_test(test_dir_names),   cmocka_unit_test(test_turn), cmocka_unit_test(test_silhouette),   cmocka_unit_test(test_png),         cmocka_unit_test(test_status_line),
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
         cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
-        cmocka_unit_test(test_back_edges), cmocka_unit_test(test_hidden_faces),
+        cmocka_unit_test(test_back_edges), cmocka_unit_test(test_hidden_faces), cmocka_unit_test(test_hidden_triangles),
         cmocka_unit_test(test_sliver_depth), cmocka_unit_test(test_edge_copies),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -99,7 +99,7 @@ typedef struct cm_view {
        model-space row (and a constant) */
     double ortho[5][4];
     uint64_t triangles, edge_segments, silhouette_segments; /* drawn (for tests and --verbose) */
-    uint64_t hidden_faces;                                  /* skipped behind what was drawn */
+    uint64_t hidden_faces, hidden_triangles;                /* skipped behind what was drawn */
     /* the model's parts (cm_view_parts): those the file names (format 4.11: cm_face.part,
        cm_placement.part), else a face's part among its own faces' connected components (faces joined
        by their edges, see there), numbered from 1 in face order, and placement k's copies part
@@ -131,16 +131,21 @@ typedef struct cm_view {
        up, before the fit's centring, which it keeps in fit_x, fit_y) and nearest depth; cm_view_mesh
        draws the faces nearest first, and skips a face whose box is behind the farthest pixel of
        every tile it touches (tile_far: an upper bound, made the farthest again where written since,
-       tile_written) */
+       tile_writer), and a triangle of a face drawn likewise */
     uint32_t boxes_nfaces;                 /* the faces boxed (0: none, draw in file order) */
     int tiles_w;                           /* tiles across the frame */
+    int tiles_live;                        /* (cm_view_mesh drawing front to back: tile_far holds) */
+    double tri_margin;                     /* (a triangle behind tile_far by more is hidden) */
     double fit_x, fit_y;
     float face_box[CM_MAX_FACES][4];       /* x low, x high, y low, y high */
     double face_near[CM_MAX_FACES];
     uint32_t face_order[CM_MAX_FACES];
     int32_t face_place[CM_MAX_FACES];      /* a face's placement (-1: the model's own) */
     float tile_far[CM_VIEW_TILES];
-    uint8_t tile_written[CM_VIEW_TILES];
+    uint32_t tile_writer[CM_VIEW_TILES];   /* (the face that wrote a tile since its tile_far was
+                                              found, plus 1; 0: none) */
+    uint32_t writer;                       /* (the face being drawn, plus 1) */
+    uint32_t tri_visible, tri_wait;        /* (its triangles found visible in a row; to skip testing) */
     uint32_t fv_tag[CM_VIEW_FACE_VERTS];
     /* a run of the mesh's positions, normals and indices, read back together */
     float run_pos[CM_VIEW_READ_RUN][3], run_nrm[CM_VIEW_READ_RUN][3];
