@@ -795,17 +795,12 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
             put_lit(pix, base, clamp ? (lfx <= 0 ? 0 : (lfx >= VIEW_LIGHT_MAX ? VIEW_LIGHT_MAX : lfx)) : lfx);
             wrote = 1;
         }
-        if (wrote) {
-            /* (the span's tiles: along a row one after another, down a column a row of tiles apart) */
-            const size_t along = cols ? (size_t)v->tiles_w : 1;
-            const uint64_t fx = (uint64_t)(cols ? x0 + j : x0 + lo), fy = (uint64_t)(cols ? y0 + lo : y0 + j);
-            uint32_t *tw = &v->tile_writer[(fy / CM_VIEW_TILE) * (uint64_t)v->tiles_w + fx / CM_VIEW_TILE];
-            uint64_t first = (uint64_t)((cols ? y0 : x0) + lo) / CM_VIEW_TILE, last = (uint64_t)((cols ? y0 : x0) + hi) / CM_VIEW_TILE;
-            for (uint64_t q = first; q <= last; q++, tw += along)
-                *tw = v->writer;
-            drawn = 1;
-        }
+        drawn |= wrote;
     }
+    if (drawn) /* (every tile of the box: one not written is measured again for nothing, never wrong) */
+        for (int64_t ty = y0 / CM_VIEW_TILE; ty <= y1 / CM_VIEW_TILE; ty++)
+            for (int64_t tx = x0 / CM_VIEW_TILE; tx <= x1 / CM_VIEW_TILE; tx++)
+                v->tile_writer[ty * v->tiles_w + tx] = v->writer;
     v->triangles += (uint64_t)drawn;
 }
 
