@@ -107,6 +107,12 @@ CM_PLATFORM_OPT := -Os
 CM_COLD_SRC := decoder/src/cm_decode.c decoder/src/cm_format.c decoder/src/cm_sections.c decoder/src/cm_limits.c \
                decoder/src/cm_error.c decoder/src/cm_arith.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c \
                decoder/src/cm_corner.c decoder/view/cm_glb_read.c decoder/out/cm_glb.c $(wildcard decoder/methods/*.c)
+# and the viewer's drawing, run per triangle and pixel of every frame, its loops peeled and
+# unswitched (gcc; clang has no such flags): issue 17's frame of 100 k triangles 2 to 3 % fewer
+# instructions (tail_section 52.9 -> 51.5 M, asmo 59.2 -> 58.0 M), the same pixels, for 1 KB of
+# x86-64 text (-O3: 4.6 KB, a further 1 %)
+CM_HOT_SRC := decoder/view/cm_view.c
+CM_HOT_OPT := $(if $(CC_IS_CLANG),,-fpeel-loops -funswitch-loops)
 endif
 CM_WARN := -Wall -Wextra -Wundef -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wcast-align \
            -Wformat=2 -Wvla -Walloca -Wdouble-promotion -Werror
@@ -161,7 +167,7 @@ $(call bdir,$(1))/decoder/%.o: decoder/%.c
 	$$(call say,CC      ,$$@)
 	$$(Q)$$(CC) $$(CM_INC) -DCM_PROFILE='"profiles/$(1).h"' $$(CPPFLAGS) $$(CM_STD) $$(CM_WARN_DECODER) \
 		$$(STACK_FLAGS_$(1)) $$(MODEL_FLAGS_$(1)) $$(CFLAGS) $$(if $$(filter $$(CM_COLD_SRC),$$<),$$(CM_PLATFORM_OPT)) \
-		$$(DEPFLAGS) -c $$< -o $$@
+		$$(if $$(filter $$(CM_HOT_SRC),$$<),$$(CM_HOT_OPT)) $$(DEPFLAGS) -c $$< -o $$@
 
 $(call bdir,$(1))/%.o: %.c
 	@mkdir -p $$(@D)
