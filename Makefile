@@ -683,7 +683,10 @@ bench:
 	$(Q)WALL_MIN=$(WALL_MIN) host_tools/scripts/bench.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(BUILD_ROOT)/bench $(BENCH_MODELS)
 	$(Q)WALL_MIN=$(WALL_MIN) host_tools/scripts/bench_peers.sh $(CMZ) $(call bdir,terminal)/cmz-decode $(ORACLE_BIN) $(BUILD_ROOT)/bench $(BENCH_MODELS)
 	$(Q)$(MAKE) --no-print-directory -s $(call bdir,terminal)/cmz-view
-	$(Q)host_tools/scripts/bench_view.sh $(call bdir,terminal)/cmz-view $(BUILD_ROOT)/bench
+	$(Q)$(MAKE) --no-print-directory -s CROSS_COMPILE=aarch64-linux-gnu- CC=aarch64-linux-gnu-gcc AR=aarch64-linux-gnu-ar \
+		PKG_CONFIG=aarch64-linux-gnu-pkg-config $(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-view || true
+	$(Q)host_tools/scripts/bench_view.sh $(call bdir,terminal)/cmz-view $(BUILD_ROOT)/bench \
+		$(BUILD_ROOT)/aarch64-linux-gnu-terminal/cmz-view
 	$(Q)$(MAKE) --no-print-directory -s bench-link
 
 # the link's speed: cmz send -> cmz-terminal over ptys, unpaced, paced at 115200 baud, and noisy

@@ -73,7 +73,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: cmz-view MODEL.cmz|MODEL.glb --png OUT.png|--fb DEV [--size WxH] [--view DIR] [--turn N]\n"
             "                [--perspective] [--step K] [--no-edges] [--background RRGGBB] [--tess MM]\n"
-            "                [--status TEXT] [--camera] [-q]\n"
+            "                [--status TEXT] [--camera] [--frames N] [-q]\n"
             "                [--gpio-rotate SPEC] [--gpio-next SPEC] [--gpio-prev SPEC] [--gpio-reset SPEC]\n"
             "                [--turntable SECONDS] [--idle SECONDS]\n"
             "       cmz-view --fb DEV --status TEXT\n"
@@ -116,7 +116,9 @@ static void usage(FILE *f)
             "per mm (perspective: the focal length in pixels), the eye's depth (perspective;\n"
             "else 0), the point the frame is centred on and the screen's right, up and\n"
             "into-the-screen axes in CAD millimetres, so that another renderer can match the\n"
-            "view (tests/tools/check_three.sh).  -q: no summary line.\n"
+            "view (tests/tools/check_three.sh).  --frames N: the frame drawn N times (as a\n"
+            "button press draws it again), the summary saying its mean wall time: what this\n"
+            "board takes to turn the model.  -q: no summary line.\n"
             "\n"
             "The operator's buttons (with --fb; the viewer then stays, drawing again on each\n"
             "press, until SIGTERM or SIGINT): --gpio-rotate turns the model one step, --gpio-next\n"
@@ -536,6 +538,7 @@ int main(int argc, char **argv)
                                                             "--gpio-reset"};
     int64_t tick_ms = 0, idle_ms = 30000;
     int sized = 0, quiet = 0, camera = 0, serving = 0;
+    long frames = 1; /* --frames: the frame drawn this many times, the mean time reported */
     double tol = 0;
     cm_view_opts vo;
     cm_view_opts_default(&vo);
@@ -632,6 +635,13 @@ int main(int argc, char **argv)
                 fprintf(stderr, "cmz-view: --background wants six hex digits RRGGBB, not '%s'\n", argv[i]);
                 return 2;
             }
+        } else if (strcmp(a, "--frames") == 0 && more) {
+            char *end;
+            frames = strtol(argv[++i], &end, 10);
+            if (*end || frames < 1 || frames > 10000) {
+                fprintf(stderr, "cmz-view: --frames wants a count from 1 to 10000, not '%s'\n", argv[i]);
+                return 2;
+            }
         } else if (strcmp(a, "--tess") == 0 && more) {
             char *end;
             tol = strtod(argv[++i], &end);
@@ -703,9 +713,17 @@ int main(int argc, char **argv)
     if (lrc != 0)
         return lrc;
     uint32_t parts = 0;
-    int rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, interactive, in, &parts);
+    /* (--frames: the same frame again, as a button press draws it: the drawing's wall time alone,
+       without the decode, the PNG or the screen) */
+    const struct timespec t0 = cm_clock_now();
+    int rc = 0;
+    for (long k = 0; k < frames && rc == 0; k++)
+        rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, interactive, in, &parts);
+    const struct timespec t1 = cm_clock_now();
     if (rc != 0)
         return rc;
+    const double frame_ms =
+        ((double)(t1.tv_sec - t0.tv_sec) * 1e3 + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-6) / (double)frames;
     rc = out ? write_png(out) : 0;
     if (rc == 0 && fb)
         rc = show_frame(fb, &vo);
@@ -730,6 +748,8 @@ int main(int argc, char **argv)
     if (vo.step > 0)
         printf(" (step %u)", vo.step);
     printf(", %u triangles (%llu drawn)", sum.triangles, (unsigned long long)view.triangles);
+    if (frames > 1)
+        printf(", %.3f ms a frame (mean of %ld)", frame_ms, frames);
     if (sum.faces_left_out > 0)
         printf(", %lu faces left out", (unsigned long)sum.faces_left_out);
     printf("%s\n", drm.map ? "; on the screen until SIGTERM" : "");

@@ -216,6 +216,21 @@ PY
     fi
 done
 
+# --frames N: the same picture (the frame drawn N times over), the summary saying its mean time;
+# a count out of range refused by name
+m=$(ls tests/data/*.igs | head -n 1)
+b=$(basename "${m%.*}")
+"$view" "$tmp/$b.cmz" --png "$tmp/once.png" -q
+line=$("$view" "$tmp/$b.cmz" --png "$tmp/thrice.png" --frames 3)
+"$view" "$tmp/$b.cmz" --png "$tmp/none.png" --frames 0 > /dev/null 2> "$tmp/err"
+st=$?
+if cmp -s "$tmp/once.png" "$tmp/thrice.png" && grep -Eq ', [0-9]+\.[0-9]{3} ms a frame \(mean of 3\)$' <<< "$line" &&
+    [ $st -eq 2 ] && grep -q "from 1 to 10000" "$tmp/err" && [ ! -e "$tmp/none.png" ]; then
+    ok "--frames 3 draws the same picture and times it: ${line##*, }"
+else
+    bad "--frames: '$line', --frames 0 exit $st $(cat "$tmp/err")"
+fi
+
 # a frame beyond the build's: refused by name, exit 2, nothing written
 m=$(ls tests/data/*.igs | head -n 1)
 b=$(basename "${m%.*}")
