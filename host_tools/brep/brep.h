@@ -49,6 +49,8 @@ typedef struct brep_face {
     int owner;            /* the entity that names its part: IGES the outermost 408 instance, else
                              the 186 solid or 514 shell, else a 402 group listing the face (DEs);
                              STEP the solid's or shell's #n; 0: none (a loose face) */
+    int product;          /* STEP: the #n of the PRODUCT its representation shapes (its part's name,
+                             the solid's own usually being empty); 0: none, and for IGES */
 } brep_face;
 
 /* an outermost subfigure instance (IGES 408) as imported: its faces carry its id */
@@ -64,7 +66,7 @@ typedef struct brep_placement {
     int proto;   /* the instance id (brep_face.instance) of the faces placed */
     int nfaces;  /* how many faces the copy had */
     haffine xf;
-    int top, owner; /* its own instance's (brep_face.top, .owner of the faces it had) */
+    int top, owner, product; /* its own instance's (brep_face.top, .owner, .product of the faces it had) */
 } brep_placement;
 
 typedef struct brep_model {

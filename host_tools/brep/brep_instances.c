@@ -146,6 +146,7 @@ cm_err brep_fold_instances(brep_model *m, int *folded, cm_status *st)
         pl[npl].xf = x;
         pl[npl].top = m->faces[first].top;
         pl[npl].owner = m->faces[first].owner;
+        pl[npl].product = m->faces[first].product;
         npl++;
         nface += n;
     }

@@ -55,24 +55,40 @@ static int root(int *up, int f)
     return f;
 }
 
+/* STEP entity id's string parameter k, trimmed, into out (0: none or empty) */
+static int step_name(const step_file *f, int id, int k, char out[80])
+{
+    const step_entity *e = id > 0 ? step_by_id(f, id) : NULL;
+    const step_val *v = e && e->nparts > 0 ? step_item(&f->vals[f->parts[e->first_part].params], k) : NULL;
+    int at = 0, len = v && v->kind == STEP_STR ? v->len : 0;
+    const char *t = len > 0 ? f->text + v->text : "";
+    while (len > 0 && t[len - 1] == ' ')
+        len--;
+    while (at < len && t[at] == ' ')
+        at++;
+    if (len <= at)
+        return 0;
+    snprintf(out, 80, "%.*s", len - at, t + at);
+    return 1;
+}
+
 /* the names a part answers to in --steps: an IGES entity's label, a 408 instance's subfigure name too;
-   a STEP entity's name (its first parameter) */
-static int part_names(const loaded_model *lm, int owner, char names[2][80])
+   STEP the name of the PRODUCT its faces' representation shapes (else its id), and the solid's or
+   shell's own name (its first parameter, mostly empty) */
+static int part_names(const loaded_model *lm, int owner, int product, char names[2][80])
 {
     int n = 0;
     names[0][0] = names[1][0] = 0;
-    if (owner <= 0)
-        return 0;
     if (lm->is_step) {
         const step_file *f = &lm->step;
-        const step_entity *e = step_by_id(f, owner);
-        if (e && e->nparts > 0) {
-            const step_val *v = step_item(&f->vals[f->parts[e->first_part].params], 0);
-            if (v && v->kind == STEP_STR && v->len > 0)
-                snprintf(names[n++], sizeof names[0], "%.*s", v->len, f->text + v->text);
-        }
+        if (product > 0 && (step_name(f, product, 1, names[n]) || step_name(f, product, 0, names[n])))
+            n++;
+        if (owner > 0 && step_name(f, owner, 0, names[n]) && !(n == 1 && strcmp(names[0], names[1]) == 0))
+            n++;
         return n;
     }
+    if (owner <= 0)
+        return 0;
     const iges_file *f = &lm->iges;
     const iges_entity *e = iges_by_de(f, owner);
     if (!e)
@@ -93,11 +109,17 @@ static int part_names(const loaded_model *lm, int owner, char names[2][80])
     return n;
 }
 
-/* the entity that names a part (its first face's owner; a copy's, its instance's) */
-static int key_owner(const loaded_model *lm, const part_key *k)
+/* the entity that names a part (its first face's owner; a copy's, its instance's), and its STEP
+   product */
+static int key_owner(const loaded_model *lm, const part_key *k, int *product)
 {
-    return k->key >> 40 == 4 ? lm->brep.placements[k->key & 0xffffffffffLL].owner
-                             : lm->brep.faces[lm->mesh.faces[k->first].brep_face].owner;
+    if (k->key >> 40 == 4) {
+        *product = lm->brep.placements[k->key & 0xffffffffffLL].product;
+        return lm->brep.placements[k->key & 0xffffffffffLL].owner;
+    }
+    const brep_face *bf = &lm->brep.faces[lm->mesh.faces[k->first].brep_face];
+    *product = bf->product;
+    return bf->owner;
 }
 
 void enc_parts_free(enc_parts *p)
@@ -162,7 +184,8 @@ static cm_err apply_steps(const loaded_model *lm, const char *path, const part_k
                 if (taken[p])
                     continue;
                 char names[2][80];
-                int nn = part_names(lm, key_owner(lm, &first_of[p]), names);
+                int product, owner = key_owner(lm, &first_of[p], &product);
+                int nn = part_names(lm, owner, product, names);
                 for (int k = 0; k < nn && !found; k++)
                     if (strcmp(names[k], s) == 0)
                         found = p;
@@ -326,19 +349,23 @@ done:
 
 int enc_part_names(const loaded_model *lm, const enc_parts *p, int part, char names[2][80], int *nfaces)
 {
-    int owner = -1, n = 0;
+    int owner = -1, product = 0, n = 0;
     for (int f = 0; f < lm->mesh.nfaces; f++)
         if (p->face_part[f] == part) {
             n++;
-            if (owner < 0)
+            if (owner < 0) {
                 owner = lm->brep.faces[lm->mesh.faces[f].brep_face].owner;
+                product = lm->brep.faces[lm->mesh.faces[f].brep_face].product;
+            }
         }
     for (int j = 0; j < lm->brep.nplacements; j++)
         if (p->place_part[j] == part) {
             n += lm->brep.placements[j].nfaces;
-            if (owner < 0)
+            if (owner < 0) {
                 owner = lm->brep.placements[j].owner;
+                product = lm->brep.placements[j].product;
+            }
         }
     *nfaces = n;
-    return part_names(lm, owner, names);
+    return part_names(lm, owner, product, names);
 }

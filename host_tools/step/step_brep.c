@@ -76,6 +76,7 @@ typedef struct importer {
     int instance;       /* outermost placement being imported (brep_face.instance), 0 at the top */
     int shell;          /* brep shell index of the faces being imported */
     int shell_id, solid_id; /* their shell's and solid's #n (for colours styled onto them), 0 if none */
+    int product;        /* the PRODUCT the representations being read shape (brep_face.product), 0 if none */
     char why[400];      /* why the current face cannot be built */
     colour_of *colours;
     int ncolours;
@@ -1097,6 +1098,7 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
         face.top = im->top;
         /* the part (assembly steps): the solid or shell model; a face placed on its own is loose */
         face.owner = im->solid_id != fe->id ? im->solid_id : 0;
+        face.product = im->product;
         face.first_loop = m->nloops;
         uint32_t rgb;
         if (colour_for(im, fe->id, &rgb) || (im->shell_id && colour_for(im, im->shell_id, &rgb)) ||
@@ -1815,10 +1817,28 @@ static cm_err group_index_build(importer *im, structure *s, group_index *gi)
 }
 
 /* import the faces of every representation in group v->group, placed by v */
+/* the #n of the PRODUCT of PRODUCT_DEFINITION pd (through its PRODUCT_DEFINITION_FORMATION), 0 if
+   there is none */
+static int product_of(const step_file *f, int pd)
+{
+    const step_entity *e = pd ? step_by_id(f, pd) : NULL;
+    const step_val *p = e ? step_params(f, e, "PRODUCT_DEFINITION") : NULL;
+    const step_entity *pdf = p ? step_ref(f, step_item(p, 2)) : NULL;
+    const step_val *q = pdf ? step_params(f, pdf, "PRODUCT_DEFINITION_FORMATION") : NULL;
+    if (!q && pdf)
+        q = step_params(f, pdf, "PRODUCT_DEFINITION_FORMATION_WITH_SPECIFIED_SOURCE");
+    const step_entity *prod = q ? step_ref(f, step_item(q, 2)) : NULL;
+    return prod && step_params(f, prod, "PRODUCT") ? prod->id : 0;
+}
+
 static cm_err import_group(importer *im, structure *s, const group_index *gi, const visit *v)
 {
     step_file *f = im->f;
     cm_err err = CM_OK;
+    /* the product the group shapes (its part's name): the first of its representations that says */
+    im->product = 0;
+    for (int q = gi->member_start[v->group]; q < gi->member_start[v->group + 1] && !im->product; q++)
+        im->product = product_of(f, s->pd_of[gi->members[q]]);
     for (int q = gi->member_start[v->group]; q < gi->member_start[v->group + 1] && err == CM_OK; q++) {
         int k = gi->members[q];
         const step_entity *re = &f->ents[s->ent_of[k]];
@@ -1955,6 +1975,7 @@ cm_err step_to_brep(step_file *f, brep_model *m, step_import_stats *stats, cm_st
         err = build_structure(&im, &s);
     if (err == CM_OK)
         err = walk(&im, &s);
+    im.product = 0; /* (what follows no product shapes) */
     /* solids no product's shape reaches (a loose file): where they stand, in the units of the
        representation that holds them (else the first one's) */
     int *holder = err == CM_OK ? malloc(((size_t)f->nents + 1) * sizeof *holder) : NULL;

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "encode/encode.h"
 #include "model_load.h"
 #include "step/step_file.h"
 
@@ -160,6 +161,18 @@ static int box_solid(sw *w, double sx, double sy, double sz, int *face_ids)
 static int product(sw *w, int rep)
 {
     int pd = sw_ent(w, "PRODUCT_DEFINITION('design','',$,$)");
+    int pds = sw_ent(w, "PRODUCT_DEFINITION_SHAPE('','',#%d)", pd);
+    sw_ent(w, "SHAPE_DEFINITION_REPRESENTATION(#%d,#%d)", pds, rep);
+    return pd;
+}
+
+/* the same for a PRODUCT named name (id 'id-' name): its definition through a formation, as
+   exporters write it */
+static int named_product(sw *w, int rep, const char *name)
+{
+    int prod = sw_ent(w, "PRODUCT('id-%s','%s','',())", name, name);
+    int pdf = sw_ent(w, "PRODUCT_DEFINITION_FORMATION('','',#%d)", prod);
+    int pd = sw_ent(w, "PRODUCT_DEFINITION('design','',#%d,$)", pdf);
     int pds = sw_ent(w, "PRODUCT_DEFINITION_SHAPE('','',#%d)", pd);
     sw_ent(w, "SHAPE_DEFINITION_REPRESENTATION(#%d,#%d)", pds, rep);
     return pd;
@@ -440,10 +453,10 @@ static char *assembly_file(int reversed, size_t *len)
     int ax0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0);
     int part = sw_ent(&w, "SHAPE_REPRESENTATION('part',(#%d),#%d)", ax0, ctx);
     sw_ent(&w, "SHAPE_REPRESENTATION_RELATIONSHIP('','',#%d,#%d)", part, absr);
-    int pd_part = product(&w, part);
+    int pd_part = named_product(&w, part, "BOX-10");
     int a1 = axis(&w, 100, 0, 0, 0, 0, 1, 1, 0, 0), a2 = axis(&w, 0, 50, 0, 0, 0, 1, 0, 1, 0);
     int asmr = sw_ent(&w, "SHAPE_REPRESENTATION('asm',(#%d,#%d,#%d),#%d)", axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0), a1, a2, ctx);
-    int pd_asm = product(&w, asmr);
+    int pd_asm = named_product(&w, asmr, "TOP");
     int at[2] = {a1, a2};
     for (int k = 0; k < 2; k++) {
         int idt = reversed ? sw_ent(&w, "ITEM_DEFINED_TRANSFORMATION('','',#%d,#%d)", at[k], ax0)
@@ -485,6 +498,22 @@ static void test_assembly(void **state)
         assert_int_equal(lm.brep.nfaces, 6);
         assert_int_equal(lm.brep.nplacements, 1);
         assert_near(brep_diag(&lm.brep), sqrt(130.0 * 130 + 60 * 60 + 30 * 30), 1e-9);
+        /* each placement a part, named first by the PRODUCT its representation shapes (what `cmz
+           encode --steps` and `cmz info --parts` know it by), then by its solid's own name */
+        enc_parts p;
+        char why[256], names[2][80];
+        cm_status st;
+        cm_status_init(&st);
+        assert_ok(enc_parts_build(&lm, NULL, &p, why, sizeof why, &st));
+        assert_int_equal(p.nparts, 2);
+        for (int k = 1; k <= 2; k++) {
+            int nfaces, n = enc_part_names(&lm, &p, k, names, &nfaces);
+            assert_int_equal(nfaces, 6);
+            assert_int_equal(n, 2);
+            assert_string_equal(names[0], "BOX-10");
+            assert_string_equal(names[1], "box");
+        }
+        enc_parts_free(&p);
         model_free(&lm);
         free(text);
     }
