@@ -230,7 +230,7 @@ static cm_vec3 restrict_point(cm_vec3 Q, const cm_vec3 *b, const cm_vec3 *n, int
     return cm_sub(cm_sub(Q, cm_scale(n[0], a1)), cm_scale(n[1], a2));
 }
 
-cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, const cm_vec3 *twist, cm_nfill_surface *out,
+CM_ONCE_PER_FACE cm_err cm_g1fit_build(const cm_greg_input *in, int nu, int nv, int mode, const cm_vec3 *twist, cm_nfill_surface *out,
                       cm_g1fit_ws *ws, cm_status *st)
 {
     cm_err e;

@@ -217,7 +217,7 @@ static cm_err add_point(cm_net_lsq *L, const cm_nfill_surface *s, cm_vec3 Q, dou
     return CM_OK;
 }
 
-cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int nu, int nv, int phi, cm_frame *frame,
+CM_ONCE_PER_FACE cm_err cm_nfill_build(const cm_greg_input *in, const cm_nfill_holes *holes, int nu, int nv, int phi, cm_frame *frame,
                       cm_nfill_surface *out, cm_nfill_ws *ws, cm_status *st)
 {
     cm_err e;
