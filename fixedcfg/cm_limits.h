@@ -178,6 +178,14 @@
 #  define CM_VIEW_FACE_VERTS CM_MAX_TESS_POINTS
 #endif
 
+/* The names of a model's parts (format 4.12: what the terminal's status line says at each assembly
+ * step), each with a 0 byte after it.  A file whose names need more decodes without them, with a
+ * warning (cm_model.part_names_left_out): names are for the operator's eyes, not worth refusing a
+ * model for.  Unit: bytes.  Not a limit of the format (cm-limits does not list it). */
+#ifndef CM_MAX_PART_NAME_BYTES
+#  define CM_MAX_PART_NAME_BYTES 8192
+#endif
+
 /* Straight pieces the viewer draws each edge curve with (its points are the curve's own, at even
  * parameter steps).  Unit: segments per edge.  Not a limit of the format. */
 #ifndef CM_VIEW_EDGE_SEGMENTS

@@ -199,7 +199,10 @@ static const char *status_text(char *buf, size_t cap, const char *status, int in
 {
     if (!interactive || step == 0)
         return status;
-    snprintf(buf, cap, "%s%sstep %u of %u", status ? status : "", status ? "  -  " : "", step, parts);
+    /* (the part's name where the file sends it, format 4.12: what the operator fits at this step) */
+    const char *name = cm_model_part_name(&state.dec.model, step);
+    snprintf(buf, cap, "%s%sstep %u of %u%s%s", status ? status : "", status ? "  -  " : "", step, parts,
+             name ? ": " : "", name ? name : "");
     return buf;
 }
 
@@ -338,6 +341,9 @@ static int load_model(const char *in, const char *spill, int is_dir, double tol,
     }
     for (uint32_t i = 0; i < sum->faces_left_out && i < CM_DECODE_LEFT_OUT_LIST; i++)
         report(stderr, "warning: ", in, &sum->left_out[i]);
+    if (state.dec.model.part_names_left_out)
+        fprintf(stderr, "cmz-view: %s: warning: the parts' names need more than this build's %d bytes "
+                        "(CM_MAX_PART_NAME_BYTES): the steps are shown without them\n", in, CM_MAX_PART_NAME_BYTES);
     if (!cm_mesh_bounds(mesh, lo, hi)) {
         fprintf(stderr, "cmz-view: %s: nothing to show (no triangles)\n", in);
         return 1;

@@ -1290,12 +1290,63 @@ static cm_err read_parts(reader *r, cm_colr_ctx *ctx)
     return r->ac.overrun ? rfail(r, CM_E_TRUNCATED, "parts") : CM_OK;
 }
 
+/* format 4.12: the parts' names, after them: the bytes sent in all (0: none), then each part's
+   name, that of an earlier part again (a bit, and how many parts back) or its length and bytes (none
+   0).  Kept, each with a 0 byte after it, while they fit the build; past that all left out, the
+   rest read past (cm_model.part_names_left_out) */
+static cm_err read_part_names(reader *r, cm_colr_ctx *ctx)
+{
+    cm_model *m = &r->d->model;
+    uint64_t total = cm_ac_dec_uint(&r->ac, &ctx->name_bytes), sent = 0;
+    if (total > (uint64_t)m->nparts * CM_FMT_MAX_PART_NAME)
+        return rfail(r, CM_E_RANGE, "part names");
+    int keep = 1;
+    for (uint32_t p = 0; p < m->nparts && total > 0; p++) {
+        if (p > 0 && cm_ac_dec_bit(&r->ac, &ctx->name_again)) {
+            uint64_t back = cm_ac_dec_uint(&r->ac, &ctx->name_back);
+            if (back >= p || r->ac.overrun)
+                return rfail(r, r->ac.overrun ? CM_E_TRUNCATED : CM_E_RANGE, "part name");
+            const char *name = keep ? cm_model_part_name(m, p - (uint32_t)back) : NULL;
+            uint32_t len = 0;
+            while (name && name[len] != 0)
+                len++;
+            keep = keep && m->part_names_len + len + 1u <= CM_MAX_PART_NAME_BYTES;
+            for (uint32_t k = 0; keep && k < len; k++) /* (from the pool into the pool: name ends before) */
+                m->part_names[m->part_names_len++] = name[k];
+        } else {
+            uint64_t len = cm_ac_dec_uint(&r->ac, &ctx->name_len);
+            if (len > CM_FMT_MAX_PART_NAME || sent + len > total || r->ac.overrun)
+                return rfail(r, r->ac.overrun ? CM_E_TRUNCATED : CM_E_RANGE, "part name");
+            sent += len;
+            keep = keep && m->part_names_len + len + 1u <= CM_MAX_PART_NAME_BYTES;
+            for (uint64_t k = 0; k < len; k++) {
+                uint32_t c = cm_ac_dec_direct(&r->ac, 8);
+                if (c == 0)
+                    return rfail(r, CM_E_RANGE, "part name");
+                if (keep)
+                    m->part_names[m->part_names_len++] = (char)c;
+            }
+        }
+        if (keep)
+            m->part_names[m->part_names_len++] = 0;
+    }
+    if (sent != total)
+        return rfail(r, CM_E_RANGE, "part names");
+    if (!keep) { /* (all or none: a step's name is never another's) */
+        m->part_names_len = 0;
+        m->part_names_left_out = 1;
+    }
+    return r->ac.overrun ? rfail(r, CM_E_TRUNCATED, "part names") : CM_OK;
+}
+
 static cm_err sec_colr(reader *r)
 {
     cm_model *m = &r->d->model;
     cm_colr_ctx ctx;
     cm_colr_ctx_init(&ctx);
     m->nparts = 0;
+    m->part_names_len = 0;
+    m->part_names_left_out = 0;
     uint64_t np = cm_ac_dec_uint(&r->ac, &ctx.count);
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, "palette");
@@ -1315,7 +1366,8 @@ static cm_err sec_colr(reader *r)
     r->face = CM_NO_FACE_INDEX;
     if (r->ac.overrun)
         return rfail(r, CM_E_TRUNCATED, m->npalette > 0 ? "face colours" : "palette");
-    return at_least_4(r, CM_FMT_PARTS_MINOR) ? read_parts(r, &ctx) : CM_OK;
+    cm_err e = at_least_4(r, CM_FMT_PARTS_MINOR) ? read_parts(r, &ctx) : CM_OK;
+    return e == CM_OK && m->nparts > 0 && at_least_4(r, CM_FMT_PART_NAMES_MINOR) ? read_part_names(r, &ctx) : e;
 }
 
 /* cm_ac_fill for a file longer than the window: the stream's bytes from pos on, read again */

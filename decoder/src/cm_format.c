@@ -511,3 +511,13 @@ const char *cm_fmt_placement_fault(const double m[12])
                  m[2] * (m[4] * m[9] - m[5] * m[8]);
     return fabs(det) >= CM_FMT_PLACE_MIN_DET ? NULL : "placement's transform (singular)";
 }
+
+const char *cm_model_part_name(const cm_model *m, uint32_t part)
+{
+    uint32_t at = 0;
+    for (uint32_t p = 1; p < part && at < m->part_names_len; p++)
+        while (at < m->part_names_len && m->part_names[at++] != 0)
+            ;
+    return part >= 1 && part <= m->nparts && at < m->part_names_len && m->part_names[at] != 0 ? &m->part_names[at]
+                                                                                              : NULL;
+}

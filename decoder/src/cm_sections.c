@@ -99,6 +99,10 @@ void cm_colr_ctx_init(cm_colr_ctx *c)
     cm_ac_int_init(&c->index);
     cm_ac_int_init(&c->nparts);
     cm_ac_int_init(&c->part);
+    cm_ac_int_init(&c->name_bytes);
+    cm_ac_int_init(&c->name_len);
+    cm_ac_int_init(&c->name_back);
+    cm_ac_prob_init(&c->name_again);
     cm_ac_prob_init(&c->part_same);
     cm_ac_prob_init(&c->part_next);
 }

@@ -761,7 +761,8 @@ cm_err cm_glb_read(cm_glb_reader *g, cm_glb_src_fn *src, void *ctx, uint64_t fil
         g->nodes[i].parent = -1;
     cm_mesh_clear(mesh);
     model->nfaces = model->nedges = model->nuses = model->nloops = model->nverts = model->nsurfs = 0;
-    model->nplacements = model->npalette = model->nparts = 0;
+    model->nplacements = model->npalette = model->nparts = model->part_names_len = 0;
+    model->part_names_left_out = 0; /* (no names: a GLB's nodes' are not read) */
     /* header, JSON chunk, BIN chunk (the first two chunks; any after them are extensions') */
     uint8_t h[20];
     if (file_len < 20)

@@ -36,6 +36,7 @@
 #define CM_MAX_MODEL_USES 64
 #define CM_MAX_EDGE_SAMPLES 32
 #define CM_MAX_PLACEMENTS 4
+#define CM_MAX_PART_NAME_BYTES 64
 #define CM_STACK_FN_MAX 8192
 #define CM_STACK_BUDGET 65536
 /* 72 KiB for 57.7 KiB on x86-64 (65 KiB before issue 15's mesh window; GREGORY-FIT's corrections

@@ -609,6 +609,51 @@ static void write_part(cm_ac_enc *e, cm_colr_ctx *ctx, int i, int part, int *pre
     *top = part > *top ? part : *top;
 }
 
+/* format 4.12: the parts' names after them (read_part_names in cm_decode.c): each part's first name
+   (parts.c: an IGES label or subfigure name, a STEP product's), a byte below a space sent as one;
+   that of the nearest earlier part again by how far back (an assembly's bolts: C1G0B0O's 24 names
+   are 7), else its length and bytes; the bytes sent in all first, 0 when no part has a name */
+static int write_part_names(cm_ac_enc *e, cm_colr_ctx *ctx, const loaded_model *lm, const enc_parts *p)
+{
+    char (*name)[80] = calloc((size_t)p->nparts + 1, sizeof *name), two[2][80];
+    if (!name)
+        return -1;
+    for (int k = 1; k <= p->nparts; k++) {
+        int nf;
+        if (enc_part_names(lm, p, k, two, &nf) > 0)
+            for (int c = 0; (name[k][c] = two[0][c]) != 0; c++)
+                name[k][c] = (unsigned char)name[k][c] < 0x20u ? ' ' : name[k][c];
+    }
+    _Static_assert(sizeof name[0] - 1 <= CM_FMT_MAX_PART_NAME, "a part's name within the format's");
+    uint64_t total = 0;
+    int *again = calloc((size_t)p->nparts + 1, sizeof *again);
+    if (!again) {
+        free(name);
+        return -1;
+    }
+    for (int k = 1; k <= p->nparts; k++) {
+        for (int q = k - 1; q >= 1 && name[k][0] && !again[k]; q--)
+            again[k] = strcmp(name[q], name[k]) == 0 ? q : 0;
+        total += again[k] ? 0 : strlen(name[k]);
+    }
+    cm_ac_enc_uint(e, &ctx->name_bytes, total);
+    for (int k = 1; k <= p->nparts && total > 0; k++) {
+        if (k > 1)
+            cm_ac_enc_bit(e, &ctx->name_again, again[k] != 0);
+        if (again[k]) {
+            cm_ac_enc_uint(e, &ctx->name_back, (uint64_t)(k - 1 - again[k]));
+            continue;
+        }
+        size_t len = strlen(name[k]);
+        cm_ac_enc_uint(e, &ctx->name_len, (uint64_t)len);
+        for (size_t c = 0; c < len; c++)
+            cm_ac_enc_direct(e, (unsigned char)name[k][c], 8);
+    }
+    free(again);
+    free(name);
+    return 0;
+}
+
 /* format 4.11: the parts in the order of the terminal's assembly steps (parts.c), after the colours:
    their count (0 for a model of one part), each face's, each copy's */
 static int write_parts(const tx *t, cm_ac_enc *e, const loaded_model *lm, cm_colr_ctx *ctx)
@@ -636,8 +681,9 @@ static int write_parts(const tx *t, cm_ac_enc *e, const loaded_model *lm, cm_col
     for (int k = 0; send && k < lm->brep.nplacements; k++)
         if (placement_faces(t, lm, k, &first, &count) > 0)
             write_part(e, ctx, i++, p.place_part[k], &prev, &top);
+    int err = send && t->o->compact_minor >= (int)CM_FMT_PART_NAMES_MINOR ? write_part_names(e, ctx, lm, &p) : 0;
     enc_parts_free(&p);
-    return 0;
+    return err;
 }
 
 static int sec_colr(const tx *t, cm_ac_enc *e, const loaded_model *lm)

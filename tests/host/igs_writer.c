@@ -733,6 +733,11 @@ int igw_subfigure_dag(igw *w, int levels, int fan)
 
 int igw_placed_boxes(igw *w, int copies, const double (*xform)[12])
 {
+    return igw_placed_boxes_named(w, copies, xform, "BOX");
+}
+
+int igw_placed_boxes_named(igw *w, int copies, const double (*xform)[12], const char *name)
+{
     int from = w->n;
     igw_box_with_hole_144(w, 40, 30, 20, 5);
     int members[16], n = 0;
@@ -741,8 +746,9 @@ int igw_placed_boxes(igw *w, int copies, const double (*xform)[12])
             members[n++] = 2 * i + 1;
             w->e[i].subord = 1;
         }
-    char buf[512];
-    repeat_list(buf, sizeof buf, "0,3HBOX,", n, members);
+    char buf[512], head[128];
+    snprintf(head, sizeof head, "0,%dH%s,", (int)strlen(name), name);
+    repeat_list(buf, sizeof buf, head, n, members);
     int def = igw_add(w, 308, 0, "%s", buf);
     igw_set(w, def, 1, 0, 0);
     for (int k = 0; k < copies; k++) {

@@ -148,6 +148,8 @@ int igw_subfigure_dag(igw *w, int levels, int fan);
  * xform[k] (row-major 3 x 4: {R11, R12, R13, T1, R21, ...}).  Returns the 308's DE.
  */
 int igw_placed_boxes(igw *w, int copies, const double (*xform)[12]);
+/* the same, the subfigure named name (at most 100 bytes) */
+int igw_placed_boxes_named(igw *w, int copies, const double (*xform)[12], const char *name);
 
 /**
  * A trimmed square whose hole is a composite-curve DAG: composite 0 is a full circle (100),

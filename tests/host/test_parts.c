@@ -110,10 +110,22 @@ static void test_parts_in_file_order(void **state)
     encode_result r;
     cm_status st;
     assert_ok(encode_with(&lm, NULL, NULL, -1, &r, &st));
-    assert_int_equal(r.bytes[CM_HDR_MINOR], CM_FMT_PARTS_MINOR);
+    assert_int_equal(r.bytes[CM_HDR_MINOR], CM_FMT_PART_NAMES_MINOR);
     assert_int_equal(r.parts, 6);
     assert_ok(decode(&r, &st));
     assert_int_equal(dec.model.nparts, 6);
+    /* format 4.12: the names the parts answer to, the first of each (the box and its copies their
+       subfigure's; the loose squares and the group none) */
+    static const char *const name[7] = {NULL, "BOX", "BOX", "BOX", NULL, NULL, NULL};
+    for (uint32_t k = 0; k <= 6; k++) {
+        const char *got = cm_model_part_name(&dec.model, k);
+        if (name[k])
+            assert_string_equal(got, name[k]);
+        else
+            assert_null(got);
+    }
+    assert_null(cm_model_part_name(&dec.model, 7));
+    assert_int_equal(dec.model.part_names_left_out, 0);
     uint32_t got[32], n;
     decoded_parts(got, &n);
     assert_int_equal(n, 13);
@@ -188,6 +200,13 @@ static void test_no_parts(void **state)
     load_assembly(&lm);
     encode_result r;
     cm_status st;
+    assert_ok(encode_with(&lm, NULL, NULL, 11, &r, &st)); /* (4.11: parts without names) */
+    assert_int_equal(r.bytes[CM_HDR_MINOR], 11);
+    assert_ok(decode(&r, &st));
+    assert_int_equal(dec.model.nparts, 6);
+    assert_int_equal(dec.model.part_names_len, 0);
+    assert_null(cm_model_part_name(&dec.model, 1));
+    encode_result_free(&r);
     assert_ok(encode_with(&lm, NULL, NULL, 10, &r, &st));
     assert_int_equal(r.bytes[CM_HDR_MINOR], 10);
     assert_int_equal(r.parts, 0);
@@ -208,6 +227,52 @@ static void test_no_parts(void **state)
     assert_int_equal(dec.model.nparts, 0);
     encode_result_free(&r);
     model_free(&lm);
+}
+
+/* names beyond the build's room for them (CM_MAX_PART_NAME_BYTES): the model decodes, each part
+   still a step, without names, and says so; within it, each copy's name */
+static void test_part_names_left_out(void **state)
+{
+    (void)state;
+    /* (copies of a box whose subfigure's name has 39 bytes: with their 0s beyond the room; 19:
+       within it) */
+    enum { COPIES = CM_MAX_PART_NAME_BYTES / 40 + 4 };
+    if (COPIES > CM_MAX_PLACEMENTS + 1)
+        skip();
+    static double xfs[COPIES][12];
+    for (int k = 0; k < COPIES; k++) {
+        const double x[12] = {1, 0, 0, 100.0 * k, 0, 1, 0, 0, 0, 0, 1, 0};
+        memcpy(xfs[k], x, sizeof x);
+    }
+    for (int over = 0; over < 2; over++) {
+        char name[40];
+        memset(name, 'N', sizeof name);
+        name[over ? 39 : 19] = 0;
+        igw w;
+        igw_init(&w);
+        igw_placed_boxes_named(&w, COPIES, (const double(*)[12])xfs, name);
+        loaded_model lm;
+        cm_status st;
+        cm_status_init(&st);
+        size_t len = 0;
+        char *text = igw_text(&w, &len);
+        assert_ok(model_load_data_ex("boxes", text, len, &lm, MODEL_LOAD_FOLD, NULL, NULL, &st));
+        free(text);
+        assert_int_equal(lm.brep.nplacements, COPIES - 1);
+        encode_result r;
+        assert_ok(encode_with(&lm, NULL, NULL, -1, &r, &st));
+        assert_ok(decode(&r, &st));
+        assert_int_equal(dec.model.nparts, COPIES);
+        assert_int_equal(dec.model.part_names_left_out, over);
+        const char *got = cm_model_part_name(&dec.model, COPIES);
+        if (over)
+            assert_null(got);
+        else
+            assert_string_equal(got, name);
+        encode_result_free(&r);
+        model_free(&lm);
+        igw_free(&w);
+    }
 }
 
 static void assert_says(const cm_status *st, const char *cause)
@@ -254,6 +319,7 @@ int main(void)
         cmocka_unit_test(test_parts_in_file_order),
         cmocka_unit_test(test_parts_in_steps_order),
         cmocka_unit_test(test_no_parts),
+        cmocka_unit_test(test_part_names_left_out),
         cmocka_unit_test(test_broken_part_records),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

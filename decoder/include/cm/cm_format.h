@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 11    /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 12    /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -107,6 +107,8 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
                                           scaled by its boundary's lengths (cm_model.refine_410) */
 #define CM_FMT_PARTS_MINOR 11u         /* 4.11: the COLR section ends with the model's parts, in the order of
                                           the terminal's assembly steps (cm_face.part, cm_placement.part) */
+#define CM_FMT_PART_NAMES_MINOR 12u    /* 4.12: and with their names (cm_model.part_names) */
+#define CM_FMT_MAX_PART_NAME 255u      /* 4.12: bytes of one part's name */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -335,6 +337,11 @@ typedef struct cm_model {
     uint32_t nplacements; /* format 4.3 */
     uint32_t nparts;      /* format 4.11: the parts the workstation named (0: none; the viewer then takes
                              the faces' connected pieces, cm_view_parts) */
+    /* format 4.12: the parts' names, each ended by a 0 byte, part 1's first (cm_model_part_name);
+       part_names_len 0: none sent, or (part_names_left_out) more than this build holds */
+    char part_names[CM_MAX_PART_NAME_BYTES];
+    uint32_t part_names_len;
+    int part_names_left_out;
     cm_placement placements[CM_MAX_PLACEMENTS > 0 ? CM_MAX_PLACEMENTS : 1];
 } cm_model;
 
@@ -364,6 +371,10 @@ void cm_put_f64(uint8_t *p, double v);
 struct cm_curve;
 struct cm_surf;
 void cm_model_edge_curve(const cm_model *m, uint32_t e, struct cm_curve *out);
+
+/** Part part's name (format 4.12; parts from 1), or NULL where the file sent none (or the build
+    left the names out: cm_model.part_names_left_out). */
+const char *cm_model_part_name(const cm_model *m, uint32_t part);
 void cm_model_surface(const cm_model *m, uint32_t s, struct cm_surf *out);
 
 /** Fill edge_face and edge_split from the faces' loops (the decoder calls it after FACE). */

@@ -64,6 +64,9 @@ typedef struct cm_face_ctx {
 typedef struct cm_colr_ctx {
     cm_ac_int count, index;
     cm_ac_int nparts, part;     /* format 4.11: the parts */
+    cm_ac_int name_bytes, name_len, name_back; /* format 4.12: their names' bytes sent in all, each new
+                                                  name's length, an earlier part's name again */
+    cm_ac_prob name_again;
     cm_ac_prob part_same, part_next;
 } cm_colr_ctx;
 
