@@ -106,7 +106,8 @@ static void usage(FILE *f)
             "dimmed.  The parts are the file's (format 4.11: the workstation's instances,\n"
             "solids and groups, each placed copy, in the order of `cmz encode --steps`), else\n"
             "the model's connected pieces (faces joined by edges) in file order, then each\n"
-            "placed copy of a part; the summary line counts them.\n"
+            "placed copy of a part; the summary line counts them and names step K's part\n"
+            "where the file names it (format 4.12).\n"
             "--background: the colour behind the model, default ffffff.  --tess: chordal\n"
             "tolerance in mm (default: the file's recommendation).  The PNG is uncompressed\n"
             "(stored deflate) and appears whole or not at all.  --status: a status line of\n"
@@ -751,8 +752,10 @@ int main(int argc, char **argv)
     printf("%s -> %s%s%s: %dx%d, %s%s, %u faces, %u parts", in, out ? out : "", out && fb ? " and " : "", fb ? fb : "",
            vo.width, vo.height, cm_view_dir_name(vo.dir),
            vo.perspective ? " perspective" : "", sum.faces, parts);
-    if (vo.step > 0)
-        printf(" (step %u)", vo.step);
+    if (vo.step > 0) { /* (and the part's name, format 4.12: what the terminal's status line says) */
+        const char *name = cm_model_part_name(&state.dec.model, vo.step);
+        printf(" (step %u%s%s)", vo.step, name ? ": " : "", name ? name : "");
+    }
     printf(", %u triangles (%llu drawn)", sum.triangles, (unsigned long long)view.triangles);
     if (frames > 1)
         printf(", %.3f ms a frame (mean of %ld)", frame_ms, frames);

@@ -231,6 +231,18 @@ else
     bad "--frames: '$line', --frames 0 exit $st $(cat "$tmp/err")"
 fi
 
+# format 4.12: a step's part named as the file names it (the placed boxes' subfigure "BOX"); a 4.11
+# file names none
+pb=tests/fuzz/corpus_iges/placed_boxes_144.igs
+"$cmz" encode -q "$pb" -o "$tmp/pb.cmz" > /dev/null && "$cmz" encode -q --format 4.11 "$pb" -o "$tmp/pb411.cmz" > /dev/null
+named=$("$view" "$tmp/pb.cmz" --png "$tmp/pb.png" --step 2 2>&1)
+plain=$("$view" "$tmp/pb411.cmz" --png "$tmp/pb411.png" --step 2 2>&1)
+if grep -q "(step 2: BOX)" <<< "$named" && grep -q "(step 2)" <<< "$plain" && cmp -s "$tmp/pb.png" "$tmp/pb411.png"; then
+    ok "a step's part is named as the file names it: $(grep -o "(step 2: BOX)" <<< "$named"), a 4.11 file's not"
+else
+    bad "part names: '$named' / '$plain'"
+fi
+
 # a frame beyond the build's: refused by name, exit 2, nothing written
 m=$(ls tests/data/*.igs | head -n 1)
 b=$(basename "${m%.*}")
