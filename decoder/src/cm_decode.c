@@ -1292,7 +1292,7 @@ static cm_err read_parts(reader *r, cm_colr_ctx *ctx)
 
 /* format 4.12: the parts' names, after them: the bytes sent in all (0: none), then each part's
    name, that of an earlier part again (a bit, and how many parts back) or its length and bytes (none
-   0).  Kept, each with a 0 byte after it, while they fit the build; past that all left out, the
+   below a space).  Kept, each with a 0 byte after it, while they fit the build; past that all left out, the
    rest read past (cm_model.part_names_left_out) */
 static cm_err read_part_names(reader *r, cm_colr_ctx *ctx)
 {
@@ -1321,7 +1321,7 @@ static cm_err read_part_names(reader *r, cm_colr_ctx *ctx)
             keep = keep && m->part_names_len + len + 1u <= CM_MAX_PART_NAME_BYTES;
             for (uint64_t k = 0; k < len; k++) {
                 uint32_t c = cm_ac_dec_direct(&r->ac, 8);
-                if (c == 0)
+                if (c < 0x20u) /* (no control byte reaches a console or the status line) */
                     return rfail(r, CM_E_RANGE, "part name");
                 if (keep)
                     m->part_names[m->part_names_len++] = (char)c;

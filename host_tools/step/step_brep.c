@@ -1766,6 +1766,8 @@ typedef struct visit {
     int depth;
     int instance;
     haffine xf;
+    int product; /* the PRODUCT of the outermost occurrence being imported (its part's name: a
+                    sub-assembly's, not its first part's), 0 at the top */
 } visit;
 
 /* the groups' members and the placements out of each group, by group (counting sorts: every
@@ -1831,14 +1833,22 @@ static int product_of(const step_file *f, int pd)
     return prod && step_params(f, prod, "PRODUCT") ? prod->id : 0;
 }
 
+/* the product group g shapes: the first of its representations that says, 0 if none */
+static int group_product(const step_file *f, const structure *s, const group_index *gi, int g)
+{
+    int product = 0;
+    for (int q = gi->member_start[g]; q < gi->member_start[g + 1] && !product; q++)
+        product = product_of(f, s->pd_of[gi->members[q]]);
+    return product;
+}
+
 static cm_err import_group(importer *im, structure *s, const group_index *gi, const visit *v)
 {
     step_file *f = im->f;
     cm_err err = CM_OK;
-    /* the product the group shapes (its part's name): the first of its representations that says */
-    im->product = 0;
-    for (int q = gi->member_start[v->group]; q < gi->member_start[v->group + 1] && !im->product; q++)
-        im->product = product_of(f, s->pd_of[gi->members[q]]);
+    /* the product that names its faces' part: the outermost occurrence's, else the one the group
+       shapes */
+    im->product = v->product ? v->product : group_product(f, s, gi, v->group);
     for (int q = gi->member_start[v->group]; q < gi->member_start[v->group + 1] && err == CM_OK; q++) {
         int k = gi->members[q];
         const step_entity *re = &f->ents[s->ent_of[k]];
@@ -1906,7 +1916,7 @@ static cm_err walk(importer *im, structure *s)
         }
     for (int k = s->nnodes - 1; k >= 0 && err == CM_OK; k--)
         if (find_group(s, k) == k && !placed[k] && (!any_product || product[k])) {
-            visit root = {k, 0, 0, haffine_identity()};
+            visit root = {k, 0, 0, haffine_identity(), 0};
             err = push_visit(im, &stack, &n, &cap, &root);
         }
     /* every visit pushed counts against the budget (a representation mapping itself 800 times
@@ -1932,10 +1942,11 @@ static cm_err walk(importer *im, structure *s)
                                  "places them again)", STEP_MAX_VISITS, STEP_MAX_VISITS, re->id);
                 break;
             }
-            visit c = {find_group(s, L->child), v.depth + 1, v.instance, haffine_compose(&v.xf, &L->xf)};
+            visit c = {find_group(s, L->child), v.depth + 1, v.instance, haffine_compose(&v.xf, &L->xf), v.product};
             if (v.depth == 0) { /* an outermost placement: an instance the fold may send once */
                 brep_instance in = {++next_instance, f->ents[s->ent_of[c.group]].id, c.xf};
                 c.instance = in.id;
+                c.product = group_product(f, s, &gi, c.group); /* (a sub-assembly: its own name) */
                 err = brep_add_instance(im->m, &in, im->st);
             }
             if (err == CM_OK)

@@ -474,6 +474,74 @@ static char *assembly_file(int reversed, size_t *len)
     return w.text;
 }
 
+/* placement k of child (representation crep, product definition cpd, its frame cax) into parent
+   (prep, ppd) at pax: the relationship with its transformation and the assembly usage */
+static void place(sw *w, int k, int crep, int cpd, int cax, int prep, int ppd, int pax)
+{
+    int idt = sw_ent(w, "ITEM_DEFINED_TRANSFORMATION('','',#%d,#%d)", cax, pax);
+    int rr = sw_ent(w,
+                    "(REPRESENTATION_RELATIONSHIP('','',#%d,#%d)REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION(#%d)"
+                    "SHAPE_REPRESENTATION_RELATIONSHIP())",
+                    crep, prep, idt);
+    int nauo = sw_ent(w, "NEXT_ASSEMBLY_USAGE_OCCURRENCE('%d','','',#%d,#%d,$)", k, ppd, cpd);
+    int pds = sw_ent(w, "PRODUCT_DEFINITION_SHAPE('','',#%d)", nauo);
+    sw_ent(w, "CONTEXT_DEPENDENT_SHAPE_REPRESENTATION(#%d,#%d)", rr, pds);
+}
+
+/* the box (product BOX-10) placed once into a sub-assembly (SUB-ASM), which the top assembly (TOP)
+   places twice: each outermost occurrence a part, named by the sub-assembly, not by its box */
+static char *nested_assembly_file(size_t *len)
+{
+    sw w;
+    sw_begin(&w);
+    int ctx = context(&w, "mm");
+    int solid = box_solid(&w, 10, 20, 30, NULL);
+    int absr = sw_ent(&w, "ADVANCED_BREP_SHAPE_REPRESENTATION('',(#%d),#%d)", solid, ctx);
+    int ax0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0);
+    int part = sw_ent(&w, "SHAPE_REPRESENTATION('part',(#%d),#%d)", ax0, ctx);
+    sw_ent(&w, "SHAPE_REPRESENTATION_RELATIONSHIP('','',#%d,#%d)", part, absr);
+    int pd_part = named_product(&w, part, "BOX-10");
+    int s0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0), s1 = axis(&w, 5, 0, 0, 0, 0, 1, 1, 0, 0);
+    int sub = sw_ent(&w, "SHAPE_REPRESENTATION('sub',(#%d,#%d),#%d)", s0, s1, ctx);
+    int pd_sub = named_product(&w, sub, "SUB-ASM");
+    place(&w, 0, part, pd_part, ax0, sub, pd_sub, s1);
+    int t0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0);
+    int a1 = axis(&w, 100, 0, 0, 0, 0, 1, 1, 0, 0), a2 = axis(&w, 0, 50, 0, 0, 0, 1, 0, 1, 0);
+    int top = sw_ent(&w, "SHAPE_REPRESENTATION('asm',(#%d,#%d,#%d),#%d)", t0, a1, a2, ctx);
+    int pd_top = named_product(&w, top, "TOP");
+    place(&w, 1, sub, pd_sub, s0, top, pd_top, a1);
+    place(&w, 2, sub, pd_sub, s0, top, pd_top, a2);
+    sw_end(&w);
+    *len = w.len;
+    return w.text;
+}
+
+static void test_nested_assembly_names(void **state)
+{
+    (void)state;
+    size_t len;
+    char *text = nested_assembly_file(&len);
+    loaded_model lm;
+    if (load_text(text, len, &lm, MODEL_LOAD_FOLD) != CM_OK)
+        fail_msg("%s", lm.iges.err);
+    assert_int_equal(lm.step_stats.placements, 4); /* (each occurrence of the sub-assembly and of its box) */
+    enc_parts p;
+    char why[256], names[2][80];
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(enc_parts_build(&lm, NULL, &p, why, sizeof why, &st));
+    assert_int_equal(p.nparts, 2);
+    for (int k = 1; k <= 2; k++) {
+        int nfaces;
+        assert_int_equal(enc_part_names(&lm, &p, k, names, &nfaces), 2);
+        assert_int_equal(nfaces, 6);
+        assert_string_equal(names[0], "SUB-ASM");
+    }
+    enc_parts_free(&p);
+    model_free(&lm);
+    free(text);
+}
+
 static void test_assembly(void **state)
 {
     (void)state;
@@ -749,6 +817,7 @@ int main(void)
         cmocka_unit_test(test_loose_solid_units),
         cmocka_unit_test(test_cylinder_seam),
         cmocka_unit_test(test_assembly),
+        cmocka_unit_test(test_nested_assembly_names),
         cmocka_unit_test(test_bad_face_left_out),
         cmocka_unit_test(test_no_face_refused),
         cmocka_unit_test(test_mutations),
