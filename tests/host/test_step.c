@@ -441,19 +441,25 @@ static void test_cylinder_seam(void **state)
 
 /* ---- assemblies ---- */
 
+/* the assemblies' part: a 10 x 20 x 30 box, its representation *part (its frame *ax0) shaping the
+   product BOX-10; its product definition */
+static int box_part(sw *w, int ctx, int *ax0, int *part)
+{
+    int solid = box_solid(w, 10, 20, 30, NULL);
+    int absr = sw_ent(w, "ADVANCED_BREP_SHAPE_REPRESENTATION('',(#%d),#%d)", solid, ctx);
+    *ax0 = axis(w, 0, 0, 0, 0, 0, 1, 1, 0, 0);
+    *part = sw_ent(w, "SHAPE_REPRESENTATION('part',(#%d),#%d)", *ax0, ctx);
+    sw_ent(w, "SHAPE_REPRESENTATION_RELATIONSHIP('','',#%d,#%d)", *part, absr);
+    return named_product(w, *part, "BOX-10");
+}
+
 /* a part (a box) placed twice into an assembly: at (100,0,0), and turned a quarter about z at (0,50,0);
    `reversed`: the relationships name the assembly first (rep_1) and the part second */
 static char *assembly_file(int reversed, size_t *len)
 {
     sw w;
     sw_begin(&w);
-    int ctx = context(&w, "mm");
-    int solid = box_solid(&w, 10, 20, 30, NULL);
-    int absr = sw_ent(&w, "ADVANCED_BREP_SHAPE_REPRESENTATION('',(#%d),#%d)", solid, ctx);
-    int ax0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0);
-    int part = sw_ent(&w, "SHAPE_REPRESENTATION('part',(#%d),#%d)", ax0, ctx);
-    sw_ent(&w, "SHAPE_REPRESENTATION_RELATIONSHIP('','',#%d,#%d)", part, absr);
-    int pd_part = named_product(&w, part, "BOX-10");
+    int ctx = context(&w, "mm"), ax0, part, pd_part = box_part(&w, ctx, &ax0, &part);
     int a1 = axis(&w, 100, 0, 0, 0, 0, 1, 1, 0, 0), a2 = axis(&w, 0, 50, 0, 0, 0, 1, 0, 1, 0);
     int asmr = sw_ent(&w, "SHAPE_REPRESENTATION('asm',(#%d,#%d,#%d),#%d)", axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0), a1, a2, ctx);
     int pd_asm = named_product(&w, asmr, "TOP");
@@ -472,6 +478,25 @@ static char *assembly_file(int reversed, size_t *len)
     sw_end(&w);
     *len = w.len;
     return w.text;
+}
+
+/* lm's two parts (each 6 faces) both named first and second as cmz info --parts would list them */
+static void assert_two_parts_named(const loaded_model *lm, const char *first, const char *second)
+{
+    enc_parts p;
+    char why[256], names[2][80];
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(enc_parts_build(lm, NULL, &p, why, sizeof why, &st));
+    assert_int_equal(p.nparts, 2);
+    for (int k = 1; k <= 2; k++) {
+        int nfaces;
+        assert_int_equal(enc_part_names(lm, &p, k, names, &nfaces), 2);
+        assert_int_equal(nfaces, 6);
+        assert_string_equal(names[0], first);
+        assert_string_equal(names[1], second);
+    }
+    enc_parts_free(&p);
 }
 
 /* placement k of child (representation crep, product definition cpd, its frame cax) into parent
@@ -494,13 +519,7 @@ static char *nested_assembly_file(size_t *len)
 {
     sw w;
     sw_begin(&w);
-    int ctx = context(&w, "mm");
-    int solid = box_solid(&w, 10, 20, 30, NULL);
-    int absr = sw_ent(&w, "ADVANCED_BREP_SHAPE_REPRESENTATION('',(#%d),#%d)", solid, ctx);
-    int ax0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0);
-    int part = sw_ent(&w, "SHAPE_REPRESENTATION('part',(#%d),#%d)", ax0, ctx);
-    sw_ent(&w, "SHAPE_REPRESENTATION_RELATIONSHIP('','',#%d,#%d)", part, absr);
-    int pd_part = named_product(&w, part, "BOX-10");
+    int ctx = context(&w, "mm"), ax0, part, pd_part = box_part(&w, ctx, &ax0, &part);
     int s0 = axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0), s1 = axis(&w, 5, 0, 0, 0, 0, 1, 1, 0, 0);
     int sub = sw_ent(&w, "SHAPE_REPRESENTATION('sub',(#%d,#%d),#%d)", s0, s1, ctx);
     int pd_sub = named_product(&w, sub, "SUB-ASM");
@@ -525,19 +544,7 @@ static void test_nested_assembly_names(void **state)
     if (load_text(text, len, &lm, MODEL_LOAD_FOLD) != CM_OK)
         fail_msg("%s", lm.iges.err);
     assert_int_equal(lm.step_stats.placements, 4); /* (each occurrence of the sub-assembly and of its box) */
-    enc_parts p;
-    char why[256], names[2][80];
-    cm_status st;
-    cm_status_init(&st);
-    assert_ok(enc_parts_build(&lm, NULL, &p, why, sizeof why, &st));
-    assert_int_equal(p.nparts, 2);
-    for (int k = 1; k <= 2; k++) {
-        int nfaces;
-        assert_int_equal(enc_part_names(&lm, &p, k, names, &nfaces), 2);
-        assert_int_equal(nfaces, 6);
-        assert_string_equal(names[0], "SUB-ASM");
-    }
-    enc_parts_free(&p);
+    assert_two_parts_named(&lm, "SUB-ASM", "box");
     model_free(&lm);
     free(text);
 }
@@ -568,20 +575,7 @@ static void test_assembly(void **state)
         assert_near(brep_diag(&lm.brep), sqrt(130.0 * 130 + 60 * 60 + 30 * 30), 1e-9);
         /* each placement a part, named first by the PRODUCT its representation shapes (what `cmz
            encode --steps` and `cmz info --parts` know it by), then by its solid's own name */
-        enc_parts p;
-        char why[256], names[2][80];
-        cm_status st;
-        cm_status_init(&st);
-        assert_ok(enc_parts_build(&lm, NULL, &p, why, sizeof why, &st));
-        assert_int_equal(p.nparts, 2);
-        for (int k = 1; k <= 2; k++) {
-            int nfaces, n = enc_part_names(&lm, &p, k, names, &nfaces);
-            assert_int_equal(nfaces, 6);
-            assert_int_equal(n, 2);
-            assert_string_equal(names[0], "BOX-10");
-            assert_string_equal(names[1], "box");
-        }
-        enc_parts_free(&p);
+        assert_two_parts_named(&lm, "BOX-10", "box");
         model_free(&lm);
         free(text);
     }
