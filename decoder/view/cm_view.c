@@ -20,6 +20,9 @@
 #define VIEW_SUBPIX 256
 /* a triangle whose box holds at most this many pixel centres has each tested on its own */
 #define VIEW_SMALL_BOX 16
+/* a pixel's depth is a mix of its triangle's corners' in double, then a float: within this share of
+   the model's diagonal of them (the coarse depth's tests, face_hidden and triangle_hidden) */
+#define VIEW_DEPTH_ROUND 1e-5
 /* at most this many triangles drawn untested after a visible one (triangle_hidden) */
 #define VIEW_TEST_WAIT 32
 /* cm_view.face_closed: closed at edges it shares with other parts, outwards still to be measured */
@@ -602,13 +605,13 @@ static void tile_mark(cm_view *v, int64_t x, int64_t y)
    assembly's hidden parts and of an open sheet's far side.  A tile written by another face since it
    was last looked at has its farthest found again; one written by this face keeps its bound, loose
    now, never wrong (found again after each of its triangles, it cost more than it saved).
-   tri_margin covers a pixel's depth, a mix of the corners' in double rounded to a float.  Its
+   VIEW_DEPTH_ROUND covers a pixel's depth, a mix of the corners' in double rounded to a float.  Its
    silhouette is still drawn (by the caller). */
 static void tile_refresh(cm_view *v, int t);
 static int triangle_hidden(cm_view *v, const cm_view_vert *const t[3], int64_t x0, int64_t y0, int64_t x1, int64_t y1)
 {
     double z = t[0]->z < t[1]->z ? t[0]->z : t[1]->z;
-    z = (t[2]->z < z ? t[2]->z : z) - v->tri_margin;
+    z = (t[2]->z < z ? t[2]->z : z) - VIEW_DEPTH_ROUND * v->diag;
     /* (the box within the frame: not negative) */
     const uint32_t tx0 = (uint32_t)x0 / CM_VIEW_TILE, tx1 = (uint32_t)x1 / CM_VIEW_TILE, ty1 = (uint32_t)y1 / CM_VIEW_TILE;
     for (uint32_t ty = (uint32_t)y0 / CM_VIEW_TILE; ty <= ty1; ty++)
@@ -962,7 +965,7 @@ static int face_hidden(cm_view *v, uint32_t fi)
     /* behind by more than the lines' bias (a silhouette across the face, drawn that much nearer,
        would not show either) and room for the roundings (a pixel's depth is a mix of its triangle's
        corners' in double, then a float: a hundred-thousandth of the model across) */
-    const double near = v->face_near[fi] - VIEW_EDGE_BIAS_PX / v->scale - 1e-5 * v->diag;
+    const double near = v->face_near[fi] - VIEW_EDGE_BIAS_PX / v->scale - VIEW_DEPTH_ROUND * v->diag;
     for (int ty = ty0; ty <= ty1; ty++)
         for (int tx = tx0; tx <= tx1; tx++) {
             int t = ty * tw + tx;
@@ -1080,9 +1083,9 @@ static int64_t face_placement(const cm_mesh *mesh, uint32_t fi, int64_t placemen
                                                                                       made by cm_mesh_place) */
 }
 
-/* draw mesh face fi, of placement (-1: the model's own); front_to_back: the faces drawn nearest
-   first (a face behind what is drawn skipped) */
-static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t placement, int front_to_back)
+/* draw mesh face fi, of placement (-1: the model's own); where the faces are drawn nearest first
+   (tiles_live), a face behind what is drawn skipped */
+static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t placement)
 {
     const cm_mesh_face *F = &mesh->faces[fi];
     const uint32_t nbase = mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces;
@@ -1093,8 +1096,8 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
     uint32_t rgb = look_rgb(v, F->has_color ? F->rgb : VIEW_DEFAULT_RGB, look);
     /* a closed part's triangles whose corners all face away are behind its front (a mesh whose
        faces are not all there, one the decoder left out, shows its back faces through the gap) */
-    int closed = v->nbase_parts > 0 && (mesh->nplace > 0 ? mesh->nbase_faces : mesh->nfaces) == v->parts_nfaces &&
-                 F->source_face < v->parts_nfaces && v->face_closed[F->source_face];
+    int closed = v->nbase_parts > 0 && nbase == v->parts_nfaces && F->source_face < v->parts_nfaces &&
+                 v->face_closed[F->source_face];
     /* a face's vertices (each in about six triangles) projected and lit once, where they fit
        (else in a window, window_vertex: one at a time, a sixth of a large face's frame) */
     int cached = F->nverts <= CM_VIEW_FACE_VERTS;
@@ -1105,7 +1108,7 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
         return; /* (every triangle's corners face away: a third of a closed model's frame) */
     v->writer = fi + 1;
     v->tri_wait = v->tri_visible = 0;
-    if (front_to_back && face_hidden(v, fi)) {
+    if (v->tiles_live && face_hidden(v, fi)) {
         v->hidden_faces++; /* (its edges still drawn: a curve may lie up to the tolerance off its
                               mesh, nearer than the face's nearest vertex) */
         return;
@@ -1183,7 +1186,6 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         order_faces(v, mesh->nfaces);
         int ntiles = v->tiles_w * ((v->o.height + CM_VIEW_TILE - 1) / CM_VIEW_TILE);
         v->tiles_live = 1;
-        v->tri_margin = 1e-5 * v->diag;
         for (int t = 0; t < ntiles; t++) {
             v->tile_far[t] = 3.0e38f; /* (the frame's clear depth) */
             v->tile_writer[t] = 0;
@@ -1199,10 +1201,10 @@ void cm_view_mesh(cm_view *v, const cm_mesh *mesh)
         if (front_to_back)
             v->face_place[fi] = (int32_t)placement;
         else
-            draw_face(v, mesh, fi, placement, 0);
+            draw_face(v, mesh, fi, placement);
     }
     for (uint32_t k = 0; front_to_back && k < mesh->nfaces; k++)
-        draw_face(v, mesh, v->face_order[k], v->face_place[v->face_order[k]], 1);
+        draw_face(v, mesh, v->face_order[k], v->face_place[v->face_order[k]]);
     v->tiles_live = 0;
 }
 

@@ -135,7 +135,6 @@ typedef struct cm_view {
     uint32_t boxes_nfaces;                 /* the faces boxed (0: none, draw in file order) */
     int tiles_w;                           /* tiles across the frame */
     int tiles_live;                        /* (cm_view_mesh drawing front to back: tile_far holds) */
-    double tri_margin;                     /* (a triangle behind tile_far by more is hidden) */
     double fit_x, fit_y;
     float face_box[CM_MAX_FACES][4];       /* x low, x high, y low, y high */
     double face_near[CM_MAX_FACES];
