@@ -55,13 +55,10 @@ static int root(int *up, int f)
     return f;
 }
 
-/* STEP entity id's string parameter k, trimmed, into out (0: none or empty) */
-static int step_name(const step_file *f, int id, int k, char out[80])
+/* the len bytes at t without their leading and trailing spaces, into out (0: nothing left) */
+static int trimmed_name(const char *t, int len, char out[80])
 {
-    const step_entity *e = id > 0 ? step_by_id(f, id) : NULL;
-    const step_val *v = e && e->nparts > 0 ? step_item(&f->vals[f->parts[e->first_part].params], k) : NULL;
-    int at = 0, len = v && v->kind == STEP_STR ? v->len : 0;
-    const char *t = len > 0 ? f->text + v->text : "";
+    int at = 0;
     while (len > 0 && t[len - 1] == ' ')
         len--;
     while (at < len && t[at] == ' ')
@@ -70,6 +67,14 @@ static int step_name(const step_file *f, int id, int k, char out[80])
         return 0;
     snprintf(out, 80, "%.*s", len - at, t + at);
     return 1;
+}
+
+/* STEP entity id's string parameter k, trimmed, into out (0: none or empty) */
+static int step_name(const step_file *f, int id, int k, char out[80])
+{
+    const step_entity *e = id > 0 ? step_by_id(f, id) : NULL;
+    const step_val *v = e && e->nparts > 0 ? step_item(&f->vals[f->parts[e->first_part].params], k) : NULL;
+    return v && v->kind == STEP_STR && trimmed_name(f->text + v->text, v->len, out);
 }
 
 /* the names a part answers to in --steps: an IGES entity's label, a 408 instance's subfigure name too;
@@ -93,14 +98,7 @@ static int part_names(const loaded_model *lm, int owner, int product, char names
     const iges_entity *e = iges_by_de(f, owner);
     if (!e)
         return 0;
-    int len = (int)strlen(e->label);
-    while (len > 0 && e->label[len - 1] == ' ')
-        len--;
-    int at = 0;
-    while (at < len && e->label[at] == ' ')
-        at++;
-    if (len > at)
-        snprintf(names[n++], sizeof names[0], "%.*s", len - at, e->label + at);
+    n += trimmed_name(e->label, (int)strlen(e->label), names[n]);
     if (e->type == 408 && e->nparams > 0 && e->params[0].kind == IGES_P_NUM) {
         const iges_entity *d = iges_by_de(f, (int)e->params[0].num);
         if (d && d->type == 308 && d->nparams > 1 && d->params[1].kind == IGES_P_STR && d->params[1].len > 0)
