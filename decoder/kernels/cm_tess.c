@@ -259,16 +259,23 @@ static void node_remove(tess_ctx *c, int k)
     ws->nflag[k] = (unsigned char)((ws->nflag[k] & ~NF_CAND) | NF_DEAD);
 }
 
+/* bit b of x (x < 2^16) moved to bit 2b, by masks (a loop over the bits took ~300 instructions a
+   code: 4 % of a GREGORY-EXACT model's decode, in the ear tests) */
+static uint32_t spread_bits(uint32_t x)
+{
+    x = (x | (x << 8)) & 0x00FF00FFu;
+    x = (x | (x << 4)) & 0x0F0F0F0Fu;
+    x = (x | (x << 2)) & 0x33333333u;
+    return (x | (x << 1)) & 0x55555555u;
+}
+
 /* Morton code of the cell holding (x, y): 15 bits per axis, interleaved */
 static uint32_t zcode(const tess_ctx *c, double x, double y)
 {
     double fx = (x - c->box[0]) * c->zinv, fy = (y - c->box[1]) * c->zinv;
     uint32_t ix = fx <= 0.0 ? 0u : (fx >= 32767.0 ? 32767u : (uint32_t)fx);
     uint32_t iy = fy <= 0.0 ? 0u : (fy >= 32767.0 ? 32767u : (uint32_t)fy);
-    uint32_t z = 0;
-    for (int b = 0; b < 15; b++)
-        z |= ((ix >> b) & 1u) << (2 * b) | ((iy >> b) & 1u) << (2 * b + 1);
-    return z;
+    return spread_bits(ix) | spread_bits(iy) << 1;
 }
 
 /* move ring-edge state s to node k (fixing the back reference of a pending bridge twin) */

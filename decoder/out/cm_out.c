@@ -120,10 +120,12 @@ static cm_err check_faces(const cm_mesh *m, uint64_t *ntris, uint32_t *nprims, c
         if ((uint64_t)fc->first_index + fc->nindex > m->nindex || fc->nindex % 3u != 0)
             return cm_fail_at(st, CM_E_RANGE, f,
                               "cm_out_begin: face index range outside the mesh or not whole triangles (offset = face)");
-        for (uint32_t k = 0; k < fc->nindex; k++) {
-            uint32_t v = cm_mesh_idx(m, fc->first_index + k);
-            if (v < fc->first_vert || v - fc->first_vert >= fc->nverts)
-                return cm_fail_at(st, CM_E_RANGE, f, "cm_out_begin: index outside its face's vertices (offset = face)");
+        for (uint32_t k0 = 0; k0 < fc->nindex; k0 += CM_OUT_RUN) {
+            uint32_t run[CM_OUT_RUN], n = fc->nindex - k0 < CM_OUT_RUN ? fc->nindex - k0 : CM_OUT_RUN;
+            cm_mesh_idxs(m, fc->first_index + k0, n, run);
+            for (uint32_t k = 0; k < n; k++)
+                if (run[k] < fc->first_vert || run[k] - fc->first_vert >= fc->nverts)
+                    return cm_fail_at(st, CM_E_RANGE, f, "cm_out_begin: index outside its face's vertices (offset = face)");
         }
         nt += fc->nindex / 3u;
         np += fc->nindex > 0;
@@ -137,17 +139,20 @@ static cm_err check_faces(const cm_mesh *m, uint64_t *ntris, uint32_t *nprims, c
 
 static cm_err check_finite(const cm_mesh *m, int check_normals, cm_status *st)
 {
-    for (uint32_t i = 0; i < m->nverts; i++) {
-        float p[3], n[3] = {0, 0, 0};
-        cm_mesh_pos(m, i, p);
+    float p[CM_OUT_RUN][3], n[CM_OUT_RUN][3];
+    memset(n, 0, sizeof n);
+    for (uint32_t i0 = 0; i0 < m->nverts; i0 += CM_OUT_RUN) {
+        uint32_t len = m->nverts - i0 < CM_OUT_RUN ? m->nverts - i0 : CM_OUT_RUN;
+        cm_mesh_vecs(m, CM_SPILL_POS, i0, len, p);
         if (check_normals)
-            cm_mesh_nrm(m, i, n);
-        for (int k = 0; k < 3; k++) {
-            if (!f32_finite(p[k]))
-                return cm_fail_at(st, CM_E_NONFINITE, i, "cm_out_begin: position (offset = vertex)");
-            if (!f32_finite(n[k]))
-                return cm_fail_at(st, CM_E_NONFINITE, i, "cm_out_begin: normal (offset = vertex)");
-        }
+            cm_mesh_vecs(m, CM_SPILL_NRM, i0, len, n);
+        for (uint32_t i = 0; i < len; i++)
+            for (int k = 0; k < 3; k++) {
+                if (!f32_finite(p[i][k]))
+                    return cm_fail_at(st, CM_E_NONFINITE, i0 + i, "cm_out_begin: position (offset = vertex)");
+                if (!f32_finite(n[i][k]))
+                    return cm_fail_at(st, CM_E_NONFINITE, i0 + i, "cm_out_begin: normal (offset = vertex)");
+            }
     }
     return CM_OK;
 }

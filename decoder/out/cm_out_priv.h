@@ -21,6 +21,11 @@
 #define CM_OUT_PENDING ((uint32_t)sizeof(((cm_out *)0)->pending))
 _Static_assert(sizeof(((cm_out *)0)->pending) >= 512, "the largest piece (a POSITION accessor) needs ~200 bytes");
 
+/* vertices or indices the writers' checks and bounds read from the mesh at a time (a run through
+   the spill's page logic instead of a call per element: the checks and the GLB's bounds read every
+   vertex; 384 bytes of stack each) */
+#define CM_OUT_RUN 32u
+
 /* append-only byte buffer over cm_out.pending; overflow is a writer bug and is flagged, never written */
 typedef struct cm_buf {
     uint8_t *p;
