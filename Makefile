@@ -103,10 +103,13 @@ CM_PLATFORM_OPT := -Os
 # 261 526 bytes; +0.1 to +0.3 % terminal instructions on Tightening_screw, asmo, C1G0B0O); cmz-view's
 # glTF reader (cm_glb_read.c, once per file: cmz-view 229 436 -> 243 980 bytes, 245 788 at -O2); the
 # GLB writer (cm_glb.c: its loops are copies), room for cmz-terminal's serving viewer on a DRM
-# display (263 060 -> 261 812 bytes; C1G0B0O's decode 647.13 -> 646.96 M instructions)
+# display (263 060 -> 261 812 bytes; C1G0B0O's decode 647.13 -> 646.96 M instructions); the output's
+# checks (cm_out.c, once per file: their reads a run at a time made them 1.1 KB larger and 2 to 4 %
+# of a decode cheaper; -Os took 0.7 KB of it back at no cost in instructions)
 CM_COLD_SRC := decoder/src/cm_decode.c decoder/src/cm_format.c decoder/src/cm_sections.c decoder/src/cm_limits.c \
                decoder/src/cm_error.c decoder/src/cm_arith.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c \
-               decoder/src/cm_corner.c decoder/view/cm_glb_read.c decoder/out/cm_glb.c $(wildcard decoder/methods/*.c)
+               decoder/src/cm_corner.c decoder/view/cm_glb_read.c decoder/out/cm_glb.c decoder/out/cm_out.c \
+               $(wildcard decoder/methods/*.c)
 # and the viewer's drawing, run per triangle and pixel of every frame, its loops peeled and
 # unswitched (gcc; clang has no such flags): issue 17's frame of 100 k triangles 2 to 3 % fewer
 # instructions (tail_section 52.9 -> 51.5 M, asmo 59.2 -> 58.0 M), the same pixels, for 1 KB of

@@ -64,20 +64,20 @@ enum {
 #define GLB_INDICES_PER_PIECE 96u  /* 384 bytes */
 _Static_assert(GLB_VERTS_PER_PIECE * 12u <= 512u && GLB_INDICES_PER_PIECE * 4u <= 512u, "binary pieces fit pending");
 
-/* v little-endian at p */
-static void put_le32(uint8_t *p, uint32_t v)
+/* n 32-bit words, little-endian (a piece at a time: a call per float was a tenth of the writing) */
+static void put_words(cm_buf *b, uint32_t *w, uint32_t n)
 {
-    p[0] = (uint8_t)(v & 0xFFu);
-    p[1] = (uint8_t)((v >> 8) & 0xFFu);
-    p[2] = (uint8_t)((v >> 16) & 0xFFu);
-    p[3] = (uint8_t)(v >> 24);
-}
-
-static uint32_t f32_bits(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u;
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+    for (uint32_t j = 0; j < n; j++) {
+        uint8_t *p = (uint8_t *)&w[j];
+        uint32_t v = w[j];
+        p[0] = (uint8_t)(v & 0xFFu);
+        p[1] = (uint8_t)((v >> 8) & 0xFFu);
+        p[2] = (uint8_t)((v >> 16) & 0xFFu);
+        p[3] = (uint8_t)(v >> 24);
+    }
+#endif
+    cm_buf_bytes(b, w, 4u * n);
 }
 
 static uint32_t pad4(uint32_t n)
@@ -398,13 +398,12 @@ static void bin_vec3(cm_out *w, cm_buf *b, int normals, uint32_t next)
         return;
     }
     uint32_t n = nv - i > GLB_VERTS_PER_PIECE ? GLB_VERTS_PER_PIECE : nv - i;
-    float v[GLB_VERTS_PER_PIECE][3];
-    uint8_t bytes[12u * GLB_VERTS_PER_PIECE];
-    cm_mesh_vecs(w->m, normals ? CM_SPILL_NRM : CM_SPILL_POS, i, n, v);
-    for (uint32_t j = 0; j < n; j++)
-        for (int k = 0; k < 3; k++)
-            put_le32(&bytes[12u * j + 4u * (uint32_t)k], f32_bits(v[j][k]));
-    cm_buf_bytes(b, bytes, 12u * n); /* (a piece at a time: a call per float was a tenth of the writing) */
+    union {
+        float f[GLB_VERTS_PER_PIECE][3];
+        uint32_t u[3 * GLB_VERTS_PER_PIECE];
+    } v;
+    cm_mesh_vecs(w->m, normals ? CM_SPILL_NRM : CM_SPILL_POS, i, n, v.f);
+    put_words(b, v.u, 3u * n);
     w->item = i + n;
 }
 
@@ -419,11 +418,10 @@ static void bin_indices(cm_out *w, cm_buf *b)
     uint32_t k = w->sub;
     uint32_t n = fc->nindex - k > GLB_INDICES_PER_PIECE ? GLB_INDICES_PER_PIECE : fc->nindex - k;
     uint32_t idx[GLB_INDICES_PER_PIECE];
-    uint8_t bytes[4u * GLB_INDICES_PER_PIECE];
     cm_mesh_idxs(m, fc->first_index + k, n, idx);
     for (uint32_t j = 0; j < n; j++)
-        put_le32(&bytes[4u * j], idx[j] - fc->first_vert); /* validated: inside the face */
-    cm_buf_bytes(b, bytes, 4u * n);
+        idx[j] -= fc->first_vert; /* validated: inside the face */
+    put_words(b, idx, n);
     w->sub = k + n;
     if (w->sub == fc->nindex) {
         w->sub = 0;
