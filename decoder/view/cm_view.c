@@ -545,9 +545,10 @@ static void ortho_rows(cm_view *v)
     v->ortho[3][3] = v->ortho[4][3] = 0.0;
 }
 
-/* floor(a / VIEW_SUBPIX) for a > -2^40: a shift of an unsigned value (C leaves >> of a negative
-   one to the compiler), the offset a whole number of pixels */
-#define VIEW_FLOOR_OFFSET ((int64_t)1 << 40)
+/* floor(a / VIEW_SUBPIX) for a > -2^30 (a corner within VIEW_COORD_MAX is 2^28 units off at most):
+   a shift of an unsigned value (C leaves >> of a negative one to the compiler), the offset a whole
+   number of pixels (and small: the sums' constants fit an instruction) */
+#define VIEW_FLOOR_OFFSET ((int64_t)1 << 30)
 static int64_t floor_px(int64_t a)
 {
     return (int64_t)((uint64_t)(a + VIEW_FLOOR_OFFSET) / VIEW_SUBPIX) - VIEW_FLOOR_OFFSET / VIEW_SUBPIX;
@@ -608,10 +609,11 @@ static void tile_mark(cm_view *v, int64_t x, int64_t y)
    VIEW_DEPTH_ROUND covers a pixel's depth, a mix of the corners' in double rounded to a float.  Its
    silhouette is still drawn (by the caller). */
 static void tile_refresh(cm_view *v, int t);
-static int triangle_hidden(cm_view *v, const cm_view_vert *const t[3], int64_t x0, int64_t y0, int64_t x1, int64_t y1)
+static int triangle_hidden(cm_view *v, const cm_view_vert *t0, const cm_view_vert *t1, const cm_view_vert *t2, int64_t x0,
+                           int64_t y0, int64_t x1, int64_t y1)
 {
-    double z = t[0]->z < t[1]->z ? t[0]->z : t[1]->z;
-    z = (t[2]->z < z ? t[2]->z : z) - VIEW_DEPTH_ROUND * v->diag;
+    double z = t0->z < t1->z ? t0->z : t1->z;
+    z = (t2->z < z ? t2->z : z) - VIEW_DEPTH_ROUND * v->diag;
     /* (the box within the frame: not negative) */
     const uint32_t tx0 = (uint32_t)x0 / CM_VIEW_TILE, tx1 = (uint32_t)x1 / CM_VIEW_TILE, ty1 = (uint32_t)y1 / CM_VIEW_TILE;
     for (uint32_t ty = (uint32_t)y0 / CM_VIEW_TILE; ty <= ty1; ty++)
@@ -642,25 +644,25 @@ static int triangle_hidden(cm_view *v, const cm_view_vert *const t[3], int64_t x
  * triangles through the spans' set-up and slivers row by row, and made a pixel's three channels
  * by three multiplications and clamps: 1.5 k.)
  */
-static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t rgb)
+static void fill_triangle(cm_view *v, const cm_view_vert *t0, const cm_view_vert *t1, const cm_view_vert *t2, int64_t wmax,
+                          int64_t hmax, uint32_t rgb)
 {
-    const int64_t X[3] = {t[0]->X, t[1]->X, t[2]->X}, Y[3] = {t[0]->Y, t[1]->Y, t[2]->Y};
+    /* (the corners in scalars, not arrays indexed by a variable: they stay in registers) */
+    int64_t X0 = t0->X, X1 = t1->X, X2 = t2->X, Y0 = t0->Y, Y1 = t1->Y, Y2 = t2->Y;
     /* the pixels whose centres (256 x + 128 in the fixed point) lie in the box, within the frame:
        none, for most triangles of a finely meshed model */
-    int64_t xmin = X[0], xmax = X[0], ymin = Y[0], ymax = Y[0];
-    for (int i = 1; i < 3; i++) {
-        xmin = X[i] < xmin ? X[i] : xmin;
-        xmax = X[i] > xmax ? X[i] : xmax;
-        ymin = Y[i] < ymin ? Y[i] : ymin;
-        ymax = Y[i] > ymax ? Y[i] : ymax;
-    }
+    int64_t xmin = X1 < X0 ? X1 : X0, xmax = X1 > X0 ? X1 : X0, ymin = Y1 < Y0 ? Y1 : Y0, ymax = Y1 > Y0 ? Y1 : Y0;
+    xmin = X2 < xmin ? X2 : xmin;
+    xmax = X2 > xmax ? X2 : xmax;
+    ymin = Y2 < ymin ? Y2 : ymin;
+    ymax = Y2 > ymax ? Y2 : ymax;
     const int64_t half = VIEW_SUBPIX / 2;
     int64_t x0 = floor_px(xmin - half + VIEW_SUBPIX - 1), x1 = floor_px(xmax - half);
     int64_t y0 = floor_px(ymin - half + VIEW_SUBPIX - 1), y1 = floor_px(ymax - half);
     x0 = x0 < 0 ? 0 : x0;
     y0 = y0 < 0 ? 0 : y0;
-    x1 = x1 > v->o.width - 1 ? v->o.width - 1 : x1;
-    y1 = y1 > v->o.height - 1 ? v->o.height - 1 : y1;
+    x1 = x1 > wmax ? wmax : x1;
+    y1 = y1 > hmax ? hmax : y1;
     if (x0 > x1 || y0 > y1)
         return;
     if (v->tiles_live) {
@@ -668,7 +670,7 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
            visible ones in a row, up to VIEW_TEST_WAIT: a face in plain sight costs a few tests) */
         if (v->tri_wait > 0) {
             v->tri_wait--;
-        } else if (triangle_hidden(v, t, x0, y0, x1, y1)) {
+        } else if (triangle_hidden(v, t0, t1, t2, x0, y0, x1, y1)) {
             v->tri_visible = 0;
             v->hidden_triangles++;
             return;
@@ -677,26 +679,29 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
             v->tri_wait = v->tri_visible;
         }
     }
-    int a = 0, b = 1, c = 2;
-    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
+    int64_t area = (X1 - X0) * (Y2 - Y0) - (Y1 - Y0) * (X2 - X0);
     if (area == 0)
         return; /* edge-on or a point: nothing covered */
-    if (area < 0) {
-        b = 2, c = 1;
+    if (area < 0) { /* (corners 1 and 2 swapped: counter-clockwise on the screen) */
+        const cm_view_vert *tt = t1;
+        int64_t q = X1;
+        t1 = t2, t2 = tt;
+        X1 = X2, X2 = q;
+        q = Y1, Y1 = Y2, Y2 = q;
         area = -area;
     }
-    /* e[0] is corner a's weight (the side b -> c) times the area, e[1] b's, e[2] c's */
-    view_side e[3] = {side_fn(X[b], Y[b], X[c], Y[c]), side_fn(X[c], Y[c], X[a], Y[a]), side_fn(X[a], Y[a], X[b], Y[b])};
-    const int from[3] = {b, c, a};
+    /* e[0] is corner 0's weight (the side 1 -> 2) times the area, e[1] 1's, e[2] 2's */
+    view_side e[3] = {side_fn(X1, Y1, X2, Y2), side_fn(X2, Y2, X0, Y0), side_fn(X0, Y0, X1, Y1)};
     /* each side's value at (x0, y0) */
     const int64_t px = x0 * VIEW_SUBPIX + half, py = y0 * VIEW_SUBPIX + half;
     int64_t w0[3];
-    for (int i = 0; i < 3; i++)
-        w0[i] = e[i].A * (px - X[from[i]]) + e[i].B * (py - Y[from[i]]) + e[i].bias;
-    /* depth and brightness: the corner a's plus the other two weights' shares of the differences */
-    const double z[3] = {t[0]->z, t[1]->z, t[2]->z}, l[3] = {t[0]->light, t[1]->light, t[2]->light};
+    w0[0] = e[0].A * (px - X1) + e[0].B * (py - Y1) + e[0].bias;
+    w0[1] = e[1].A * (px - X2) + e[1].B * (py - Y2) + e[1].bias;
+    w0[2] = e[2].A * (px - X0) + e[2].B * (py - Y0) + e[2].bias;
+    /* depth and brightness: the corner 0's plus the other two weights' shares of the differences */
+    const double za = t0->z, la = t0->light;
     double inv = 1.0 / (double)area;
-    double dzb = z[b] - z[a], dzc = z[c] - z[a], dlb = l[b] - l[a], dlc = l[c] - l[a];
+    double dzb = t1->z - za, dzc = t2->z - za, dlb = t1->light - la, dlc = t2->light - la;
     if ((x1 - x0 + 1) * (y1 - y0 + 1) <= VIEW_SMALL_BOX) {
         /* a few pixel centres in the box (a small triangle's usual case): each tested, and where
            covered its depth and brightness from the weights, without the slopes' set-up */
@@ -711,11 +716,11 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
                     continue;
                 size_t at = (size_t)y * (size_t)v->o.width + (size_t)x;
                 double wb = (double)(q1 - e[1].bias), wc = (double)(q2 - e[2].bias);
-                float zf = (float)(z[a] + (wb * dzb + wc * dzc) * inv);
+                float zf = (float)(za + (wb * dzb + wc * dzc) * inv);
                 if (!(zf < v->depth[at]))
                     continue;
                 v->depth[at] = zf;
-                put_lit(&v->rgb[3 * at], base, light_fx(l[a] + (wb * dlb + wc * dlc) * inv));
+                put_lit(&v->rgb[3 * at], base, light_fx(la + (wb * dlb + wc * dlc) * inv));
                 drawn = 1;
             }
         }
@@ -783,8 +788,8 @@ static void fill_triangle(cm_view *v, const cm_view_vert *const t[3], uint32_t r
            (from the box's corner, a sliver's extrapolation lost more than face_hidden's margin),
            then stepped (depth in double, brightness in fixed point) */
         const double wb = (double)(wl1 + lo * s1), wc = (double)(wl2 + lo * s2);
-        double zp = z[a] + (wb * dzb + wc * dzc) * inv;
-        int64_t lfx = light_fx(l[a] + (wb * dlb + wc * dlc) * inv), lend = lfx + (hi - lo) * ls_fx;
+        double zp = za + (wb * dzb + wc * dzc) * inv;
+        int64_t lfx = light_fx(la + (wb * dlb + wc * dlc) * inv), lend = lfx + (hi - lo) * ls_fx;
         size_t at = line_at + (size_t)lo * stride;
         float *d = &v->depth[at];
         uint8_t *pix = &v->rgb[3 * at];
@@ -814,7 +819,9 @@ static void draw_line(cm_view *v, const double a[3], const double b[3]);
    front of the eye, within the fixed point's reach), VIEW_VERT_AWAY where it faces away.  (The
    camera's arithmetic written out, orthographic as five dot products: through to_view and
    to_screen it was a tenth of a large model's frame) */
-static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3], cm_view_vert *t)
+/* (written out where a face's vertices are projected, the hot loop; a call elsewhere) */
+__attribute__((always_inline)) static inline void vertex_screen_in(const cm_view *v, const float p[3], const float n[3],
+                                                                   cm_view_vert *t)
 {
     int ok = 1;
     double x, y;
@@ -845,6 +852,11 @@ static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3
     double fx = x * VIEW_SUBPIX, fy = y * VIEW_SUBPIX;
     t->X = ok ? (int32_t)(fx >= 0.0 ? fx + 0.5 : fx - 0.5) : 0;
     t->Y = ok ? (int32_t)(fy >= 0.0 ? fy + 0.5 : fy - 0.5) : 0;
+}
+
+__attribute__((noinline)) static void vertex_screen_at(const cm_view *v, const float p[3], const float n[3], cm_view_vert *t)
+{
+    vertex_screen_in(v, p, n, t);
 }
 
 /* the same for vertex vi of the mesh, read on its own */
@@ -900,8 +912,9 @@ static const cm_view_vert *window_vertex(cm_view *v, const cm_mesh *mesh, const 
  * viewer).  A side's crossing depends on its two corners alone, so the segments of neighbouring
  * triangles meet; a plane's corners share one normal and never cross.
  */
-static void silhouette(cm_view *v, const cm_view_vert *const c[3])
+static void silhouette(cm_view *v, const cm_view_vert *c0, const cm_view_vert *c1, const cm_view_vert *c2)
 {
+    const cm_view_vert *const c[3] = {c0, c1, c2};
     /* (the corners where the rasteriser has them, to 1/VIEW_SUBPIX of a pixel) */
     const double px = 1.0 / VIEW_SUBPIX;
     const double s[3][3] = {{c[0]->X * px, c[0]->Y * px, c[0]->z},
@@ -1123,7 +1136,7 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
         cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
         cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
         for (uint32_t i = 0; i < n; i++) {
-            vertex_screen_at(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
+            vertex_screen_in(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
             face_all &= v->fv[i0 + i].flags;
             face_any |= v->fv[i0 + i].flags;
         }
@@ -1134,16 +1147,18 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
        through a byte pointer could be anything to the compiler: they would be read again) */
     const uint32_t first = F->first_vert, nverts = cached ? F->nverts : 0, ntri = F->nindex / 3;
     const unsigned silhouettes = v->o.edges && mixed ? VIEW_VERT_AWAY : 0u, cull = closed ? VIEW_VERT_AWAY : 0u;
+    const int64_t wmax = v->o.width - 1, hmax = v->o.height - 1; /* (the frame's last pixel) */
     for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
         const uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
         cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
         for (const uint32_t *ix = v->run_idx, *const end = ix + 3u * n; ix < end; ix += 3) {
             cm_view_vert own[3];
-            const cm_view_vert *t[3];
+            /* (three pointers, not an array: they stay in registers) */
+            const cm_view_vert *t0 = &own[0], *t1 = &own[1], *t2 = &own[2];
             /* (unsigned: an index below the face's wraps beyond it) */
             uint32_t j0 = ix[0] - first, j1 = ix[1] - first, j2 = ix[2] - first;
             if (j0 < nverts && j1 < nverts && j2 < nverts) {
-                t[0] = &v->fv[j0], t[1] = &v->fv[j1], t[2] = &v->fv[j2];
+                t0 = &v->fv[j0], t1 = &v->fv[j1], t2 = &v->fv[j2];
             } else {
                 /* (a large face's corners copied out of the window: a later corner's run may
                    replace an earlier one's slot) */
@@ -1155,16 +1170,21 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
                         own[i] = *window_vertex(v, mesh, F, j);
                     else
                         vertex_screen(v, mesh, ix[i], &own[i]); /* (not the face's own: not made so) */
-                    t[i] = &own[i];
                 }
             }
-            const unsigned f0 = t[0]->flags, f1 = t[1]->flags, f2 = t[2]->flags, all = f0 & f1 & f2;
+            const unsigned f0 = t0->flags, f1 = t1->flags, f2 = t2->flags, all = f0 & f1 & f2;
             if (!(all & VIEW_VERT_OK) || (all & cull))
                 continue;
-            fill_triangle(v, t, rgb);
             /* a silhouette crosses it where its corners face different ways */
-            if (((f0 | f1 | f2) ^ all) & silhouettes)
-                silhouette(v, t);
+            const unsigned sil = ((f0 | f1 | f2) ^ all) & silhouettes;
+            fill_triangle(v, t0, t1, t2, wmax, hmax, rgb);
+            if (sil) {
+                /* (the corners found again, not kept across the filling: a rare case's registers) */
+                if (ix[0] - first < nverts && ix[1] - first < nverts && ix[2] - first < nverts)
+                    silhouette(v, &v->fv[ix[0] - first], &v->fv[ix[1] - first], &v->fv[ix[2] - first]);
+                else
+                    silhouette(v, &own[0], &own[1], &own[2]);
+            }
         }
     }
 }
