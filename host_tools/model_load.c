@@ -2,6 +2,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "model_load.h"
 
+#include "brep/brep_seam.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -99,6 +101,11 @@ static cm_err load_rest(loaded_model *lm, int flags, model_progress progress, vo
         lm->seam_joined += lm->fds[f].joined_seam;
         if (lm->fds[f].max_gap > lm->max_gap)
             lm->max_gap = lm->fds[f].max_gap;
+        /* a band between two loops winding round its surface, cut open along it (brep_seam.h) */
+        int cut = 0;
+        if (brep_cut_seam(m, f, &lm->fds[f], tol, &cut, st) != CM_OK)
+            return cm_fail(st, CM_E_NOMEM, "out of memory");
+        lm->seams_cut += cut;
     }
     lm->seconds_domains = now() - t;
     if (progress)

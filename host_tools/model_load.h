@@ -28,6 +28,7 @@ typedef struct loaded_model {
     int loops_reversed;  /* faces whose loops were re-oriented (spec §1) */
     int outer_reordered; /* faces whose outer loop was not listed first */
     int seam_joined;     /* faces bounded by loops winding around a closed surface */
+    int seams_cut;       /* of those, bands cut open along their surface (brep_seam.h) */
     double max_gap;      /* largest boundary-to-surface distance seen */
     int *left_out;       /* indices into iges.warn: one warning per face left out of the model */
     int nleft_out;       /* (import, parameter domain or encoder: each names the face's entity) */

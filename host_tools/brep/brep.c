@@ -131,6 +131,12 @@ cm_err brep_remove_faces(brep_model *m, const unsigned char *drop, cm_status *st
             for (int i = 0; i < m->loops[l].n; i++)
                 useg[m->loops[l].first + i] = 1;
         }
+        /* (a face cut open keeps the loops it had, for the encoder's undo: brep_seam.h) */
+        for (int l = F->cut_from_loop; F->cut_from_nloops > 0 && l < F->cut_from_loop + F->cut_from_nloops; l++) {
+            uloop[l] = 1;
+            for (int i = 0; i < m->loops[l].n; i++)
+                useg[m->loops[l].first + i] = 1;
+        }
     }
     int k = 0;
     for (int i = 0; i < m->nsurfs; i++) {
@@ -169,6 +175,8 @@ cm_err brep_remove_faces(brep_model *m, const unsigned char *drop, cm_status *st
         m->faces[k] = m->faces[f];
         m->faces[k].surf = nsurf[m->faces[f].surf];
         m->faces[k].first_loop = nloop[m->faces[f].first_loop];
+        if (m->faces[f].cut_from_nloops > 0)
+            m->faces[k].cut_from_loop = nloop[m->faces[f].cut_from_loop];
         k++;
     }
     m->nfaces = k;

@@ -51,6 +51,10 @@ typedef struct brep_face {
                              STEP the solid's or shell's #n; 0: none (a loose face) */
     int product;          /* STEP: the #n of the PRODUCT its representation shapes (its part's name,
                              the solid's own usually being empty); 0: none, and for IGES */
+    /* a band cut open along its seam (brep_seam.h): its loops before the cut, and whether it may be
+       cut (again) */
+    int cut_from_loop, cut_from_nloops; /* cut_from_nloops 0: not cut */
+    int no_cut;
 } brep_face;
 
 /* an outermost subfigure instance (IGES 408) as imported: its faces carry its id */

@@ -139,6 +139,7 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
     memset(fd, 0, sizeof *fd);
     brep_face *f = &m->faces[face];
     fd->face = face;
+    fd->wind_loop[0] = fd->wind_loop[1] = -1;
     cm_surf view = hsurf_view(&m->surfs[f->surf]);
     if (cm_psurf_init(&fd->ps, &view, tol, st) != CM_OK)
         return cm_fail(st, CM_E_DEGENERATE, "face_domain: surface");
@@ -313,6 +314,9 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                         fd->loops = nl;
                         fd->nloops = k;
                         fd->joined_seam = 1;
+                        fd->wind_loop[0] = a;
+                        fd->wind_loop[1] = b;
+                        fd->wind_along_u = along_u;
                         outer = -1; /* loop 0 is already the outer region */
                     }
                 }

@@ -47,6 +47,8 @@ typedef struct face_domain {
     int reversed;     /* loops were reversed to match the face normal */
     int reordered;    /* the outer loop was not the file's first loop */
     int joined_seam;  /* winding loops were joined along the seam */
+    int wind_loop[2]; /* then the face's loops (numbered from its first) that wound, -1 for none */
+    int wind_along_u; /* and whether they wound round u (else v) */
     fd_grid *grid;    /* (its pointee changes under a const face_domain: a cache of what ps gives) */
 } face_domain;
 

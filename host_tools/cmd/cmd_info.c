@@ -289,8 +289,8 @@ int cmd_info(int argc, char **argv)
             printf("%s{\"type\": %d, \"name\": \"%s\", \"faces\": %d}", k ? ", " : "", sc[k].type,
                    surface_name(sc[k].type, step), sc[k].read);
         printf("]},\n  \"loops\": {\"total\": %d, \"holes\": %d, \"reoriented_faces\": %d, \"outer_reordered\": %d, "
-               "\"seam_joined\": %d, \"domains_failed\": %d},\n",
-               m->nloops, holes, lm.loops_reversed, lm.outer_reordered, lm.seam_joined, lm.domains_failed);
+               "\"seam_joined\": %d, \"seams_cut\": %d, \"domains_failed\": %d},\n",
+               m->nloops, holes, lm.loops_reversed, lm.outer_reordered, lm.seam_joined, lm.seams_cut, lm.domains_failed);
         printf("  \"vertices\": %d,\n  \"edges\": {\"total\": %d, \"shared\": %d, \"free\": %d, \"seam\": %d, "
                "\"non_manifold\": %d, \"g1\": %d, \"split_at_vertices\": %d, \"inconsistent\": %d},\n",
                cm->nverts, cm->nedges, nshared, nfree, nseam, nnm, ng1, cm->nsplits, cm->inconsistent);
@@ -371,7 +371,7 @@ int cmd_info(int argc, char **argv)
         if (lm.outer_reordered)
             printf("; %d outer loops not listed first", lm.outer_reordered);
         if (lm.seam_joined)
-            printf("; %d faces wound around a closed surface", lm.seam_joined);
+            printf("; %d faces wound around a closed surface (%d cut open along it)", lm.seam_joined, lm.seams_cut);
         printf("\nvertices    %d\n", cm->nverts);
         printf("edges       %d: %d shared, %d free, %d seam, %d non-manifold; %d G1 (normals within 1 deg)\n",
                cm->nedges, nshared, nfree, nseam, nnm, ng1);

@@ -1,6 +1,8 @@
 /* encode.c - loaded model -> .cmz (see encode.h and docs/FORMAT.md): the passes over the model, and
    the faces that cannot be sent settled between them. */
 #include "encode.h"
+
+#include "brep/brep_seam.h"
 #include "encode_internal.h"
 
 #include <math.h>
@@ -327,6 +329,30 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             break;
         }
         e = encode_pass(w, lm, o, keep_only, net_whole, fault, &nfaults, r, st);
+        if (e == CM_OK && nfaults == 0 && r->faces) {
+            /* a band cut open whose surface is still sent: the cut only cost its edge (brep_seam.h);
+               the face as it was, the curve mesh anew, and the file once more */
+            int uncut = 0;
+            for (int f = 0; f < nf && e == CM_OK; f++) {
+                int b = lm->mesh.faces[f].brep_face;
+                if (enc_kept(r->faces[f].method) && lm->brep.faces[b].cut_from_nloops > 0) {
+                    for (int k = 0; k < nb && !uncut; k++)
+                        lm->brep.faces[k].flip = flip0[k];
+                    e = brep_uncut_seam(&lm->brep, b, &lm->fds[b], brep_tolerance(&lm->brep), st);
+                    uncut++;
+                }
+            }
+            if (e == CM_OK && uncut > 0) {
+                lm->seams_cut -= uncut;
+                cmesh_free(&lm->mesh);
+                e = cmesh_build(&lm->brep, lm->fds, &lm->mesh, st);
+                encode_result_free(r);
+                free(fault);
+                if (e != CM_OK)
+                    break;
+                continue;
+            }
+        }
         if (e != CM_OK || nfaults == 0) {
             free(fault);
             break;

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cm/cm_method.h"
 #include "encode/encode.h"
 #include "model_load.h"
 #include "step/step_file.h"
@@ -439,6 +440,133 @@ static void test_cylinder_seam(void **state)
     free(text);
 }
 
+/* a cylinder r, h whose side is bounded by its two circles alone, no seam edge (as some exporters
+   write a full band): the top circle starting `turn` radians round from the bottom one's start;
+   with `cone`, instead a cone from the bottom circle up to its apex at (0, 0, h), bounded by that
+   circle alone */
+static char *band_file(double r, double h, double turn, int cone, size_t *len)
+{
+    sw w;
+    sw_begin(&w);
+    int ctx = context(&w, "mm");
+    int v0 = sw_ent(&w, "VERTEX_POINT('',#%d)", pt(&w, r, 0, 0));
+    int v1 = sw_ent(&w, "VERTEX_POINT('',#%d)", pt(&w, r * cos(turn), r * sin(turn), h));
+    int c0 = sw_ent(&w, "CIRCLE('',#%d,%.17g)", axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0), r);
+    int c1 = sw_ent(&w, "CIRCLE('',#%d,%.17g)", axis(&w, 0, 0, h, 0, 0, 1, cos(turn), sin(turn), 0), r);
+    int e0 = sw_ent(&w, "EDGE_CURVE('',#%d,#%d,#%d,.T.)", v0, v0, c0);
+    int e1 = sw_ent(&w, "EDGE_CURVE('',#%d,#%d,#%d,.T.)", v1, v1, c1);
+    int l0 = sw_ent(&w, "EDGE_LOOP('',(#%d))", sw_ent(&w, "ORIENTED_EDGE('',*,*,#%d,.F.)", e0));
+    int bottom = sw_ent(&w, "ADVANCED_FACE('',(#%d),#%d,.F.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", l0),
+                        sw_ent(&w, "PLANE('',#%d)", axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0)));
+    int la = sw_ent(&w, "EDGE_LOOP('',(#%d))", sw_ent(&w, "ORIENTED_EDGE('',*,*,#%d,.T.)", e0));
+    int shell;
+    if (cone) {
+        /* radius r at the placement, widening along its axis (down): the apex h above it, a loop of
+           its own (a VERTEX_LOOP, as asitus__nist_ctc_01 has its cones' apexes) */
+        int apex = sw_ent(&w, "VERTEX_LOOP('',#%d)", sw_ent(&w, "VERTEX_POINT('',#%d)", pt(&w, 0, 0, h)));
+        int side = sw_ent(&w, "ADVANCED_FACE('',(#%d,#%d),#%d,.T.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", la),
+                          sw_ent(&w, "FACE_BOUND('',#%d,.T.)", apex),
+                          sw_ent(&w, "CONICAL_SURFACE('',#%d,%.17g,%.17g)", axis(&w, 0, 0, 0, 0, 0, -1, 1, 0, 0), r,
+                                 atan(r / h)));
+        shell = sw_ent(&w, "CLOSED_SHELL('',(#%d,#%d))", bottom, side);
+    } else {
+        int l1 = sw_ent(&w, "EDGE_LOOP('',(#%d))", sw_ent(&w, "ORIENTED_EDGE('',*,*,#%d,.T.)", e1));
+        int top = sw_ent(&w, "ADVANCED_FACE('',(#%d),#%d,.T.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", l1),
+                         sw_ent(&w, "PLANE('',#%d)", axis(&w, 0, 0, h, 0, 0, 1, 1, 0, 0)));
+        int lb = sw_ent(&w, "EDGE_LOOP('',(#%d))", sw_ent(&w, "ORIENTED_EDGE('',*,*,#%d,.F.)", e1));
+        int side = sw_ent(&w, "ADVANCED_FACE('',(#%d,#%d),#%d,.T.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", la),
+                          sw_ent(&w, "FACE_BOUND('',#%d,.T.)", lb),
+                          sw_ent(&w, "CYLINDRICAL_SURFACE('',#%d,%.17g)", axis(&w, 0, 0, 0, 0, 0, 1, 1, 0, 0), r));
+        shell = sw_ent(&w, "CLOSED_SHELL('',(#%d,#%d,#%d))", bottom, top, side);
+    }
+    int solid = sw_ent(&w, "MANIFOLD_SOLID_BREP('',#%d)", shell);
+    product(&w, sw_ent(&w, "ADVANCED_BREP_SHAPE_REPRESENTATION('',(#%d),#%d)", solid, ctx));
+    sw_end(&w);
+    *len = w.len;
+    return w.text;
+}
+
+static void encode_default(loaded_model *lm, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
+/* issue 13: a band with no seam edge is cut open along its cylinder (brep_seam.h) and rebuilt from
+   its boundary, exactly; where the rebuild cannot take the cut face (a cone's apex, here) the
+   encoder undoes the cut and sends the surface, the face as the file has it */
+static void test_band_cut_open(void **state)
+{
+    (void)state;
+    for (int k = 0; k < 2; k++) {
+        /* the circles starting at the same angle: the cut is a side of four; opposite: the cut splits
+           the top circle where it meets it */
+        size_t len;
+        char *text = band_file(5, 12, k ? M_PI : 0.0, 0, &len);
+        loaded_model lm;
+        if (load_text(text, len, &lm, 0) != CM_OK)
+            fail_msg("%s", lm.iges.err);
+        assert_int_equal(lm.brep.nfaces, 3);
+        assert_int_equal(lm.seam_joined, 1);
+        assert_int_equal(lm.seams_cut, 1);
+        const brep_face *F = &lm.brep.faces[2];
+        assert_int_equal(F->surf_type, 192);
+        assert_int_equal(F->nloops, 1);              /* the circles and the cut twice: one loop */
+        assert_int_equal(F->cut_from_nloops, 2);     /* (the file's two, kept for an undo) */
+        assert_int_equal(lm.brep.loops[F->first_loop].n, k ? 5 : 4);
+        int nfree, nshared, nseam, nnm, ng1;
+        cmesh_counts(&lm.mesh, &nfree, &nshared, &nseam, &nnm, &ng1);
+        assert_int_equal(nfree, 0);
+        assert_int_equal(nseam, 1);
+        assert_int_equal(lm.domains_failed, 0);
+        assert_false(lm.fds[2].joined_seam);
+        encode_result r;
+        encode_default(&lm, &r);
+        if (k == 0) {
+            /* two circles and two lines on a cylinder: the exact patch is the cylinder */
+            assert_int_equal(r.faces[2].method, CM_METHOD_GREGORY_EXACT);
+            if (!(r.faces[2].rebuild_max < 1e-9))
+                fail_msg("the band rebuilt %.3g mm off its cylinder", r.faces[2].rebuild_max);
+        } else {
+            /* the cut splits the top circle where the bottom's starts: five sides, and the joined
+               patch over the top's two halves is not within the tolerance (the T-vertex's corner
+               normal has no partner to come from); so the surface is sent, the face as the file has
+               it (a cut only costs bytes there) */
+            assert_int_equal(r.faces[2].method, CM_METHOD_KEEP);
+            assert_int_equal(lm.brep.faces[2].cut_from_nloops, 0);
+            assert_int_equal(lm.brep.faces[2].nloops, 2);
+            assert_int_equal(lm.seams_cut, 0);
+        }
+        encode_result_free(&r);
+        model_free(&lm);
+        free(text);
+    }
+    /* the cone: cut from its base circle up to the apex, a face of three sides two of which are the
+       cut; no method rebuilds it within the tolerance, so the cut is undone and the surface sent */
+    size_t len;
+    char *text = band_file(5, 12, 0.0, 1, &len);
+    loaded_model lm;
+    if (load_text(text, len, &lm, 0) != CM_OK)
+        fail_msg("%s", lm.iges.err);
+    assert_int_equal(lm.brep.nfaces, 2);
+    assert_int_equal(lm.seams_cut, 1);
+    assert_int_equal(lm.brep.loops[lm.brep.faces[1].first_loop].n, 3);
+    encode_result r;
+    encode_default(&lm, &r);
+    assert_int_equal(r.faces[1].method, CM_METHOD_KEEP);
+    assert_int_equal(lm.brep.faces[1].cut_from_nloops, 0);
+    assert_int_equal(lm.brep.faces[1].no_cut, 1);
+    assert_int_equal(lm.seams_cut, 0);
+    assert_int_equal(lm.brep.loops[lm.brep.faces[1].first_loop].n, 1);
+    encode_result_free(&r);
+    model_free(&lm);
+    free(text);
+}
+
 /* ---- assemblies ---- */
 
 /* the assemblies' part: a 10 x 20 x 30 box, its representation *part (its frame *ax0) shaping the
@@ -810,6 +938,7 @@ int main(void)
         cmocka_unit_test(test_box_units),
         cmocka_unit_test(test_loose_solid_units),
         cmocka_unit_test(test_cylinder_seam),
+        cmocka_unit_test(test_band_cut_open),
         cmocka_unit_test(test_assembly),
         cmocka_unit_test(test_nested_assembly_names),
         cmocka_unit_test(test_bad_face_left_out),
