@@ -760,8 +760,41 @@ static cm_err bspline_surface(importer *im, const step_entity *e, hsurf *out)
     return CM_OK;
 }
 
-static cm_err surface_of(importer *im, const step_entity *face, const step_val *v, const hbox *ext, hsurf *out,
-                         int *kind)
+/* how many of a face's loops wind round the axis through o along Z (their points' angle about it
+   turning a whole turn): a cone's face of one such loop reaches the apex (its other side is
+   unbounded), whether or not the file gives the apex a VERTEX_LOOP */
+static int loops_winding(const hcurve_list *loops, int nloops, const frame *fr)
+{
+    int winding = 0;
+    for (int l = 0; l < nloops; l++) {
+        double turned = 0.0, last = 0.0;
+        int have = 0;
+        for (int i = 0; i < loops[l].n; i++) {
+            cm_curve cv = hcurve_view(&loops[l].c[i]);
+            double t0, t1;
+            hcurve_domain(&loops[l].c[i], &t0, &t1);
+            for (int j = 0; j <= 16; j++) {
+                cm_vec3 d[1];
+                if (cm_curve_eval(&cv, t0 + (t1 - t0) * j / 16.0, 0, d, NULL) != CM_OK)
+                    return 0;
+                cm_vec3 r = cm_sub(d[0], fr->o);
+                double a = atan2(cm_dot(r, fr->Y), cm_dot(r, fr->X));
+                if (have) {
+                    double da = a - last;
+                    da -= da > M_PI ? 2 * M_PI : (da < -M_PI ? -2 * M_PI : 0.0);
+                    turned += da;
+                }
+                last = a;
+                have = 1;
+            }
+        }
+        winding += fabs(turned) > M_PI;
+    }
+    return winding;
+}
+
+static cm_err surface_of(importer *im, const step_entity *face, const step_val *v, const hbox *ext,
+                         const hcurve_list *loops, int nloops, hsurf *out, int *kind)
 {
     const step_file *f = im->f;
     const step_entity *e = ref_of(im, face, v, NULL, "its surface");
@@ -800,6 +833,10 @@ static cm_err surface_of(importer *im, const step_entity *face, const step_val *
         if (cyl)
             return hsurf_cylinder(fr.o, fr.X, fr.Y, fr.Z, r, 0, 2 * M_PI, v0, v1, out, im->st);
         double ta = tan(semi), apex = ta != 0 ? -r / ta : -HUGE_VAL;
+        if (ta != 0 && loops_winding(loops, nloops, &fr) == 1) { /* (the apex in it: a cap) */
+            v0 = apex < v0 ? apex : v0;
+            v1 = apex > v1 ? apex : v1;
+        }
         if (ta > 0 && v0 < apex)
             v0 = apex;
         if (ta < 0 && v1 > apex)
@@ -1060,10 +1097,10 @@ static cm_err build_face(importer *im, const step_entity *fe, int flip)
     hsurf s = {0};
     int kind = 0;
     if (err == CM_OK && nloops > 0)
-        err = surface_of(im, fe, step_item(p, 2), &box, &s, &kind);
+        err = surface_of(im, fe, step_item(p, 2), &box, loops, nloops, &s, &kind);
     else if (err == CM_OK) { /* no edge: the whole surface (a sphere, a torus), which must be closed */
         hbox none = hbox_empty();
-        err = surface_of(im, fe, step_item(p, 2), &none, &s, &kind);
+        err = surface_of(im, fe, step_item(p, 2), &none, loops, nloops, &s, &kind);
         if (err == CM_OK && kind != SURF_SPHERE && kind != SURF_TORUS && kind != SURF_BSPLINE && kind != SURF_REVOLUTION)
             err = why(im, fe, "an unbounded surface without any edge");
     }

@@ -443,7 +443,7 @@ static void test_cylinder_seam(void **state)
 /* a cylinder r, h whose side is bounded by its two circles alone, no seam edge (as some exporters
    write a full band): the top circle starting `turn` radians round from the bottom one's start;
    with `cone`, instead a cone from the bottom circle up to its apex at (0, 0, h), bounded by that
-   circle alone */
+   circle and (cone 1) a VERTEX_LOOP at the apex, or (cone 2) by the circle alone */
 static char *band_file(double r, double h, double turn, int cone, size_t *len)
 {
     sw w;
@@ -463,11 +463,15 @@ static char *band_file(double r, double h, double turn, int cone, size_t *len)
     if (cone) {
         /* radius r at the placement, widening along its axis (down): the apex h above it, a loop of
            its own (a VERTEX_LOOP, as asitus__nist_ctc_01 has its cones' apexes) */
-        int apex = sw_ent(&w, "VERTEX_LOOP('',#%d)", sw_ent(&w, "VERTEX_POINT('',#%d)", pt(&w, 0, 0, h)));
-        int side = sw_ent(&w, "ADVANCED_FACE('',(#%d,#%d),#%d,.T.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", la),
-                          sw_ent(&w, "FACE_BOUND('',#%d,.T.)", apex),
-                          sw_ent(&w, "CONICAL_SURFACE('',#%d,%.17g,%.17g)", axis(&w, 0, 0, 0, 0, 0, -1, 1, 0, 0), r,
-                                 atan(r / h)));
+        int surf = sw_ent(&w, "CONICAL_SURFACE('',#%d,%.17g,%.17g)", axis(&w, 0, 0, 0, 0, 0, -1, 1, 0, 0), r, atan(r / h));
+        int side;
+        if (cone == 1) {
+            int apex = sw_ent(&w, "VERTEX_LOOP('',#%d)", sw_ent(&w, "VERTEX_POINT('',#%d)", pt(&w, 0, 0, h)));
+            side = sw_ent(&w, "ADVANCED_FACE('',(#%d,#%d),#%d,.T.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", la),
+                          sw_ent(&w, "FACE_BOUND('',#%d,.T.)", apex), surf);
+        } else {
+            side = sw_ent(&w, "ADVANCED_FACE('',(#%d),#%d,.T.)", sw_ent(&w, "FACE_OUTER_BOUND('',#%d,.T.)", la), surf);
+        }
         shell = sw_ent(&w, "CLOSED_SHELL('',(#%d,#%d))", bottom, side);
     } else {
         int l1 = sw_ent(&w, "EDGE_LOOP('',(#%d))", sw_ent(&w, "ORIENTED_EDGE('',*,*,#%d,.T.)", e1));
@@ -563,6 +567,37 @@ static void test_band_cut_open(void **state)
     assert_int_equal(lm.seams_cut, 0);
     assert_int_equal(lm.brep.loops[lm.brep.faces[1].first_loop].n, 1);
     encode_result_free(&r);
+    model_free(&lm);
+    free(text);
+}
+
+/* a cone's face bounded by its base circle alone, no VERTEX_LOOP at the apex: its other side is
+   unbounded, so it is the cap up to the apex, and the surface is built to reach it (it was sized to
+   the circle's extent: the face ended 1.4 mm above the base, the decoded cone 10.4 mm short) */
+static void test_cone_cap_reaches_apex(void **state)
+{
+    (void)state;
+    size_t len;
+    char *text = band_file(5, 12, 0.0, 2, &len);
+    loaded_model lm;
+    if (load_text(text, len, &lm, 0) != CM_OK)
+        fail_msg("%s", lm.iges.err);
+    assert_int_equal(lm.brep.nfaces, 2);
+    assert_int_equal(lm.domains_failed, 0);
+    cm_vec2 uv[200];
+    int n = face_domain_sample(&lm.fds[1], 200, 7, uv);
+    assert_true(n >= 50);
+    double top = 0.0;
+    for (int i = 0; i < n; i++) {
+        cm_vec3 P, N;
+        cm_status st;
+        cm_status_init(&st);
+        assert_ok(face_domain_eval(&lm.brep, &lm.fds[1], uv[i].x, uv[i].y, &P, &N, &st));
+        assert_near(hypot(P.x, P.y), 5.0 * (12.0 - P.z) / 12.0, 1e-6); /* on the cone */
+        top = P.z > top ? P.z : top;
+    }
+    if (!(top > 10.0))
+        fail_msg("the face's samples reach z = %.3g of the apex's 12", top);
     model_free(&lm);
     free(text);
 }
@@ -939,6 +974,7 @@ int main(void)
         cmocka_unit_test(test_loose_solid_units),
         cmocka_unit_test(test_cylinder_seam),
         cmocka_unit_test(test_band_cut_open),
+        cmocka_unit_test(test_cone_cap_reaches_apex),
         cmocka_unit_test(test_assembly),
         cmocka_unit_test(test_nested_assembly_names),
         cmocka_unit_test(test_bad_face_left_out),
