@@ -64,7 +64,8 @@ for m in "$@"; do
     fi
     igs=$(stat -c %s "$m") gz=$(gzip -9 -c "$m" | wc -c) xz=$(xz -9 -c "$m" | wc -c) cz=$(stat -c %s "$c")
     # the summary line counts faces by method in the table's order: read each by its name
-    count() { sed -n "s/.*[(,] *\([0-9]*\) $1[,)].*/\1/p" <<<"$enc"; }
+    # (a method's count ends at ',' or ')', and "N kept" at ';' where the parts follow: format 4.11)
+    count() { sed -n "s/.*[(,] *\([0-9]*\) $1[,;)].*/\1/p" <<<"$enc"; }
     faces=$(sed -n 's/.*: \([0-9]*\) faces (.*/\1/p' <<<"$enc")
     [ -z "$faces" ] || faces="$faces $(count plane) $(count kept) $(count gregory) $(count gregory-exact) $(count gregory-fit) $(count nfill) $(count g1fit)"
     # over the rebuilt faces: the largest ratio (column 9) and the worst G1 angle (column 13)
