@@ -942,7 +942,7 @@ static void write_seeds(const char *dirname)
         const char *name;
         char *text;
         size_t len;
-    } seeds[5];
+    } seeds[8];
     seeds[0].name = "box_mm_coloured.stp";
     seeds[0].text = box_file("mm", 10, 1, &seeds[0].len);
     seeds[1].name = "box_inch.stp";
@@ -953,7 +953,13 @@ static void write_seeds(const char *dirname)
     seeds[3].text = assembly_file(0, &seeds[3].len);
     seeds[4].name = "assembly_reversed.stp";
     seeds[4].text = assembly_file(1, &seeds[4].len);
-    for (int i = 0; i < 5; i++) {
+    seeds[5].name = "band_no_seam.stp";
+    seeds[5].text = band_file(5, 12, 0.0, 0, &seeds[5].len);
+    seeds[6].name = "band_no_seam_turned.stp";
+    seeds[6].text = band_file(5, 12, M_PI, 0, &seeds[6].len);
+    seeds[7].name = "cone_cap_no_apex_loop.stp";
+    seeds[7].text = band_file(5, 12, 0.0, 2, &seeds[7].len);
+    for (int i = 0; i < 8; i++) {
         char path[512];
         snprintf(path, sizeof path, "%s/%s", dirname, seeds[i].name);
         FILE *f = fopen(path, "wb");
