@@ -211,6 +211,13 @@ static cm_err build_cut_loop(const brep_model *m, const brep_face *F, const face
         x = x < lo ? x + period : x;
         const hsurf *S = &m->surfs[F->surf];
         e = along_u ? hsurf_iso_u(S, x, &iso, st) : hsurf_iso_v(S, x, &iso, st);
+        if (e == CM_OK) { /* (a loop on the domain's edge projects a rounding beyond it) */
+            double d0, d1;
+            hcurve_domain(&iso, &d0, &d1);
+            double room = 1e-9 * (d1 - d0);
+            ya = ya < d0 && ya > d0 - room ? d0 : (ya > d1 && ya < d1 + room ? d1 : ya);
+            yb = yb < d0 && yb > d0 - room ? d0 : (yb > d1 && yb < d1 + room ? d1 : yb);
+        }
         if (e == CM_OK && ya != yb) {
             e = hcurve_subrange(&iso, ya < yb ? ya : yb, ya < yb ? yb : ya, &cut, st);
             if (e == CM_OK && ya > yb)
@@ -305,7 +312,9 @@ cm_err brep_cut_seam(brep_model *m, int f, face_domain *fd, double tol, int *cut
 {
     *cut = 0;
     brep_face *F = &m->faces[f];
-    if (!fd->uv || !fd->joined_seam || fd->wind_loop[0] < 0 || F->no_cut)
+    /* (a band with other holes too is left alone: no method rebuilds a hole on a curved surface,
+       and the cut could cross one) */
+    if (!fd->uv || !fd->joined_seam || fd->wind_loop[0] < 0 || F->no_cut || F->nloops != (fd->wind_loop[1] < 0 ? 1 : 2))
         return CM_OK;
     const brep_loop *la = &m->loops[F->first_loop + fd->wind_loop[0]];
     int room = la->n + (fd->wind_loop[1] >= 0 ? m->loops[F->first_loop + fd->wind_loop[1]].n : 0) + 3;

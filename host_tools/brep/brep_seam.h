@@ -10,9 +10,10 @@
  * the bands the file itself gives a seam (IGES exporters mostly do).  The face stays one face: the
  * same entity, the same number, the same surface; only its boundary gains the cut.
  *
- * The cut runs along the surface's parameter line through the start of the lower loop's first
- * curve (no new vertex there), up to where that line meets the other loop (which is cut there in
- * two).  The face's loops before the cut are kept in brep_face.cut_from_loop, so that the encoder
+ * The cut runs along the surface's parameter line through the start of the first winding loop's
+ * first curve (no new vertex there), up to where that line meets the other loop (which is cut
+ * there in two).  Only a band of exactly those two loops (a cap: the one) is cut: no method rebuilds
+ * a further hole on a curved surface, and a cut could cross it.  The face's loops before the cut are kept in brep_face.cut_from_loop, so that the encoder
  * can undo a cut that did not let the face's surface go (brep_uncut_seam).
  */
 #ifndef BREP_SEAM_H

@@ -224,7 +224,7 @@ int cmd_info(int argc, char **argv)
     /* faces by base surface type */
     type_count sc[32];
     int nsc = 0;
-    int holes = 0;
+    int holes = 0, face_loops = 0; /* (the faces' own: a face cut open keeps its loops as imported) */
     for (int i = 0; i < m->nfaces; i++) {
         int k = 0;
         while (k < nsc && sc[k].type != m->faces[i].surf_type)
@@ -237,6 +237,7 @@ int cmd_info(int argc, char **argv)
         if (k < nsc)
             sc[k].read++;
         holes += m->faces[i].nloops - 1;
+        face_loops += m->faces[i].nloops;
     }
     int nfree, nshared, nseam, nnm, ng1;
     cmesh_counts(cm, &nfree, &nshared, &nseam, &nnm, &ng1);
@@ -290,7 +291,7 @@ int cmd_info(int argc, char **argv)
                    surface_name(sc[k].type, step), sc[k].read);
         printf("]},\n  \"loops\": {\"total\": %d, \"holes\": %d, \"reoriented_faces\": %d, \"outer_reordered\": %d, "
                "\"seam_joined\": %d, \"seams_cut\": %d, \"domains_failed\": %d},\n",
-               m->nloops, holes, lm.loops_reversed, lm.outer_reordered, lm.seam_joined, lm.seams_cut, lm.domains_failed);
+               face_loops, holes, lm.loops_reversed, lm.outer_reordered, lm.seam_joined, lm.seams_cut, lm.domains_failed);
         printf("  \"vertices\": %d,\n  \"edges\": {\"total\": %d, \"shared\": %d, \"free\": %d, \"seam\": %d, "
                "\"non_manifold\": %d, \"g1\": %d, \"split_at_vertices\": %d, \"inconsistent\": %d},\n",
                cm->nverts, cm->nedges, nshared, nfree, nseam, nnm, ng1, cm->nsplits, cm->inconsistent);
@@ -365,7 +366,7 @@ int cmd_info(int argc, char **argv)
                 printf(" %d %s%s", sc[k].read, surface_name(sc[k].type, 1), k + 1 < nsc ? "," : "");
             else
                 printf(" %d %s (%d)%s", sc[k].read, iges_type_name(sc[k].type), sc[k].type, k + 1 < nsc ? "," : "");
-        printf("\nloops       %d: %d outer, %d holes", m->nloops, m->nloops - holes, holes);
+        printf("\nloops       %d: %d outer, %d holes", face_loops, face_loops - holes, holes);
         if (lm.loops_reversed)
             printf("; %d faces re-oriented to the surface normal", lm.loops_reversed);
         if (lm.outer_reordered)

@@ -336,7 +336,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             for (int f = 0; f < nf && e == CM_OK; f++) {
                 int b = lm->mesh.faces[f].brep_face;
                 if (enc_kept(r->faces[f].method) && lm->brep.faces[b].cut_from_nloops > 0) {
-                    for (int k = 0; k < nb && !uncut; k++)
+                    for (int k = 0; k < lm->brep.nfaces && !uncut; k++)
                         lm->brep.faces[k].flip = flip0[k];
                     e = brep_uncut_seam(&lm->brep, b, &lm->fds[b], brep_tolerance(&lm->brep), st);
                     uncut++;
@@ -357,9 +357,13 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             free(fault);
             break;
         }
-        /* settle the faulty faces: KEEP once more where a rebuilt surface failed, else leave out */
-        int *out = malloc((size_t)nfaults * sizeof *out), nout = 0, retried = 0;
-        if (!out) {
+        /* settle the faulty faces: a band cut open as it was imported (brep_seam.h), KEEP once
+           more where a rebuilt surface failed, else leave out */
+        int *out = malloc((size_t)nfaults * sizeof *out), nout = 0, retried = 0, nuncut = 0;
+        int *uncut = malloc((size_t)nfaults * sizeof *uncut);
+        if (!out || !uncut) {
+            free(out);
+            free(uncut);
             free(fault);
             e = cm_fail(st, CM_E_NOMEM, "out of memory");
             break;
@@ -368,7 +372,10 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             if (!fault[f])
                 continue;
             int b = lm->mesh.faces[f].brep_face;
-            if (fault[f] == enc_net_folds && !net_whole[b]) {
+            if (lm->brep.faces[b].cut_from_nloops > 0) {
+                uncut[nuncut++] = b;
+                retried++;
+            } else if (fault[f] == enc_net_folds && !net_whole[b]) {
                 net_whole[b] = 1; /* its net whole, as the source has it */
                 nets_whole++;
                 retried++;
@@ -387,6 +394,18 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
                      brep_face_source(F, src, sizeof src), fault[out[0]]);
             e = cm_fail(st, CM_E_DEGENERATE, "a face cannot be sent (--strict)");
         }
+        if (e == CM_OK && nuncut > 0) {
+            for (int b = 0; b < lm->brep.nfaces; b++)
+                lm->brep.faces[b].flip = flip0[b];
+            for (int i = 0; e == CM_OK && i < nuncut; i++)
+                e = brep_uncut_seam(&lm->brep, uncut[i], &lm->fds[uncut[i]], brep_tolerance(&lm->brep), st);
+            lm->seams_cut -= nuncut;
+            if (e == CM_OK && nout == 0) { /* (a face left out builds the curve mesh anew below) */
+                cmesh_free(&lm->mesh);
+                e = cmesh_build(&lm->brep, lm->fds, &lm->mesh, st);
+            }
+        }
+        free(uncut);
         if (e == CM_OK && nout > 0) {
             /* back to the orientation the face domains were built with, then the curve mesh anew */
             int *bad = malloc((size_t)nout * sizeof *bad);
@@ -397,11 +416,18 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
                 bad[i] = lm->mesh.faces[out[i]].brep_face;
                 snprintf(why[i], sizeof why[i], "%s", fault[out[i]]);
             }
-            for (int b = 0; e == CM_OK && b < nb; b++)
+            for (int b = 0; e == CM_OK && b < lm->brep.nfaces; b++)
                 lm->brep.faces[b].flip = flip0[b];
-            /* from the last: a face left out moves the later ones down */
+            /* from the last: a face left out moves the later ones down, and what is kept per face
+               with them (until 2026-12-07 a second round read a moved face's neighbour's) */
             for (int i = nout - 1; e == CM_OK && i >= 0; i--) {
                 e = model_leave_out_face(lm, bad[i], why[i], st);
+                if (e == CM_OK) {
+                    size_t after = (size_t)(lm->brep.nfaces - bad[i]);
+                    memmove(&flip0[bad[i]], &flip0[bad[i] + 1], after);
+                    memmove(&keep_only[bad[i]], &keep_only[bad[i] + 1], after);
+                    memmove(&net_whole[bad[i]], &net_whole[bad[i] + 1], after);
+                }
                 left_out++;
             }
             free(bad);

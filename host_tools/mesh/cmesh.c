@@ -318,6 +318,10 @@ static cm_err merge_vertices(builder *b)
     if (!ends || !par || !body || !cnt || !b->vid || !b->vbody || !out->verts) {
         err = cm_fail(b->st, CM_E_NOMEM, "out of memory");
     } else {
+        /* a segment no face's loop uses (a band's loops as imported, kept while it is cut open:
+           brep_seam.h) has a body of its own and no vertex: it must not cut or join the others */
+        for (int i = 0; i < 2 * ns; i++)
+            body[i] = -1 - i;
         for (int f = 0; f < m->nfaces; f++) {
             const brep_face *bf = &m->faces[f];
             int key = bf->instance;
@@ -333,17 +337,19 @@ static cm_err merge_vertices(builder *b)
             par[2 * s] = 2 * s;
             par[2 * s + 1] = 2 * s + 1;
         }
-        for (int l = 0; l < m->nloops; l++) {
-            const brep_loop *lp = &m->loops[l];
-            for (int i = 0; i < lp->n; i++) {
-                int s = lp->first + i, nxt = lp->first + (i + 1) % lp->n;
-                double gap = cm_dist(ends[2 * s + 1], ends[2 * nxt]);
-                if (gap > tol) {
-                    out->nforced++;
-                    if (gap > out->max_forced_gap)
-                        out->max_forced_gap = gap;
+        for (int f = 0; f < m->nfaces; f++) {
+            for (int l = m->faces[f].first_loop; l < m->faces[f].first_loop + m->faces[f].nloops; l++) {
+                const brep_loop *lp = &m->loops[l];
+                for (int i = 0; i < lp->n; i++) {
+                    int s = lp->first + i, nxt = lp->first + (i + 1) % lp->n;
+                    double gap = cm_dist(ends[2 * s + 1], ends[2 * nxt]);
+                    if (gap > tol) {
+                        out->nforced++;
+                        if (gap > out->max_forced_gap)
+                            out->max_forced_gap = gap;
+                    }
+                    uf_union(par, 2 * s + 1, 2 * nxt);
                 }
-                uf_union(par, 2 * s + 1, 2 * nxt);
             }
         }
         grid g;
@@ -369,6 +375,8 @@ static cm_err merge_vertices(builder *b)
         for (int i = 0; i < 2 * ns; i++)
             vid[i] = -1;
         for (int i = 0; i < 2 * ns; i++) {
+            if (body[i] < 0)
+                continue; /* (used by no face) */
             int r = uf_find(par, i);
             if (vid[r] < 0) {
                 vid[r] = out->nverts;
