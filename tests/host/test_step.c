@@ -490,6 +490,17 @@ static char *band_file(double r, double h, double turn, int cone, size_t *len)
     return w.text;
 }
 
+/* band_file(5, 12, turn, cone) loaded into lm; its text, to free after lm */
+static char *load_band(double turn, int cone, loaded_model *lm)
+{
+    size_t len;
+    char *text = band_file(5, 12, turn, cone, &len);
+    if (load_text(text, len, lm, 0) != CM_OK)
+        fail_msg("%s", lm->iges.err);
+    assert_int_equal(lm->brep.nfaces, cone ? 2 : 3);
+    return text;
+}
+
 static void encode_default(loaded_model *lm, encode_result *r)
 {
     encode_opts o;
@@ -509,12 +520,8 @@ static void test_band_cut_open(void **state)
     for (int k = 0; k < 2; k++) {
         /* the circles starting at the same angle: the cut is a side of four; opposite: the cut splits
            the top circle where it meets it */
-        size_t len;
-        char *text = band_file(5, 12, k ? M_PI : 0.0, 0, &len);
         loaded_model lm;
-        if (load_text(text, len, &lm, 0) != CM_OK)
-            fail_msg("%s", lm.iges.err);
-        assert_int_equal(lm.brep.nfaces, 3);
+        char *text = load_band(k ? M_PI : 0.0, 0, &lm);
         assert_int_equal(lm.seam_joined, 1);
         assert_int_equal(lm.seams_cut, 1);
         const brep_face *F = &lm.brep.faces[2];
@@ -557,12 +564,8 @@ static void test_band_cut_open(void **state)
     }
     /* the cone: cut from its base circle up to the apex, a face of three sides two of which are the
        cut; no method rebuilds it within the tolerance, so the cut is undone and the surface sent */
-    size_t len;
-    char *text = band_file(5, 12, 0.0, 1, &len);
     loaded_model lm;
-    if (load_text(text, len, &lm, 0) != CM_OK)
-        fail_msg("%s", lm.iges.err);
-    assert_int_equal(lm.brep.nfaces, 2);
+    char *text = load_band(0.0, 1, &lm);
     assert_int_equal(lm.seams_cut, 1);
     assert_int_equal(lm.brep.loops[lm.brep.faces[1].first_loop].n, 3);
     encode_result r;
@@ -583,12 +586,8 @@ static void test_band_cut_open(void **state)
 static void test_cone_cap_reaches_apex(void **state)
 {
     (void)state;
-    size_t len;
-    char *text = band_file(5, 12, 0.0, 2, &len);
     loaded_model lm;
-    if (load_text(text, len, &lm, 0) != CM_OK)
-        fail_msg("%s", lm.iges.err);
-    assert_int_equal(lm.brep.nfaces, 2);
+    char *text = load_band(0.0, 2, &lm);
     assert_int_equal(lm.domains_failed, 0);
     cm_vec2 uv[200];
     int n = face_domain_sample(&lm.fds[1], 200, 7, uv);
