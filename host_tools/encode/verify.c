@@ -645,6 +645,9 @@ double verify_mesh_face(const loaded_model *lm, int f, const float (*pos)[3], ui
             worst = d > worst ? d : worst;
         }
     for (int q = 0; q < fd->npts; q++) {
+        if (!cm_finite3(fd->xyz[q]))
+            continue; /* (a joined winding polygon's points along the seam or a pole: no boundary
+                         point; measured, the report said "inf" for every such face) */
         double d = point_mesh_dist(fd->xyz[q], pos, idx, nindex);
         worst = d > worst ? d : worst;
     }

@@ -580,6 +580,33 @@ static void test_band_cut_open(void **state)
     free(text);
 }
 
+/* the report's mesh deviation of a face whose loops wind (its domain's polygon runs along the seam
+   and the pole, points with no boundary point behind them): measured, not "inf" (it was, for every
+   such face) */
+static void test_winding_face_mesh_dev(void **state)
+{
+    (void)state;
+    for (int cone = 0; cone < 2; cone++) {
+        loaded_model lm;
+        char *text = load_band(M_PI, cone ? 2 : 0, &lm);
+        encode_opts o;
+        encode_opts_default(&o);
+        o.measure_mesh = 1;
+        cm_status st;
+        cm_status_init(&st);
+        encode_result r;
+        memset(&r, 0, sizeof r);
+        assert_ok(encode_model(&lm, &o, &r, &st));
+        int f = cone ? 1 : 2;
+        assert_int_equal(r.faces[f].method, CM_METHOD_KEEP); /* (kept: its domain is the joined one) */
+        if (!(r.faces[f].mesh_dev >= 0.0 && r.faces[f].mesh_dev < 0.1))
+            fail_msg("face %d: mesh_dev %g", f, r.faces[f].mesh_dev);
+        encode_result_free(&r);
+        model_free(&lm);
+        free(text);
+    }
+}
+
 /* a cone's face bounded by its base circle alone, no VERTEX_LOOP at the apex: its other side is
    unbounded, so it is the cap up to the apex, and the surface is built to reach it (it was sized to
    the circle's extent: the face ended 1.4 mm above the base, the decoded cone 10.4 mm short) */
@@ -986,6 +1013,7 @@ int main(void)
         cmocka_unit_test(test_cylinder_seam),
         cmocka_unit_test(test_band_cut_open),
         cmocka_unit_test(test_cone_cap_reaches_apex),
+        cmocka_unit_test(test_winding_face_mesh_dev),
         cmocka_unit_test(test_assembly),
         cmocka_unit_test(test_nested_assembly_names),
         cmocka_unit_test(test_bad_face_left_out),
