@@ -54,29 +54,6 @@ static cm_err copy_loop(const brep_model *m, const brep_loop *l, int rev, hcurve
     return CM_OK;
 }
 
-/* the net turns (in periods, signed) of a loop's curves round the winding direction, from samples */
-static double loop_turns(const face_domain *fd, int along_u, double period, const hcurve *c, int n)
-{
-    double sum = 0.0, last = 0.0, first = 0.0;
-    int have = 0;
-    for (int i = 0; i < n; i++) {
-        double t0, t1;
-        hcurve_domain(&c[i], &t0, &t1);
-        for (int j = 0; j < SEAM_SAMPLES; j++) {
-            double x, y;
-            if (!surf_xy(fd, along_u, curve_at(&c[i], t0 + (t1 - t0) * j / SEAM_SAMPLES), &x, &y))
-                continue;
-            if (have)
-                sum += wrap(x - last, period);
-            else
-                first = x;
-            last = x;
-            have = 1;
-        }
-    }
-    return have ? (sum + wrap(first - last, period)) / period : 0.0;
-}
-
 /* where the curves c[0..n) cross the line x = x0 (mod period) nearest to y0: curve *ci at *ti, its
    other parameter *yi; 0 if they never cross it */
 static int find_crossing(const face_domain *fd, int along_u, double period, const hcurve *c, int n, double x0,
@@ -180,15 +157,13 @@ static cm_err build_cut_loop(const brep_model *m, const brep_face *F, const face
     cm_err e = a && b ? CM_OK : cm_fail(st, CM_E_NOMEM, "out of memory");
     if (e == CM_OK)
         e = copy_loop(m, la, 0, a, st);
-    double ta = e == CM_OK ? loop_turns(fd, along_u, period, a, na) : 0.0;
-    /* the far loop runs the other way round (an outer loop and its hole), as the file may not have it */
-    double tb = -ta;
-    if (e == CM_OK && lb) {
+    /* each loop once round (the face domain counted its turns); the far loop runs the other way
+       round (an outer loop and its hole), as the file may not have it */
+    int ta = fd->wind_turns[0], tb = lb ? fd->wind_turns[1] : -ta;
+    if (e == CM_OK && lb)
         e = copy_loop(m, lb, 0, b, st);
-        tb = e == CM_OK ? loop_turns(fd, along_u, period, b, nb) : 0.0;
-    }
-    int ok = e == CM_OK && fabs(fabs(ta) - 1.0) < 0.25 && fabs(fabs(tb) - 1.0) < 0.25;
-    if (ok && lb && (ta > 0.0) == (tb > 0.0)) {
+    int ok = e == CM_OK && abs(ta) == 1 && abs(tb) == 1;
+    if (ok && lb && (ta > 0) == (tb > 0)) {
         free_curves(b, nb);
         memset(b, 0, (size_t)nb * sizeof *b);
         e = copy_loop(m, lb, 1, b, st);

@@ -317,6 +317,8 @@ cm_err face_domain_build(brep_model *m, int face, double tol, face_domain *fd, c
                         fd->wind_loop[0] = a;
                         fd->wind_loop[1] = b;
                         fd->wind_along_u = along_u;
+                        fd->wind_turns[0] = dira;
+                        fd->wind_turns[1] = b >= 0 ? (along_u ? wu[b] : wv[b]) : 0;
                         outer = -1; /* loop 0 is already the outer region */
                     }
                 }

@@ -49,6 +49,7 @@ typedef struct face_domain {
     int joined_seam;  /* winding loops were joined along the seam */
     int wind_loop[2]; /* then the face's loops (numbered from its first) that wound, -1 for none */
     int wind_along_u; /* and whether they wound round u (else v) */
+    int wind_turns[2];/* and their net turns round it (signed: the loops' own directions) */
     fd_grid *grid;    /* (its pointee changes under a const face_domain: a cache of what ps gives) */
 } face_domain;
 
