@@ -103,8 +103,8 @@ static cm_err load_rest(loaded_model *lm, int flags, model_progress progress, vo
             lm->max_gap = lm->fds[f].max_gap;
         /* a band between two loops winding round its surface, cut open along it (brep_seam.h) */
         int cut = 0;
-        if (brep_cut_seam(m, f, &lm->fds[f], tol, &cut, st) != CM_OK)
-            return cm_fail(st, CM_E_NOMEM, "out of memory");
+        if ((e = brep_cut_seam(m, f, &lm->fds[f], tol, &cut, st)) != CM_OK)
+            return e; /* (only memory: st says so) */
         lm->seams_cut += cut;
     }
     lm->seconds_domains = now() - t;

@@ -284,6 +284,26 @@ static cm_err encode_pass(enc_work *w, loaded_model *lm, const encode_opts *aske
     return CM_OK;
 }
 
+/* bands cut open (brep_seam.h) back as imported: the faces' orientations first back to those their
+   domains were built with (flip0), then, with rebuild_mesh, the curve mesh anew; nothing for n 0 */
+static cm_err uncut_faces(loaded_model *lm, const int *faces, int n, const unsigned char *flip0, int rebuild_mesh,
+                          cm_status *st)
+{
+    if (n == 0)
+        return CM_OK;
+    for (int b = 0; b < lm->brep.nfaces; b++)
+        lm->brep.faces[b].flip = flip0[b];
+    cm_err e = CM_OK;
+    for (int i = 0; e == CM_OK && i < n; i++)
+        e = brep_uncut_seam(&lm->brep, faces[i], &lm->fds[faces[i]], brep_tolerance(&lm->brep), st);
+    lm->seams_cut -= n;
+    if (e == CM_OK && rebuild_mesh) {
+        cmesh_free(&lm->mesh);
+        e = cmesh_build(&lm->brep, lm->fds, &lm->mesh, st);
+    }
+    return e;
+}
+
 /*
  * One bad face never sinks a model.  A face that cannot be sent as it is (an edge or its surface off
  * the grid, a surface that does not tessellate) is settled and the file made again: a rebuilt face
@@ -332,20 +352,15 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
         if (e == CM_OK && nfaults == 0 && r->faces) {
             /* a band cut open whose surface is still sent: the cut only cost its edge (brep_seam.h);
                the face as it was, the curve mesh anew, and the file once more */
-            int uncut = 0;
-            for (int f = 0; f < nf && e == CM_OK; f++) {
+            int *kept_cut = malloc((size_t)nf * sizeof *kept_cut + 1), uncut = 0;
+            for (int f = 0; kept_cut && f < nf; f++) {
                 int b = lm->mesh.faces[f].brep_face;
-                if (enc_kept(r->faces[f].method) && lm->brep.faces[b].cut_from_nloops > 0) {
-                    for (int k = 0; k < lm->brep.nfaces && !uncut; k++)
-                        lm->brep.faces[k].flip = flip0[k];
-                    e = brep_uncut_seam(&lm->brep, b, &lm->fds[b], brep_tolerance(&lm->brep), st);
-                    uncut++;
-                }
+                if (enc_kept(r->faces[f].method) && lm->brep.faces[b].cut_from_nloops > 0)
+                    kept_cut[uncut++] = b;
             }
-            if (e == CM_OK && uncut > 0) {
-                lm->seams_cut -= uncut;
-                cmesh_free(&lm->mesh);
-                e = cmesh_build(&lm->brep, lm->fds, &lm->mesh, st);
+            e = kept_cut ? uncut_faces(lm, kept_cut, uncut, flip0, 1, st) : cm_fail(st, CM_E_NOMEM, "out of memory");
+            free(kept_cut);
+            if (e != CM_OK || uncut > 0) {
                 encode_result_free(r);
                 free(fault);
                 if (e != CM_OK)
@@ -394,17 +409,8 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
                      brep_face_source(F, src, sizeof src), fault[out[0]]);
             e = cm_fail(st, CM_E_DEGENERATE, "a face cannot be sent (--strict)");
         }
-        if (e == CM_OK && nuncut > 0) {
-            for (int b = 0; b < lm->brep.nfaces; b++)
-                lm->brep.faces[b].flip = flip0[b];
-            for (int i = 0; e == CM_OK && i < nuncut; i++)
-                e = brep_uncut_seam(&lm->brep, uncut[i], &lm->fds[uncut[i]], brep_tolerance(&lm->brep), st);
-            lm->seams_cut -= nuncut;
-            if (e == CM_OK && nout == 0) { /* (a face left out builds the curve mesh anew below) */
-                cmesh_free(&lm->mesh);
-                e = cmesh_build(&lm->brep, lm->fds, &lm->mesh, st);
-            }
-        }
+        if (e == CM_OK) /* (a face left out builds the curve mesh anew below) */
+            e = uncut_faces(lm, uncut, nuncut, flip0, nout == 0, st);
         free(uncut);
         if (e == CM_OK && nout > 0) {
             /* back to the orientation the face domains were built with, then the curve mesh anew */
