@@ -335,21 +335,8 @@ static void json_accessor(cm_out *w, cm_buf *b)
         cm_buf_u64(b, fc->nverts);
         cm_buf_str(b, ",\"type\":\"VEC3\"");
         if (w->sub == 0) { /* exact bounds of the vertices this accessor covers */
-            float lo[3], hi[3], p[CM_OUT_RUN][3];
-            cm_mesh_pos(m, fc->first_vert, p[0]);
-            for (int k = 0; k < 3; k++)
-                lo[k] = hi[k] = p[0][k];
-            for (uint32_t i0 = 1; i0 < fc->nverts; i0 += CM_OUT_RUN) {
-                uint32_t n = fc->nverts - i0 < CM_OUT_RUN ? fc->nverts - i0 : CM_OUT_RUN;
-                cm_mesh_vecs(m, CM_SPILL_POS, fc->first_vert + i0, n, p);
-                for (uint32_t i = 0; i < n; i++)
-                    for (int k = 0; k < 3; k++) {
-                        if (p[i][k] < lo[k])
-                            lo[k] = p[i][k];
-                        if (p[i][k] > hi[k])
-                            hi[k] = p[i][k];
-                    }
-            }
+            float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+            (void)cm_mesh_range_bounds(m, fc->first_vert, fc->nverts, lo, hi); /* (a face with triangles has vertices) */
             cm_buf_str(b, ",\"min\":");
             json_vec3(b, lo);
             cm_buf_str(b, ",\"max\":");

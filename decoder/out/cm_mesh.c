@@ -200,32 +200,38 @@ uint32_t cm_mesh_face_from(const cm_mesh *m, uint32_t n, uint32_t f)
 }
 
 /*
- * Bounds of positions [0, nverts).  NaN coordinates never win a comparison,
- * so they are ignored unless the first vertex holds one (the writers reject
- * non-finite meshes before they need bounds).
+ * Bounds of positions [first, first + n), read a run at a time (once a face: built for size, as the
+ * GLB writer that calls it is).  NaN coordinates never win a
+ * comparison, so they are ignored unless the first vertex holds one (the writers reject non-finite
+ * meshes before they need bounds).
  */
-int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
+CM_ONCE_PER_FACE int cm_mesh_range_bounds(const cm_mesh *m, uint32_t first, uint32_t n, float lo[3], float hi[3])
 {
-    if (m == NULL || m->nverts == 0 || m->pos == NULL || lo == NULL || hi == NULL)
+    if (m == NULL || n == 0 || m->pos == NULL || lo == NULL || hi == NULL)
         return 0;
-    float l[3], h[3];
-    float p[3];
-    cm_mesh_pos(m, 0, p);
+    float l[3], h[3], p[CM_MESH_BOUNDS_RUN][3];
+    cm_mesh_pos(m, first, p[0]);
     for (int k = 0; k < 3; k++)
-        l[k] = h[k] = p[k];
-    for (uint32_t i = 1; i < m->nverts; i++) {
-        cm_mesh_pos(m, i, p);
-        for (int k = 0; k < 3; k++) {
-            float v = p[k];
-            if (v < l[k])
-                l[k] = v;
-            if (v > h[k])
-                h[k] = v;
-        }
+        l[k] = h[k] = p[0][k];
+    for (uint32_t i0 = 1; i0 < n; i0 += CM_MESH_BOUNDS_RUN) {
+        uint32_t len = n - i0 < CM_MESH_BOUNDS_RUN ? n - i0 : CM_MESH_BOUNDS_RUN;
+        cm_mesh_vecs(m, CM_SPILL_POS, first + i0, len, p);
+        for (uint32_t i = 0; i < len; i++)
+            for (int k = 0; k < 3; k++) {
+                if (p[i][k] < l[k])
+                    l[k] = p[i][k];
+                if (p[i][k] > h[k])
+                    h[k] = p[i][k];
+            }
     }
     for (int k = 0; k < 3; k++) {
         lo[k] = l[k];
         hi[k] = h[k];
     }
     return 1;
+}
+
+int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
+{
+    return m != NULL && cm_mesh_range_bounds(m, 0, m->nverts, lo, hi);
 }

@@ -124,4 +124,10 @@ uint32_t cm_mesh_face_from(const cm_mesh *m, uint32_t n, uint32_t f);
 /** Bounds of all positions (lo/hi untouched when the mesh is empty; returns 0 then, else 1). */
 int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3]);
 
+/** Vertices read at a time by cm_mesh_range_bounds (384 bytes of stack). */
+#define CM_MESH_BOUNDS_RUN 32u
+
+/** Bounds of positions [first, first + n) (the GLB's accessors: a face's); as cm_mesh_bounds. */
+int cm_mesh_range_bounds(const cm_mesh *m, uint32_t first, uint32_t n, float lo[3], float hi[3]);
+
 #endif /* CM_MESH_H */
