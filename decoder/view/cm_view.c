@@ -295,6 +295,8 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
     nf = held == mesh->nverts ? nf : 0;
     double xlo = 0, xhi = 0, ylo = 0, yhi = 0;
     int first = 1;
+    /* (x and y as a pair, as vertex_screen_in: the same bits as dot3's) */
+    const view_pair r_u[3] = {{v->r[0], v->u[0]}, {v->r[1], v->u[1]}, {v->r[2], v->u[2]}};
     for (uint32_t f = 0; f < (nf ? nf : 1); f++) {
         uint32_t v0 = nf ? mesh->faces[f].first_vert : 0, nv = nf ? mesh->faces[f].nverts : mesh->nverts;
         double fxlo = 1e300, fxhi = -1e300, fylo = 1e300, fyhi = -1e300, fz = 1e300;
@@ -304,7 +306,9 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
             for (uint32_t i = 0; i < n; i++) {
                 double d[3] = {(double)v->run_pos[i][0] - v->c[0], (double)v->run_pos[i][1] - v->c[1],
                                (double)v->run_pos[i][2] - v->c[2]};
-                double x = dot3(d, v->r), y = dot3(d, v->u), z = dot3(d, v->f);
+                const view_pair XY =
+                    (view_pair){d[0], d[0]} * r_u[0] + (view_pair){d[1], d[1]} * r_u[1] + (view_pair){d[2], d[2]} * r_u[2];
+                double x = XY[0], y = XY[1], z = dot3(d, v->f);
                 fxlo = x < fxlo ? x : fxlo;
                 fxhi = x > fxhi ? x : fxhi;
                 fylo = y < fylo ? y : fylo;
@@ -543,6 +547,10 @@ static void ortho_rows(cm_view *v)
     v->ortho[1][3] = 0.5 * (double)v->o.height + k * dot3(v->c, v->u);
     v->ortho[2][3] = -dot3(v->c, v->f);
     v->ortho[3][3] = v->ortho[4][3] = 0.0;
+    for (int i = 0; i < 4; i++) {
+        v->ortho_xy[i] = (view_pair){v->ortho[0][i], v->ortho[1][i]};
+        v->ortho_zf[i] = (view_pair){v->ortho[2][i], i < 3 ? v->ortho[3][i] : -0.0};
+    }
 }
 
 /* floor(a / VIEW_SUBPIX) for a > -2^30 (a corner within VIEW_COORD_MAX is 2^28 units off at most):
@@ -826,14 +834,19 @@ __attribute__((always_inline)) static inline void vertex_screen_in(const cm_view
     int ok = 1;
     double x, y;
     if (!v->o.perspective) {
-        /* five dot products (ortho_rows) */
-        const double P[3] = {(double)p[0], (double)p[1], (double)p[2]}, N[3] = {(double)n[0], (double)n[1], (double)n[2]};
-        const double(*o)[4] = v->ortho;
-        x = P[0] * o[0][0] + P[1] * o[0][1] + P[2] * o[0][2] + o[0][3];
-        y = P[0] * o[1][0] + P[1] * o[1][1] + P[2] * o[1][2] + o[1][3];
-        t->z = P[0] * o[2][0] + P[1] * o[2][1] + P[2] * o[2][2] + o[2][3];
-        t->facing = N[0] * o[3][0] + N[1] * o[3][1] + N[2] * o[3][2];
-        t->light = shade(t->facing, N[0] * o[4][0] + N[1] * o[4][1] + N[2] * o[4][2]);
+        /* five dot products (ortho_rows), two at a time: x with y, the depth with the facing (its
+           constant -0.0, which adds nothing to any value); each lane's sums in the order written
+           out, so the same bits as one at a time */
+        const double P0 = (double)p[0], P1 = (double)p[1], P2 = (double)p[2];
+        const double N0 = (double)n[0], N1 = (double)n[1], N2 = (double)n[2];
+        const view_pair *xy = v->ortho_xy, *zf = v->ortho_zf;
+        const view_pair XY = (view_pair){P0, P0} * xy[0] + (view_pair){P1, P1} * xy[1] +
+                             (view_pair){P2, P2} * xy[2] + xy[3];
+        const view_pair ZF = (view_pair){P0, N0} * zf[0] + (view_pair){P1, N1} * zf[1] +
+                             (view_pair){P2, N2} * zf[2] + zf[3];
+        const double *o4 = v->ortho[4];
+        x = XY[0], y = XY[1], t->z = ZF[0], t->facing = ZF[1];
+        t->light = shade(t->facing, N0 * o4[0] + N1 * o4[1] + N2 * o4[2]);
     } else {
         double q[3], s[3] = {0, 0, 0};
         to_view(v, (double)p[0], (double)p[1], (double)p[2], q);
@@ -953,6 +966,7 @@ static void tile_refresh(cm_view *v, int t)
     float far = -3.0e38f;
     for (int py = ty * CM_VIEW_TILE; py < py1; py++) {
         const float *d = &v->depth[(size_t)py * (size_t)v->o.width];
+#pragma GCC unroll 8
         for (int px = tx * CM_VIEW_TILE; px < px1; px++)
             far = d[px] > far ? d[px] : far;
     }

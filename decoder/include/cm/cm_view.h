@@ -87,6 +87,10 @@ typedef struct cm_view_vert {
     uint8_t flags;
 } cm_view_vert;
 
+/* two doubles handled as one (gcc's and clang's vector extension: one SSE2 or NEON operation where
+   the target has it, two otherwise; each lane rounds as a double alone) */
+typedef double view_pair __attribute__((vector_size(16)));
+
 typedef struct cm_view {
     cm_view_opts o;
     /* the camera: a point of view space is ((p - c).r, (p - c).u, (p - c).f), f into the screen */
@@ -98,6 +102,8 @@ typedef struct cm_view {
        normal's component along the view and along the fill light, each a dot product with a
        model-space row (and a constant) */
     double ortho[5][4];
+    /* the same rows' coefficients in pairs, x with y and depth with facing (vertex_screen_in) */
+    view_pair ortho_xy[4], ortho_zf[4];
     uint64_t triangles, edge_segments, silhouette_segments; /* drawn (for tests and --verbose) */
     uint64_t hidden_faces, hidden_triangles;                /* skipped behind what was drawn */
     /* the model's parts (cm_view_parts): those the file names (format 4.11: cm_face.part,
