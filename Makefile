@@ -105,10 +105,13 @@ CM_PLATFORM_OPT := -Os
 # GLB writer (cm_glb.c: its loops are copies), room for cmz-terminal's serving viewer on a DRM
 # display (263 060 -> 261 812 bytes; C1G0B0O's decode 647.13 -> 646.96 M instructions); the output's
 # checks (cm_out.c, once per file: their reads a run at a time made them 1.1 KB larger and 2 to 4 %
-# of a decode cheaper; -Os took 0.7 KB of it back at no cost in instructions)
+# of a decode cheaper; -Os took 0.7 KB of it back at no cost in instructions); the exact patches'
+# construction (cm_egregface.c: its sides and corners once per face; the patches' evaluation,
+# cm_egreg.c, stays -O2), room for format 4.13's corner hints (cmz-terminal 262 926 -> 261 694 bytes)
 CM_COLD_SRC := decoder/src/cm_decode.c decoder/src/cm_format.c decoder/src/cm_sections.c decoder/src/cm_limits.c \
                decoder/src/cm_error.c decoder/src/cm_arith.c decoder/out/cm_numfmt.c decoder/out/cm_obj.c decoder/out/cm_stl.c \
                decoder/src/cm_corner.c decoder/view/cm_glb_read.c decoder/out/cm_glb.c decoder/out/cm_out.c \
+               decoder/kernels/cm_egregface.c \
                $(wildcard decoder/methods/*.c)
 # and the viewer's drawing, run per triangle and pixel of every frame, its loops peeled and
 # unswitched (gcc; clang has no such flags): issue 17's frame of 100 k triangles 2 to 3 % fewer

@@ -24,6 +24,10 @@ int cm_gregory_needs_midpoints(const cm_face *F);
 cm_err cm_gregory_rebuild(const cm_model *m, uint32_t f, int check, int n, int n_outer, cm_rebuilt *out,
                           cm_rebuild_ws *ws, cm_status *st);
 void cm_gregory_needs(const cm_model *m, const cm_face *F, uint32_t *need);
+/* format 4.13: the corner hints that end a GREGORY-family record (after GREGORY-FIT's correction),
+   their normals into the model's pool; written from fit (NULL: none) */
+cm_err cm_gregory_read_hints(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why);
+void cm_gregory_write_hints(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_fit_q *fit);
 
 /* GREGORY, GREGORY-EXACT and GREGORY-FIT: the rebuild they share (gregory.c), exact 1 over the edges
    themselves, fit 1 with the record's correction added (cm_gregory_fit_apply) */

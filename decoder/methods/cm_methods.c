@@ -36,9 +36,11 @@ cm_err cm_method_read_record(const cm_method *M, cm_ac_dec *ac, cm_face_ctx *ctx
     switch (M->id) {
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
-        return cm_gregory_read_record(ac, ctx, F, why);
-    case CM_METHOD_GREGORY_FIT:
-        return cm_gregory_fit_read_record(ac, ctx, m, F, why);
+    case CM_METHOD_GREGORY_FIT: {
+        cm_err e = M->id == CM_METHOD_GREGORY_FIT ? cm_gregory_fit_read_record(ac, ctx, m, F, why)
+                                                  : cm_gregory_read_record(ac, ctx, F, why);
+        return e != CM_OK ? e : cm_gregory_read_hints(ac, ctx, m, F, why);
+    }
     case CM_METHOD_NFILL:
         return cm_nfill_read_record(ac, ctx, m, F, why);
     case CM_METHOD_G1FIT:
@@ -55,9 +57,11 @@ void cm_method_write_record(const cm_method *M, cm_ac_enc *ac, cm_face_ctx *ctx,
     case CM_METHOD_GREGORY:
     case CM_METHOD_GREGORY_EXACT:
         cm_gregory_write_record(ac, ctx, F);
+        cm_gregory_write_hints(ac, ctx, fit);
         break;
     case CM_METHOD_GREGORY_FIT:
         cm_gregory_fit_write_record(ac, ctx, F, fit);
+        cm_gregory_write_hints(ac, ctx, fit);
         break;
     case CM_METHOD_NFILL:
         cm_nfill_write_record(ac, ctx, F, fit);

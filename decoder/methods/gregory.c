@@ -13,6 +13,8 @@
 #include "cm/cm_limits_info.h"
 #include "cm_method_impl.h"
 
+#include <math.h>
+
 cm_err cm_gregory_read_record(cm_ac_dec *ac, cm_face_ctx *ctx, cm_face *F, cm_method_fault *why)
 {
     uint64_t layout = cm_ac_dec_uint(ac, &ctx->layout);
@@ -45,6 +47,85 @@ void cm_gregory_write_record(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_face *F)
     cm_ac_enc_direct(ac, F->checksum >> 16, 16);
 }
 
+/* spec 15.3's octahedral map: v = n / (|x| + |y| + |z|), the lower half folded over the diagonals */
+void cm_hint_encode(cm_vec3 n, int16_t q[2])
+{
+    double s = fabs(n.x) + fabs(n.y) + fabs(n.z);
+    double x = s > 0 ? n.x / s : 0, y = s > 0 ? n.y / s : 0;
+    if (s > 0 && n.z < 0) {
+        double fx = (1 - fabs(y)) * (x < 0 ? -1 : 1), fy = (1 - fabs(x)) * (y < 0 ? -1 : 1);
+        x = fx, y = fy;
+    }
+    /* (rounded half away from zero, |x|, |y| <= 1; written out: the decoder links no libm rounding) */
+    double qx = x * CM_FMT_HINT_ONE, qy = y * CM_FMT_HINT_ONE;
+    q[0] = (int16_t)(qx < 0 ? -(int32_t)(0.5 - qx) : (int32_t)(qx + 0.5));
+    q[1] = (int16_t)(qy < 0 ? -(int32_t)(0.5 - qy) : (int32_t)(qy + 0.5));
+}
+
+cm_vec3 cm_hint_decode(int32_t qx, int32_t qy)
+{
+    double x = (double)qx / CM_FMT_HINT_ONE, y = (double)qy / CM_FMT_HINT_ONE, z = 1 - fabs(x) - fabs(y);
+    if (z < 0) {
+        double fx = (1 - fabs(y)) * (x < 0 ? -1 : 1), fy = (1 - fabs(x)) * (y < 0 ? -1 : 1);
+        x = fx, y = fy;
+    }
+    return cm_unit(cm_v3(x, y, z));
+}
+
+cm_err cm_gregory_read_hints(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
+{
+    F->fill_nu = F->fill_nv = 0;
+    uint64_t mask = ctx->hints && cm_ac_dec_bit(ac, &ctx->hint_any) ? cm_ac_dec_uint(ac, &ctx->hint_mask) : 0;
+    if (mask >= 1u << CM_GREG_JOINED_MAX_EDGES) {
+        why->what = "GREGORY hints";
+        return CM_E_RANGE;
+    }
+    if (mask && !F->fit)
+        F->surf = m->nctrl; /* (GREGORY-FIT's follow its correction: cm_face_hint_first) */
+    for (unsigned k = 0; k < CM_GREG_JOINED_MAX_EDGES; k++) {
+        if (!((mask >> k) & 1u))
+            continue;
+        int64_t qx = cm_ac_dec_sint(ac, &ctx->hint_oct), qy = cm_ac_dec_sint(ac, &ctx->hint_oct);
+        if (ac->overrun)
+            break;
+        if (qx < -CM_FMT_HINT_ONE || qx > CM_FMT_HINT_ONE || qy < -CM_FMT_HINT_ONE || qy > CM_FMT_HINT_ONE) {
+            why->what = "GREGORY hint normal";
+            return CM_E_RANGE;
+        }
+        if (m->nctrl >= CM_MAX_MODEL_CTRL) {
+            why->what = "GREGORY hints";
+            why->limit = CM_LIMIT_MAX_MODEL_CTRL;
+            why->need = (uint64_t)m->nctrl + 1;
+            return CM_E_LIMIT;
+        }
+        m->ctrl[m->nctrl] = cm_hint_decode((int32_t)qx, (int32_t)qy);
+        m->w[m->nctrl++] = 1.0;
+    }
+    if (ac->overrun) {
+        why->what = "face record";
+        return CM_E_TRUNCATED;
+    }
+    F->fill_nu = (uint8_t)(mask & 0xffu);
+    F->fill_nv = (uint8_t)(mask >> 8);
+    return CM_OK;
+}
+
+void cm_gregory_write_hints(cm_ac_enc *ac, cm_face_ctx *ctx, const cm_fit_q *fit)
+{
+    unsigned mask = fit ? fit->hint_mask : 0u;
+    if (!ctx->hints)
+        return;
+    cm_ac_enc_bit(ac, &ctx->hint_any, mask != 0);
+    if (mask)
+        cm_ac_enc_uint(ac, &ctx->hint_mask, mask);
+    for (unsigned k = 0, i = 0; k < CM_GREG_JOINED_MAX_EDGES; k++)
+        if ((mask >> k) & 1u) {
+            cm_ac_enc_sint(ac, &ctx->hint_oct, fit->hint[i][0]);
+            cm_ac_enc_sint(ac, &ctx->hint_oct, fit->hint[i][1]);
+            i++;
+        }
+}
+
 /* one loop of 3..CM_MAX_SIDES edges; layout 0 only for 4, layout 2 only for 3, layout 3 for 5 to 12
    with four corners named */
 cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fault *why)
@@ -63,6 +144,8 @@ cm_err cm_gregory_check_loops(const cm_model *m, const cm_face *F, cm_method_fau
         why->what = "GREGORY layout 3 on cubic patches"; /* it joins the exact edges */
     else if (F->layout == CM_GREG_LAYOUT_JOINED && !cm_greg_joined_ok(F->corner, (int)n))
         why->what = "GREGORY layout 3 corners";
+    else if (cm_face_hint_mask(F) >> n)
+        why->what = "GREGORY hint beyond the loop";
     if (why->what)
         return CM_E_FORMAT;
     /* layout 3 takes up to 12 edges in any build that can do it at all (CM_MAX_SIDES >= 5) */

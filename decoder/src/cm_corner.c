@@ -178,15 +178,25 @@ cm_err cm_greg_input_build(const cm_model *m, uint32_t f, int exact, cm_greg_inp
     in->turning = m->turning_basis;
     corner_ctx c = {m, in->nF, in->eps_len, ws, exact};
     const cm_vec3 *turn = exact ? NULL : &in->nF; /* what corner normals are turned to */
+    /* the record's hints (format 4.13), one for each bit, in corner order */
+    const unsigned hints = cm_face_hint_mask(F);
+    uint32_t hint_at = cm_face_hint_first(F);
     /* per corner k (vertex V_k, between use k-1 and use k): N_geo and its partner fallback */
     for (int k = 0; k < n; k++) {
         const cm_use *uin = &m->uses[L->use0 + (uint32_t)((k + n - 1) % n)], *uout = &m->uses[L->use0 + (uint32_t)k];
         const cm_edge *Ei = &m->edges[uin->edge];
         int32_t v = uin->rev ? Ei->v0 : Ei->v1;
+        const int hinted = (hints >> k) & 1u, g1 = m->edges[uin->edge].g1 || m->edges[uout->edge].g1;
         ws->vert[k] = v;
         ws->has_geo[k] = geo_normal(m, uin, uout, turn, c.eps, &ws->geo[k]);
         in->corner_normal[k] = ws->geo[k];
-        if (ws->has_geo[k])
+        /* (ii) a hint, only at a flat corner with no G1 edge (spec 5.3): a hint anywhere else is not
+           the encoder's (hint_at < nctrl: the reader put one there for each bit) */
+        if (hinted && (ws->has_geo[k] || g1 || hint_at >= m->nctrl))
+            return cm_fail(st, CM_E_FORMAT, "GREGORY hint at a corner that has its own normal");
+        if (hinted)
+            in->corner_normal[k] = m->ctrl[hint_at++];
+        if (ws->has_geo[k] || hinted)
             continue;
         /* (i) across a G1 edge at this corner, the partner's geometric normal; (iii) n_F */
         in->corner_normal[k] = in->nF;

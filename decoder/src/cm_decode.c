@@ -1133,9 +1133,12 @@ static cm_err sec_face(reader *r)
     cm_face_ctx_init(&ctx);
     ctx.net_fit = at_least_4(r, CM_FMT_NET_FIT_MINOR);
     ctx.placements = at_least_4(r, CM_FMT_PLACE_MINOR);
+    ctx.hints = at_least_4(r, CM_FMT_HINTS_MINOR);
     cm_err e = read_count(r, &ctx.count, CM_LIMIT_MAX_FACES, CM_MAX_FACES, &m->nfaces, "face count");
     if (e != CM_OK)
         return e;
+    /* format 4.13: whether any record has corner hints (else none has their field) */
+    ctx.hints = ctx.hints && cm_ac_dec_bit(&r->ac, &ctx.hint_any);
     uint32_t enext = 0, snext = 0;
     m->nloops = m->nuses = 0;
     /* format 4.5: the lists of referenced edges at each vertex (cm_use_adj.h), in arrays that are

@@ -89,8 +89,12 @@ void cm_face_ctx_init(cm_face_ctx *c)
     cm_ac_int_init(&c->place_count);
     cm_ac_int_init(&c->place_entry);
     cm_ac_int_init(&c->place_shift);
+    cm_ac_prob_init(&c->hint_any);
+    cm_ac_int_init(&c->hint_mask);
+    cm_ac_int_init(&c->hint_oct);
     c->net_fit = 0;
     c->placements = 0;
+    c->hints = 0;
 }
 
 void cm_colr_ctx_init(cm_colr_ctx *c)

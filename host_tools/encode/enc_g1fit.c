@@ -165,6 +165,8 @@ static fit_record *g1fit_twists(enc_work *w, const loaded_model *lm, int f)
     cm_corner_ws *cw = malloc(sizeof *cw);
     fit_record *tw = calloc(1, sizeof *tw);
     int any = 0;
+    if (cw)
+        cm_corner_cache_end(cw); /* (no cache: its entries and model were malloc's garbage) */
     if (!in || !cw || !tw || cm_greg_input_build(m, (uint32_t)f, 1, in, cw, NULL) != CM_OK || in->n != (int)L->nuse)
         goto done;
     for (int k = 0; k < in->n; k++) {

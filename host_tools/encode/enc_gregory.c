@@ -176,6 +176,87 @@ static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corn
     return ok;
 }
 
+/* spec 15.3: a hint when the normal a flat corner falls back to (n_F) is more than 2 degrees off the
+   source surface's */
+#define HINT_COS 0.9993908270190958
+/* a hint's bits in the record, about (a mask's, two octahedral coordinates' of 15 bits and signs) */
+#define HINT_BITS 36
+
+/*
+ * Spec §14 step 3's last resort for face f (method: GREGORY or GREGORY-EXACT): its flat corners with
+ * no G1 edge, where the rebuild takes n_F (spec 5.3 (iii)), each hinted with the source surface's
+ * normal there where that is more than 2 degrees off n_F.  The hints into h (a record without a
+ * correction); 0 when there are none.
+ */
+static int corner_hints(enc_work *w, const loaded_model *lm, int f, int method, fit_record *h)
+{
+    cm_model *m = &w->dec.model;
+    cm_face saved = m->faces[f];
+    enc_record_fields(&m->faces[f], method, 0, 0); /* (no hints of an earlier trial) */
+    cm_greg_input *in = malloc(sizeof *in);
+    cm_corner_ws *cw = malloc(sizeof *cw);
+    memset(h, 0, sizeof *h);
+    int n = 0;
+    if (cw)
+        cm_corner_cache_end(cw); /* (no cache: malloc's garbage otherwise) */
+    if (in && cw && cm_greg_input_build(m, (uint32_t)f, method != CM_METHOD_GREGORY, in, cw, NULL) == CM_OK) {
+        const cm_loop *L = &m->loops[m->faces[f].loop0];
+        for (int k = 0; k < in->n && k < CM_GREG_JOINED_MAX_EDGES; k++) {
+            const cm_use *uin = &m->uses[L->use0 + (uint32_t)((k + in->n - 1) % in->n)];
+            const cm_use *uout = &m->uses[L->use0 + (uint32_t)k];
+            cm_vec3 ns;
+            if (cw->has_geo[k] || m->edges[uin->edge].g1 || m->edges[uout->edge].g1 || cw->vert[k] < 0 ||
+                !verify_source_normal(lm, f, m->verts[cw->vert[k]], &ns))
+                continue;
+            /* (the source's Su x Sv, turned to the face's side: the loops run about that) */
+            if (lm->brep.faces[lm->mesh.faces[f].brep_face].flip)
+                ns = cm_neg(ns);
+            if (!(cm_dot(ns, in->nF) < HINT_COS))
+                continue;
+            h->hint_mask |= 1u << k;
+            cm_hint_encode(ns, h->hint[n++]);
+        }
+    }
+    free(in);
+    free(cw);
+    m->faces[f] = saved;
+    return n;
+}
+
+/* GREGORY's or GREGORY-EXACT's candidate layouts (cand_layout, cand_j: nc of them), with the record's
+   corner hints (NULL: none): the first that passes §12 is accepted (1); -1 when its surface cannot
+   be kept (out of memory), 0 when none passes (rep->why, *best_ratio the closest) */
+static int try_layouts(tx *t, const loaded_model *lm, int f, int method, const int *cand_layout, const int *cand_j,
+                       int nc, double tol, const cm_fit_q *hints, face_report *rep, face_surface *fs, double *best_ratio)
+{
+    enc_work *w = t->w;
+    for (int c = 0; c < nc; c++) {
+        cm_rebuilt rb;
+        if (enc_trial_rebuild(w, f, method, cand_layout[c], cand_j[c], hints, &rb) != CM_OK) {
+            rep->why = "construction failed";
+            continue;
+        }
+        face_error fe;
+        if (!verify_face(lm, &w->dec.model, f, &rb, tol, &fe)) {
+            rep->why = "no source domain";
+            continue;
+        }
+        if (fe.ratio < *best_ratio)
+            *best_ratio = fe.ratio;
+        if (rep->greg_ratio == 0 || fe.ratio < rep->greg_ratio)
+            rep->greg_ratio = fe.ratio; /* over both methods of the family */
+        if (!(fe.max < tol)) {
+            rep->why = "error";
+            continue;
+        }
+        if (!face_surface_set(&fs[f], &rb))
+            return -1;
+        enc_fit_accept(t, f, cand_layout[c], cand_j[c], cand_j[c], &rb, &fe, rep);
+        return 1;
+    }
+    return 0;
+}
+
 /* spec §14 candidate list of the GREGORY family (method: GREGORY, GREGORY-EXACT or GREGORY-FIT); the
    first that passes §12 wins */
 static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
@@ -277,30 +358,23 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
         rep->fit_m = fr->m;
         return 1;
     }
-    for (int c = 0; c < nc && !fit; c++) {
-        cm_rebuilt rb;
-        if (enc_trial_rebuild(w, f, method, cand_layout[c], cand_j[c], NULL, &rb) != CM_OK) {
-            rep->why = "construction failed";
-            continue;
+    /* the candidates, then (format 4.13) once more with hints at the flat corners that fell back to
+       n_F, where there are any (spec §14 step 3) and they cost less than the surface (step 6) */
+    int passed = fit ? 0 : try_layouts(t, lm, f, method, cand_layout, cand_j, nc, tol, NULL, rep, fs, &best_ratio);
+    fit_record *hints = passed || fit || !enc_hints(o) ? NULL : malloc(sizeof *hints);
+    int nh = hints ? corner_hints(w, lm, f, method, hints) : 0;
+    if (nh > 0 && (double)(nh * HINT_BITS) < enc_kept_surface_bits(&t->surfs[f], t->o->predicted)) {
+        cm_fit_q hview = fit_record_view(hints);
+        passed = try_layouts(t, lm, f, method, cand_layout, cand_j, nc, tol, &hview, rep, fs, &best_ratio);
+        if (passed > 0) {
+            free(t->fit[f]);
+            t->fit[f] = hints; /* (the hints travel in the record: a correction of m = 0) */
+            hints = NULL;
         }
-        face_error fe;
-        if (!verify_face(lm, &w->dec.model, f, &rb, tol, &fe)) {
-            rep->why = "no source domain";
-            continue;
-        }
-        if (fe.ratio < best_ratio)
-            best_ratio = fe.ratio;
-        if (rep->greg_ratio == 0 || fe.ratio < rep->greg_ratio)
-            rep->greg_ratio = fe.ratio; /* over both methods of the family */
-        if (!(fe.max < tol)) {
-            rep->why = "error";
-            continue;
-        }
-        if (!face_surface_set(&fs[f], &rb))
-            return 0;
-        enc_fit_accept(t, f, cand_layout[c], cand_j[c], cand_j[c], &rb, &fe, rep);
-        return 1;
     }
+    free(hints);
+    if (passed)
+        return passed > 0;
     /* the reason of the candidate that came closest: one built and measured over the tolerance says
        more than a later layout that could not be built */
     if (best_ratio < HUGE_VAL)

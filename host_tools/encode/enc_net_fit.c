@@ -12,6 +12,7 @@
 static void with_twists(fit_record *fr, const fit_record *base)
 {
     fr->ntwist = base ? base->ntwist : 0;
+    fr->hint_mask = 0; /* (the GREGORY family's alone) */
     if (base)
         memcpy(fr->twist, base->twist, sizeof fr->twist);
 }

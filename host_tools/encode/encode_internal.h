@@ -266,6 +266,11 @@ static inline int enc_net_fit(const encode_opts *o)
 {
     return enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_NET_FIT_MINOR;
 }
+/* format 4.13 on: GREGORY-family records may carry corner hints (spec 15.3) */
+static inline int enc_hints(const encode_opts *o)
+{
+    return enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_HINTS_MINOR;
+}
 /* the chordal tolerance the file can say nearest to tess (format 4: a multiple of the grid step), so
    that what the encoder measures the tessellation with is what the terminal reads */
 double enc_file_tess(const tx *t, double tess);

@@ -239,6 +239,7 @@ int fit_record_quantise(fit_record *out, const cm_vec3 *c, int m, int npatch, do
     out->exp = e;
     memset(out->q, 0, sizeof out->q);
     out->ntwist = 0; /* G1FIT's twists, when any, are put in by its trial */
+    out->hint_mask = 0; /* (and GREGORY-FIT's hints by try_family) */
     for (int i = 0; i < npatch * m * m; i++) {
         double x[3] = {c[i].x, c[i].y, c[i].z};
         for (int a = 0; a < 3; a++) {

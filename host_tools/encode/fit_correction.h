@@ -20,14 +20,16 @@ struct fit_record {
     int32_t q[CM_MAX_GREG * CM_FIT_MAX_COEF][3];    /* patch k's coefficient (i,j) at (k m + i) m + j */
     int ntwist;                                     /* G1FIT (format 4.2): uses with a twist field (0: none) */
     int16_t twist[CM_GREG_MAX_INPUT][CM_TWIST_N];   /* ... each use's quantised sines (cm_fit_q) */
+    unsigned hint_mask;                             /* GREGORY family (format 4.13): hinted corners, */
+    int16_t hint[CM_GREG_MAX_INPUT][2];             /* ... their normals in corner order (cm_fit_q) */
 };
 typedef struct fit_record fit_record;
 
 /** The record's view for the FACE section writer (cm_method_write_record). */
 static inline cm_fit_q fit_record_view(const fit_record *r)
 {
-    cm_fit_q v = {r->m, r->npatch, r->exp, (const int32_t(*)[3])r->q, r->ntwist,
-                  (const int16_t(*)[CM_TWIST_N])r->twist};
+    cm_fit_q v = {r->m,         r->npatch, r->exp, (const int32_t(*)[3])r->q, r->ntwist,
+                  (const int16_t(*)[CM_TWIST_N])r->twist, r->hint_mask, (const int16_t(*)[2])r->hint};
     return v;
 }
 

@@ -539,7 +539,16 @@ static int sec_face(const tx *t, cm_ac_enc *e, const loaded_model *lm)
     cm_face_ctx_init(&ctx);
     ctx.net_fit = enc_net_fit(t->o);
     ctx.placements = enc_placement_tail(t->o);
+    ctx.hints = enc_hints(t->o);
     cm_ac_enc_uint(e, &ctx.count, (uint64_t)t->nfaces);
+    if (ctx.hints) {
+        /* format 4.13: whether any record has corner hints (else none has their field) */
+        int any = 0;
+        for (int f = 0; f < t->nfaces && !any; f++)
+            any = t->fit[f] && t->fit[f]->hint_mask;
+        cm_ac_enc_bit(e, &ctx.hint_any, (unsigned)any);
+        ctx.hints = any;
+    }
     int enext = 0;
     use_lists ul = {0};
     int by_vertex = enc_use_adj(t->o);

@@ -535,6 +535,33 @@ static void test_gregory_record_out_of_range(void **state)
     assert_decodes(2);
 }
 
+/* format 4.13's hints (spec 15.3): only a flat corner with no G1 edge takes one; a hint at a corner
+   with a normal of its own (each of a pentagon's) is not the encoder's, and the face is refused by
+   name when it is rebuilt (test_hints.c has the record's own refusals) */
+static void test_hint_at_own_normal(void **state)
+{
+    (void)state;
+    write_minor = 1;
+    polygon_face(5, 0, CM_METHOD_GREGORY_EXACT, CM_GREG_LAYOUT_SPLIT, 0);
+    assert_decodes(2); /* (the model as the terminal has it) */
+    write_minor = 0;
+    cm_model *m = &dec->model;
+    cm_face *F = &m->faces[0];
+    cm_rebuilt rb;
+    cm_status st;
+    cm_status_init(&st);
+    /* (without the hint the flat pentagon is no Gregory face either, but not for a hint) */
+    assert_true(cm_rebuild_face_ex(m, 0, 0, &rb, &rbws, &st) != CM_E_FORMAT);
+    F->surf = m->nctrl;
+    m->ctrl[m->nctrl++] = cm_v3(0, 0, 1);
+    F->fill_nu = 1u << 3;
+    assert_int_equal(cm_rebuild_face_ex(m, 0, 0, &rb, &rbws, &st), CM_E_FORMAT);
+    assert_says(&st, "GREGORY hint at a corner that has its own normal");
+    /* (a net's fields are no mask) */
+    F->method = CM_METHOD_NFILL;
+    assert_int_equal(cm_face_hint_mask(F), 0);
+}
+
 /* GREGORY faces are one loop whose side count fits the layout, else CM_E_FORMAT */
 static void test_gregory_loop_malformed(void **state)
 {
@@ -913,6 +940,7 @@ int main(void)
         cmocka_unit_test(test_gregory_in_format_1_unsupported),
         cmocka_unit_test(test_gregory_record_out_of_range),
         cmocka_unit_test(test_gregory_loop_malformed),
+        cmocka_unit_test(test_hint_at_own_normal),
         cmocka_unit_test(test_gregory_sides_over_limit),
         cmocka_unit_test(test_gregory_checksum_in_file),
         cmocka_unit_test(test_gregory_exact_records),

@@ -18,6 +18,9 @@
 #include <string.h>
 
 #include "cm/cm_method.h"
+#include "cm/cm_rebuild.h"
+#include "cm_report.h"
+#include "cmz_splice.h"
 #include "encode/encode.h"
 #include "model_load.h"
 #include "step/step_file.h"
@@ -501,6 +504,22 @@ static char *load_band(double turn, int cone, loaded_model *lm)
     return text;
 }
 
+static cm_decoder dec;
+static cm_rebuild_ws rbws;
+
+/* minor: the format 4 minor to write (-1: the newest) */
+static void encode_minor(loaded_model *lm, int minor, encode_result *r)
+{
+    encode_opts o;
+    encode_opts_default(&o);
+    if (minor >= 0)
+        encode_opts_for_format(&o, 4, minor);
+    cm_status st;
+    cm_status_init(&st);
+    memset(r, 0, sizeof *r);
+    assert_ok(encode_model(lm, &o, r, &st));
+}
+
 static void encode_default(loaded_model *lm, encode_result *r)
 {
     encode_opts o;
@@ -512,14 +531,15 @@ static void encode_default(loaded_model *lm, encode_result *r)
 }
 
 /* issue 13: a band with no seam edge is cut open along its cylinder (brep_seam.h) and rebuilt from
-   its boundary, exactly; where the rebuild cannot take the cut face (a cone's apex, here) the
-   encoder undoes the cut and sends the surface, the face as the file has it */
+   its boundary, exactly; where the rebuild cannot take the cut face (a cone's apex, here; a band cut
+   at a T-vertex in a file older than 4.13) the encoder undoes the cut and sends the surface, the
+   face as the file has it */
 static void test_band_cut_open(void **state)
 {
     (void)state;
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 3; k++) {
         /* the circles starting at the same angle: the cut is a side of four; opposite: the cut splits
-           the top circle where it meets it */
+           the top circle where it meets it (k 2: written as format 4.12) */
         loaded_model lm;
         char *text = load_band(k ? M_PI : 0.0, 0, &lm);
         assert_int_equal(lm.seam_joined, 1);
@@ -536,17 +556,44 @@ static void test_band_cut_open(void **state)
         assert_int_equal(lm.domains_failed, 0);
         assert_false(lm.fds[2].joined_seam);
         encode_result r;
-        encode_default(&lm, &r);
-        if (k == 0) {
-            /* two circles and two lines on a cylinder: the exact patch is the cylinder */
+        encode_minor(&lm, k == 2 ? 12 : -1, &r);
+        if (k < 2) {
+            /* two circles and two lines on a cylinder: the exact patch is the cylinder.  Cut at a
+               T-vertex (k 1: five sides, the top circle's two halves meeting flat, no G1 edge there),
+               only with the cylinder's normal at that corner as a hint (format 4.13, spec 15.3): n_F,
+               along the axis, bent the joined patch 1 % of the band off */
             assert_int_equal(r.faces[2].method, CM_METHOD_GREGORY_EXACT);
             if (!(r.faces[2].rebuild_max < 1e-9))
                 fail_msg("the band rebuilt %.3g mm off its cylinder", r.faces[2].rebuild_max);
+            cm_status st;
+            cm_status_init(&st);
+            assert_ok(cmz_decode(&dec, r.bytes, r.len, &st));
+            const cm_face *D = &dec.model.faces[2];
+            unsigned mask = cm_face_hint_mask(D);
+            assert_int_equal(mask != 0, k == 1);
+            if (k == 1) {
+                assert_int_equal(mask & (mask - 1), 0); /* one corner */
+                /* the hint is the cylinder's normal there: square to the axis */
+                cm_vec3 h = dec.model.ctrl[cm_face_hint_first(D)];
+                if (!(fabs(h.z) < 1e-4 && fabs(cm_norm(h) - 1.0) < 1e-12))
+                    fail_msg("hint (%g %g %g)", h.x, h.y, h.z);
+                /* a hint at a corner with a normal of its own (the band's others are square) is
+                   not the encoder's: the face is refused by name */
+                cm_face *E = &dec.model.faces[2];
+                unsigned other = mask == 1u ? 2u : mask >> 1;
+                E->fill_nu = (uint8_t)other;
+                cm_rebuilt rb;
+                cm_status_init(&st);
+                assert_int_equal(cm_rebuild_face_ex(&dec.model, 2, 0, &rb, &rbws, &st), CM_E_FORMAT);
+                char said[256];
+                if (!strstr(cm_format_status(said, sizeof said, &st), "GREGORY hint at a corner that has its own normal"))
+                    fail_msg("%s", said);
+                E->fill_nu = (uint8_t)mask;
+                assert_ok(cm_rebuild_face_ex(&dec.model, 2, 1, &rb, &rbws, &st));
+            }
         } else {
-            /* the cut splits the top circle where the bottom's starts: five sides, and the joined
-               patch over the top's two halves is not within the tolerance (the T-vertex's corner
-               normal has no partner to come from); so the surface is sent, the face as the file has
-               it (a cut only costs bytes there) */
+            /* format 4.12 has no hints: the joined patch is not within the tolerance, so the surface
+               is sent, the face as the file has it (a cut only costs bytes there) */
             assert_int_equal(r.faces[2].method, CM_METHOD_KEEP);
             assert_int_equal(lm.brep.faces[2].cut_from_nloops, 0);
             assert_int_equal(lm.brep.faces[2].nloops, 2);
@@ -591,6 +638,7 @@ static void test_winding_face_mesh_dev(void **state)
         char *text = load_band(M_PI, cone ? 2 : 0, &lm);
         encode_opts o;
         encode_opts_default(&o);
+        encode_opts_for_format(&o, 4, 12); /* (no hints: the band is kept, its domain the joined one) */
         o.measure_mesh = 1;
         cm_status st;
         cm_status_init(&st);

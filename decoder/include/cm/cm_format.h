@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 12    /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 13    /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -109,6 +109,9 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
                                           the terminal's assembly steps (cm_face.part, cm_placement.part) */
 #define CM_FMT_PART_NAMES_MINOR 12u    /* 4.12: and with their names (cm_model.part_names) */
 #define CM_FMT_MAX_PART_NAME 255u      /* 4.12: bytes of one part's name */
+#define CM_FMT_HINTS_MINOR 13u         /* 4.13: GREGORY-family records end with corner hint normals (spec 15.3,
+                                          cm_face_hint_mask) */
+#define CM_FMT_HINT_ONE 32767          /* 4.13: a hint's octahedral coordinates in units of 1/this */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -260,7 +263,8 @@ typedef struct cm_face {
                              direction m (bits 0-2) and patches (bits 3-7; a net: 1) of its
                              correction (cm_face_fit_m, cm_face_fit_patches); else 0 */
     uint8_t fill_nu, fill_nv, fill_phi; /* NFILL, G1FIT record (spec 15.2): control points per direction
-                             and NFILL's fairing weight's index (cm_nfill_phi) or G1FIT's mode; else 0 */
+                             and NFILL's fairing weight's index (cm_nfill_phi) or G1FIT's mode; the
+                             GREGORY family's hinted corners (cm_face_hint_mask); else 0 */
     uint32_t surf;        /* KEEP: index of its kept surface; a face with a correction (fit != 0):
                              index in ctrl[] of its first coefficient (patch k's (i,j) at
                              surf + (k m + i) m + j) */
@@ -274,6 +278,22 @@ typedef struct cm_face {
 static inline uint8_t cm_face_fit_pack(unsigned m, unsigned patches) { return (uint8_t)((m & 7u) | (patches << 3)); }
 static inline unsigned cm_face_fit_m(const cm_face *F) { return F->fit & 7u; }
 static inline unsigned cm_face_fit_patches(const cm_face *F) { return (unsigned)F->fit >> 3; }
+/* GREGORY family, format 4.13: the outer loop's corners that carry a hint normal (spec 15.3), bit k for
+   the corner where use k starts, in fill_nu (bits 0-7) and fill_nv (bits 8-11), which only NFILL and
+   G1FIT use otherwise (no room taken from the model's faces); the unit normals follow the face's
+   correction in ctrl[] (from cm_face_hint_first), one per bit in corner order */
+static inline int cm_method_takes_hints(unsigned method)
+{
+    return method >= CM_METHOD_GREGORY && method <= CM_METHOD_GREGORY_FIT;
+}
+static inline unsigned cm_face_hint_mask(const cm_face *F)
+{
+    return cm_method_takes_hints(F->method) ? (unsigned)F->fill_nu | (unsigned)F->fill_nv << 8 : 0u;
+}
+static inline uint32_t cm_face_hint_first(const cm_face *F)
+{
+    return F->surf + cm_face_fit_patches(F) * cm_face_fit_m(F) * cm_face_fit_m(F);
+}
 
 #define CM_NO_FACE (-1)   /* edge_face: no face on that side */
 #define CM_MANY_FACES (-2) /* edge_face[e][1]: a third face uses the edge (non-manifold) */

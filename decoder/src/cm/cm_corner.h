@@ -60,8 +60,8 @@ int cm_use_tangent(const cm_model *m, const cm_use *U, int at_end, double eps, c
 /**
  * The input of cm_greg_build() for face f's outer loop: n sides with their
  * cubics in the face's direction, basis normals, corner normals, n_F and
- * EPS_LEN (1e-12 of the face's bbox).  Hints (spec 15.3) are not part of
- * this format version: a flat corner with no G1 partner takes n_F.
+ * EPS_LEN (1e-12 of the face's bbox).  A flat corner with no G1 edge takes
+ * the record's hint (format 4.13, spec 15.3) where it has one, else n_F.
  * Each side also names its edge and curve (for cm_egreg_build).  `exact` 1
  * (GREGORY-EXACT): no K7 cubics (left zero), and corner and partner normals
  * as the loops orient them, never turned to n_F (see geo_normal).

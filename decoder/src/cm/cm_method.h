@@ -63,7 +63,14 @@ typedef struct cm_fit_q {
     const int32_t (*q)[3]; /* patch k's coefficient (i,j): q[(k m + i) m + j] */
     int ntwist;            /* G1FIT: uses of the outer loop with a twist (0: none; else all of them) */
     const int16_t (*twist)[CM_TWIST_N]; /* per use, its samples' quantised sines (all 0: untwisted) */
+    unsigned hint_mask;    /* GREGORY family (format 4.13): the hinted corners (cm_face_hint_mask) ... */
+    const int16_t (*hint)[2]; /* ... each one's normal, octahedral (cm_hint_encode), in corner order */
 } cm_fit_q;
+
+/** Spec 15.3: unit normal n as octahedral coordinates in units of 1/CM_FMT_HINT_ONE (the writer's). */
+void cm_hint_encode(cm_vec3 n, int16_t q[2]);
+/** ... and back, a unit normal (the reader's; the same bits on every machine). */
+cm_vec3 cm_hint_decode(int32_t qx, int32_t qy);
 
 /**
  * FACE section: the record's fields after the method number, into F (nothing for a method without

@@ -55,9 +55,12 @@ typedef struct cm_face_ctx {
     cm_ac_int twist_n, twist;                        /* ... their count, and each sample's change */
     cm_ac_int place_n, place_first, place_count;     /* format 4.3: the placed copies ... */
     cm_ac_int place_entry, place_shift;              /* ... their linear parts' entries, translations */
+    cm_ac_prob hint_any;                             /* format 4.13: GREGORY-family corner hints: any, */
+    cm_ac_int hint_mask, hint_oct;                   /* ... their corners, their normals */
     int net_fit; /* format 4.2 on: NFILL and G1FIT records end with a correction's field (not a
                     coder context: set by the reader and the writer from the version) */
     int placements; /* format 4.3 on: the section ends with the placed copies (likewise) */
+    int hints;      /* format 4.13 on: GREGORY-family records end with their corner hints (likewise) */
 } cm_face_ctx;
 
 /* COLR: palette size, then a palette index per face */
