@@ -92,14 +92,14 @@ static inline const uint8_t *spilled(const cm_mesh *m, unsigned s, uint32_t i, u
     if (sp->page_first[s][k] != first || i - first >= sp->page_n[s][k]) {
         uint32_t n = end - first < per ? end - first : per;
         sp->page_n[s][k] = 0;
-        if (!spill_io(sp, 0, s, (uint64_t)first * es, sp->page[s][k], (size_t)n * es))
+        if (!spill_io(sp, 0, s, (uint64_t)first * es, sp->page[s][k].b, (size_t)n * es))
             return zeros;
         sp->page_first[s][k] = first;
         sp->page_n[s][k] = n;
     }
     if (avail)
         *avail = sp->page_n[s][k] - (i - first);
-    return sp->page[s][k] + (size_t)(i - first) * es;
+    return sp->page[s][k].b + (size_t)(i - first) * es;
 }
 
 /* (not inlined into cm_mesh_pos and cm_mesh_nrm: two copies of the page logic cost the board's
@@ -153,6 +153,30 @@ void cm_mesh_vecs(const cm_mesh *m, unsigned s, uint32_t first, uint32_t n, floa
 void cm_mesh_idxs(const cm_mesh *m, uint32_t k, uint32_t n, uint32_t *out)
 {
     read_run(m, CM_SPILL_IDX, k, n, 4u, m->win_index, (const uint8_t *)m->idx, (uint8_t *)out);
+}
+
+const float (*cm_mesh_vecs_at(const cm_mesh *m, unsigned s, uint32_t first, uint32_t n, float (*out)[3]))[3]
+{
+    uint32_t avail;
+    if (first >= m->win_vert)
+        return (const float(*)[3])((s == CM_SPILL_NRM ? m->nrm : m->pos) + (first - m->win_vert));
+    const uint8_t *p = spilled(m, s, first, 12u, &avail);
+    if (avail >= n) /* (within one cached page: valid until the stream's next page is read) */
+        return (const float(*)[3])(const void *)p;
+    cm_mesh_vecs(m, s, first, n, out);
+    return (const float(*)[3])out;
+}
+
+const uint32_t *cm_mesh_idxs_at(const cm_mesh *m, uint32_t k, uint32_t n, uint32_t *out)
+{
+    uint32_t avail;
+    if (k >= m->win_index)
+        return m->idx + (k - m->win_index);
+    const uint8_t *p = spilled(m, CM_SPILL_IDX, k, 4u, &avail);
+    if (avail >= n)
+        return (const uint32_t *)(const void *)p;
+    cm_mesh_idxs(m, k, n, out);
+    return out;
 }
 
 cm_mesh_mark cm_mesh_save(const cm_mesh *m)

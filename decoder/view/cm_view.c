@@ -302,10 +302,9 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
         double fxlo = 1e300, fxhi = -1e300, fylo = 1e300, fyhi = -1e300, fz = 1e300;
         for (uint32_t i0 = 0; i0 < nv; i0 += CM_VIEW_READ_RUN) {
             uint32_t n = nv - i0 < CM_VIEW_READ_RUN ? nv - i0 : CM_VIEW_READ_RUN;
-            cm_mesh_vecs(mesh, CM_SPILL_POS, v0 + i0, n, v->run_pos);
+            const float(*pos)[3] = cm_mesh_vecs_at(mesh, CM_SPILL_POS, v0 + i0, n, v->run_pos);
             for (uint32_t i = 0; i < n; i++) {
-                double d[3] = {(double)v->run_pos[i][0] - v->c[0], (double)v->run_pos[i][1] - v->c[1],
-                               (double)v->run_pos[i][2] - v->c[2]};
+                double d[3] = {(double)pos[i][0] - v->c[0], (double)pos[i][1] - v->c[1], (double)pos[i][2] - v->c[2]};
                 const view_pair XY =
                     (view_pair){d[0], d[0]} * r_u[0] + (view_pair){d[1], d[1]} * r_u[1] + (view_pair){d[2], d[2]} * r_u[2];
                 double x = XY[0], y = XY[1], z = dot3(d, v->f);
@@ -888,9 +887,9 @@ static int face_turned_away(cm_view *v, const cm_mesh *mesh, const cm_mesh_face 
     const double *f = v->ortho[3];
     for (uint32_t i0 = 0; i0 < F->nverts; i0 += CM_VIEW_READ_RUN) {
         uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
-        cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
+        const float(*nrm)[3] = cm_mesh_vecs_at(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
         for (uint32_t i = 0; i < n; i++) {
-            const float *N = v->run_nrm[i];
+            const float *N = nrm[i];
             if (!((double)N[0] * f[0] + (double)N[1] * f[1] + (double)N[2] * f[2] > 0.0))
                 return 0;
         }
@@ -1147,10 +1146,10 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
         /* read back a run at a time (from the spill a page at a time): a call per value was a
            sixth of a large model's frame */
         uint32_t n = F->nverts - i0 < CM_VIEW_READ_RUN ? F->nverts - i0 : CM_VIEW_READ_RUN;
-        cm_mesh_vecs(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
-        cm_mesh_vecs(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
+        const float(*pos)[3] = cm_mesh_vecs_at(mesh, CM_SPILL_POS, F->first_vert + i0, n, v->run_pos);
+        const float(*nrm)[3] = cm_mesh_vecs_at(mesh, CM_SPILL_NRM, F->first_vert + i0, n, v->run_nrm);
         for (uint32_t i = 0; i < n; i++) {
-            vertex_screen_in(v, v->run_pos[i], v->run_nrm[i], &v->fv[i0 + i]);
+            vertex_screen_in(v, pos[i], nrm[i], &v->fv[i0 + i]);
             face_all &= v->fv[i0 + i].flags;
             face_any |= v->fv[i0 + i].flags;
         }
@@ -1164,8 +1163,8 @@ static void draw_face(cm_view *v, const cm_mesh *mesh, uint32_t fi, int64_t plac
     const int64_t wmax = v->o.width - 1, hmax = v->o.height - 1; /* (the frame's last pixel) */
     for (uint32_t k0 = 0; k0 < ntri; k0 += CM_VIEW_READ_RUN) {
         const uint32_t n = ntri - k0 < CM_VIEW_READ_RUN ? ntri - k0 : CM_VIEW_READ_RUN;
-        cm_mesh_idxs(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
-        for (const uint32_t *ix = v->run_idx, *const end = ix + 3u * n; ix < end; ix += 3) {
+        const uint32_t *run = cm_mesh_idxs_at(mesh, F->first_index + 3u * k0, 3u * n, v->run_idx);
+        for (const uint32_t *ix = run, *const end = ix + 3u * n; ix < end; ix += 3) {
             cm_view_vert own[3];
             /* (three pointers, not an array: they stay in registers) */
             const cm_view_vert *t0 = &own[0], *t1 = &own[1], *t2 = &own[2];

@@ -42,6 +42,14 @@ enum { CM_SPILL_POS = 0, CM_SPILL_NRM = 1, CM_SPILL_IDX = 2, CM_SPILL_STREAMS = 
    append or rewrite what a rolled-back face left; reads only what was written */
 typedef int cm_mesh_spill_io(void *ctx, int write, unsigned s, uint64_t off, void *buf, size_t n);
 
+/* a cached page of a spilled stream: its bytes as read, over storage of the type it holds (aligned
+   for it, so that cm_mesh_vecs_at and cm_mesh_idxs_at can hand out pointers into it) */
+typedef union cm_spill_page {
+    uint8_t b[CM_SPILL_PAGE_BYTES];
+    float vec[CM_SPILL_PAGE_BYTES / 12][3];
+    uint32_t idx[CM_SPILL_PAGE_BYTES / 4];
+} cm_spill_page;
+
 typedef struct cm_mesh_spill {
     cm_mesh_spill_io *io;
     void *ctx;
@@ -50,7 +58,7 @@ typedef struct cm_mesh_spill {
        writers read in order, but STL takes a face's positions by its indices, which jump within
        the face (one page per stream re-read a page nearly every triangle) */
     uint32_t page_first[CM_SPILL_STREAMS][CM_SPILL_PAGES], page_n[CM_SPILL_STREAMS][CM_SPILL_PAGES];
-    uint8_t page[CM_SPILL_STREAMS][CM_SPILL_PAGES][CM_SPILL_PAGE_BYTES];
+    cm_spill_page page[CM_SPILL_STREAMS][CM_SPILL_PAGES];
 } cm_mesh_spill;
 
 typedef struct cm_mesh {
@@ -103,6 +111,11 @@ uint32_t cm_mesh_idx(const cm_mesh *m, uint32_t k);
     face's vertices and triangles so, each frame). */
 void cm_mesh_vecs(const cm_mesh *m, unsigned s, uint32_t first, uint32_t n, float (*out)[3]);
 void cm_mesh_idxs(const cm_mesh *m, uint32_t k, uint32_t n, uint32_t *out);
+/** The same values where the window or one cached page of the spill holds them all: a pointer to
+    them, no copy (valid until the mesh changes or the stream's next page is read); else copied into
+    out, which is returned. */
+const float (*cm_mesh_vecs_at(const cm_mesh *m, unsigned s, uint32_t first, uint32_t n, float (*out)[3]))[3];
+const uint32_t *cm_mesh_idxs_at(const cm_mesh *m, uint32_t k, uint32_t n, uint32_t *out);
 
 /** 1 when a spill's io failed (the mesh, or what was written of it, is not to be trusted). */
 static inline int cm_mesh_spill_failed(const cm_mesh *m) { return m->spill != NULL && m->spill->failed; }
