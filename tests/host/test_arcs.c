@@ -21,6 +21,7 @@
 #include "encode/encode_internal.h"
 #include "cm/cm_limits_info.h"
 #include "cmz_splice.h"
+#include "record_io.h"
 #include "igs_writer.h"
 #include "model_load.h"
 
@@ -36,18 +37,6 @@ static void load_half_cylinder(loaded_model *lm)
     igw_half_cylinder_120(&w, CYL_R, CYL_H);
     cm_status st;
     assert_ok(igw_load(&w, "half_cylinder", lm, &st));
-}
-
-static void encode_minor(loaded_model *lm, int minor, encode_result *r)
-{
-    encode_opts o;
-    encode_opts_default(&o);
-    if (minor >= 0)
-        encode_opts_for_format(&o, 4, minor);
-    cm_status st;
-    cm_status_init(&st);
-    memset(r, 0, sizeof *r);
-    assert_ok(encode_model(lm, &o, r, &st));
 }
 
 static cm_err decode(const uint8_t *b, size_t len, cm_status *st)
@@ -89,7 +78,7 @@ static void test_half_circles_as_arcs(void **state)
     loaded_model lm;
     load_half_cylinder(&lm);
     encode_result r, r43;
-    encode_minor(&lm, -1, &r);
+    encode_for_minor(&lm, -1, &r);
     assert_int_equal(r.bytes[CM_HDR_MINOR], CM_FMT_VERSION_MINOR);
     assert_int_equal(r.edges_arcs, 2);
     cm_status st;
@@ -101,7 +90,7 @@ static void test_half_circles_as_arcs(void **state)
             assert_int_equal(dec.model.edges[i].nctrl, 5);
     if (!(worst <= 1e-3 * diag / 16))
         fail_msg("an arc %.3g mm off its circle", worst);
-    encode_minor(&lm, (int)CM_FMT_PLACE_MINOR, &r43);
+    encode_for_minor(&lm, (int)CM_FMT_PLACE_MINOR, &r43);
     assert_int_equal(r43.edges_arcs, 0);
     if (!(r.len < r43.len))
         fail_msg("4.4: %zu bytes, 4.3: %zu", r.len, r43.len);
@@ -147,7 +136,7 @@ static void test_full_cylinder_band(void **state)
     cm_status st;
     assert_ok(igw_load(&w, "cylinder", &lm, &st));
     encode_result r;
-    encode_minor(&lm, -1, &r);
+    encode_for_minor(&lm, -1, &r);
     assert_int_equal(r.edges_arcs, 2);
     assert_int_equal(r.faces_by_method[CM_METHOD_KEEP], 0);
     assert_ok(decode(r.bytes, r.len, &st));
@@ -384,7 +373,7 @@ static void recoded_the_same(loaded_model *lm, encode_result *r)
 {
     /* format 4.4: the records are 4.4's, and the decoder's grid vertices (dec.vq, which this coder
        predicts from) outlast the decode only up to 4.4 (from 4.5 FACE reuses their storage) */
-    encode_minor(lm, (int)CM_FMT_ARC_MINOR, r);
+    encode_for_minor(lm, (int)CM_FMT_ARC_MINOR, r);
     assert_true(r->edges_arcs >= 1);
     cm_status st;
     assert_ok(decode(r->bytes, r->len, &st));

@@ -18,6 +18,7 @@
 #include "cm/cm_gregface.h"
 #include "cm/cm_method.h"
 #include "cm/cm_sections.h"
+#include "record_io.h"
 
 static cm_decoder dec;
 
@@ -74,33 +75,8 @@ static size_t exact_record(uint8_t *buf, size_t cap, int with_field, uint64_t ma
     return cm_ac_enc_finish(&e);
 }
 
-/* read it back as a reader of 4.13 (hints) or older would: the record's fault, and what follows */
-static cm_err read_record(const uint8_t *buf, size_t len, int hints, cm_face *F, cm_method_fault *why,
-                          uint64_t *after)
-{
-    cm_ac_dec d;
-    cm_face_ctx c;
-    cm_face_ctx_init(&c);
-    c.hints = hints;
-    cm_ac_dec_init(&d, buf, len);
-    memset(F, 0, sizeof *F);
-    F->method = CM_METHOD_GREGORY_EXACT;
-    memset(why, 0, sizeof *why);
-    cm_err e = cm_method_read_record(cm_method_of(CM_METHOD_GREGORY_EXACT), &d, &c, &dec.model, F, why);
-    *after = cm_ac_dec_uint(&d, &c.count);
-    return e;
-}
-
-static void assert_record_refused(const uint8_t *buf, size_t len, cm_err code, const char *what)
-{
-    cm_face F;
-    cm_method_fault why;
-    uint64_t after;
-    cm_err e = read_record(buf, len, 1, &F, &why, &after);
-    if (e != code || !why.what || strcmp(why.what, what) != 0)
-        fail_msg("refused %s (%s), expected %s (%s)", cm_strerror(e), why.what ? why.what : "-", cm_strerror(code),
-                 what);
-}
+/* read back as a reader of 4.13 (hints) or of 4.12 would */
+static const record_flags v413 = {1, 1}, v412 = {1, 0};
 
 static void test_hint_records(void **state)
 {
@@ -113,7 +89,7 @@ static void test_hint_records(void **state)
     dec.model.nctrl = 5; /* (the pool holds others' points before the face's) */
     /* corners 1 and 3 hinted: two normals in the pool from F.surf, in corner order */
     size_t n = exact_record(buf, sizeof buf, 1, 0xa, 0, -CM_FMT_HINT_ONE);
-    assert_ok(read_record(buf, n, 1, &F, &why, &after));
+    assert_ok(record_read(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, &F, &why, &after));
     assert_int_equal(after, 77);
     assert_int_equal(cm_face_hint_mask(&F), 0xa);
     assert_int_equal(cm_face_hint_first(&F), 5);
@@ -123,40 +99,40 @@ static void test_hint_records(void **state)
     /* none: a bit, nothing more, the pool untouched */
     dec.model.nctrl = 0;
     n = exact_record(buf, sizeof buf, 1, 0, 0, 0);
-    assert_ok(read_record(buf, n, 1, &F, &why, &after));
+    assert_ok(record_read(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, &F, &why, &after));
     assert_int_equal(after, 77);
     assert_int_equal(cm_face_hint_mask(&F), 0);
     assert_int_equal(dec.model.nctrl, 0);
     /* before 4.13 there is no field: a 4.12 record is read whole and what follows is next; a 4.13
        record read as 4.12 is misread (which is why a 4.12 reader refuses 4.13 by its version) */
     n = exact_record(buf, sizeof buf, 0, 0, 0, 0);
-    assert_ok(read_record(buf, n, 0, &F, &why, &after));
+    assert_ok(record_read(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v412, &F, &why, &after));
     assert_int_equal(after, 77);
     n = exact_record(buf, sizeof buf, 1, 0x3, 100, 200);
-    assert_ok(read_record(buf, n, 0, &F, &why, &after));
+    assert_ok(record_read(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v412, &F, &why, &after));
     assert_true(after != 77);
     /* out of the format, by name: corners beyond 12 edges, a coordinate beyond the unit */
     dec.model.nctrl = 0;
     n = exact_record(buf, sizeof buf, 1, 1u << CM_GREG_JOINED_MAX_EDGES, 0, 0);
-    assert_record_refused(buf, n, CM_E_RANGE, "GREGORY hints");
+    record_assert_refused(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, CM_E_RANGE, "GREGORY hints");
     n = exact_record(buf, sizeof buf, 1, 1, CM_FMT_HINT_ONE + 1, 0);
-    assert_record_refused(buf, n, CM_E_RANGE, "GREGORY hint normal");
+    record_assert_refused(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, CM_E_RANGE, "GREGORY hint normal");
     n = exact_record(buf, sizeof buf, 1, 1, 0, -CM_FMT_HINT_ONE - 1);
-    assert_record_refused(buf, n, CM_E_RANGE, "GREGORY hint normal");
+    record_assert_refused(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, CM_E_RANGE, "GREGORY hint normal");
     /* cut short, and beyond the build's pool (MAX_MODEL_CTRL, named) */
     n = exact_record(buf, sizeof buf, 1, 0xfff, 30000, -30000);
-    assert_record_refused(buf, 9, CM_E_TRUNCATED, "face record");
+    record_assert_refused(&dec.model, CM_METHOD_GREGORY_EXACT, buf, 9, v413, CM_E_TRUNCATED, "face record");
     dec.model.nctrl = CM_MAX_MODEL_CTRL - 11; /* 12 asked for */
-    assert_record_refused(buf, n, CM_E_LIMIT, "GREGORY hints");
+    record_assert_refused(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, CM_E_LIMIT, "GREGORY hints");
     cm_face G;
     memset(&why, 0, sizeof why);
-    assert_int_equal(read_record(buf, n, 1, &G, &why, &after), CM_E_LIMIT);
+    assert_int_equal(record_read(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, &G, &why, &after), CM_E_LIMIT);
     assert_int_equal(why.limit, CM_LIMIT_MAX_MODEL_CTRL);
     assert_int_equal(why.need, CM_MAX_MODEL_CTRL + 1);
     dec.model.nctrl = 0;
     /* a hinted corner must be on the loop (checked when the loops are read) */
     n = exact_record(buf, sizeof buf, 1, 0x20, 0, 0);
-    assert_ok(read_record(buf, n, 1, &F, &why, &after));
+    assert_ok(record_read(&dec.model, CM_METHOD_GREGORY_EXACT, buf, n, v413, &F, &why, &after));
     cm_method_fault lw = {0};
     dec.model.loops[0] = (cm_loop){0, 5};
     F.loop0 = 0;
@@ -170,11 +146,59 @@ static void test_hint_records(void **state)
     assert_int_equal(cm_face_hint_mask(&F), 0);
 }
 
+/* GREGORY-FIT's hints follow its correction: in the record, and in the pool (cm_face_hint_first) */
+static void test_fit_hints_follow_correction(void **state)
+{
+    (void)state;
+    uint8_t buf[512];
+    cm_ac_enc e;
+    cm_face_ctx c;
+    cm_face_ctx_init(&c);
+    cm_ac_enc_init(&e, buf, sizeof buf);
+    cm_ac_enc_uint(&e, &c.layout, CM_GREG_LAYOUT_QUAD);
+    cm_ac_enc_uint(&e, &c.corner, 0);
+    cm_ac_enc_direct(&e, 0x1234, 16);
+    cm_ac_enc_direct(&e, 0x5678, 16);
+    cm_ac_enc_uint(&e, &c.fit_m, 2); /* 2 x 2 coefficients of one patch, each (5, 5, 5) grid steps */
+    cm_ac_enc_uint(&e, &c.fit_patches, 1);
+    cm_ac_enc_uint(&e, &c.fit_exp, 0);
+    for (int i = 0; i < 12; i++)
+        cm_ac_enc_sint(&e, &c.fit_coef, 5);
+    cm_ac_enc_bit(&e, &c.hint_any, 1);
+    cm_ac_enc_uint(&e, &c.hint_mask, 0x4);
+    cm_ac_enc_sint(&e, &c.hint_oct, CM_FMT_HINT_ONE);
+    cm_ac_enc_sint(&e, &c.hint_oct, 0);
+    cm_ac_enc_uint(&e, &c.count, 77);
+    size_t n = cm_ac_enc_finish(&e);
+    cm_dec_init(&dec);
+    dec.model.q = 0.5;
+    dec.model.nctrl = 3;
+    cm_ac_dec d;
+    cm_face_ctx r;
+    cm_face_ctx_init(&r);
+    r.hints = 1;
+    cm_ac_dec_init(&d, buf, n);
+    cm_face F;
+    memset(&F, 0, sizeof F);
+    F.method = CM_METHOD_GREGORY_FIT;
+    cm_method_fault why = {0};
+    assert_ok(cm_method_read_record(cm_method_of(CM_METHOD_GREGORY_FIT), &d, &r, &dec.model, &F, &why));
+    assert_int_equal(cm_ac_dec_uint(&d, &r.count), 77);
+    assert_int_equal(F.surf, 3);
+    assert_int_equal(cm_face_hint_mask(&F), 0x4);
+    assert_int_equal(cm_face_hint_first(&F), 3 + 4);
+    assert_int_equal(dec.model.nctrl, 3 + 4 + 1);
+    assert_true(dec.model.ctrl[3].x == 2.5 && dec.model.ctrl[6].z == 2.5);
+    cm_vec3 h = dec.model.ctrl[7];
+    assert_true(h.x == 1.0 && h.y == 0.0 && h.z == 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_octahedral_round_trip),
         cmocka_unit_test(test_hint_records),
+        cmocka_unit_test(test_fit_hints_follow_correction),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -24,6 +24,7 @@
 #include "encode/verify.h"
 #include "igs_writer.h"
 #include "model_load.h"
+#include "record_io.h"
 
 static cm_decoder dec;
 static cm_rebuild_ws rbws;
@@ -107,28 +108,12 @@ static size_t g1fit_record(uint8_t *buf, size_t cap, int with_field, uint64_t m,
 static cm_err read_record(const uint8_t *buf, size_t len, int net_fit, cm_face *F, cm_method_fault *why,
                           uint64_t *after)
 {
-    cm_ac_dec d;
-    cm_face_ctx c;
-    cm_face_ctx_init(&c);
-    c.net_fit = net_fit;
-    cm_ac_dec_init(&d, buf, len);
-    memset(F, 0, sizeof *F);
-    F->method = CM_METHOD_G1FIT;
-    memset(why, 0, sizeof *why);
-    cm_err e = cm_method_read_record(cm_method_of(CM_METHOD_G1FIT), &d, &c, &dec.model, F, why);
-    *after = cm_ac_dec_uint(&d, &c.count);
-    return e;
+    return record_read(&dec.model, CM_METHOD_G1FIT, buf, len, (record_flags){net_fit, 0}, F, why, after);
 }
 
 static void assert_record_refused(const uint8_t *buf, size_t len, cm_err code, const char *what)
 {
-    cm_face F;
-    cm_method_fault why;
-    uint64_t after;
-    cm_err e = read_record(buf, len, 1, &F, &why, &after);
-    if (e != code || !why.what || strcmp(why.what, what) != 0)
-        fail_msg("refused %s (%s), expected %s (%s)", cm_strerror(e), why.what ? why.what : "-", cm_strerror(code),
-                 what);
+    record_assert_refused(&dec.model, CM_METHOD_G1FIT, buf, len, (record_flags){1, 0}, code, what);
 }
 
 static void test_net_records(void **state)

@@ -21,6 +21,7 @@
 #include "cm/cm_rebuild.h"
 #include "cm_report.h"
 #include "cmz_splice.h"
+#include "record_io.h"
 #include "encode/encode.h"
 #include "model_load.h"
 #include "step/step_file.h"
@@ -507,19 +508,6 @@ static char *load_band(double turn, int cone, loaded_model *lm)
 static cm_decoder dec;
 static cm_rebuild_ws rbws;
 
-/* minor: the format 4 minor to write (-1: the newest) */
-static void encode_minor(loaded_model *lm, int minor, encode_result *r)
-{
-    encode_opts o;
-    encode_opts_default(&o);
-    if (minor >= 0)
-        encode_opts_for_format(&o, 4, minor);
-    cm_status st;
-    cm_status_init(&st);
-    memset(r, 0, sizeof *r);
-    assert_ok(encode_model(lm, &o, r, &st));
-}
-
 static void encode_default(loaded_model *lm, encode_result *r)
 {
     encode_opts o;
@@ -556,7 +544,7 @@ static void test_band_cut_open(void **state)
         assert_int_equal(lm.domains_failed, 0);
         assert_false(lm.fds[2].joined_seam);
         encode_result r;
-        encode_minor(&lm, k == 2 ? 12 : -1, &r);
+        encode_for_minor(&lm, k == 2 ? 12 : -1, &r);
         if (k < 2) {
             /* two circles and two lines on a cylinder: the exact patch is the cylinder.  Cut at a
                T-vertex (k 1: five sides, the top circle's two halves meeting flat, no G1 edge there),
