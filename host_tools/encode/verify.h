@@ -76,7 +76,8 @@ int verify_face(const loaded_model *lm, const cm_model *m, int f, const cm_rebui
  */
 double verify_patch_foot(const cm_greg_surface *s, double accept, cm_vec3 p, int *have, int *k, double *u, double *v);
 /** The unit normal of face f's source surface at the foot of P (found from the nearest boundary
-    sample: P near the face's loop); 0 where it cannot be had. */
+    sample: P near the face's loop), unit(Su x Sv) as the surface has it, not turned to the face's
+    side (brep_face.flip): the G1 checks compare |cos|; 0 where it cannot be had. */
 int verify_source_normal(const loaded_model *lm, int f, cm_vec3 P, cm_vec3 *n);
 /** The same on a (non-periodic) B-spline surface over its whole domain: what verify_face measures
     a NURBS rebuild with. */
