@@ -120,15 +120,11 @@ static int joined_corners(const double *ccos, int n)
 /* one correction of m per direction fitted, rebuilt by the decoder's code from the quantised record
    and measured: 1 when it passes (record in *fr, surface in rb, numbers in fe) */
 static int fit_once(enc_work *w, const loaded_model *lm, int f, int layout, int corner, double tol,
-                    const cm_greg_surface *base, int m, const fit_record *hints, fit_record *fr, cm_rebuilt *rb,
-                    face_error *fe, double *best_ratio)
+                    const cm_greg_surface *base, int m, fit_record *fr, cm_rebuilt *rb, face_error *fe,
+                    double *best_ratio)
 {
     if (!fit_correction(lm, lm->mesh.faces[f].brep_face, base, m, tol, w->dec.model.q, fr))
         return 0;
-    if (hints) { /* (the patches' corner hints travel with their correction) */
-        fr->hint_mask = hints->hint_mask;
-        memcpy(fr->hint, hints->hint, sizeof fr->hint);
-    }
     cm_fit_q view = fit_record_view(fr);
     if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY_FIT, layout, corner, &view, rb) != CM_OK ||
         !verify_face(lm, &w->dec.model, f, rb, tol, fe))
@@ -143,16 +139,14 @@ static int fit_once(enc_work *w, const loaded_model *lm, int f, int layout, int 
  * combinations of those of the largest (Bernstein degree elevation), so the largest fits at least
  * as closely: it is tried first, and when it fails the face is given up at once (most trials fail:
  * this is the encoder's time); when it passes, m = 1, 2, ... are tried for a smaller record.
- * With corner hints (format 4.13; NULL: none) in the base patches and every record tried.
  * Returns 1 with the winner's record, surface and numbers.
  */
-static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corner, double tol,
-                      const fit_record *hints, fit_record *fr, cm_rebuilt *rb, face_error *fe, double *best_ratio)
+static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corner, double tol, fit_record *fr,
+                      cm_rebuilt *rb, face_error *fe, double *best_ratio)
 {
     enc_work *w = t->w;
     cm_rebuilt base;
-    cm_fit_q hview = hints ? fit_record_view(hints) : (cm_fit_q){0};
-    if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY_EXACT, layout, corner, hints ? &hview : NULL, &base) != CM_OK)
+    if (enc_trial_rebuild(w, f, CM_METHOD_GREGORY_EXACT, layout, corner, NULL, &base) != CM_OK)
         return 0;
     cm_greg_surface *gs = malloc(sizeof *gs); /* the base patches: the next rebuild reuses the workspace */
     fit_record *best = malloc(sizeof *best);
@@ -163,12 +157,12 @@ static int fit_layout(tx *t, const loaded_model *lm, int f, int layout, int corn
     }
     *gs = *base.greg;
     int ok = fit_sides_within(lm, lm->mesh.faces[f].brep_face, gs, tol) &&
-             fit_once(w, lm, f, layout, corner, tol, gs, CM_FIT_MAX_M, hints, best, rb, fe, best_ratio);
+             fit_once(w, lm, f, layout, corner, tol, gs, CM_FIT_MAX_M, best, rb, fe, best_ratio);
     if (ok) {
         face_error best_fe = *fe;
         int smaller = 0;
         for (int m = 1; m < CM_FIT_MAX_M && !smaller; m++)
-            smaller = fit_once(w, lm, f, layout, corner, tol, gs, m, hints, fr, rb, fe, best_ratio);
+            smaller = fit_once(w, lm, f, layout, corner, tol, gs, m, fr, rb, fe, best_ratio);
         if (!smaller) {
             /* the largest m after all: rebuilt again (the tries since reused the workspace) */
             *fr = *best;
@@ -263,59 +257,6 @@ static int try_layouts(tx *t, const loaded_model *lm, int f, int method, const i
     return 0;
 }
 
-/* the corners a hint mask names */
-static int hint_count(unsigned mask)
-{
-    int n = 0;
-    for (; mask; mask &= mask - 1)
-        n++;
-    return n;
-}
-
-/* GREGORY-FIT's candidate layouts (cand_layout, cand_j: nc of them), with corner hints (NULL: none) in
-   every record tried: the first whose correction passes §12 and costs less than the surface is
-   accepted (1; its record to t->fit[f]); 0 when none (*too_large when one passed but cost more) */
-static int try_fit_layouts(tx *t, const loaded_model *lm, int f, const int *cand_layout, const int *cand_j, int nc,
-                           double tol, const fit_record *hints, face_report *rep, face_surface *fs, double *best_ratio,
-                           int *too_large)
-{
-    for (int c = 0; c < nc; c++) {
-        /* every layout: the correction vanishes with its slopes on every side of every patch, so a
-           rebuilt face still meets its neighbours and its own patches G1.  A fit cannot move a side,
-           so fit_layout first checks that the sides, the N-split's inner curves included, are within
-           the tolerance, and spares the fits that cannot pass (none of 3819 N-split fits passed on
-           Shelt_channel_5's bands of revolution).  At --tol 0.001 the three-sided chamfers of hex nuts
-           (degenerate quad) and six-sided faces of revolution (as1_pe_203, N-split) pass. */
-        cm_rebuilt rb;
-        face_error fe;
-        fit_record *fr = malloc(sizeof *fr);
-        if (!fr)
-            return -1;
-        if (!fit_layout(t, lm, f, cand_layout[c], cand_j[c], tol, hints, fr, &rb, &fe, best_ratio)) {
-            free(fr);
-            continue;
-        }
-        /* spec §14 step 6: a correction that costs more than the surface it replaces is not worth
-           sending (the N-split's several patches on a small B-spline face) */
-        if (enc_fit_record_bits(fr) + hint_count(fr->hint_mask) * HINT_BITS >=
-            enc_kept_surface_bits(&t->surfs[f], t->o->predicted)) {
-            *too_large = 1;
-            free(fr);
-            continue;
-        }
-        if (!face_surface_set(&fs[f], &rb)) {
-            free(fr);
-            continue;
-        }
-        free(t->fit[f]);
-        t->fit[f] = fr;
-        enc_fit_accept(t, f, cand_layout[c], cand_j[c], cand_j[c], &rb, &fe, rep);
-        rep->fit_m = fr->m;
-        return 1;
-    }
-    return 0;
-}
-
 /* spec §14 candidate list of the GREGORY family (method: GREGORY, GREGORY-EXACT or GREGORY-FIT); the
    first that passes §12 wins */
 static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o, face_report *rep,
@@ -384,17 +325,48 @@ static int try_family(tx *t, const loaded_model *lm, int f, const encode_opts *o
     }
     double best_ratio = HUGE_VAL;
     int too_large = 0; /* a correction passed but cost more than the surface */
+    for (int c = 0; c < nc && fit; c++) {
+        /* every layout: the correction vanishes with its slopes on every side of every patch, so a
+           rebuilt face still meets its neighbours and its own patches G1.  A fit cannot move a side,
+           so fit_layout first checks that the sides, the N-split's inner curves included, are within
+           the tolerance, and spares the fits that cannot pass (none of 3819 N-split fits passed on
+           Shelt_channel_5's bands of revolution).  At --tol 0.001 the three-sided chamfers of hex nuts
+           (degenerate quad) and six-sided faces of revolution (as1_pe_203, N-split) pass. */
+        cm_rebuilt rb;
+        face_error fe;
+        fit_record *fr = malloc(sizeof *fr);
+        if (!fr)
+            return 0;
+        if (!fit_layout(t, lm, f, cand_layout[c], cand_j[c], tol, fr, &rb, &fe, &best_ratio)) {
+            free(fr);
+            continue;
+        }
+        /* spec §14 step 6: a correction that costs more than the surface it replaces is not worth
+           sending (the N-split's several patches on a small B-spline face) */
+        if (enc_fit_record_bits(fr) >= enc_kept_surface_bits(&t->surfs[f], t->o->predicted)) {
+            too_large = 1;
+            free(fr);
+            continue;
+        }
+        if (!face_surface_set(&fs[f], &rb)) {
+            free(fr);
+            continue;
+        }
+        free(t->fit[f]);
+        t->fit[f] = fr;
+        enc_fit_accept(t, f, cand_layout[c], cand_j[c], cand_j[c], &rb, &fe, rep);
+        rep->fit_m = fr->m;
+        return 1;
+    }
     /* the candidates, then (format 4.13) once more with hints at the flat corners that fell back to
        n_F, where there are any (spec §14 step 3) and they cost less than the surface (step 6) */
-    int passed = fit ? try_fit_layouts(t, lm, f, cand_layout, cand_j, nc, tol, NULL, rep, fs, &best_ratio, &too_large)
-                     : try_layouts(t, lm, f, method, cand_layout, cand_j, nc, tol, NULL, rep, fs, &best_ratio);
-    fit_record *hints = passed || !enc_hints(o) ? NULL : malloc(sizeof *hints);
+    int passed = fit ? 0 : try_layouts(t, lm, f, method, cand_layout, cand_j, nc, tol, NULL, rep, fs, &best_ratio);
+    fit_record *hints = passed || fit || !enc_hints(o) ? NULL : malloc(sizeof *hints);
     int nh = hints ? corner_hints(w, lm, f, method, hints) : 0;
     if (nh > 0 && (double)(nh * HINT_BITS) < enc_kept_surface_bits(&t->surfs[f], t->o->predicted)) {
         cm_fit_q hview = fit_record_view(hints);
-        passed = fit ? try_fit_layouts(t, lm, f, cand_layout, cand_j, nc, tol, hints, rep, fs, &best_ratio, &too_large)
-                     : try_layouts(t, lm, f, method, cand_layout, cand_j, nc, tol, &hview, rep, fs, &best_ratio);
-        if (passed > 0 && !fit) {
+        passed = try_layouts(t, lm, f, method, cand_layout, cand_j, nc, tol, &hview, rep, fs, &best_ratio);
+        if (passed > 0) {
             free(t->fit[f]);
             t->fit[f] = hints; /* (the hints travel in the record: a correction of m = 0) */
             hints = NULL;
