@@ -72,41 +72,52 @@ cm_vec3 cm_hint_decode(int32_t qx, int32_t qy)
     return cm_unit(cm_v3(x, y, z));
 }
 
+cm_err cm_gregory_place_hints(cm_model *m, cm_face *F, unsigned mask, const int16_t (*q)[2])
+{
+    unsigned count = 0;
+    for (unsigned b = mask; b; b &= b - 1)
+        count++;
+    if (count > CM_MAX_MODEL_CTRL - m->nctrl)
+        return CM_E_LIMIT;
+    if (mask && !F->fit)
+        F->surf = m->nctrl; /* (GREGORY-FIT's follow its correction: cm_face_hint_first) */
+    for (unsigned i = 0; i < count; i++) {
+        m->ctrl[m->nctrl] = cm_hint_decode(q[i][0], q[i][1]);
+        m->w[m->nctrl++] = 1.0;
+    }
+    F->fill_nu = (uint8_t)(mask & 0xffu);
+    F->fill_nv = (uint8_t)(mask >> 8);
+    return CM_OK;
+}
+
 cm_err cm_gregory_read_hints(cm_ac_dec *ac, cm_face_ctx *ctx, cm_model *m, cm_face *F, cm_method_fault *why)
 {
+    int16_t q[CM_GREG_JOINED_MAX_EDGES][2];
+    unsigned count = 0;
     F->fill_nu = F->fill_nv = 0;
     uint64_t mask = ctx->hints && cm_ac_dec_bit(ac, &ctx->hint_any) ? cm_ac_dec_uint(ac, &ctx->hint_mask) : 0;
     if (mask >= 1u << CM_GREG_JOINED_MAX_EDGES) {
         why->what = "GREGORY hints";
         return CM_E_RANGE;
     }
-    if (mask && !F->fit)
-        F->surf = m->nctrl; /* (GREGORY-FIT's follow its correction: cm_face_hint_first) */
-    for (unsigned k = 0; k < CM_GREG_JOINED_MAX_EDGES; k++) {
-        if (!((mask >> k) & 1u))
-            continue;
+    for (uint64_t b = mask; b && !ac->overrun; b &= b - 1, count++) {
         int64_t qx = cm_ac_dec_sint(ac, &ctx->hint_oct), qy = cm_ac_dec_sint(ac, &ctx->hint_oct);
-        if (ac->overrun)
-            break;
         if (qx < -CM_FMT_HINT_ONE || qx > CM_FMT_HINT_ONE || qy < -CM_FMT_HINT_ONE || qy > CM_FMT_HINT_ONE) {
-            why->what = "GREGORY hint normal";
-            return CM_E_RANGE;
+            why->what = ac->overrun ? "face record" : "GREGORY hint normal";
+            return ac->overrun ? CM_E_TRUNCATED : CM_E_RANGE;
         }
-        if (m->nctrl >= CM_MAX_MODEL_CTRL) {
-            why->what = "GREGORY hints";
-            why->limit = CM_LIMIT_MAX_MODEL_CTRL;
-            why->need = (uint64_t)m->nctrl + 1;
-            return CM_E_LIMIT;
-        }
-        m->ctrl[m->nctrl] = cm_hint_decode((int32_t)qx, (int32_t)qy);
-        m->w[m->nctrl++] = 1.0;
+        q[count][0] = (int16_t)qx, q[count][1] = (int16_t)qy;
     }
     if (ac->overrun) {
         why->what = "face record";
         return CM_E_TRUNCATED;
     }
-    F->fill_nu = (uint8_t)(mask & 0xffu);
-    F->fill_nv = (uint8_t)(mask >> 8);
+    if (cm_gregory_place_hints(m, F, (unsigned)mask, (const int16_t(*)[2])q) != CM_OK) {
+        why->what = "GREGORY hints";
+        why->limit = CM_LIMIT_MAX_MODEL_CTRL;
+        why->need = (uint64_t)m->nctrl + count;
+        return CM_E_LIMIT;
+    }
     return CM_OK;
 }
 

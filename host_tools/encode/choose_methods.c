@@ -84,21 +84,9 @@ static cm_err trial_place(cm_model *m, int f, int method, int layout, int corner
         F->fill_phi |= CM_G1FIT_TWISTED;
         F->corner = (uint16_t)fit->ntwist;
     }
-    if (fit && fit->hint_mask && cm_method_takes_hints((unsigned)method)) {
-        /* the corner hints after the correction, as cm_gregory_read_hints places them */
-        if (CM_GREG_JOINED_MAX_EDGES > CM_MAX_MODEL_CTRL - m->nctrl)
-            return CM_E_LIMIT;
-        if (!F->fit)
-            F->surf = m->nctrl;
-        for (unsigned k = 0, i = 0; k < CM_GREG_JOINED_MAX_EDGES; k++)
-            if ((fit->hint_mask >> k) & 1u) {
-                m->ctrl[m->nctrl] = cm_hint_decode(fit->hint[i][0], fit->hint[i][1]);
-                m->w[m->nctrl++] = 1.0;
-                i++;
-            }
-        F->fill_nu = (uint8_t)(fit->hint_mask & 0xffu);
-        F->fill_nv = (uint8_t)(fit->hint_mask >> 8);
-    }
+    /* the corner hints after the correction, as the reader places them */
+    if (fit && fit->hint_mask && cm_method_takes_hints((unsigned)method))
+        return cm_gregory_place_hints(m, F, fit->hint_mask, fit->hint);
     return CM_OK;
 }
 

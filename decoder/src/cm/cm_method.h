@@ -71,6 +71,10 @@ typedef struct cm_fit_q {
 void cm_hint_encode(cm_vec3 n, int16_t q[2]);
 /** ... and back, a unit normal (the reader's; the same bits on every machine). */
 cm_vec3 cm_hint_decode(int32_t qx, int32_t qy);
+/** Face F's hints (mask, one octahedral pair each in corner order) into m's control-point pool after
+    its correction, as the reader puts them (the writer's trials too): CM_E_LIMIT when the pool has
+    no room (nothing placed). */
+CM_NODISCARD cm_err cm_gregory_place_hints(cm_model *m, cm_face *F, unsigned mask, const int16_t (*q)[2]);
 
 /**
  * FACE section: the record's fields after the method number, into F (nothing for a method without
