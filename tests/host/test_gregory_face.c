@@ -602,6 +602,74 @@ static void test_gregory_joined_ten_edges(void **state)
     check_joined_cylinder(4, 1, chains, cut, 3e-4);
 }
 
+/*
+ * A tear along a chain's joint is measured (verify.c's creases_to_source).  The T-vertex quarter
+ * cylinder's joined side, its second edge's cross basis turned 20 degrees about the side at the
+ * joint (as an edge meeting the side at an angle turns it, gmsh__Block's notch): the patch jumps
+ * along the line through the joint, and is farthest off the cylinder right beside it, between the
+ * 21 x 21 grid's points and step 4's sixths.  verify_face's worst must be the worst of a dense scan
+ * of the patch (radius against the cylinder's); without the measure beside the joints it found 0.888 mm
+ * of the 1.018.
+ */
+static void test_verify_sees_tear_at_joint(void **state)
+{
+    (void)state;
+    loaded_model lm;
+    encode_result r;
+    igw w;
+    igw_init(&w);
+    igw_t_vertex_half_cylinder_144(&w, CR, CH, 2, 0);
+    load_igw(&w, "t-vertex-cylinder", 2, &lm);
+    encode_with(&lm, 1e-2, 3, &r);
+    decode(&r);
+    const cm_model *m = &dec.model;
+    cm_rebuilt rb;
+    cm_status st;
+    cm_status_init(&st);
+    assert_ok(cm_rebuild_face(m, 0, &rb, &rbws[0], &st));
+    assert_int_equal(rb.greg->layout, CM_GREG_LAYOUT_JOINED);
+    int chain = -1;
+    for (int k = 0; k < 4; k++)
+        if (rb.greg->e[0].side[k].kind == CM_EGREG_SIDE_CHAIN)
+            chain = k;
+    assert_true(chain >= 0);
+    static cm_greg_surface torn; /* (the rebuilt patch is the workspace's: a copy to change) */
+    torn = *rb.greg;
+    rb.greg = &torn;
+    cm_egreg_side *sd = &torn.e[0].side[chain];
+    /* the second piece's basis turned about the side's tangent at the joint, linear along it */
+    cm_vec3 d[3];
+    assert_ok(cm_egreg_side_eval(sd, sd->piece[1].s0, d, NULL, &st));
+    cm_vec3 t = cm_unit(d[1]), a = sd->piece[1].As, b = cm_cross(t, a);
+    const double turn = 20.0 * M_PI / 180.0;
+    sd->piece[1].As = cm_add(cm_scale(a, cos(turn)), cm_scale(b, sin(turn)));
+    sd->piece[1].tb.mode = CM_EGREG_TURN_NONE;
+    sd->piece[0].tb.mode = CM_EGREG_TURN_NONE;
+    /* the truth: the patch's radius on a fine grid and on both sides of the joint's line */
+    const double joint = chain >= 2 ? 1.0 - sd->piece[0].s1 : sd->piece[0].s1;
+    double truth = 0, at = -1;
+    for (int i = 0; i <= 400; i++)
+        for (int j = -1; j <= 401; j++) {
+            double x = i / 400.0, y = j < 0 ? joint - 1e-9 : (j > 400 ? joint + 1e-9 : j / 400.0);
+            cm_vec3 S;
+            assert_ok(cm_greg_surface_eval(rb.greg, 0, chain % 2 ? x : y, chain % 2 ? y : x, &S, NULL, NULL));
+            double dev = fabs(hypot(S.x, S.y) - CR);
+            if (dev > truth)
+                truth = dev, at = y;
+        }
+    /* the tear is the worst of it, beside the joint, and well past the quarter's own error */
+    if (!(fabs(at - joint) < 0.01))
+        fail_msg("worst %.4g at %.4f of the side, the joint at %.4f", truth, at, joint);
+    face_error fe;
+    assert_true(verify_face(&lm, m, 0, &rb, HUGE_VAL, &fe));
+    if (!(truth > 10 * r.faces[0].rebuild_max))
+        fail_msg("tear %.4g, the quarter's own error %.4g: not a tear", truth, r.faces[0].rebuild_max);
+    if (!(fe.max > 0.98 * truth && fe.max < 1.02 * truth))
+        fail_msg("verify_face measured %.4g mm, the patch is %.4g off beside its joint", fe.max, truth);
+    encode_result_free(&r);
+    model_free(&lm);
+}
+
 /* spec §14 step 6: at a tighter tolerance the bump needs a finer and larger correction (m = 5 at
    0.06 %, about 120 bytes); the 5 x 5 net with one raised point costs about 64 bytes in the SURF
    section, whose prediction sends the flat rows almost free.  The face keeps its surface. */
@@ -717,6 +785,7 @@ int main(void)
         cmocka_unit_test(test_gregory_fit_not_larger_than_surface),
         cmocka_unit_test(test_gregory_joined_t_vertex),
         cmocka_unit_test(test_gregory_joined_ten_edges),
+        cmocka_unit_test(test_verify_sees_tear_at_joint),
         cmocka_unit_test(test_gregory_exact_turning_half_dome),
     };
     return cmocka_run_group_tests_name("gregory_face", tests, NULL, NULL);
