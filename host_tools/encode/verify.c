@@ -461,7 +461,7 @@ static double patches_to_source(const brep_model *m, const face_domain *fd, cons
  * straight side at 38 degrees) jumped 0.28 mm there and measured 0.0965 mm off the cylinder just
  * before the joint, past the 0.084 mm tolerance, where the grids found 0.081 (with format 4.13's
  * hints and a GREGORY-FIT correction, since taken out); tail_section_asm's face 19, 0.079 mm on the
- * grids, is 1.16 mm off beside its joint (tolerance 0.83).  Measured here on
+ * grids, runs 1.16 mm past its boundary beside its joint (tolerance 0.83).  Measured here on
  * both sides of each joint's line (a hair from it: the side evaluates the edge before or after),
  * CREASE_N + 1 points along each.
  */
