@@ -328,10 +328,14 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     int nb = lm->brep.nfaces;
     unsigned char *keep_only = calloc((size_t)nb + 1, 1), *flip0 = malloc((size_t)nb + 1);
     unsigned char *net_whole = calloc((size_t)nb + 1, 1);
+    /* why a face cut open (brep_seam.h) kept its surface all the same: its report says that, not the
+       uncut face's "fewer than 3 sides" (a cone's cap, one circle) or "holes" (a band) */
+    const char **cut_why = calloc((size_t)nb + 1, sizeof *cut_why);
     enc_work *w = calloc(1, sizeof *w);
-    if (!keep_only || !flip0 || !w || !net_whole) {
+    if (!keep_only || !flip0 || !w || !net_whole || !cut_why) {
         free(keep_only);
         free(net_whole);
+        free(cut_why);
         free(flip0);
         free(w);
         memset(r, 0, sizeof *r);
@@ -355,8 +359,10 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
             int *kept_cut = malloc((size_t)nf * sizeof *kept_cut + 1), uncut = 0;
             for (int f = 0; kept_cut && f < nf; f++) {
                 int b = lm->mesh.faces[f].brep_face;
-                if (enc_kept(r->faces[f].method) && lm->brep.faces[b].cut_from_nloops > 0)
+                if (enc_kept(r->faces[f].method) && lm->brep.faces[b].cut_from_nloops > 0) {
+                    cut_why[b] = r->faces[f].why;
                     kept_cut[uncut++] = b;
+                }
             }
             e = kept_cut ? uncut_faces(lm, kept_cut, uncut, flip0, 1, st) : cm_fail(st, CM_E_NOMEM, "out of memory");
             free(kept_cut);
@@ -433,6 +439,7 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
                     memmove(&flip0[bad[i]], &flip0[bad[i] + 1], after);
                     memmove(&keep_only[bad[i]], &keep_only[bad[i] + 1], after);
                     memmove(&net_whole[bad[i]], &net_whole[bad[i] + 1], after);
+                    memmove(&cut_why[bad[i]], &cut_why[bad[i] + 1], after * sizeof *cut_why);
                 }
                 left_out++;
             }
@@ -452,6 +459,12 @@ cm_err encode_model(loaded_model *lm, const encode_opts *o, encode_result *r, cm
     }
     r->faces_left_out = left_out;
     r->nets_whole = nets_whole;
+    for (int f = 0; e == CM_OK && r->faces && f < lm->mesh.nfaces; f++) {
+        int b = lm->mesh.faces[f].brep_face;
+        if (cut_why[b] && enc_kept(r->faces[f].method))
+            r->faces[f].why = cut_why[b];
+    }
+    free(cut_why);
     if (e == CM_OK && enc_compact_header(o) && o->compact_minor >= (int)CM_FMT_PARTS_MINOR) {
         /* what write_parts sent (the same numbering on the same faces) */
         enc_parts p;
