@@ -37,7 +37,7 @@ int main(int argc, char **argv)
     if (strcmp(argv[1], "--tsv") == 0 && argc == 2) {
         for (unsigned i = 0; i < CM_LIMIT_COUNT; i++) {
             const cm_limit_info *l = &cm_limit_table[i];
-            printf("%s\t%lu\t%lu\t%s\t%s\n", l->macro, (unsigned long)l->value, (unsigned long)l->hard_max, l->unit,
+            printf("CM_%s\t%lu\t%lu\t%s\t%s\n", l->name, (unsigned long)l->value, (unsigned long)l->hard_max, l->unit,
                    l->doc);
         }
         return 0;

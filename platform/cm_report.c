@@ -70,7 +70,7 @@ void cm_report_limits_markdown(FILE *f)
     fprintf(f, "| limit | %s | hard max | unit | meaning |\n|---|---:|---:|---|---|\n", cm_profile_name);
     for (unsigned i = 0; i < CM_LIMIT_COUNT; i++) {
         const cm_limit_info *l = &cm_limit_table[i];
-        fprintf(f, "| `%s` | %lu | %lu | %s | %s |\n", l->macro, (unsigned long)l->value, (unsigned long)l->hard_max,
+        fprintf(f, "| `CM_%s` | %lu | %lu | %s | %s |\n", l->name, (unsigned long)l->value, (unsigned long)l->hard_max,
                 l->unit, l->doc);
     }
 }

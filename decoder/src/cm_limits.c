@@ -3,9 +3,16 @@
 
 #include <stddef.h>
 
-#define CM_LIMIT_ROW_(id, value, hard, unit, doc) {#id, "CM_" #id, (uint32_t)(value), (uint32_t)(hard), unit, doc},
+#define CM_LIMIT_ROW_(id, value, hard, unit, doc) {(uint32_t)(value), (uint32_t)(hard), #id, unit, doc},
 const cm_limit_info cm_limit_table[CM_LIMIT_COUNT] = {CM_LIMITS(CM_LIMIT_ROW_)};
 #undef CM_LIMIT_ROW_
+/* each text with its 0 byte within its array (a literal exactly as long as the array would lose it) */
+#define CM_LIMIT_FITS_(id, value, hard, unit, doc)                                                         \
+    _Static_assert(sizeof(#id) <= CM_LIMIT_NAME_CHARS && sizeof(unit) <= CM_LIMIT_UNIT_CHARS &&            \
+                       sizeof(doc) <= CM_LIMIT_DOC_CHARS,                                                  \
+                   "limit " #id ": a text longer than cm_limit_info holds");
+CM_LIMITS(CM_LIMIT_FITS_)
+#undef CM_LIMIT_FITS_
 
 const char cm_profile_name[] = CM_PROFILE_NAME;
 

@@ -47,9 +47,8 @@ static void test_table_matches_macros(void **state)
     assert_int_equal(cm_limit_table[CM_LIMIT_STACK_BUDGET].value, CM_STACK_BUDGET);
     for (unsigned i = 0; i < CM_LIMIT_COUNT; i++) {
         const cm_limit_info *l = &cm_limit_table[i];
-        assert_non_null(l->name);
+        assert_true(strlen(l->name) > 3 && strlen(l->unit) > 0);
         assert_true(strlen(l->doc) > 10);
-        assert_true(strncmp(l->macro, "CM_", 3) == 0 && strcmp(l->macro + 3, l->name) == 0);
         assert_true(l->value >= 1 && l->value <= l->hard_max);
     }
     assert_ptr_equal(cm_limit_get(0), &cm_limit_table[0]);

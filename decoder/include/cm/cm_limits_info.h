@@ -17,13 +17,18 @@
 typedef enum cm_limit_id { CM_LIMITS(CM_LIMIT_ENUM_) CM_LIMIT_COUNT } cm_limit_id;
 #undef CM_LIMIT_ENUM_
 
+/* The texts are arrays in the row, not pointers: a pointer in a position-independent program is
+   a relocation the loader applies (24 bytes each on aarch64, 104 here: 2.5 KB of the terminal's
+   read-only 256 KiB).  cm_limits.c refuses a text that does not fit with its 0 byte. */
+#define CM_LIMIT_NAME_CHARS 18 /* name and its 0 (the longest now: MAX_SURF_CTRL_DIR) */
+#define CM_LIMIT_UNIT_CHARS 10
+#define CM_LIMIT_DOC_CHARS 64
 typedef struct cm_limit_info {
-    const char *name;  /* "MAX_FACES" */
-    const char *macro; /* "CM_MAX_FACES" */
-    uint32_t value;    /* this build's value */
-    uint32_t hard_max; /* format/type ceiling */
-    const char *unit;  /* "faces" */
-    const char *doc;   /* one line */
+    uint32_t value;                 /* this build's value */
+    uint32_t hard_max;              /* format/type ceiling */
+    char name[CM_LIMIT_NAME_CHARS]; /* "MAX_FACES" (its macro: "CM_" and the name) */
+    char unit[CM_LIMIT_UNIT_CHARS]; /* "faces" */
+    char doc[CM_LIMIT_DOC_CHARS];   /* one line */
 } cm_limit_info;
 
 extern const cm_limit_info cm_limit_table[CM_LIMIT_COUNT];
