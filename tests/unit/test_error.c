@@ -19,6 +19,14 @@ static void test_names_and_texts(void **state)
         for (int b = a + 1; b < (int)CM_ERR_COUNT; b++)
             if (cm_err_defined(a) && cm_err_defined(b))
                 assert_true(strcmp(cm_err_name((cm_err)a), cm_err_name((cm_err)b)) != 0);
+    /* (each from its own place in the pools: a name that is not its code's, a text cut or run
+       into the next, reads wrong here) */
+    assert_string_equal(cm_err_name(CM_E_STEP), "CM_E_STEP");
+    assert_string_equal(cm_strerror(CM_E_STEP), "malformed STEP file");
+    assert_string_equal(cm_strerror(CM_OK), "ok");
+    for (int code = 0; code < (int)CM_ERR_COUNT; code++)
+        if (cm_err_defined(code))
+            assert_true(strncmp(cm_err_name((cm_err)code), "CM_", 3) == 0 && strlen(cm_strerror((cm_err)code)) > 1);
     for (int dropped = 18; dropped <= 21; dropped++) {
         assert_false(cm_err_defined(dropped));
         assert_string_equal(cm_err_name((cm_err)dropped), "CM_E_UNKNOWN");
