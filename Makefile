@@ -250,13 +250,15 @@ LIMIT_TOOLS := $(foreach p,$(PROFILES),$(call bdir,$(p))/cm-limits)
 
 # every profile's limits table, for `cmz encode --profile NAME`
 PROFILE_TABLES := $(foreach p,$(PROFILES),$(call bdir,host)/host_tools/profile_table_$(p).o)
-# (the limits' headers named: a changed default must reach `cmz encode --profile`)
+# (the limits' headers named: a changed default must reach `cmz encode --profile`; and its other
+# headers tracked like every object's: cm_limit_info's rows changed, an old object would be read
+# with the new layout)
 $(call bdir,host)/host_tools/profile_table_%.o: host_tools/profile_table.c fixedcfg/cm_limits.h \
 		fixedcfg/cm_limits_list.h fixedcfg/profiles/%.h
 	@mkdir -p $(@D)
 	$(call say,CC      ,$@)
 	$(Q)$(CC) $(CM_INC_ALL) -DCM_PROFILE='"profiles/$*.h"' -DPROFILE_TABLE=cm_profile_table_$* $(CPPFLAGS) \
-		$(CM_STD) $(CM_WARN) $(CFLAGS) -c $< -o $@
+		$(CM_STD) $(CM_WARN) $(CFLAGS) $(DEPFLAGS) -c $< -o $@
 
 # test tool: the decoded mesh's topology (host profile)
 # a .cmz header's needs read or rewritten, any format (the lying-header and bundled round-trip gates);
