@@ -7,7 +7,7 @@
 /*
  * The names and texts, each code's one member of a struct laid out once in read-only data, found by
  * its offset: no pointers, so nothing for the loader to relocate in a position-independent program
- * (a table of 2 x 25 pointers was 50 relocations, 1.2 KB of the terminal's read-only 256 KiB).
+ * (two tables of 25 pointers, 42 of them relocated: 1 KB of the terminal's read-only 256 KiB).
  * Offset 0 (the struct's leading empty string) marks a number no code has (a dropped one).
  */
 #define CM_ERR_NAME_MEMBER_(id, num, text) char id[sizeof("CM_" #id)];
