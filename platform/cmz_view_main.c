@@ -47,6 +47,8 @@
 /* everything big is static: the decode and draw paths never touch the heap */
 static cm_decode_state state;
 static cm_view view;
+/* the model's faces' boxes (cm_mesh_face_boxes: once a model, for each frame's fit) */
+static float face_box[CM_MAX_FACES][6];
 static cm_glb_reader glb; /* MODEL.glb's accessors, primitives and nodes */
 static cm_drm drm = {.fd = -1}; /* --fb /dev/dri/cardN: the DRM screen this process holds (drm.map) */
 static cm_gpio gpio;
@@ -210,7 +212,7 @@ static const char *status_text(char *buf, size_t cap, const char *status, int in
 /* draw the model into the frame as vo asks (the parts numbered again: cm_view_begin clears them)
    and count its parts: 0, or the exit status after reporting why not (3: the mesh could not be read
    back from its spill files) */
-static int draw(const cm_view_opts *vo, const float lo[3], const float hi[3], const cm_mesh *mesh,
+static int draw(const cm_view_opts *vo, const float lo[3], const float hi[3], const cm_mesh *mesh, uint32_t nboxed,
                 const char *status, int interactive, const char *in, uint32_t *nparts)
 {
     cm_status st;
@@ -225,7 +227,7 @@ static int draw(const cm_view_opts *vo, const float lo[3], const float hi[3], co
         fprintf(stderr, "cmz-view: %s: --step %u: the model has %u parts\n", in, vo->step, parts);
         return 2;
     }
-    cm_view_fit(&view, mesh);
+    cm_view_fit(&view, mesh, (const float(*)[6])face_box, nboxed);
     cm_view_mesh(&view, mesh);
     cm_view_edges(&view, &state.dec.model);
     char buf[512];
@@ -320,7 +322,7 @@ static int parse_seconds(const char *opt, const char *s, int64_t *ms)
 /* decode (or read: a GLB) `in` into *mesh, its spill beside `spill` (a file; is_dir: in that directory):
    0, or the exit status after saying why */
 static int load_model(const char *in, const char *spill, int is_dir, double tol, cm_mesh *mesh, cm_decode_summary *sum,
-                      float lo[3], float hi[3])
+                      float lo[3], float hi[3], uint32_t *nboxed)
 {
     cm_status st;
     cm_status_init(&st);
@@ -345,7 +347,7 @@ static int load_model(const char *in, const char *spill, int is_dir, double tol,
     if (state.dec.model.part_names_left_out)
         fprintf(stderr, "cmz-view: %s: warning: the parts' names need more than this build's %d bytes "
                         "(CM_MAX_PART_NAME_BYTES): the steps are shown without them\n", in, CM_MAX_PART_NAME_BYTES);
-    if (!cm_mesh_bounds(mesh, lo, hi)) {
+    if (!cm_mesh_face_boxes(mesh, face_box, CM_MAX_FACES, nboxed, lo, hi)) {
         fprintf(stderr, "cmz-view: %s: nothing to show (no triangles)\n", in);
         return 1;
     }
@@ -382,6 +384,7 @@ static struct {
     int loaded;
     cm_mesh mesh;
     float lo[3], hi[3];
+    uint32_t nboxed; /* (its faces boxed in face_box) */
     uint32_t parts;
     int has_status;
     char status[1024];
@@ -481,7 +484,7 @@ static int screen_loop(const char *fb, const char *const button[CM_GPIO_NBUTTON]
                     cur.has_status = 1;
                     /* (a file that does not decode took the old mesh with it: the old picture stays
                        on the screen, the buttons wait for the next model) */
-                    cur.loaded = load_model(cur.path, dir, 1, tol, &cur.mesh, &sum, cur.lo, cur.hi) == 0;
+                    cur.loaded = load_model(cur.path, dir, 1, tol, &cur.mesh, &sum, cur.lo, cur.hi, &cur.nboxed) == 0;
                     vo = start;
                     redraw = cur.loaded;
                 } else if (!skipping && line[0]) {
@@ -522,10 +525,10 @@ static int screen_loop(const char *fb, const char *const button[CM_GPIO_NBUTTON]
         if (!redraw || rc != 0)
             continue;
         const char *status = cur.has_status ? cur.status : NULL;
-        rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, buttons || tick_ms > 0, cur.path, &cur.parts);
+        rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, cur.nboxed, status, buttons || tick_ms > 0, cur.path, &cur.parts);
         if (rc == 2 && commands) { /* (a --step beyond a new model's parts: the whole model) */
             vo.step = 0;
-            rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, buttons || tick_ms > 0, cur.path, &cur.parts);
+            rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, cur.nboxed, status, buttons || tick_ms > 0, cur.path, &cur.parts);
         }
         if (rc == 0)
             rc = show_frame(fb, &vo);
@@ -559,6 +562,8 @@ int main(int argc, char **argv)
             cm_report_limits(stdout);
             const cm_ram_part own[] = {
                 {"  frame", "the viewer's RGB frame and depth buffer (CM_VIEW_MAX_W x CM_VIEW_MAX_H)", sizeof view},
+                {"  face boxes", "each face's box, measured once a model for the frames' fit (CM_MAX_FACES)",
+                 sizeof face_box},
                 {"  glTF input", "MODEL.glb's accessors, primitives and nodes (CM_GLB_MAX_*)", sizeof glb},
                 {"  I/O chunks", "the reader's chunk, the mesh spill's files", cm_decode_file_read_static_bytes()}};
             cm_report_program_ram(stdout, own, sizeof own / sizeof own[0]);
@@ -716,7 +721,7 @@ int main(int argc, char **argv)
     const char *tmpdir = getenv("TMPDIR");
     cm_decode_summary sum;
     int lrc = load_model(in, out ? out : (tmpdir && tmpdir[0] ? tmpdir : "/tmp"), out ? 0 : 1, tol, &cur.mesh, &sum,
-                         cur.lo, cur.hi);
+                         cur.lo, cur.hi, &cur.nboxed);
     if (lrc != 0)
         return lrc;
     uint32_t parts = 0;
@@ -725,7 +730,7 @@ int main(int argc, char **argv)
     const struct timespec t0 = cm_clock_now();
     int rc = 0;
     for (long k = 0; k < frames && rc == 0; k++)
-        rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, status, interactive, in, &parts);
+        rc = draw(&vo, cur.lo, cur.hi, &cur.mesh, cur.nboxed, status, interactive, in, &parts);
     const struct timespec t1 = cm_clock_now();
     if (rc != 0)
         return rc;

@@ -259,3 +259,48 @@ int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
 {
     return m != NULL && cm_mesh_range_bounds(m, 0, m->nverts, lo, hi);
 }
+
+/*
+ * Each face's bounds and the whole mesh's, in one pass: once a model, so that the viewer's frames
+ * need not read every vertex to fit the camera (cm_view_fit).  The faces must hold the vertices one
+ * after another from 0, each once (as the decoder, cm_mesh_place and cm_glb_read make them);
+ * otherwise, or with more faces than cap, none is boxed and the whole mesh's bounds are
+ * cm_mesh_bounds'.  The union of the faces' is the same as cm_mesh_bounds' (a NaN likewise ignored
+ * unless the first vertex holds one).
+ */
+CM_ONCE_PER_FACE int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint32_t cap, uint32_t *nboxed, float lo[3],
+                                        float hi[3])
+{
+    *nboxed = 0;
+    uint32_t next = 0;
+    int held = m != NULL && box != NULL && m->nfaces <= cap;
+    for (uint32_t f = 0; held && f < m->nfaces; f++) {
+        held = m->faces[f].first_vert == next;
+        next += m->faces[f].nverts;
+    }
+    if (!held || next != m->nverts)
+        return cm_mesh_bounds(m, lo, hi);
+    int any = 0;
+    float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        float *b = box[f];
+        if (!cm_mesh_range_bounds(m, m->faces[f].first_vert, m->faces[f].nverts, b, b + 3)) {
+            b[0] = b[1] = b[2] = 3.0e38f; /* (no vertices: an empty box, lower above upper) */
+            b[3] = b[4] = b[5] = -3.0e38f;
+            continue;
+        }
+        for (int k = 0; k < 3; k++) {
+            if (!any || b[k] < l[k])
+                l[k] = b[k];
+            if (!any || b[3 + k] > h[k])
+                h[k] = b[3 + k];
+        }
+        any = 1;
+    }
+    *nboxed = m->nfaces;
+    for (int k = 0; any && k < 3; k++) {
+        lo[k] = l[k];
+        hi[k] = h[k];
+    }
+    return any;
+}

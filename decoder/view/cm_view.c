@@ -276,15 +276,91 @@ static float box_float(double x)
     return x < 3.0e38 ? (x > -3.0e38 ? (float)x : -3.0e38f) : 3.0e38f;
 }
 
-void cm_view_fit(cm_view *v, const cm_mesh *mesh)
+/* the outline (across and up, before the fit's centring) and nearest depth of vertices
+   [v0, v0 + nv) seen from the camera: out = {x low, x high, y low, y high, depth low} (1e300 and
+   -1e300: none); the vertices read back a run at a time (one at a time was a twentieth of a large
+   model's frame) */
+static void outline_of(cm_view *v, const cm_mesh *mesh, uint32_t v0, uint32_t nv, double out[5])
+{
+    double fxlo = 1e300, fxhi = -1e300, fylo = 1e300, fyhi = -1e300, fz = 1e300;
+    /* (x and y as a pair, as vertex_screen_in: the same bits as dot3's) */
+    const view_pair r_u[3] = {{v->r[0], v->u[0]}, {v->r[1], v->u[1]}, {v->r[2], v->u[2]}};
+    for (uint32_t i0 = 0; i0 < nv; i0 += CM_VIEW_READ_RUN) {
+        uint32_t n = nv - i0 < CM_VIEW_READ_RUN ? nv - i0 : CM_VIEW_READ_RUN;
+        const float(*pos)[3] = cm_mesh_vecs_at(mesh, CM_SPILL_POS, v0 + i0, n, v->run_pos);
+        for (uint32_t i = 0; i < n; i++) {
+            double d[3] = {(double)pos[i][0] - v->c[0], (double)pos[i][1] - v->c[1], (double)pos[i][2] - v->c[2]};
+            const view_pair XY =
+                (view_pair){d[0], d[0]} * r_u[0] + (view_pair){d[1], d[1]} * r_u[1] + (view_pair){d[2], d[2]} * r_u[2];
+            double x = XY[0], y = XY[1], z = dot3(d, v->f);
+            fxlo = x < fxlo ? x : fxlo;
+            fxhi = x > fxhi ? x : fxhi;
+            fylo = y < fylo ? y : fylo;
+            fyhi = y > fyhi ? y : fyhi;
+            fz = z < fz ? z : fz;
+        }
+    }
+    out[0] = fxlo, out[1] = fxhi, out[2] = fylo, out[3] = fyhi, out[4] = fz;
+}
+
+/* the same bounds for every vertex within a model-space box b (cm_mesh_face_boxes): its centre
+   seen from the camera, plus and minus its half sides' reach along each axis, widened by far more
+   than the roundings of outline_of's sums (a billionth of the sizes: a box of a few vertices must
+   hold theirs); an empty box gives none, one holding a NaN not-a-numbers (its face is measured) */
+static __attribute__((noinline)) void outline_within(const cm_view *v, const float b[6], double out[5])
+{
+    if (b[0] > b[3] || b[1] > b[4] || b[2] > b[5]) {
+        out[0] = out[2] = out[4] = 1e300, out[1] = out[3] = -1e300;
+        return;
+    }
+    double d[3], h[3], size = 0.0;
+    for (int k = 0; k < 3; k++) {
+        d[k] = 0.5 * ((double)b[k] + (double)b[3 + k]) - v->c[k];
+        h[k] = 0.5 * ((double)b[3 + k] - (double)b[k]);
+        size += fabs(d[k]) + h[k];
+    }
+    const double *axis[3] = {v->r, v->u, v->f};
+    for (int a = 0; a < 3; a++) {
+        const double *x = axis[a], at = dot3(d, x);
+        const double reach = fabs(x[0]) * h[0] + fabs(x[1]) * h[1] + fabs(x[2]) * h[2] + 1e-9 * size;
+        out[2 * a] = at - reach;
+        if (a < 2)
+            out[2 * a + 1] = at + reach;
+    }
+}
+
+/* face f's outline kept for cm_view_mesh's order and skipping */
+static void keep_face_box(cm_view *v, uint32_t f, const double o[5])
+{
+    for (int k = 0; k < 4; k++)
+        v->face_box[f][k] = box_float(o[k]);
+    v->face_near[f] = o[4];
+}
+
+/* face f's vertices (UINT32_MAX: the whole mesh's) projected: its outline kept, and added to all (x
+   low, high, y low, high: 1e300 and -1e300 before any) */
+static __attribute__((noinline)) void measure(cm_view *v, const cm_mesh *mesh, uint32_t f, double all[4])
+{
+    double o[5];
+    const int whole = f == UINT32_MAX;
+    outline_of(v, mesh, whole ? 0 : mesh->faces[f].first_vert, whole ? mesh->nverts : mesh->faces[f].nverts, o);
+    if (!whole)
+        keep_face_box(v, f, o);
+    if (!(o[0] <= o[1])) /* (no vertices) */
+        return;
+    all[0] = o[0] < all[0] ? o[0] : all[0];
+    all[1] = o[1] > all[1] ? o[1] : all[1];
+    all[2] = o[2] < all[2] ? o[2] : all[2];
+    all[3] = o[3] > all[3] ? o[3] : all[3];
+}
+
+void cm_view_fit(cm_view *v, const cm_mesh *mesh, const float (*box)[6], uint32_t nboxed)
 {
     v->boxes_nfaces = 0;
     if (v->o.perspective || mesh->nverts == 0)
         return;
     /* the outline across and up the screen, face by face (each face's box and nearest depth kept
-       for cm_view_mesh's order), where the faces hold every vertex once; else vertex by vertex
-       (the vertices read back a run at a time: one at a time was a twentieth of a large model's
-       frame) */
+       for cm_view_mesh's order), where the faces hold every vertex once; else vertex by vertex */
     uint64_t held = 0;
     uint32_t nf = mesh->nfaces <= CM_MAX_FACES ? mesh->nfaces : 0, next = 0;
     for (uint32_t f = 0; f < nf; f++) {
@@ -293,45 +369,40 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh)
         next = mesh->faces[f].first_vert + mesh->faces[f].nverts;
     }
     nf = held == mesh->nverts ? nf : 0;
-    double xlo = 0, xhi = 0, ylo = 0, yhi = 0;
-    int first = 1;
-    /* (x and y as a pair, as vertex_screen_in: the same bits as dot3's) */
-    const view_pair r_u[3] = {{v->r[0], v->u[0]}, {v->r[1], v->u[1]}, {v->r[2], v->u[2]}};
-    for (uint32_t f = 0; f < (nf ? nf : 1); f++) {
-        uint32_t v0 = nf ? mesh->faces[f].first_vert : 0, nv = nf ? mesh->faces[f].nverts : mesh->nverts;
-        double fxlo = 1e300, fxhi = -1e300, fylo = 1e300, fyhi = -1e300, fz = 1e300;
-        for (uint32_t i0 = 0; i0 < nv; i0 += CM_VIEW_READ_RUN) {
-            uint32_t n = nv - i0 < CM_VIEW_READ_RUN ? nv - i0 : CM_VIEW_READ_RUN;
-            const float(*pos)[3] = cm_mesh_vecs_at(mesh, CM_SPILL_POS, v0 + i0, n, v->run_pos);
-            for (uint32_t i = 0; i < n; i++) {
-                double d[3] = {(double)pos[i][0] - v->c[0], (double)pos[i][1] - v->c[1], (double)pos[i][2] - v->c[2]};
-                const view_pair XY =
-                    (view_pair){d[0], d[0]} * r_u[0] + (view_pair){d[1], d[1]} * r_u[1] + (view_pair){d[2], d[2]} * r_u[2];
-                double x = XY[0], y = XY[1], z = dot3(d, v->f);
-                fxlo = x < fxlo ? x : fxlo;
-                fxhi = x > fxhi ? x : fxhi;
-                fylo = y < fylo ? y : fylo;
-                fyhi = y > fyhi ? y : fyhi;
-                fz = z < fz ? z : fz;
-            }
+    /* with the faces' model-space boxes: each one's bound on the screen kept for the order and the
+       skipping, and only the faces whose bound reaches past the outline of those measured so far
+       (the four reaching farthest first) have their vertices projected: the same outline as from
+       every vertex, in a large model's frame a few faces' vertices (each vertex projected twice
+       was a twentieth of asmo's frame) */
+    double all[4] = {1e300, -1e300, 1e300, -1e300};
+    if (nf && box && nboxed == nf) {
+        uint32_t reach[4] = {0, 0, 0, 0};
+        double best[4] = {1e300, -1e300, 1e300, -1e300}, o[5];
+        for (uint32_t f = 0; f < nf; f++) {
+            outline_within(v, box[f], o);
+            keep_face_box(v, f, o);
+            for (int k = 0; k < 4; k++)
+                if ((k & 1) ? o[k] > best[k] : o[k] < best[k])
+                    best[k] = o[k], reach[k] = f;
         }
-        if (nf) {
-            v->face_box[f][0] = box_float(fxlo), v->face_box[f][1] = box_float(fxhi);
-            v->face_box[f][2] = box_float(fylo), v->face_box[f][3] = box_float(fyhi);
-            v->face_near[f] = fz;
+        for (int k = 0; k < 4; k++)
+            if ((k < 1 || reach[k] != reach[0]) && (k < 2 || reach[k] != reach[1]) && (k < 3 || reach[k] != reach[2]))
+                measure(v, mesh, reach[k], all);
+        for (uint32_t f = 0; f < nf; f++) {
+            if (f == reach[0] || f == reach[1] || f == reach[2] || f == reach[3] || mesh->faces[f].nverts == 0)
+                continue;
+            outline_within(v, box[f], o);
+            if (!(o[0] >= all[0] && o[1] <= all[1] && o[2] >= all[2] && o[3] <= all[3])) /* (not a number: measured) */
+                measure(v, mesh, f, all);
         }
-        if (nv == 0)
-            continue;
-        if (first) {
-            xlo = fxlo, xhi = fxhi, ylo = fylo, yhi = fyhi;
-            first = 0;
-        }
-        xlo = fxlo < xlo ? fxlo : xlo;
-        xhi = fxhi > xhi ? fxhi : xhi;
-        ylo = fylo < ylo ? fylo : ylo;
-        yhi = fyhi > yhi ? fyhi : yhi;
+    } else {
+        for (uint32_t f = 0; f < (nf ? nf : 1); f++)
+            measure(v, mesh, nf ? f : UINT32_MAX, all);
     }
+    if (!(all[0] <= all[1])) /* (no vertices) */
+        all[0] = all[1] = all[2] = all[3] = 0.0;
     v->boxes_nfaces = nf;
+    double xlo = all[0], xhi = all[1], ylo = all[2], yhi = all[3];
     double mx = 0.5 * (xlo + xhi), my = 0.5 * (ylo + yhi);
     for (int k = 0; k < 3; k++)
         v->c[k] += mx * v->r[k] + my * v->u[k];
@@ -1427,6 +1498,45 @@ static void placed_view(const cm_view *v, cm_vec3 p, const double *a, double q[3
     to_view(v, x, y, z, q);
 }
 
+/* is curve c one span with its knots clamped at both ends (p + 1 equal knots each): a Bezier curve
+   (circular arcs, most exporters' simple edges, asmo's degree-7 edges)? */
+static __attribute__((noinline)) int one_span(const cm_curve *c)
+{
+    const int p = c->p;
+    if (p < 2 || c->n_ctrl != p + 1 || !(c->knots[p] < c->knots[p + 1]))
+        return 0;
+#pragma GCC unroll 1
+    for (int i = 0; i < p; i++)
+        if (c->knots[i] != c->knots[p] || c->knots[p + 1 + i] != c->knots[2 * p + 1])
+            return 0;
+    return 1;
+}
+
+/* such a curve's point at u (clamped to its domain, as cm_curve_eval's): its control points summed
+   with the Bernstein polynomials' values, weighted where rational.  O(p) where the B-spline basis
+   is O(p^2): a degree-7 point was 700 instructions.  (The viewer's alone: the lines between its
+   points are drawn, not compared) */
+static __attribute__((noinline)) void bezier_point(const cm_curve *c, double u, cm_vec3 *out)
+{
+    const int p = c->p;
+    const double a = c->knots[p], b = c->knots[p + 1];
+    u = u > a ? (u < b ? u : b) : a;
+    const double s = (u - a) / (b - a), t = 1.0 - s;
+    double pw[CM_MAX_ORDER], x = 0.0, y = 0.0, z = 0.0, w = 0.0, sp = 1.0, tp = 1.0, binom = 1.0;
+    /* (loops, not peeled into one copy for each degree: the viewer's code is budgeted) */
+#pragma GCC unroll 1
+    for (int i = 0; i <= p; i++, sp *= s)
+        pw[i] = sp; /* s^i */
+#pragma GCC unroll 1
+    for (int i = p; i >= 0; i--, tp *= t) {
+        /* C(p, i) s^i t^(p - i), the binomial from C(p, p) = 1 down: C(p, i - 1) = C(p, i) i / (p - i + 1) */
+        double bw = binom * pw[i] * tp * (c->w ? c->w[i] : 1.0);
+        x += bw * c->ctrl[i].x, y += bw * c->ctrl[i].y, z += bw * c->ctrl[i].z, w += bw;
+        binom = binom * (double)i / (double)(p - i + 1);
+    }
+    out->x = x / w, out->y = y / w, out->z = z / w;
+}
+
 /* edge e of m, placed by a, sampled and drawn: a line (degree 1) at its control points, a curve in
    pieces of about VIEW_EDGE_PIECE_PX pixels of its control polygon on the screen (at least one a
    span, at most CM_VIEW_EDGE_SEGMENTS) */
@@ -1458,9 +1568,12 @@ static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a
            (cm_view_edges draws an edge's copies one after another: a copy's curve was evaluated
            again, a tenth of a large assembly's frame) */
         v->edge_cache_e = e, v->edge_cache_n = n, v->edge_cache_len = 0;
+        const int bezier = one_span(&c);
         for (int k = 0; k <= n; k++) {
             cm_vec3 d[CM_MAX_DERS + 1];
-            if (cm_curve_eval(&c, (double)k / (double)n, 0, d, NULL) != CM_OK)
+            if (bezier)
+                bezier_point(&c, (double)k / (double)n, d);
+            else if (cm_curve_eval(&c, (double)k / (double)n, 0, d, NULL) != CM_OK)
                 break; /* (the points before it are drawn) */
             v->edge_cache_pts[v->edge_cache_len++] = d[0];
         }

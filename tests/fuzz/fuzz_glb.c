@@ -23,6 +23,7 @@ static cm_model model;
 static float pos[4096][3], nrm[4096][3];
 static uint32_t idx[12288];
 static cm_mesh_face faces[256];
+static float boxes[256][6];
 
 static const uint8_t *data;
 static size_t len;
@@ -87,8 +88,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *d, size_t n)
         if (model.faces[f].part < 1 || model.faces[f].part > model.nparts)
             __builtin_trap();
     }
-    float lo[3], hi[3];
-    if (!cm_mesh_bounds(&mesh, lo, hi))
+    float lo[3], hi[3], blo[3], bhi[3];
+    uint32_t nboxed = 0;
+    int any = cm_mesh_bounds(&mesh, lo, hi);
+    /* the faces' boxes give the same bounds (the union), and below the same fit */
+    if (cm_mesh_face_boxes(&mesh, boxes, 256, &nboxed, blo, bhi) != any ||
+        (any && (memcmp(lo, blo, sizeof lo) != 0 || memcmp(hi, bhi, sizeof hi) != 0)))
+        __builtin_trap();
+    if (!any)
         return 0;
     cm_view_opts o;
     cm_view_opts_default(&o);
@@ -106,7 +113,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *d, size_t n)
     uint32_t parts = cm_view_parts(&view, &model);
     o.step = parts > 0 && n > 3 ? d[n - 4] % (parts + 1) : 0;
     view.o.step = o.step;
-    cm_view_fit(&view, &mesh);
+    if (nboxed) { /* (the fit from every vertex, then from the boxes: the same camera) */
+        cm_view_fit(&view, &mesh, NULL, 0);
+        const double c0[3] = {view.c[0], view.c[1], view.c[2]}, s0 = view.scale;
+        if (cm_view_begin(&view, &o, lo, hi, &st) != CM_OK)
+            __builtin_trap();
+        (void)cm_view_parts(&view, &model);
+        view.o.step = o.step;
+        cm_view_fit(&view, &mesh, (const float(*)[6])boxes, nboxed);
+        if (memcmp(c0, view.c, sizeof c0) != 0 || memcmp(&s0, &view.scale, sizeof s0) != 0)
+            __builtin_trap();
+    } else {
+        cm_view_fit(&view, &mesh, NULL, 0);
+    }
     cm_view_mesh(&view, &mesh);
     cm_view_edges(&view, &model);
     return 0;

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <stdio.h>
 
+#include "cm/cm_bspline.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_png.h"
 #include "cm/cm_view.h"
@@ -559,7 +560,7 @@ static void test_hidden_faces(void **state)
             add_quad(&m, front, larger == 2 ? tilted : ny, 0x808080u, 1);
             assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
             if (fit)
-                cm_view_fit(&view, &m);
+                cm_view_fit(&view, &m, NULL, 0);
             assert_int_equal(view.boxes_nfaces, fit ? 2 : 0);
             cm_view_mesh(&view, &m);
             drawn[fit] = view.triangles;
@@ -572,6 +573,77 @@ static void test_hidden_faces(void **state)
         assert_int_equal(drawn[1], larger ? 4 : 2);
         assert_int_equal(view.hidden_faces, larger == 0);
     }
+}
+
+/* the fit from the faces' boxes (cm_mesh_face_boxes): six squares of a unit cube's faces, a small
+   tilted one inside it and a sliver along its diagonal and a little beyond (whose box reaches
+   farthest every way: measured first, it is not the outline), seen from iso and turned.  The camera is the
+   same as from every vertex, bit for bit, and so is the frame; the boxes' union is cm_mesh_bounds';
+   the small face is not measured (its kept box is its box's bound, wider than its vertices'); every
+   kept box holds its face's vertices.  Faces that do not hold the vertices one after another, or
+   more than the boxes: none boxed */
+static void test_fit_from_boxes(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 120 || CM_VIEW_MAX_H < 90 || CM_MAX_FACES < 8)
+        skip();
+    static const float sq[8][4][3] = {
+        {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}},         {{1, 1, 0}, {0, 1, 0}, {0, 1, 1}, {1, 1, 1}},
+        {{0, 1, 0}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}},         {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}},
+        {{0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}},         {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+        {{0.3f, 0.3f, 0.3f}, {0.6f, 0.4f, 0.3f}, {0.6f, 0.5f, 0.6f}, {0.3f, 0.4f, 0.6f}},
+        {{-0.1f, -0.1f, -0.1f}, {-0.08f, -0.1f, -0.1f}, {1.1f, 1.1f, 1.1f}, {1.08f, 1.1f, 1.1f}}};
+    const float n[3] = {0, -1, 0};
+    cm_mesh m = mesh_storage();
+    for (int f = 0; f < 8; f++)
+        add_quad(&m, sq[f], n, 0x808080u, 1);
+    static float box[8][6];
+    static uint8_t frame[120 * 90 * 3];
+    uint32_t nboxed = 0;
+    float lo[3], hi[3], blo[3], bhi[3];
+    assert_int_equal(cm_mesh_bounds(&m, lo, hi), 1);
+    assert_int_equal(cm_mesh_face_boxes(&m, box, 8, &nboxed, blo, bhi), 1);
+    assert_int_equal(nboxed, 8);
+    assert_memory_equal(lo, blo, sizeof lo);
+    assert_memory_equal(hi, bhi, sizeof hi);
+    assert_true(box[6][0] == 0.3f && box[6][4] == 0.5f && box[7][5] == 1.1f);
+    cm_view_opts o = square_opts(120, CM_VIEW_ISO, 0);
+    o.height = 90;
+    for (int turn = 0; turn < 3; turn++) {
+        o.turn = turn;
+        double c[3], scale;
+        float exact[8][4];
+        for (int boxed = 0; boxed < 2; boxed++) {
+            assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+            cm_view_fit(&view, &m, boxed ? (const float(*)[6])box : NULL, boxed ? nboxed : 0);
+            assert_int_equal(view.boxes_nfaces, 8);
+            cm_view_mesh(&view, &m);
+            if (!boxed) {
+                memcpy(c, view.c, sizeof c);
+                scale = view.scale;
+                memcpy(frame, view.rgb, sizeof frame);
+                for (int f = 0; f < 8; f++)
+                    for (int k = 0; k < 4; k++)
+                        exact[f][k] = view.face_box[f][k];
+                continue;
+            }
+            assert_memory_equal(view.c, c, sizeof c);
+            assert_memory_equal(&view.scale, &scale, sizeof scale);
+            assert_memory_equal(view.rgb, frame, sizeof frame);
+            for (int f = 0; f < 8; f++)
+                assert_true(view.face_box[f][0] <= exact[f][0] && view.face_box[f][1] >= exact[f][1] &&
+                            view.face_box[f][2] <= exact[f][2] && view.face_box[f][3] >= exact[f][3]);
+            assert_true(view.face_box[6][0] < exact[6][0] || view.face_box[6][1] > exact[6][1] ||
+                        view.face_box[6][2] < exact[6][2] || view.face_box[6][3] > exact[6][3]);
+        }
+    }
+    /* (the last two faces' vertices swapped round: not one after another) */
+    m.faces[6].first_vert = 28, m.faces[7].first_vert = 24;
+    assert_int_equal(cm_mesh_face_boxes(&m, box, 8, &nboxed, blo, bhi), 1);
+    assert_int_equal(nboxed, 0);
+    assert_memory_equal(lo, blo, sizeof lo);
+    assert_int_equal(cm_mesh_face_boxes(&m, box, 7, &nboxed, blo, bhi), 1);
+    assert_int_equal(nboxed, 0);
 }
 
 /* front to back, triangle by triangle: a square tilted back (y = z - 0.5, nearest at its lower
@@ -598,7 +670,7 @@ static void test_hidden_triangles(void **state)
         add_quad(&m, back, tilted, 0x808080u, 1);
         assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
         if (fit)
-            cm_view_fit(&view, &m);
+            cm_view_fit(&view, &m, NULL, 0);
         assert_int_equal(view.boxes_nfaces, fit ? 2 : 0);
         cm_view_mesh(&view, &m);
         assert_int_equal(view.hidden_faces, 0);
@@ -701,6 +773,85 @@ static void test_edge_copies(void **state)
         uint8_t want = one[0][i] != bg ? one[0][i] : (one[1][i] != bg ? one[1][i] : one[2][i]);
         assert_int_equal(view.rgb[i], want);
     }
+}
+
+/* edges of one span (Bezier curves: the viewer sums their Bernstein polynomials, not the B-spline
+   basis): a rational quadratic quarter circle and a degree-7 curve, drawn from the front.  Every
+   edge pixel lies within a pixel and a half of the curve (the kernels' cm_curve_eval, densely), and
+   every point of the curve has an edge pixel that near: a wrong weight (a parabola for the circle)
+   or a wrong binomial moves the lines by several pixels */
+static cm_model g_bez;
+static void test_bezier_edges(void **state)
+{
+    (void)state;
+    if (CM_VIEW_MAX_W < 100 || CM_VIEW_MAX_H < 100 || CM_MAX_EDGES < 2 || CM_MAX_MODEL_CTRL < 11 ||
+        CM_MAX_MODEL_KNOTS < 22 || CM_MAX_DEGREE < 7)
+        skip();
+    memset(&g_bez, 0, sizeof g_bez);
+    static const double arc[3][3] = {{0.9, 0, 0.1}, {0.9, 0, 0.9}, {0.1, 0, 0.9}};
+    static const double seven[8][3] = {{0.05, 0, 0.05}, {0.3, 0, 0.7}, {0.1, 0, 0.95}, {0.6, 0, 0.2},
+                                       {0.9, 0, 0.5},   {0.5, 0, 0.9}, {0.95, 0, 0.9}, {0.7, 0, 0.05}};
+    for (int i = 0; i < 3; i++) {
+        g_bez.ctrl[i] = cm_v3(arc[i][0], arc[i][1], arc[i][2]);
+        g_bez.w[i] = i == 1 ? sqrt(0.5) : 1.0;
+    }
+    for (int i = 0; i < 8; i++)
+        g_bez.ctrl[3 + i] = cm_v3(seven[i][0], seven[i][1], seven[i][2]);
+    for (int i = 0; i < 6; i++)
+        g_bez.knots[i] = i < 3 ? 0.0 : 1.0;
+    for (int i = 0; i < 16; i++)
+        g_bez.knots[6 + i] = i < 8 ? 0.0 : 1.0;
+    cm_edge *A = &g_bez.edges[0], *B = &g_bez.edges[1];
+    A->p = 2, A->nctrl = 3, A->ctrl0 = 0, A->knot0 = 0, A->rational = 1, A->v0 = A->v1 = -1;
+    B->p = 7, B->nctrl = 8, B->ctrl0 = 3, B->knot0 = 6, B->v0 = B->v1 = -1;
+    for (int e = 0; e < 2; e++)
+        g_bez.edge_face[e][0] = 0, g_bez.edge_face[e][1] = CM_NO_FACE;
+    g_bez.nedges = 2;
+    g_bez.nfaces = 1;
+    cm_view_opts o = square_opts(100, CM_VIEW_FRONT, 1);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 0, 1};
+    assert_ok(cm_view_begin(&view, &o, lo, hi, NULL));
+    cm_view_edges(&view, &g_bez);
+    /* the curves densely on the screen (to_screen's orthographic arithmetic) */
+    enum { DENSE = 2000 };
+    static double sx[2][DENSE + 1], sy[2][DENSE + 1];
+    for (int e = 0; e < 2; e++) {
+        cm_curve c;
+        cm_model_edge_curve(&g_bez, (uint32_t)e, &c);
+        for (int k = 0; k <= DENSE; k++) {
+            cm_vec3 d[CM_MAX_DERS + 1];
+            assert_ok(cm_curve_eval(&c, (double)k / DENSE, 0, d, NULL));
+            const double q[3] = {d[0].x - view.c[0], d[0].y - view.c[1], d[0].z - view.c[2]};
+            sx[e][k] = 50.0 + view.scale * (q[0] * view.r[0] + q[1] * view.r[1] + q[2] * view.r[2]);
+            sy[e][k] = 50.0 - view.scale * (q[0] * view.u[0] + q[1] * view.u[1] + q[2] * view.u[2]);
+        }
+    }
+    int pixels = 0;
+    for (int y = 0; y < 100; y++)
+        for (int x = 0; x < 100; x++) {
+            if (view.rgb[3 * (y * 100 + x)] == (uint8_t)(o.background >> 16))
+                continue;
+            pixels++;
+            double best = 1e300;
+            for (int e = 0; e < 2; e++)
+                for (int k = 0; k <= DENSE; k++) {
+                    double dx = sx[e][k] - (x + 0.5), dy = sy[e][k] - (y + 0.5);
+                    best = dx * dx + dy * dy < best ? dx * dx + dy * dy : best;
+                }
+            assert_true(best <= 1.5 * 1.5);
+        }
+    assert_true(pixels > 100);
+    for (int e = 0; e < 2; e++)
+        for (int k = 0; k <= DENSE; k += 10) {
+            int near = 0;
+            for (int y = (int)sy[e][k] - 2; y <= (int)sy[e][k] + 2; y++)
+                for (int x = (int)sx[e][k] - 2; x <= (int)sx[e][k] + 2; x++) {
+                    double dx = sx[e][k] - (x + 0.5), dy = sy[e][k] - (y + 0.5);
+                    near = near || (x >= 0 && y >= 0 && x < 100 && y < 100 && dx * dx + dy * dy <= 1.5 * 1.5 &&
+                                    view.rgb[3 * (y * 100 + x)] != (uint8_t)(o.background >> 16));
+                }
+            assert_true(near);
+        }
 }
 
 static void test_refuses_large_frame(void **state)
@@ -867,7 +1018,7 @@ int main(void)
         cmocka_unit_test(test_fill_rule),   cmocka_unit_test(test_back_faces), cmocka_unit_test(test_large_face),
         cmocka_unit_test(test_small_triangles), cmocka_unit_test(test_touching_solids),
         cmocka_unit_test(test_back_edges), cmocka_unit_test(test_hidden_faces), cmocka_unit_test(test_hidden_triangles),
-        cmocka_unit_test(test_sliver_depth), cmocka_unit_test(test_edge_copies),
+        cmocka_unit_test(test_sliver_depth), cmocka_unit_test(test_edge_copies), cmocka_unit_test(test_bezier_edges), cmocka_unit_test(test_fit_from_boxes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

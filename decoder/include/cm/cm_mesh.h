@@ -143,4 +143,11 @@ int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3]);
 /** Bounds of positions [first, first + n) (the GLB's accessors: a face's); as cm_mesh_bounds. */
 int cm_mesh_range_bounds(const cm_mesh *m, uint32_t first, uint32_t n, float lo[3], float hi[3]);
 
+/** Each face's bounds into box[f] (low x, y, z, then high; an empty face's lower above its upper)
+    and the whole mesh's into lo, hi, in one pass (once a model: the viewer's frames fit the camera
+    from them, cm_view_fit).  Where the faces hold the vertices one after another from 0, each once,
+    and are at most cap: *nboxed = m->nfaces; else 0 and lo, hi from cm_mesh_bounds.  Returns as
+    cm_mesh_bounds (the same lo, hi). */
+int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint32_t cap, uint32_t *nboxed, float lo[3], float hi[3]);
+
 #endif /* CM_MESH_H */

@@ -174,9 +174,11 @@ CM_NODISCARD cm_err cm_view_begin(cm_view *v, const cm_view_opts *o, const float
 /**
  * Orthographic frames: centre and scale the camera on the mesh's own outline (its vertices seen
  * from the camera) instead of its box's, which from an oblique direction is larger.  Call after
- * cm_view_begin, before drawing; perspective frames keep the box's fit.
+ * cm_view_begin, before drawing; perspective frames keep the box's fit.  With the faces' model-space
+ * boxes (box[f] from cm_mesh_face_boxes, nboxed of them: once a model) only the faces that may
+ * reach the outline have their vertices projected, the same outline; else (box NULL) every vertex.
  */
-void cm_view_fit(cm_view *v, const cm_mesh *mesh);
+void cm_view_fit(cm_view *v, const cm_mesh *mesh, const float (*box)[6], uint32_t nboxed);
 
 /**
  * Number the model's parts for assembly steps (opts.step): those the file names (format 4.11, the
