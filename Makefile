@@ -240,6 +240,11 @@ $(call bdir,$(1))/tests/fuzz/replay_tess: $(call bdir,$(1))/tests/fuzz/fuzz_tess
 		$(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
 	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
+# the viewer's glTF input's: no host code either
+$(call bdir,$(1))/tests/fuzz/replay_glb: $(call bdir,$(1))/tests/fuzz/fuzz_glb.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
+		$(call bdir,$(1))/libcmdecoder.a
+	$$(call say,LD      ,$$@)
+	$$(Q)$$(CC) $$(CFLAGS) $$(LDFLAGS) -o $$@ $$^ -lm
 $(call bdir,$(1))/tests/fuzz/replay_%: $(call bdir,$(1))/tests/fuzz/fuzz_%.o $(call bdir,$(1))/tests/fuzz/replay_main.o \
 		$(call bdir,$(1))/libcmhost.a $(call bdir,$(1))/libcmdecoder.a
 	$$(call say,LD      ,$$@)
@@ -352,6 +357,7 @@ check-run: $(foreach p,$(PROFILES),unit-tests-$(p)) host-tests-host $(call bdir,
 		"gate:import-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-replay" \
 		"gate:decode-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-decode-replay" \
 		"gate:tess-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-tess-replay" \
+		"gate:glb-fuzz-replay:$(MAKE) --no-print-directory -s check-fuzz-glb-replay" \
 		"gate:corpus-vs-occt:$(MAKE) --no-print-directory -s check-corpus-occt" \
 		"gate:corpus-roundtrip:$(MAKE) --no-print-directory -s check-corpus-roundtrip" \
 		"gate:step-vs-occt:$(MAKE) --no-print-directory -s check-step-occt" \
@@ -395,6 +401,7 @@ check-fuzz-replay-fast:
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-replay FUZZ_REPLAY_SHARED= FUZZ_REPLAY_SHARED_STEP=
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-decode-replay
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-tess-replay
+	$(Q)$(MAKE) --no-print-directory -s check-fuzz-glb-replay
 	$(Q)$(MAKE) --no-print-directory -s check-fuzz-link-replay
 
 # headers declaring fewer triangles than the faces make: 60 % decodes whole (the host grows its mesh),
@@ -511,6 +518,15 @@ check-fuzz-tess-replay:
 		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
 		$(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_tess
 	$(Q)FUZZ_TESS_STRICT=1 $(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_tess tests/fuzz/corpus_tess
+
+# the viewer's glTF input's seeds replayed under the sanitizers: each GLB read, drawn, and its faces'
+# boxes and both fits compared (tests/fuzz/fuzz_glb.c)
+.PHONY: check-fuzz-glb-replay
+check-fuzz-glb-replay:
+	$(Q)$(MAKE) --no-print-directory -s CC=clang BUILD_ROOT=$(BUILD_ROOT)/clang-san CM_NO_STACK_FLAGS=1 PROFILE=terminal \
+		CFLAGS="$(CLANG_SAN)" LDFLAGS="-fsanitize=address,undefined" \
+		$(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_glb
+	$(Q)$(BUILD_ROOT)/clang-san/$(CLANG_TRIPLET)-terminal/tests/fuzz/replay_glb tests/fuzz/corpus_glb
 
 # libFuzzer on the triangulator (not part of check): make fuzz-tess FUZZ_SECONDS=600 (its own build:
 # edge coverage of the library only, the harness uninstrumented, about 13x faster)

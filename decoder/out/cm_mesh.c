@@ -266,7 +266,8 @@ int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
  * after another from 0, each once (as the decoder, cm_mesh_place and cm_glb_read make them);
  * otherwise, or with more faces than cap, none is boxed and the whole mesh's bounds are
  * cm_mesh_bounds'.  The union of the faces' is the same as cm_mesh_bounds' (a NaN likewise ignored
- * unless the first vertex holds one).
+ * unless the first vertex holds one); where a face's first vertex holds one, its box ignores the
+ * rest of its vertices (found by the fuzzing of the viewer's glTF input): then cm_mesh_bounds'.
  */
 CM_ONCE_PER_FACE int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint32_t cap, uint32_t *nboxed, float lo[3],
                                         float hi[3])
@@ -280,7 +281,7 @@ CM_ONCE_PER_FACE int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint3
     }
     if (!held || next != m->nverts)
         return cm_mesh_bounds(m, lo, hi);
-    int any = 0;
+    int any = 0, nan = 0;
     float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};
     for (uint32_t f = 0; f < m->nfaces; f++) {
         float *b = box[f];
@@ -290,6 +291,7 @@ CM_ONCE_PER_FACE int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint3
             continue;
         }
         for (int k = 0; k < 3; k++) {
+            nan = nan || b[k] != b[k] || b[3 + k] != b[3 + k];
             if (!any || b[k] < l[k])
                 l[k] = b[k];
             if (!any || b[3 + k] > h[k])
@@ -298,6 +300,8 @@ CM_ONCE_PER_FACE int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint3
         any = 1;
     }
     *nboxed = m->nfaces;
+    if (nan) /* (a face's first vertex held one: its box ignores the rest, the whole mesh's do not) */
+        return cm_mesh_bounds(m, lo, hi);
     for (int k = 0; any && k < 3; k++) {
         lo[k] = l[k];
         hi[k] = h[k];

@@ -637,6 +637,14 @@ static void test_fit_from_boxes(void **state)
                         view.face_box[6][2] < exact[6][2] || view.face_box[6][3] > exact[6][3]);
         }
     }
+    /* a NaN in a face's first vertex (a hostile GLB's): that face's box ignores the rest of its
+       vertices, so the whole mesh's bounds are cm_mesh_bounds' all the same */
+    m.pos[28][2] = NAN;
+    m.pos[30][2] = 5.0f;
+    assert_int_equal(cm_mesh_bounds(&m, lo, hi), 1);
+    assert_int_equal(cm_mesh_face_boxes(&m, box, 8, &nboxed, blo, bhi), 1);
+    assert_int_equal(nboxed, 8);
+    assert_true(hi[2] == 5.0f && bhi[2] == 5.0f && blo[2] == lo[2]);
     /* (the last two faces' vertices swapped round: not one after another) */
     m.faces[6].first_vert = 28, m.faces[7].first_vert = 24;
     assert_int_equal(cm_mesh_face_boxes(&m, box, 8, &nboxed, blo, bhi), 1);
