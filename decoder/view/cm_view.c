@@ -1502,40 +1502,44 @@ static void placed_view(const cm_view *v, cm_vec3 p, const double *a, double q[3
 }
 
 /* is curve c one span with its knots clamped at both ends (p + 1 equal knots each): a Bezier curve
-   (circular arcs, most exporters' simple edges, asmo's degree-7 edges)? */
-static __attribute__((noinline)) int one_span(const cm_curve *c)
+   (circular arcs, most exporters' simple edges, asmo's degree-7 edges)?  Then coef[i] = C(p, i) w_i
+   (the binomials exact: integers) for bezier_point */
+static __attribute__((noinline)) int one_span(const cm_curve *c, double coef[CM_MAX_ORDER])
 {
     const int p = c->p;
     if (p < 2 || c->n_ctrl != p + 1 || !(c->knots[p] < c->knots[p + 1]))
         return 0;
+    double binom = 1.0;
 #pragma GCC unroll 1
-    for (int i = 0; i < p; i++)
-        if (c->knots[i] != c->knots[p] || c->knots[p + 1 + i] != c->knots[2 * p + 1])
+    for (int i = 0; i <= p; i++) {
+        if (i < p && (c->knots[i] != c->knots[p] || c->knots[p + 1 + i] != c->knots[2 * p + 1]))
             return 0;
+        coef[i] = binom * (c->w ? c->w[i] : 1.0);
+        binom = binom * (double)(p - i) / (double)(i + 1);
+    }
     return 1;
 }
 
 /* such a curve's point at u (clamped to its domain, as cm_curve_eval's): its control points summed
-   with the Bernstein polynomials' values, weighted where rational.  O(p) where the B-spline basis
-   is O(p^2): a degree-7 point was 700 instructions.  (The viewer's alone: the lines between its
-   points are drawn, not compared) */
-static __attribute__((noinline)) void bezier_point(const cm_curve *c, double u, cm_vec3 *out)
+   with the Bernstein polynomials' values, weighted where rational (coef: one_span's).  O(p) where
+   the B-spline basis is O(p^2): a degree-7 point was 700 instructions.  (The viewer's alone: the
+   lines between its points are drawn, not compared) */
+static __attribute__((noinline)) void bezier_point(const cm_curve *c, const double coef[CM_MAX_ORDER], double u,
+                                                   cm_vec3 *out)
 {
     const int p = c->p;
     const double a = c->knots[p], b = c->knots[p + 1];
     u = u > a ? (u < b ? u : b) : a;
     const double s = (u - a) / (b - a), t = 1.0 - s;
-    double pw[CM_MAX_ORDER], x = 0.0, y = 0.0, z = 0.0, w = 0.0, sp = 1.0, tp = 1.0, binom = 1.0;
+    double pw[CM_MAX_ORDER], x = 0.0, y = 0.0, z = 0.0, w = 0.0, sp = 1.0, tp = 1.0;
     /* (loops, not peeled into one copy for each degree: the viewer's code is budgeted) */
 #pragma GCC unroll 1
     for (int i = 0; i <= p; i++, sp *= s)
         pw[i] = sp; /* s^i */
 #pragma GCC unroll 1
-    for (int i = p; i >= 0; i--, tp *= t) {
-        /* C(p, i) s^i t^(p - i), the binomial from C(p, p) = 1 down: C(p, i - 1) = C(p, i) i / (p - i + 1) */
-        double bw = binom * pw[i] * tp * (c->w ? c->w[i] : 1.0);
+    for (int i = p; i >= 0; i--, tp *= t) { /* C(p, i) w_i s^i t^(p - i) */
+        double bw = coef[i] * pw[i] * tp;
         x += bw * c->ctrl[i].x, y += bw * c->ctrl[i].y, z += bw * c->ctrl[i].z, w += bw;
-        binom = binom * (double)i / (double)(p - i + 1);
     }
     out->x = x / w, out->y = y / w, out->z = z / w;
 }
@@ -1571,11 +1575,12 @@ static void draw_edge(cm_view *v, const cm_model *m, uint32_t e, const double *a
            (cm_view_edges draws an edge's copies one after another: a copy's curve was evaluated
            again, a tenth of a large assembly's frame) */
         v->edge_cache_e = e, v->edge_cache_n = n, v->edge_cache_len = 0;
-        const int bezier = one_span(&c);
+        double coef[CM_MAX_ORDER];
+        const int bezier = one_span(&c, coef);
         for (int k = 0; k <= n; k++) {
             cm_vec3 d[CM_MAX_DERS + 1];
             if (bezier)
-                bezier_point(&c, (double)k / (double)n, d);
+                bezier_point(&c, coef, (double)k / (double)n, d);
             else if (cm_curve_eval(&c, (double)k / (double)n, 0, d, NULL) != CM_OK)
                 break; /* (the points before it are drawn) */
             v->edge_cache_pts[v->edge_cache_len++] = d[0];
