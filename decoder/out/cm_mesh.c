@@ -260,6 +260,19 @@ int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3])
     return m != NULL && cm_mesh_range_bounds(m, 0, m->nverts, lo, hi);
 }
 
+uint32_t cm_mesh_faces_in_order(const cm_mesh *m, uint32_t cap)
+{
+    if (m == NULL || m->nfaces == 0 || m->nfaces > cap)
+        return 0;
+    uint64_t next = 0; /* (64 bits: a hostile GLB's counts do not wrap round to a match) */
+    for (uint32_t f = 0; f < m->nfaces; f++) {
+        if (m->faces[f].first_vert != next)
+            return 0;
+        next += m->faces[f].nverts;
+    }
+    return next == m->nverts ? m->nfaces : 0;
+}
+
 /*
  * Each face's bounds and the whole mesh's, in one pass: once a model, so that the viewer's frames
  * need not read every vertex to fit the camera (cm_view_fit).  The faces must hold the vertices one
@@ -273,13 +286,7 @@ CM_ONCE_PER_FACE int cm_mesh_face_boxes(const cm_mesh *m, float (*box)[6], uint3
                                         float hi[3])
 {
     *nboxed = 0;
-    uint32_t next = 0;
-    int held = m != NULL && box != NULL && m->nfaces <= cap;
-    for (uint32_t f = 0; held && f < m->nfaces; f++) {
-        held = m->faces[f].first_vert == next;
-        next += m->faces[f].nverts;
-    }
-    if (!held || next != m->nverts)
+    if (box == NULL || cm_mesh_faces_in_order(m, cap) == 0)
         return cm_mesh_bounds(m, lo, hi);
     int any = 0, nan = 0;
     float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};

@@ -361,14 +361,7 @@ void cm_view_fit(cm_view *v, const cm_mesh *mesh, const float (*box)[6], uint32_
         return;
     /* the outline across and up the screen, face by face (each face's box and nearest depth kept
        for cm_view_mesh's order), where the faces hold every vertex once; else vertex by vertex */
-    uint64_t held = 0;
-    uint32_t nf = mesh->nfaces <= CM_MAX_FACES ? mesh->nfaces : 0, next = 0;
-    for (uint32_t f = 0; f < nf; f++) {
-        held += mesh->faces[f].nverts;
-        nf = mesh->faces[f].first_vert == next ? nf : 0; /* (one after another from 0) */
-        next = mesh->faces[f].first_vert + mesh->faces[f].nverts;
-    }
-    nf = held == mesh->nverts ? nf : 0;
+    const uint32_t nf = cm_mesh_faces_in_order(mesh, CM_MAX_FACES);
     /* with the faces' model-space boxes: each one's bound on the screen kept for the order and the
        skipping, and only the faces whose bound reaches past the outline of those measured so far
        (the four reaching farthest first) have their vertices projected: the same outline as from

@@ -143,6 +143,11 @@ int cm_mesh_bounds(const cm_mesh *m, float lo[3], float hi[3]);
 /** Bounds of positions [first, first + n) (the GLB's accessors: a face's); as cm_mesh_bounds. */
 int cm_mesh_range_bounds(const cm_mesh *m, uint32_t first, uint32_t n, float lo[3], float hi[3]);
 
+/** m->nfaces where its faces, at most cap of them, hold the vertices one after another from 0, each
+    once (as the decoder, cm_mesh_place and cm_glb_read make them: a face's box is then its own
+    vertices'), else 0. */
+uint32_t cm_mesh_faces_in_order(const cm_mesh *m, uint32_t cap);
+
 /** Each face's bounds into box[f] (low x, y, z, then high; an empty face's lower above its upper)
     and the whole mesh's into lo, hi, in one pass (once a model: the viewer's frames fit the camera
     from them, cm_view_fit).  Where the faces hold the vertices one after another from 0, each once,
