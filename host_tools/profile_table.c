@@ -11,6 +11,5 @@
 #error "compile with -DPROFILE_TABLE=cm_profile_table_<profile>"
 #endif
 
-#define ROW_(id, value, hard, unit, doc) {(uint32_t)(value), (uint32_t)(hard), #id, unit, doc},
 extern const cm_limit_info PROFILE_TABLE[CM_LIMIT_COUNT];
-const cm_limit_info PROFILE_TABLE[CM_LIMIT_COUNT] = {CM_LIMITS(ROW_)};
+const cm_limit_info PROFILE_TABLE[CM_LIMIT_COUNT] = {CM_LIMITS(CM_LIMIT_INFO_ROW)};

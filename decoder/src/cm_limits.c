@@ -3,9 +3,7 @@
 
 #include <stddef.h>
 
-#define CM_LIMIT_ROW_(id, value, hard, unit, doc) {(uint32_t)(value), (uint32_t)(hard), #id, unit, doc},
-const cm_limit_info cm_limit_table[CM_LIMIT_COUNT] = {CM_LIMITS(CM_LIMIT_ROW_)};
-#undef CM_LIMIT_ROW_
+const cm_limit_info cm_limit_table[CM_LIMIT_COUNT] = {CM_LIMITS(CM_LIMIT_INFO_ROW)};
 /* each text with its 0 byte within its array (a literal exactly as long as the array would lose it) */
 #define CM_LIMIT_FITS_(id, value, hard, unit, doc)                                                         \
     _Static_assert(sizeof(#id) <= CM_LIMIT_NAME_CHARS && sizeof(unit) <= CM_LIMIT_UNIT_CHARS &&            \

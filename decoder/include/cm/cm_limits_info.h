@@ -31,6 +31,10 @@ typedef struct cm_limit_info {
     char doc[CM_LIMIT_DOC_CHARS];   /* one line */
 } cm_limit_info;
 
+/* one row of a limits table from a CM_LIMITS entry (this build's cm_limit_table and the
+   workstation's per-profile copies, host_tools/profile_table.c: one layout for both) */
+#define CM_LIMIT_INFO_ROW(id, value, hard, unit, doc) {(uint32_t)(value), (uint32_t)(hard), #id, unit, doc},
+
 extern const cm_limit_info cm_limit_table[CM_LIMIT_COUNT];
 
 /** Name of the profile this code was compiled with ("terminal", "host", "tiny"). */
