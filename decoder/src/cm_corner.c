@@ -86,7 +86,8 @@ static cm_err face_normal_cached(cm_corner_ws *ws, const cm_model *m, uint32_t f
     return e;
 }
 
-/* the K7 cubic of edge e (curve cv) over its whole range, from the cache where on */
+/* the cubic of edge e (curve cv) over its whole range (K7, or from 4.14 a conic's closed form), from
+   the cache where on */
 static cm_err edge_cubic_cached(cm_corner_ws *ws, const cm_model *m, uint32_t e, const cm_curve *cv, cm_cubic *out,
                                 cm_status *st)
 {
@@ -95,7 +96,7 @@ static cm_err edge_cubic_cached(cm_corner_ws *ws, const cm_model *m, uint32_t e,
         *out = ws->cubic_cache[slot].c;
         return CM_OK;
     }
-    cm_err err = cm_cubic_convert(cv, 0.0, 1.0, out, NULL, NULL, st);
+    cm_err err = cm_edge_cubic(cv, m->conic_cubic, out, st);
     if (err == CM_OK && ws->cache_model == m) {
         ws->cubic_cache[slot].edge = (int32_t)e;
         ws->cubic_cache[slot].c = *out;

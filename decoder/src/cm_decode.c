@@ -387,6 +387,7 @@ static cm_err check_header(cm_decoder *d, cm_status *st)
     d->model.refine_48 = h->major > 4 || (h->major == 4 && h->minor >= CM_FMT_PREDICT_FLAT_MINOR);
     d->model.refine_49 = h->major > 4 || (h->major == 4 && h->minor >= CM_FMT_RULED_MINOR);
     d->model.refine_410 = h->major > 4 || (h->major == 4 && h->minor >= CM_FMT_PATCH_SCALE_MINOR);
+    d->model.conic_cubic = h->major > 4 || (h->major == 4 && h->minor >= CM_FMT_CONIC_CUBIC_MINOR);
     d->model.predicted = h->major >= CM_FMT_PREDICT_MAJOR;
     if (!isfinite(d->model.tess_tol))
         return fail(d, st, CM_E_NONFINITE, v.at_tess, "chordal tolerance");

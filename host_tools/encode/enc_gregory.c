@@ -54,7 +54,8 @@ static int gregory_applicable(enc_work *w, int f, double tol, int exact, double 
         cm_curve c;
         cm_model_edge_curve(m, U->edge, &c);
         double delta = 0;
-        if (cm_cubic_convert(&c, 0.0, 1.0, &cub[k], &delta, NULL, NULL) != CM_OK || !(delta <= K7_ACCEPT * tol)) {
+        if (cm_edge_cubic(&c, m->conic_cubic, &cub[k], NULL) != CM_OK ||
+            cm_edge_cubic_delta(&c, &cub[k], &delta, NULL) != CM_OK || !(delta <= K7_ACCEPT * tol)) {
             rep->why = "edge not cubic-convertible";
             return 0;
         }

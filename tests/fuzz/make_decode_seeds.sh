@@ -21,12 +21,13 @@ for f in "$here"/corpus_iges/box_hole_144.igs "$here"/corpus_iges/box_hole_186.i
     "$cmz" encode -q "$f" -o "$tmp/$b.cmz"
     # the two sampled methods: these faces are G1FIT by default, NFILL without it
     case $b in l_shape_144|dome_square_hole_144) "$cmz" encode -q --no-g1fit "$f" -o "$tmp/${b}_nfill.cmz" ;; esac
-    # and the same in format 4.12 (no corner hints), 4.11 (parts without names), 4.10 (no parts after the colours), 4.9 (GREGORY patches scaled as before
+    # and the same in format 4.13 (K7 for every Gregory side), 4.12 (no corner hints), 4.11 (parts without names), 4.10 (no parts after the colours), 4.9 (GREGORY patches scaled as before
     # 4.10), 4.8 (kept faces meshed as before 4.9), 4.7 (the refinement before
     # 4.8's predictions), 4.6 (the refinement before 4.7's), 4.5 (the varint header, a stream per
     # section), 4.4 (edge uses named by `back`), 4.2 (no placed copies), 4.1 (no net corrections),
-    # 4.0's header, format 3's fixed one and format 2's coding (format 4.13 is the default): every
+    # 4.0's header, format 3's fixed one and format 2's coding (format 4.14 is the default): every
     # reader's path
+    "$cmz" encode -q --format 4.13 "$f" -o "$tmp/${b}_v413.cmz"
     "$cmz" encode -q --format 4.12 "$f" -o "$tmp/${b}_v412.cmz"
     "$cmz" encode -q --format 4.11 "$f" -o "$tmp/${b}_v411.cmz"
     "$cmz" encode -q --format 4.10 "$f" -o "$tmp/${b}_v410.cmz"
@@ -41,7 +42,7 @@ for f in "$here"/corpus_iges/box_hole_144.igs "$here"/corpus_iges/box_hole_186.i
     "$cmz" encode -q --format 4.0 "$f" -o "$tmp/${b}_v40.cmz"
     "$cmz" encode -q --format 3 "$f" -o "$tmp/${b}_v3.cmz"
     "$cmz" encode -q --format 2.6 "$f" -o "$tmp/${b}_v2.cmz"
-    for c in "$tmp/$b.cmz" "$tmp/${b}_nfill.cmz" "$tmp/${b}_v412.cmz" "$tmp/${b}_v411.cmz" "$tmp/${b}_v410.cmz" "$tmp/${b}_v49.cmz" "$tmp/${b}_v48.cmz" "$tmp/${b}_v47.cmz" "$tmp/${b}_v46.cmz" "$tmp/${b}_v45.cmz" "$tmp/${b}_v44.cmz" "$tmp/${b}_v42.cmz" "$tmp/${b}_v41.cmz" "$tmp/${b}_v40.cmz" "$tmp/${b}_v3.cmz" "$tmp/${b}_v2.cmz"; do
+    for c in "$tmp/$b.cmz" "$tmp/${b}_nfill.cmz" "$tmp/${b}_v413.cmz" "$tmp/${b}_v412.cmz" "$tmp/${b}_v411.cmz" "$tmp/${b}_v410.cmz" "$tmp/${b}_v49.cmz" "$tmp/${b}_v48.cmz" "$tmp/${b}_v47.cmz" "$tmp/${b}_v46.cmz" "$tmp/${b}_v45.cmz" "$tmp/${b}_v44.cmz" "$tmp/${b}_v42.cmz" "$tmp/${b}_v41.cmz" "$tmp/${b}_v40.cmz" "$tmp/${b}_v3.cmz" "$tmp/${b}_v2.cmz"; do
         [ -f "$c" ] || continue
         for sel in 0 200; do
             { printf "\\x$(printf %02x $sel)"; cat "$c"; } > "$out/$(basename "$c" .cmz)_chunk$sel.cmzf"

@@ -19,6 +19,8 @@
 #include "cm/cm_arith.h"
 #include "cm/cm_crc32.h"
 #include "cm/cm_method.h"
+#include "cm/cm_corner.h"
+#include "cm/cm_cubic_convert.h"
 #include "cm/cm_limits_info.h"
 #include "encode/encode.h"
 #include "encode/verify.h"
@@ -569,6 +571,70 @@ static void test_kept_strips(void **state)
         if (model == 0 ? !(2 * tris[1] <= tris[0]) : !(4 * tris[1] <= 3 * tris[0]))
             fail_msg("%s: 4.9 %u triangles, 4.8 %u (too few spared)", model == 0 ? "cylinder" : "trough", tris[1],
                      tris[0]);
+        encode_result_free(&r);
+        model_free(&lm);
+    }
+}
+
+/* ---- format 4.14: a GREGORY side along an arc is its closed-form cubic, not K7's fit ----
+   Two quarter cylinders sharing a tangent edge (R 5, length 12: four quarter arcs; each face a
+   GREGORY patch over two arcs and two lines), written in the default format and in 4.13.  Each file
+   decodes and meshes (its GREGORY checksums are of the patches its own version builds); each face's
+   arc sides are cm_cubic_from_conic's cubics in 4.14 and K7's in 4.13; and each file read as the other
+   version would read it (the model's conic_cubic flipped) is refused by the checksum of every face,
+   so a reader that took the wrong cubic for a version could not go unnoticed. */
+static void test_conic_cubic_414(void **state)
+{
+    (void)state;
+    static cm_corner_ws cws;
+    static cm_greg_input in;
+    for (int v414 = 0; v414 < 2; v414++) {
+        igw w;
+        igw_init(&w);
+        igw_split_half_cylinder_144(&w, 5, 12);
+        loaded_model lm;
+        encode_result r;
+        encode_opts o;
+        encode_opts_default(&o);
+        if (!v414)
+            encode_opts_for_format(&o, CM_FMT_COMPACT_MAJOR, (int)CM_FMT_CONIC_CUBIC_MINOR - 1);
+        encode_igw_opts(&w, &lm, &r, &o);
+        igw_free(&w);
+        assert_int_equal(r.faces_by_method[CM_METHOD_GREGORY], 2);
+        cm_status st;
+        assert_ok(decode_bytes(r.bytes, r.len, r.len, &st));
+        assert_int_equal(dec.model.conic_cubic, v414);
+        cm_mesh mesh;
+        tessellate_all(&mesh);
+        int arcs = 0;
+        for (uint32_t f = 0; f < dec.model.nfaces; f++) {
+            cm_status_init(&st);
+            assert_ok(cm_greg_input_build(&dec.model, f, 0, &in, &cws, &st));
+            for (int k = 0; k < in.n; k++) {
+                cm_cubic want;
+                if (in.side[k].curve.p != 2 || !in.side[k].curve.w)
+                    continue;
+                arcs++;
+                if (v414)
+                    assert_int_equal(cm_cubic_from_conic(&in.side[k].curve, &want), 1);
+                else
+                    assert_ok(cm_cubic_convert(&in.side[k].curve, 0, 1, &want, NULL, NULL, NULL));
+                cm_cubic got = in.side[k].rev ? cm_cubic_reverse(&in.side[k].c) : in.side[k].c;
+                for (int i = 0; i < 4; i++)
+                    assert_vec_near(got.c[i], want.c[i], 0.0);
+            }
+        }
+        assert_int_equal(arcs, 4); /* two quarter arcs a face */
+        dec.model.conic_cubic = !v414;
+        cm_mesh_clear(&mesh);
+        for (uint32_t f = 0; f < dec.model.nfaces; f++) {
+            cm_tess_info info;
+            cm_status_init(&st);
+            cm_err e = cm_tessellate_face(&dec.model, f, dec.model.tess_tol, &mesh, &tess, &info, &st);
+            if (e != CM_E_CHECKSUM)
+                fail_msg("format 4.%d read as 4.%d: face %u gave %s, not the checksum's refusal", v414 ? 14 : 13,
+                         v414 ? 13 : 14, f, cm_err_name(e));
+        }
         encode_result_free(&r);
         model_free(&lm);
     }
@@ -1126,6 +1192,7 @@ int main(void)
         cmocka_unit_test(test_refine_skips_passed_pieces),
         cmocka_unit_test(test_kept_strips),
         cmocka_unit_test(test_patch_scale_410),
+        cmocka_unit_test(test_conic_cubic_414),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good45, teardown_good),
         cmocka_unit_test_setup_teardown(test_damaged_files, setup_good3, teardown_good),

@@ -158,6 +158,13 @@ int main(void)
     for (int i = 0; i < 4; i++)
         pv("k7-120", i, arc.c[i]);
     pd("k7-120-delta", 0, delta);
+    /* format 4.14: the same arcs' cubics in closed form (cm_cubic_from_conic), and the edge's choice */
+    ok(cm_cubic_from_conic(&c120, &arc) ? CM_OK : CM_E_ARG, "conic-120");
+    for (int i = 0; i < 4; i++)
+        pv("conic-120", i, arc.c[i]);
+    ok(cm_edge_cubic(&c120, 1, &arc, NULL), "conic-120-edge");
+    ok(cm_edge_cubic_delta(&c120, &arc, &delta, NULL), "conic-120-delta");
+    pd("conic-120-delta", 0, delta);
 
     /* K6: least-squares cubic with fixed ends through noisy samples of a helix-like curve */
     enum { M = 40, N = 6 };

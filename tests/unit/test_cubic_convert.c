@@ -1,4 +1,5 @@
-/* test_cubic_convert.c - K7 cubic edge conversion: exact cases, circular arcs (spec T4 values). */
+/* test_cubic_convert.c - K7 cubic edge conversion: exact cases, circular arcs (spec T4 values); format
+   4.14's closed form for a one-span conic (cm_cubic_from_conic, cm_edge_cubic). */
 #include "test_util.h"
 
 #include "cm/cm_cubic_convert.h"
@@ -130,6 +131,105 @@ static void test_convert_errors(void **state)
     assert_err(cm_cubic_convert(&pt2, 0, 1, &cu, NULL, NULL, NULL), CM_E_DEGENERATE);
 }
 
+
+/* Format 4.14: a one-span conic's cubic in closed form.  A 90 degree arc of R = 10: its ends and end
+   tangents kept, its middle point on the circle, the handle 4/3 tan(22.5 deg) R (0.55228 R, inside
+   T4's K7 window), its radial error 2.7e-4 R (K7's fit: 2.0e-4 R; the price of the closed form);
+   the same curve with its weights scaled, the same cubic; a parabola (equal weights), its exact
+   degree elevation; the wider arcs near their K7 errors.  Red with the weight taken as w1 alone
+   (the scaled weights), with a = 2/3 (the arc's middle point). */
+static void test_conic_closed_form(void **state)
+{
+    (void)state;
+    arc a;
+    make_arc(&a, 10.0, M_PI / 2);
+    cm_cubic cu;
+    assert_int_equal(cm_cubic_from_conic(&a.c, &cu), 1);
+    assert_vec_near(cu.c[0], a.P[0], 0.0);
+    assert_vec_near(cu.c[3], a.P[2], 0.0);
+    double k = cm_dist(cu.c[1], cu.c[0]) / 10.0;
+    assert_near(k, 4.0 / 3.0 * tan(M_PI / 8), 1e-14);
+    assert_near(cm_dist(cu.c[2], cu.c[3]) / 10.0, k, 1e-14);
+    assert_near(cu.c[1].x, 10.0, 1e-13); /* along the end tangent */
+    cm_vec3 d[3];
+    cm_cubic_eval(&cu, 0.5, d);
+    assert_near(cm_norm(d[0]), 10.0, 1e-12);
+    double err = radial_error(&cu, 10.0);
+    print_message("# 90 deg arc: closed form radial error %.3g R\n", err / 10.0);
+    assert_true(err >= 2.6e-4 * 10.0 && err <= 2.8e-4 * 10.0);
+    /* the weights scaled (w0 = w2 = 2, w1 = 2 cos 45 deg: the same curve), the same cubic */
+    arc b = a;
+    b.w[0] = b.w[2] = 2.0;
+    b.w[1] = 2.0 * a.w[1];
+    b.c.w = b.w;
+    b.c.ctrl = b.P;
+    b.c.knots = b.U;
+    cm_cubic cb;
+    assert_int_equal(cm_cubic_from_conic(&b.c, &cb), 1);
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cb.c[i], cu.c[i], 1e-13);
+    /* a parabola: equal weights, the quadratic's exact elevation */
+    b.w[0] = b.w[1] = b.w[2] = 3.0;
+    assert_int_equal(cm_cubic_from_conic(&b.c, &cb), 1);
+    cm_cubic el = cm_cubic_from_quad(b.P[0], b.P[1], b.P[2]);
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cb.c[i], el.c[i], 1e-14);
+    /* wider arcs: 120 deg within 1.5 times K7's prototype error, 170 deg short of failing */
+    make_arc(&a, 1.0, 2 * M_PI / 3);
+    assert_int_equal(cm_cubic_from_conic(&a.c, &cu), 1);
+    double e120 = radial_error(&cu, 1.0);
+    print_message("# 120 deg arc: closed form radial error %.3g R (K7's prototype 1.2e-3)\n", e120);
+    assert_true(e120 <= 1.5 * 1.2e-3);
+}
+
+/* What cm_cubic_from_conic refuses (out untouched), and cm_edge_cubic's choice: K7 without the
+   flag or for any other curve (the same cubic as cm_cubic_convert's, and cm_edge_cubic_delta the same
+   delta as its own), the closed form with it.  Red with the flag ignored. */
+static void test_edge_cubic_choice(void **state)
+{
+    (void)state;
+    arc a;
+    make_arc(&a, 10.0, M_PI / 2);
+    const cm_cubic mark = {{{7, 7, 7}, {7, 7, 7}, {7, 7, 7}, {7, 7, 7}}};
+    cm_cubic cu = mark, k7, cf;
+    arc bad = a;
+    bad.c.w = NULL; /* a polynomial quadratic: elevated exactly by K7, not a conic here */
+    assert_int_equal(cm_cubic_from_conic(&bad.c, &cu), 0);
+    bad = a;
+    bad.w[1] = 0.0;
+    bad.c.w = bad.w;
+    assert_int_equal(cm_cubic_from_conic(&bad.c, &cu), 0);
+    bad.w[1] = -0.5;
+    assert_int_equal(cm_cubic_from_conic(&bad.c, &cu), 0);
+    arc h;
+    make_half_circle(&h, 10.0); /* two spans */
+    assert_int_equal(cm_cubic_from_conic(&h.c, &cu), 0);
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cu.c[i], mark.c[i], 0.0);
+
+    double dk, dc, d;
+    assert_ok(cm_cubic_convert(&a.c, 0, 1, &k7, &dk, NULL, NULL));
+    assert_ok(cm_edge_cubic(&a.c, 0, &cu, NULL));
+    assert_ok(cm_edge_cubic_delta(&a.c, &cu, &d, NULL));
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cu.c[i], k7.c[i], 0.0);
+    assert_true(d == dk);
+    assert_int_equal(cm_cubic_from_conic(&a.c, &cf), 1);
+    assert_ok(cm_edge_cubic(&a.c, 1, &cu, NULL));
+    assert_ok(cm_edge_cubic_delta(&a.c, &cu, &dc, NULL));
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cu.c[i], cf.c[i], 0.0);
+    assert_true(cm_dist(cf.c[1], k7.c[1]) > 1e-4); /* the two cubics differ */
+    assert_true(dc > dk && dc <= 2.8e-4 * 10.0);
+    /* two spans: K7 with or without the flag */
+    assert_ok(cm_cubic_convert(&h.c, 0, 1, &k7, &dk, NULL, NULL));
+    assert_ok(cm_edge_cubic(&h.c, 1, &cu, NULL));
+    assert_ok(cm_edge_cubic_delta(&h.c, &cu, &d, NULL));
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cu.c[i], k7.c[i], 0.0);
+    assert_true(d == dk);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -137,6 +237,8 @@ int main(void)
         cmocka_unit_test(test_wide_arcs),
         cmocka_unit_test(test_exact_cases),
         cmocka_unit_test(test_convert_errors),
+        cmocka_unit_test(test_conic_closed_form),
+        cmocka_unit_test(test_edge_cubic_choice),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -22,7 +22,7 @@
 #define CM_FMT_MAGIC2 'M'
 #define CM_FMT_MAGIC3 'Z'
 #define CM_FMT_VERSION_MAJOR 4     /* the newest this reader knows (4: the compact header) */
-#define CM_FMT_VERSION_MINOR 13    /* the newest minor of CM_FMT_VERSION_MAJOR */
+#define CM_FMT_VERSION_MINOR 14    /* the newest minor of CM_FMT_VERSION_MAJOR */
 #define CM_FMT_V2_MINOR 6          /* the last minor of format 2: 1 GREGORY-EXACT, 2 GREGORY-FIT, 3 layout 3,
                                       4 NFILL, 5 G1FIT, 6 the exact patches' turning basis */
 #define CM_FMT_TURNING_MINOR 6     /* files of 2.6 on rebuild exact sides with the turning basis */
@@ -112,6 +112,9 @@ void cm_fmt_header_unpack(const uint8_t *b, cm_fmt_header *h);
 #define CM_FMT_HINTS_MINOR 13u         /* 4.13: GREGORY-family records end with corner hint normals (spec 15.3,
                                           cm_face_hint_mask) */
 #define CM_FMT_HINT_ONE 32767          /* 4.13: a hint's octahedral coordinates in units of 1/this */
+#define CM_FMT_CONIC_CUBIC_MINOR 14u   /* 4.14: the bytes of 4.13; a GREGORY side along a one-span conic (an arc
+                                          up to a half circle) is its closed-form cubic, not K7's fit
+                                          (cm_model.conic_cubic, cm_edge_cubic) */
 /* 4.3: a placement's linear part within this of 1 per entry, its translation within this many mm */
 #define CM_FMT_PLACE_MAX_LINEAR 1e3
 #define CM_FMT_PLACE_MAX_SHIFT 1e9
@@ -331,6 +334,9 @@ typedef struct cm_model {
                              direction whose grid cells are longer (by at most 4; a ruled direction,
                              degree 1, without limit and with a grid column per knot span), so that
                              its triangles run along the flatter direction (cm_tessellate.c) */
+    int conic_cubic;      /* format 4.14 on: a GREGORY side along a one-span conic is the cubic through
+                             its ends and middle point with its end tangents (cm_edge_cubic), not K7's
+                             least-squares fit; the encoder's checksums are of those patches */
     int refine_410;       /* format 4.10 on: a GREGORY patch is triangulated in (u,v) scaled by the
                              lengths of its boundary's sides, not by its mean speeds at 5 x 5 interior
                              points (cm_tessellate.c); the encoder measured the needs that way */
