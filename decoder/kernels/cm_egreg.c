@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "cm/cm_gregory.h"
@@ -277,7 +278,50 @@ static void hermite(double s, double H[4], double dH[4])
     dH[3] = 6.0 * s - 6.0 * s2;
 }
 
+void cm_egreg_memo_reset(cm_egreg_memo *m)
+{
+    if (++m->gen == 0) { /* (after 2^32 patches: entries of generation 1 would come back) */
+        memset(m, 0, sizeof *m);
+        m->gen = 1;
+    }
+}
+
+/* side k at s, from the memo where it holds s */
+static cm_err side_eval_memo(const cm_egreg_side *sd, int k, double s, cm_vec3 d[3], cm_vec3 x[2],
+                             cm_egreg_memo *memo, cm_status *st)
+{
+    if (!memo)
+        return cm_egreg_side_eval(sd, s, d, x, st);
+    uint64_t bits;
+    memcpy(&bits, &s, sizeof bits);
+#if CM_EGREG_MEMO_BITS > 0
+    cm_egreg_memo_entry *me = &memo->e[k][(bits * 0x9E3779B97F4A7C15ull) >> (64 - CM_EGREG_MEMO_BITS)];
+#else
+    (void)bits;
+    cm_egreg_memo_entry *me = &memo->e[k][0];
+#endif
+    if (me->gen == memo->gen && memcmp(&me->s, &s, sizeof s) == 0) {
+        memcpy(d, me->d, sizeof me->d);
+        memcpy(x, me->x, sizeof me->x);
+        return CM_OK;
+    }
+    cm_err e = cm_egreg_side_eval(sd, s, d, x, st);
+    if (e == CM_OK) {
+        me->s = s;
+        me->gen = memo->gen;
+        memcpy(me->d, d, sizeof me->d);
+        memcpy(me->x, x, sizeof me->x);
+    }
+    return e;
+}
+
 cm_err cm_egreg_eval(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv, cm_status *st)
+{
+    return cm_egreg_eval_memo(g, u, v, S, Su, Sv, NULL, st);
+}
+
+cm_err cm_egreg_eval_memo(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv,
+                          cm_egreg_memo *memo, cm_status *st)
 {
     u = clamp01(u);
     v = clamp01(v);
@@ -286,7 +330,7 @@ cm_err cm_egreg_eval(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 
     static const int backwards[4] = {0, 0, 1, 1};
     for (int k = 0; k < 4; k++) {
         double s = at_u[k] ? u : v;
-        cm_err e = cm_egreg_side_eval(&g->side[k], backwards[k] ? 1.0 - s : s, d[k], x[k], st);
+        cm_err e = side_eval_memo(&g->side[k], k, backwards[k] ? 1.0 - s : s, d[k], x[k], memo, st);
         if (e != CM_OK)
             return e;
     }

@@ -515,6 +515,12 @@ double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, 
 
 cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv)
 {
+    return cm_greg_surface_eval_memo(s, k, u, v, S, Su, Sv, NULL);
+}
+
+cm_err cm_greg_surface_eval_memo(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su,
+                                 cm_vec3 *Sv, cm_egreg_memo *memo)
+{
     cm_err e = CM_OK;
     if (k >= 0 && k < s->npatch && k < CM_MAX_GREG) {
         if (!s->exact) {
@@ -522,7 +528,7 @@ cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v,
             cm_fit_add(s->corr[k], s->fit, u, v, S, Su, Sv);
             return CM_OK;
         }
-        if ((e = cm_egreg_eval(&s->e[k], u, v, S, Su, Sv, NULL)) == CM_OK) {
+        if ((e = cm_egreg_eval_memo(&s->e[k], u, v, S, Su, Sv, memo, NULL)) == CM_OK) {
             cm_fit_add(s->corr[k], s->fit, u, v, S, Su, Sv);
             return CM_OK;
         }

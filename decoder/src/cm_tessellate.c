@@ -380,6 +380,7 @@ typedef struct chart {
     double sign;            /* the face normal is sign * (Su x Sv) */
     int off_surface;        /* NURBS rebuilt to a tolerance (NFILL, G1FIT; a kept net from 4.1): the loop's points lie up to it off
                                the surface, so the refinement measures from the surface's own points */
+    cm_egreg_memo *memo;    /* GREGORY family: the patch's side evaluations (reset for each patch) */
 } chart;
 
 /* point and first partials at (u,v) */
@@ -388,7 +389,7 @@ static cm_err chart_eval(const chart *c, double u, double v, cm_vec3 d[3], cm_st
     if (c->kind == CHART_NURBS)
         return cm_psurf_eval(c->ps, u, v, d, st);
     if (c->kind == CHART_GREGORY) {
-        cm_err e = cm_greg_surface_eval(c->gs, c->patch, u, v, &d[0], &d[1], &d[2]);
+        cm_err e = cm_greg_surface_eval_memo(c->gs, c->patch, u, v, &d[0], &d[1], &d[2], c->memo);
         if (e != CM_OK)
             return cm_fail(st, e, "Gregory patch");
         return cm_finite3(d[0]) ? CM_OK : cm_fail(st, CM_E_NONFINITE, "Gregory patch");
@@ -972,7 +973,8 @@ static void patch_scale(const cm_tess_ws *ws, int npts, double *su, double *sv)
 static cm_err tess_patch(const cm_greg_surface *gs, int patch, cm_tess_ws *ws, int npts, int side_n[4], double tol, cm_mesh *mesh,
                          cm_tess_info *info, cm_status *st)
 {
-    chart c = {CHART_GREGORY, NULL, NULL, gs, patch, 1.0, 0};
+    chart c = {CHART_GREGORY, NULL, NULL, gs, patch, 1.0, 0, &ws->egreg_memo};
+    cm_egreg_memo_reset(c.memo);
     cm_err e;
     ws->loop_start[0] = 0;
     ws->loop_start[1] = npts;
@@ -1220,7 +1222,7 @@ static cm_err tessellate_face(const cm_model *m, uint32_t f, double tol, cm_mesh
        refinement crowded points where the loop runs off the surface (asitus__IAD_v3: 78 to 228
        triangles folded at a quarter of the recommended tolerance) */
     int off_surface = keep && M && (!M->kept_surface || m->kept_off_edges);
-    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign, off_surface};
+    chart c = {keep ? CHART_NURBS : CHART_FRAME, &ps, &rb.frame, NULL, 0, rb.sign, off_surface, NULL};
     if (keep) {
         if ((e = cm_psurf_init(&ps, &rb.surf, 1e-9 * rb.bbox, st)) != CM_OK)
             return e;

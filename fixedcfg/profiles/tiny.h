@@ -25,6 +25,7 @@
 #define CM_VIEW_MAX_H 120
 #define CM_TESS_PASS_SLOTS 128
 #define CM_PARAM_GRID_CACHE 0 /* the global searches' grids (47 KiB) do not fit the budget: searched as before */
+#define CM_EGREG_MEMO_BITS 0  /* an exact patch's memo of side evaluations (17 KiB): the last one a side */
 #define CM_MAX_TESS_POINTS 64
 #define CM_MAX_FILE_BYTES 4096
 #define CM_FILE_WINDOW_BYTES CM_MAX_FILE_BYTES

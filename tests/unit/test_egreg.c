@@ -370,6 +370,63 @@ static void test_turning_basis_chain_and_patch(void **state)
     assert_partials(&g);
 }
 
+/* the memo of side evaluations (cm_egreg_eval_memo): the same bits as without it at every point of
+   a grid walked twice (rows and columns repeat their side parameters), at parameters that fall in
+   one slot of the memo (s found by search: two values hashed alike must not be taken for each
+   other), and after a reset on another patch at the same points (an entry of the last patch must
+   not answer).  Red without the comparison of s, and without the reset's new generation. */
+static int memo_slot(double s)
+{
+    uint64_t bits;
+    memcpy(&bits, &s, sizeof bits);
+#if CM_EGREG_MEMO_BITS > 0
+    return (int)((bits * 0x9E3779B97F4A7C15ull) >> (64 - CM_EGREG_MEMO_BITS));
+#else
+    (void)bits; /* the tiny profile: one entry a side */
+    return 0;
+#endif
+}
+
+static void same_bits(const cm_egreg *g, double u, double v, cm_egreg_memo *memo)
+{
+    cm_vec3 S0, Su0, Sv0, S1, Su1, Sv1;
+    eval(g, u, v, &S0, &Su0, &Sv0);
+    assert_int_equal(cm_egreg_eval_memo(g, u, v, &S1, &Su1, &Sv1, memo, NULL), CM_OK);
+    if (memcmp(&S0, &S1, sizeof S0) || memcmp(&Su0, &Su1, sizeof Su0) || memcmp(&Sv0, &Sv1, sizeof Sv0))
+        fail_msg("at (%.17g, %.17g) the memo gives other bits", u, v);
+}
+
+static void test_side_memo(void **state)
+{
+    (void)state;
+    static cm_egreg g, h;
+    static cm_egreg_memo memo;
+    warped_patch(&g, 0.7);
+    warped_patch(&h, -1.3);
+    memset(&memo, 0, sizeof memo);
+    cm_egreg_memo_reset(&memo);
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i <= 12; i++)
+            for (int j = 0; j <= 12; j++)
+                same_bits(&g, i / 12.0, (j + 0.5) / 13.0, &memo);
+    /* two parameters in one slot */
+    double a = 0.3, b = -1.0;
+    for (int k = 1; k < 100000 && b < 0; k++)
+        if (memo_slot(k / 100000.0) == memo_slot(a) && k / 100000.0 != a)
+            b = k / 100000.0;
+    assert_true(b > 0);
+    for (int pass = 0; pass < 3; pass++) {
+        same_bits(&g, a, 0.5, &memo);
+        same_bits(&g, b, 0.5, &memo);
+        same_bits(&g, 0.5, a, &memo);
+        same_bits(&g, 0.5, b, &memo);
+    }
+    /* another patch after a reset: nothing of g's answers */
+    cm_egreg_memo_reset(&memo);
+    for (int i = 0; i <= 12; i++)
+        same_bits(&h, i / 12.0, (i + 0.5) / 13.0, &memo);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -379,6 +436,7 @@ int main(void)
         cmocka_unit_test(test_nonfinite),
         cmocka_unit_test(test_turning_basis_half_circle),
         cmocka_unit_test(test_turning_basis_chain_and_patch),
+        cmocka_unit_test(test_side_memo),
     };
     return cmocka_run_group_tests_name("egreg", tests, NULL, NULL);
 }

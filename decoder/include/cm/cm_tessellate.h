@@ -60,6 +60,8 @@ typedef struct cm_tess_ws {
     int refine_410;                        /* ... and of format 4.10 (cm_model.refine_410) */
     int test_every_piece;                  /* tests: 1 turns format 4.8's predicted passes off (on
                                               smooth models the mesh must not change) */
+    cm_egreg_memo egreg_memo;              /* the exact patch being meshed: its side evaluations
+                                              (cm_egreg.h; the same bits, fewer evaluations) */
 } cm_tess_ws;
 
 /** Statistics of one face's tessellation (for the encoder's needs and for tests). */

@@ -176,4 +176,36 @@ CM_NODISCARD cm_err cm_egreg_finish(cm_egreg *g, cm_status *st);
 CM_NODISCARD cm_err cm_egreg_eval(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv,
                                   cm_status *st);
 
+/*
+ * A memo of one patch's side evaluations.  A point of the patch costs its four sides (each an exact
+ * edge's point with two derivatives and its cross derivative: about 500 instructions), and the
+ * tessellation asks for the same side parameters again and again: a grid's rows and columns share
+ * them, and a refinement's points fall on the same parameters (a side's evaluations repeat 46 % to
+ * 74 % of the time over the corpus models' GREGORY-EXACT faces, as1_pe_203's 68 %).  Each side keeps
+ * its last CM_EGREG_MEMO results, placed by a hash of s; the same s gives the same bits as
+ * cm_egreg_side_eval (a pure function of its side and s), so nothing the decoder outputs changes.
+ * Valid for one patch: cm_egreg_memo_reset before another (or the same one rebuilt).
+ */
+#ifndef CM_EGREG_MEMO_BITS
+#  define CM_EGREG_MEMO_BITS 5 /* 2^5 entries per side: 17 KB in all, in the tessellation's workspace (4 bits
+                                  gave 1 % more instructions on as1_pe_203, 6 did not fit the terminal's budget) */
+#endif
+#define CM_EGREG_MEMO (1 << CM_EGREG_MEMO_BITS) /* a profile's 0: one entry a side, the last s */
+typedef struct cm_egreg_memo_entry {
+    double s;
+    uint32_t gen; /* the memo's generation it was written in (0: never) */
+    cm_vec3 d[3], x[2];
+} cm_egreg_memo_entry;
+typedef struct cm_egreg_memo {
+    uint32_t gen;
+    cm_egreg_memo_entry e[4][CM_EGREG_MEMO];
+} cm_egreg_memo;
+
+/** Forget every entry (a new patch). */
+void cm_egreg_memo_reset(cm_egreg_memo *m);
+
+/** cm_egreg_eval with its side evaluations through memo (NULL: none); the same bits as without. */
+CM_NODISCARD cm_err cm_egreg_eval_memo(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv,
+                                       cm_egreg_memo *memo, cm_status *st);
+
 #endif /* CM_EGREG_H */

@@ -279,6 +279,10 @@ double cm_greg_surface_project(const cm_greg_surface *s, cm_vec3 p, int *patch, 
  *  A k outside 0..npatch-1 gives zero vectors; an exact patch may fail (CM_E_NONFINITE, curve errors;
  *  the vectors are then zero too). */
 cm_err cm_greg_surface_eval(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv);
+/** cm_greg_surface_eval with an exact patch's side evaluations through memo (cm_egreg_eval_memo; NULL:
+    none; reset it when k or s changes); the same bits as without. */
+cm_err cm_greg_surface_eval_memo(const cm_greg_surface *s, int k, double u, double v, cm_vec3 *S, cm_vec3 *Su,
+                                 cm_vec3 *Sv, cm_egreg_memo *memo);
 
 /** FNV-1a 32 of the rebuilt control data (order: top of this file; spec §2 rule 6). */
 uint32_t cm_greg_surface_checksum(const cm_greg_surface *s);
