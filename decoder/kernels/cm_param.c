@@ -2,6 +2,7 @@
 #include "cm/cm_param.h"
 
 #include <stddef.h>
+#include <string.h>
 
 #include "cm/cm_limits_info.h"
 #include "cm/cm_lm.h"
@@ -82,8 +83,10 @@ cm_err cm_psurf_init(cm_psurf *ps, const cm_surf *s, double tol, cm_status *st)
    (occt__hammer), for digits far below any tolerance */
 #define WALK_STEP_MIN_48 1e-10
 
+/* (dend, when not NULL: S, Su, Sv at the (u,v) returned, the search's last point taken: the bits of
+   cm_psurf_eval there) */
 static cm_err project_with(const cm_psurf *ps, cm_vec3 P, const cm_lm2_opts *opts, double *u, double *v,
-                           double *dist, cm_status *st)
+                           double *dist, cm_vec3 dend[3], cm_status *st)
 {
     /* periodic parameters stay unwrapped, the others are clamped (the start too) */
     cm_lm2_box box = {ps->u0, ps->u1, ps->v0, ps->v1, ps->closed_u ? CM_LM_FREE : CM_LM_CLAMP,
@@ -105,12 +108,15 @@ static cm_err project_with(const cm_psurf *ps, cm_vec3 P, const cm_lm2_opts *opt
     *v = lm.v;
     if (dist)
         *dist = sqrt(lm.f);
+    if (dend)
+        for (int i = 0; i < 3; i++)
+            dend[i] = lm.d[i];
     return CM_OK;
 }
 
 cm_err cm_psurf_project_from(const cm_psurf *ps, cm_vec3 P, double *u, double *v, double *dist, cm_status *st)
 {
-    return project_with(ps, P, &project_lm, u, v, dist, st);
+    return project_with(ps, P, &project_lm, u, v, dist, NULL, st);
 }
 
 /* the (u,v) of the control point nearest P (the first of equals), at its Greville abscissae: where
@@ -253,6 +259,11 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
         for (int k = 0; k <= n; k++) {
             cm_vec3 P = pts[k < n ? k : 0];
             double uu = u, vv = v, dist;
+            /* the surface's point and partials where the search ended (at_u, at_v), which the pole
+               test below needs at (uu, vv): evaluated again only where a grid or a period moved it */
+            cm_vec3 dd[3];
+            double at_u = 0.0, at_v = 0.0;
+            int have_dd = 0;
             if (k == 0 && pass == 0) {
                 /* the first point: (format 4.8) from the control net; a coarse grid (289 evaluations)
                    where that lands badly, a fine one (1681) only if the coarse grid does too.  The
@@ -262,9 +273,12 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
                 int landed = 0;
                 if (ws->net_start) {
                     net_nearest(ps, P, &uu, &vv);
-                    if ((e = project_with(ps, P, walk, &uu, &vv, &dist, st)) != CM_OK)
+                    if ((e = project_with(ps, P, walk, &uu, &vv, &dist, dd, st)) != CM_OK)
                         return e;
                     landed = dist <= accept;
+                    have_dd = 1;
+                    at_u = uu;
+                    at_v = vv;
                 }
                 if (!landed) {
                     if ((e = project_grid_cached(ps, P, CM_PARAM_GRID_COARSE, ws, &uu, &vv, &dist, st)) != CM_OK)
@@ -275,8 +289,11 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
                 }
             } else {
                 /* (the second pass starts from where the first came back to the start) */
-                if ((e = project_with(ps, P, walk, &uu, &vv, &dist, st)) != CM_OK)
+                if ((e = project_with(ps, P, walk, &uu, &vv, &dist, dd, st)) != CM_OK)
                     return e;
+                have_dd = 1;
+                at_u = uu;
+                at_v = vv;
                 if (dist > accept && global_left > 0) {
                     global_left--;
                     /* lost the way (a jump): search globally, keep the periodic copy nearest to us */
@@ -302,8 +319,9 @@ cm_err cm_loop_uv(const cm_psurf *ps, const cm_vec3 *pts, int n, double accept, 
                 if (ps->closed_v)
                     vv += pv * floor((v - vv) / pv + 0.5);
             }
-            cm_vec3 dd[3];
-            if ((e = cm_psurf_eval(ps, uu, vv, dd, st)) != CM_OK)
+            /* (the same bits of (u,v), the same point: a copy a period away may round otherwise) */
+            if (!(have_dd && memcmp(&uu, &at_u, sizeof uu) == 0 && memcmp(&vv, &at_v, sizeof vv) == 0) &&
+                (e = cm_psurf_eval(ps, uu, vv, dd, st)) != CM_OK)
                 return e;
             /* a pole: the iso-line through the point in one direction is shorter than `accept`
              * (exporters leave a generatrix end a little off the axis) */
