@@ -286,20 +286,25 @@ void cm_egreg_memo_reset(cm_egreg_memo *m)
     }
 }
 
+int cm_egreg_memo_slot(double s)
+{
+    uint64_t bits;
+    memcpy(&bits, &s, sizeof bits);
+#if CM_EGREG_MEMO_BITS > 0
+    return (int)((bits * 0x9E3779B97F4A7C15ull) >> (64 - CM_EGREG_MEMO_BITS));
+#else
+    (void)bits;
+    return 0;
+#endif
+}
+
 /* side k at s, from the memo where it holds s */
 static cm_err side_eval_memo(const cm_egreg_side *sd, int k, double s, cm_vec3 d[3], cm_vec3 x[2],
                              cm_egreg_memo *memo, cm_status *st)
 {
     if (!memo)
         return cm_egreg_side_eval(sd, s, d, x, st);
-    uint64_t bits;
-    memcpy(&bits, &s, sizeof bits);
-#if CM_EGREG_MEMO_BITS > 0
-    cm_egreg_memo_entry *me = &memo->e[k][(bits * 0x9E3779B97F4A7C15ull) >> (64 - CM_EGREG_MEMO_BITS)];
-#else
-    (void)bits;
-    cm_egreg_memo_entry *me = &memo->e[k][0];
-#endif
+    cm_egreg_memo_entry *me = &memo->e[k][cm_egreg_memo_slot(s)];
     if (me->gen == memo->gen && memcmp(&me->s, &s, sizeof s) == 0) {
         memcpy(d, me->d, sizeof me->d);
         memcpy(x, me->x, sizeof me->x);

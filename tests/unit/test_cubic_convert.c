@@ -182,6 +182,18 @@ static void test_conic_closed_form(void **state)
     assert_true(e120 <= 1.5 * 1.2e-3);
 }
 
+/* cm_edge_cubic's cubic for c (flag `conic`) is `want` to the bit; returns cm_edge_cubic_delta's measure */
+static double edge_cubic_is(const cm_curve *c, int conic, const cm_cubic *want)
+{
+    cm_cubic cu;
+    double d;
+    assert_ok(cm_edge_cubic(c, conic, &cu, NULL));
+    assert_ok(cm_edge_cubic_delta(c, &cu, &d, NULL));
+    for (int i = 0; i < 4; i++)
+        assert_vec_near(cu.c[i], want->c[i], 0.0);
+    return d;
+}
+
 /* What cm_cubic_from_conic refuses (out untouched), and cm_edge_cubic's choice: K7 without the
    flag or for any other curve (the same cubic as cm_cubic_convert's, and cm_edge_cubic_delta the same
    delta as its own), the closed form with it.  Red with the flag ignored. */
@@ -207,27 +219,16 @@ static void test_edge_cubic_choice(void **state)
     for (int i = 0; i < 4; i++)
         assert_vec_near(cu.c[i], mark.c[i], 0.0);
 
-    double dk, dc, d;
+    double dk;
     assert_ok(cm_cubic_convert(&a.c, 0, 1, &k7, &dk, NULL, NULL));
-    assert_ok(cm_edge_cubic(&a.c, 0, &cu, NULL));
-    assert_ok(cm_edge_cubic_delta(&a.c, &cu, &d, NULL));
-    for (int i = 0; i < 4; i++)
-        assert_vec_near(cu.c[i], k7.c[i], 0.0);
-    assert_true(d == dk);
+    assert_true(edge_cubic_is(&a.c, 0, &k7) == dk);
     assert_int_equal(cm_cubic_from_conic(&a.c, &cf), 1);
-    assert_ok(cm_edge_cubic(&a.c, 1, &cu, NULL));
-    assert_ok(cm_edge_cubic_delta(&a.c, &cu, &dc, NULL));
-    for (int i = 0; i < 4; i++)
-        assert_vec_near(cu.c[i], cf.c[i], 0.0);
+    double dc = edge_cubic_is(&a.c, 1, &cf);
     assert_true(cm_dist(cf.c[1], k7.c[1]) > 1e-4); /* the two cubics differ */
     assert_true(dc > dk && dc <= 2.8e-4 * 10.0);
     /* two spans: K7 with or without the flag */
     assert_ok(cm_cubic_convert(&h.c, 0, 1, &k7, &dk, NULL, NULL));
-    assert_ok(cm_edge_cubic(&h.c, 1, &cu, NULL));
-    assert_ok(cm_edge_cubic_delta(&h.c, &cu, &d, NULL));
-    for (int i = 0; i < 4; i++)
-        assert_vec_near(cu.c[i], k7.c[i], 0.0);
-    assert_true(d == dk);
+    assert_true(edge_cubic_is(&h.c, 1, &k7) == dk);
 }
 
 int main(void)

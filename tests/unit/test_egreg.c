@@ -375,18 +375,6 @@ static void test_turning_basis_chain_and_patch(void **state)
    one slot of the memo (s found by search: two values hashed alike must not be taken for each
    other), and after a reset on another patch at the same points (an entry of the last patch must
    not answer).  Red without the comparison of s, and without the reset's new generation. */
-static int memo_slot(double s)
-{
-    uint64_t bits;
-    memcpy(&bits, &s, sizeof bits);
-#if CM_EGREG_MEMO_BITS > 0
-    return (int)((bits * 0x9E3779B97F4A7C15ull) >> (64 - CM_EGREG_MEMO_BITS));
-#else
-    (void)bits; /* the tiny profile: one entry a side */
-    return 0;
-#endif
-}
-
 static void same_bits(const cm_egreg *g, double u, double v, cm_egreg_memo *memo)
 {
     cm_vec3 S0, Su0, Sv0, S1, Su1, Sv1;
@@ -412,7 +400,7 @@ static void test_side_memo(void **state)
     /* two parameters in one slot */
     double a = 0.3, b = -1.0;
     for (int k = 1; k < 100000 && b < 0; k++)
-        if (memo_slot(k / 100000.0) == memo_slot(a) && k / 100000.0 != a)
+        if (cm_egreg_memo_slot(k / 100000.0) == cm_egreg_memo_slot(a) && k / 100000.0 != a)
             b = k / 100000.0;
     assert_true(b > 0);
     for (int pass = 0; pass < 3; pass++) {

@@ -204,6 +204,9 @@ typedef struct cm_egreg_memo {
 /** Forget every entry (a new patch). */
 void cm_egreg_memo_reset(cm_egreg_memo *m);
 
+/** The entry of a side that s takes: a hash of its bits (the tiny profile: the one entry). */
+int cm_egreg_memo_slot(double s);
+
 /** cm_egreg_eval with its side evaluations through memo (NULL: none); the same bits as without. */
 CM_NODISCARD cm_err cm_egreg_eval_memo(const cm_egreg *g, double u, double v, cm_vec3 *S, cm_vec3 *Su, cm_vec3 *Sv,
                                        cm_egreg_memo *memo, cm_status *st);
